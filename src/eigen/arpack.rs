@@ -1,0 +1,89 @@
+//! Minimal FFI to ARPACK-NG's C-callable symmetric drivers `dsaupd_c` / `dseupd_c`
+//! (Debian `libarpack2-dev`, 32-bit integers), and the global lock that serialises them:
+//! ARPACK keeps state in Fortran SAVE variables and is not re-entrant.
+
+use std::os::raw::{c_char, c_double, c_int};
+use std::sync::Mutex;
+
+/// Serialises every ARPACK call in the process (tests run on parallel threads).
+pub static ARPACK_LOCK: Mutex<()> = Mutex::new(());
+
+extern "C" {
+    pub fn dsaupd_c(
+        ido: *mut c_int,
+        bmat: *const c_char,
+        n: c_int,
+        which: *const c_char,
+        nev: c_int,
+        tol: c_double,
+        resid: *mut c_double,
+        ncv: c_int,
+        v: *mut c_double,
+        ldv: c_int,
+        iparam: *mut c_int,
+        ipntr: *mut c_int,
+        workd: *mut c_double,
+        workl: *mut c_double,
+        lworkl: c_int,
+        info: *mut c_int,
+    );
+    pub fn dseupd_c(
+        rvec: c_int,
+        howmny: *const c_char,
+        select: *const c_int,
+        d: *mut c_double,
+        z: *mut c_double,
+        ldz: c_int,
+        sigma: c_double,
+        bmat: *const c_char,
+        n: c_int,
+        which: *const c_char,
+        nev: c_int,
+        tol: c_double,
+        resid: *mut c_double,
+        ncv: c_int,
+        v: *mut c_double,
+        ldv: c_int,
+        iparam: *mut c_int,
+        ipntr: *mut c_int,
+        workd: *mut c_double,
+        workl: *mut c_double,
+        lworkl: c_int,
+        info: *mut c_int,
+    );
+}
+
+/// Meaning of a dsaupd `info` code (ARPACK documentation of dsaupd).
+pub fn saupd_message(info: i32) -> &'static str {
+    match info {
+        1 => "maximum number of Arnoldi update iterations reached",
+        3 => "no shifts could be applied during an implicit restart: increase ncv",
+        -1 => "n must be positive",
+        -2 => "nev must be positive",
+        -3 => "ncv must satisfy nev < ncv <= n",
+        -4 => "the maximum number of iterations must be positive",
+        -5 => "'which' is invalid",
+        -6 => "bmat must be 'I' or 'G'",
+        -7 => "length of private work array is not sufficient",
+        -8 => "error return from the tridiagonal eigenvalue calculation",
+        -9 => "starting vector is zero",
+        -10 => "iparam(7) (mode) is invalid",
+        -11 => "mode 1 is incompatible with bmat = 'G'",
+        -12 => "iparam(1) must be 0 or 1",
+        -13 => "nev and which = 'BE' are incompatible",
+        -9999 => "could not build an Arnoldi factorisation",
+        _ => "unknown ARPACK error",
+    }
+}
+
+/// Meaning of a dseupd `info` code.
+pub fn seupd_message(info: i32) -> &'static str {
+    match info {
+        -14 => "dsaupd did not find any eigenvalues to sufficient accuracy",
+        -15 => "howmny must be 'A' or 'S' when rvec is true",
+        -16 => "howmny = 'S' is not implemented",
+        -17 => "dseupd got a different count of converged Ritz values than dsaupd",
+        -8 => "error return from the tridiagonal eigenvalue calculation (LAPACK dsteqr)",
+        _ => saupd_message(info),
+    }
+}

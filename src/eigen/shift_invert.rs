@@ -1,0 +1,281 @@
+//! ARPACK shift-invert driver (dsaupd mode 3, bmat = 'G', which = 'LM').
+//!
+//! With A = K - sigma M factorised once, the Lanczos iteration runs on the operator
+//! OP = A^{-1} M in the M inner product; its eigenvalues nu = 1 / (lambda - sigma) are largest
+//! for lambda nearest sigma, so a shift just below zero yields the lowest modes first, rigid-body
+//! modes included (A stays positive definite for sigma < 0 even for a free-free part).
+//! Eigenvectors come back M-orthonormal: phi_i^T M phi_j = delta_ij.
+
+use super::arpack::{dsaupd_c, dseupd_c, saupd_message, seupd_message, ARPACK_LOCK};
+use std::os::raw::c_int;
+
+/// Settings of one eigen-solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EigenSettings {
+    /// Number of eigenpairs wanted (lowest, rigid-body modes included).
+    pub count: usize,
+    /// Shift sigma [rad^2/s^2]; negative for free-free parts.
+    pub sigma: f64,
+    /// Lanczos basis size; 0 picks max(2 nev + 1, nev + 16), at most n.
+    pub ncv: usize,
+    /// Relative accuracy of the Ritz values (ARPACK tol); machine epsilon by default.
+    pub tol: f64,
+    /// Maximum number of implicit restarts.
+    pub max_restarts: usize,
+}
+
+impl EigenSettings {
+    pub fn new(count: usize, sigma: f64) -> Self {
+        Self {
+            count,
+            sigma,
+            ncv: 0,
+            tol: f64::EPSILON,
+            max_restarts: 500,
+        }
+    }
+}
+
+/// Eigenpairs and the work they took.
+#[derive(Clone, Debug)]
+pub struct Modes {
+    /// Eigenvalues lambda = omega^2, ascending.
+    pub eigenvalues: Vec<f64>,
+    /// Mode shapes, column-major n x count, M-orthonormal.
+    pub vectors: Vec<f64>,
+    pub n: usize,
+    /// Applications of A^{-1} (factor solves).
+    pub solves: usize,
+    /// Products with M.
+    pub mass_products: usize,
+    /// ARPACK's count of Arnoldi update iterations.
+    pub restarts: usize,
+    pub ncv: usize,
+    /// Seconds spent in factor solves, in M products, and inside ARPACK itself.
+    pub seconds_solve: f64,
+    pub seconds_mass: f64,
+    pub seconds_arpack: f64,
+}
+
+impl Modes {
+    pub fn count(&self) -> usize {
+        self.eigenvalues.len()
+    }
+    /// Mode shape j.
+    pub fn vector(&self, j: usize) -> &[f64] {
+        &self.vectors[j * self.n..(j + 1) * self.n]
+    }
+    /// Natural frequency f = sqrt(max(lambda, 0)) / (2 pi) [Hz].
+    pub fn frequency_hz(&self, j: usize) -> f64 {
+        self.eigenvalues[j].max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
+    }
+}
+
+/// Eigen-solver failures, with ARPACK's code and meaning.
+#[derive(Debug, thiserror::Error)]
+pub enum EigenError {
+    #[error("requested {count} modes but the model has only {n} DOFs")]
+    TooMany { count: usize, n: usize },
+    #[error("ARPACK dsaupd failed (info = {info}): {msg}")]
+    Saupd { info: i32, msg: &'static str },
+    #[error("ARPACK converged only {converged} of {wanted} eigenpairs after {restarts} restarts ({msg})")]
+    NotConverged {
+        converged: usize,
+        wanted: usize,
+        restarts: usize,
+        msg: &'static str,
+    },
+    #[error("ARPACK dseupd failed (info = {info}): {msg}")]
+    Seupd { info: i32, msg: &'static str },
+    #[error("ARPACK returned a non-finite eigenvalue (mode {index})")]
+    NonFinite { index: usize },
+}
+
+/// Deterministic start vector (a fixed linear congruential sequence), so runs are repeatable.
+fn start_vector(n: usize) -> Vec<f64> {
+    let mut s: u64 = 0x2545_f491_4f6c_dd1d;
+    (0..n)
+        .map(|_| {
+            s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            0.5 + ((s >> 11) as f64) / ((1u64 << 53) as f64)
+        })
+        .collect()
+}
+
+/// Lowest `settings.count` eigenpairs of (K, M) given y = M x (`mass`) and x <- A^{-1} x
+/// (`solve`, A = K - sigma M).
+pub fn solve_modes(
+    n: usize,
+    settings: &EigenSettings,
+    mut mass: impl FnMut(&[f64], &mut [f64]),
+    mut solve: impl FnMut(&mut [f64]),
+) -> Result<Modes, EigenError> {
+    let nev = settings.count;
+    if nev == 0 || nev >= n {
+        return Err(EigenError::TooMany { count: nev, n });
+    }
+    let ncv = if settings.ncv == 0 {
+        (2 * nev + 1).max(nev + 16).min(n)
+    } else {
+        settings.ncv.clamp(nev + 1, n)
+    };
+    let lworkl = ncv * (ncv + 8);
+    let mut resid = start_vector(n);
+    let mut v = vec![0.0; n * ncv];
+    let mut workd = vec![0.0; 3 * n];
+    let mut workl = vec![0.0; lworkl];
+    let mut iparam = [0 as c_int; 11];
+    let mut ipntr = [0 as c_int; 11];
+    iparam[0] = 1; // exact shifts
+    iparam[2] = settings.max_restarts as c_int;
+    iparam[6] = 3; // shift-invert mode
+    let mut ido: c_int = 0;
+    let mut info: c_int = 1; // use resid as the start vector
+    let bmat = c"G";
+    let which = c"LM";
+    let (mut solves, mut mass_products) = (0usize, 0usize);
+    let mut tmp = vec![0.0; n];
+    let (mut t_solve, mut t_mass, mut t_arpack) = (0.0, 0.0, 0.0);
+    let clock = std::time::Instant::now;
+    let _guard = ARPACK_LOCK.lock().unwrap_or_else(|p| p.into_inner());
+    loop {
+        let t0 = clock();
+        // SAFETY: all arrays have the sizes dsaupd documents (resid n, v n x ncv, workd 3n,
+        // workl lworkl, iparam/ipntr 11); strings are NUL-terminated.
+        unsafe {
+            dsaupd_c(
+                &mut ido,
+                bmat.as_ptr(),
+                n as c_int,
+                which.as_ptr(),
+                nev as c_int,
+                settings.tol,
+                resid.as_mut_ptr(),
+                ncv as c_int,
+                v.as_mut_ptr(),
+                n as c_int,
+                iparam.as_mut_ptr(),
+                ipntr.as_mut_ptr(),
+                workd.as_mut_ptr(),
+                workl.as_mut_ptr(),
+                lworkl as c_int,
+                &mut info,
+            );
+        }
+        t_arpack += t0.elapsed().as_secs_f64();
+        let x0 = ipntr[0] as usize - 1;
+        let y0 = ipntr[1] as usize - 1;
+        match ido {
+            -1 => {
+                // y = A^{-1} M x
+                let t = clock();
+                mass(&workd[x0..x0 + n], &mut tmp);
+                mass_products += 1;
+                t_mass += t.elapsed().as_secs_f64();
+                let t = clock();
+                solve(&mut tmp);
+                solves += 1;
+                t_solve += t.elapsed().as_secs_f64();
+                workd[y0..y0 + n].copy_from_slice(&tmp);
+            }
+            1 => {
+                // y = A^{-1} (M x), M x supplied at ipntr[2]
+                let b0 = ipntr[2] as usize - 1;
+                tmp.copy_from_slice(&workd[b0..b0 + n]);
+                let t = clock();
+                solve(&mut tmp);
+                solves += 1;
+                t_solve += t.elapsed().as_secs_f64();
+                workd[y0..y0 + n].copy_from_slice(&tmp);
+            }
+            2 => {
+                let t = clock();
+                mass(&workd[x0..x0 + n], &mut tmp);
+                mass_products += 1;
+                t_mass += t.elapsed().as_secs_f64();
+                workd[y0..y0 + n].copy_from_slice(&tmp);
+            }
+            99 => break,
+            other => unreachable!("ARPACK asked for unknown ido = {other}"),
+        }
+    }
+    let restarts = iparam[2] as usize;
+    if info < 0 {
+        return Err(EigenError::Saupd {
+            info,
+            msg: saupd_message(info),
+        });
+    }
+    let converged = iparam[4] as usize;
+    if converged < nev {
+        return Err(EigenError::NotConverged {
+            converged,
+            wanted: nev,
+            restarts,
+            msg: saupd_message(info),
+        });
+    }
+    let t0 = clock();
+    let select = vec![0 as c_int; ncv];
+    let mut d = vec![0.0; nev];
+    let mut z = vec![0.0; n * nev];
+    let mut info2: c_int = 0;
+    // SAFETY: as above; z is n x nev, d has nev entries, select ncv.
+    unsafe {
+        dseupd_c(
+            1,
+            c"A".as_ptr(),
+            select.as_ptr(),
+            d.as_mut_ptr(),
+            z.as_mut_ptr(),
+            n as c_int,
+            settings.sigma,
+            bmat.as_ptr(),
+            n as c_int,
+            which.as_ptr(),
+            nev as c_int,
+            settings.tol,
+            resid.as_mut_ptr(),
+            ncv as c_int,
+            v.as_mut_ptr(),
+            n as c_int,
+            iparam.as_mut_ptr(),
+            ipntr.as_mut_ptr(),
+            workd.as_mut_ptr(),
+            workl.as_mut_ptr(),
+            lworkl as c_int,
+            &mut info2,
+        );
+    }
+    drop(_guard);
+    t_arpack += t0.elapsed().as_secs_f64();
+    if info2 != 0 {
+        return Err(EigenError::Seupd {
+            info: info2,
+            msg: seupd_message(info2),
+        });
+    }
+    if let Some(index) = d.iter().position(|x| !x.is_finite()) {
+        return Err(EigenError::NonFinite { index });
+    }
+    // ascending order
+    let mut order: Vec<usize> = (0..nev).collect();
+    order.sort_by(|&a, &b| d[a].total_cmp(&d[b]));
+    let eigenvalues = order.iter().map(|&i| d[i]).collect();
+    let mut vectors = Vec::with_capacity(n * nev);
+    for &i in &order {
+        vectors.extend_from_slice(&z[i * n..(i + 1) * n]);
+    }
+    Ok(Modes {
+        eigenvalues,
+        vectors,
+        n,
+        solves,
+        mass_products,
+        restarts,
+        ncv,
+        seconds_solve: t_solve,
+        seconds_mass: t_mass,
+        seconds_arpack: t_arpack,
+    })
+}

@@ -1,0 +1,11 @@
+//! Finite elements: reference shapes, quadrature, element matrices, assembly, constraints and
+//! the static solve.
+
+pub mod assembly;
+pub mod dofs;
+pub mod element;
+pub mod material;
+pub mod quadrature;
+pub mod shape;
+pub mod model;
+pub mod statics;

@@ -1,0 +1,144 @@
+//! An assembled FE model of one part: mesh, DOF map, K and M on one pattern, the fill-reducing
+//! order and the symbolic factorisation, ready for static and eigen solves.
+
+use super::assembly::{Assembler, AssemblyError};
+use super::dofs::{DofMap, UnknownSet};
+use super::material::Elastic;
+use crate::eigen::certify::{self, SturmCheck};
+use crate::eigen::{solve_modes, EigenError, EigenSettings, Modes};
+use crate::linalg::factor::{Analysis, FactorError};
+use crate::linalg::ordering;
+use crate::linalg::sparse::StiffnessMass;
+use crate::mesh::Mesh;
+use std::time::Instant;
+
+/// Failures while building or solving a model.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    #[error(transparent)]
+    Set(#[from] UnknownSet),
+    #[error(transparent)]
+    Assembly(#[from] AssemblyError),
+    #[error("fill-reducing ordering failed: {0}")]
+    Ordering(String),
+    #[error(transparent)]
+    Factor(#[from] FactorError),
+    #[error(transparent)]
+    Eigen(#[from] EigenError),
+    #[error("the model has no free DOFs")]
+    NoDofs,
+}
+
+/// Wall-clock seconds of each phase.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Timings {
+    pub assembly: f64,
+    pub ordering: f64,
+    pub factorisation: f64,
+    pub eigen: f64,
+    pub certification: f64,
+}
+
+/// Assembled model of one part.
+pub struct FeModel {
+    pub mesh: Mesh,
+    pub dofs: DofMap,
+    pub km: StiffnessMass,
+    pub analysis: Analysis,
+    pub timings: Timings,
+}
+
+/// Modal solution with its certificate.
+pub struct ModalSolution {
+    pub modes: Modes,
+    pub residuals: Vec<f64>,
+    pub m_orthogonality: f64,
+    pub sturm: Option<SturmCheck>,
+    pub sigma: f64,
+}
+
+impl FeModel {
+    /// Assembles K, M for `mesh` with `fixed` node sets constrained and analyses the pattern.
+    pub fn build(mesh: Mesh, material: &Elastic, fixed: &[String]) -> Result<Self, ModelError> {
+        let mut timings = Timings::default();
+        let t = Instant::now();
+        let dofs = DofMap::with_fixed_sets(&mesh, fixed)?;
+        if dofs.n_free == 0 {
+            return Err(ModelError::NoDofs);
+        }
+        let asm = Assembler::new(&mesh, &dofs);
+        let km = asm.assemble(&mesh, material)?;
+        timings.assembly = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let node_dofs = dofs.node_dofs();
+        let keep: Vec<bool> = node_dofs.iter().map(|d| !d.is_empty()).collect();
+        let (xadj, adjncy, ids) = asm.graph.without_self_loops(&keep);
+        let order = ordering::nested_dissection(&xadj, &adjncy).map_err(ModelError::Ordering)?;
+        let node_perm: Vec<usize> = order.iter().map(|&v| ids[v]).collect();
+        let (fwd, inv) = ordering::expand_to_dofs(&node_perm, &node_dofs, dofs.n_free);
+        let analysis = Analysis::new(&km.pattern, &fwd, &inv)?;
+        timings.ordering = t.elapsed().as_secs_f64();
+        Ok(Self {
+            mesh,
+            dofs,
+            km,
+            analysis,
+            timings,
+        })
+    }
+
+    pub fn n_free(&self) -> usize {
+        self.dofs.n_free
+    }
+
+    /// The lowest `count` modes with shift `sigma`, certified (residuals, M-orthogonality,
+    /// Sturm count). `guard` extra modes are computed to locate a spectral gap for the check.
+    pub fn modes(&mut self, count: usize, sigma: f64, guard: usize) -> Result<ModalSolution, ModelError> {
+        let n = self.n_free();
+        let nev = (count + guard).min(n.saturating_sub(1)).max(count);
+        let t = Instant::now();
+        let shifted = self.km.shifted(sigma);
+        let llt = self.analysis.llt(&self.km.pattern, &shifted)?;
+        drop(shifted);
+        self.timings.factorisation = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let pattern = &self.km.pattern;
+        let m = &self.km.m;
+        let all = solve_modes(
+            n,
+            &EigenSettings::new(nev, sigma),
+            |x, y| pattern.matvec(m, x, y),
+            |x| llt.solve_vec(x),
+        )?;
+        drop(llt);
+        self.timings.eigen = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let sturm = match certify::sturm_shift(&all.eigenvalues, count, 1e-4) {
+            Some((sigma_c, expected)) => {
+                let found = self
+                    .analysis
+                    .negative_pivots(&self.km.pattern, &self.km.shifted(sigma_c))?;
+                Some(SturmCheck {
+                    shift_hz: sigma_c.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
+                    expected,
+                    found,
+                    ok: found == expected,
+                })
+            }
+            None => None,
+        };
+        let mut modes = all;
+        modes.eigenvalues.truncate(count);
+        modes.vectors.truncate(count * n);
+        let residuals = certify::residuals(&self.km, &modes, sigma);
+        let m_orthogonality = certify::m_orthogonality_error(&self.km, &modes);
+        self.timings.certification = t.elapsed().as_secs_f64();
+        Ok(ModalSolution {
+            modes,
+            residuals,
+            m_orthogonality,
+            sturm,
+            sigma,
+        })
+    }
+}

@@ -1,0 +1,14 @@
+//! linercav: piston-slap-induced cavitation risk of wet cylinder liners.
+//!
+//! The pipeline (see ARCHITECTURE in the README): scene -> mesh -> FE matrices -> modal bases
+//! -> reduced engine model -> slap transient -> analysis -> cavitation risk -> reports.
+//! This crate is the library; `src/main.rs` is a thin command-line front end.
+
+pub mod app;
+pub mod eigen;
+pub mod error;
+pub mod fem;
+pub mod linalg;
+pub mod mesh;
+pub mod report;
+pub mod scene;

@@ -1,0 +1,156 @@
+//! Factorisations of shifted symmetric matrices A = K - sigma M with faer's sparse supernodal
+//! Cholesky, the symbolic analysis done once per pattern and reused for every shift.
+//!
+//! - `llt`: A = L L^T for A positive definite (shift below the spectrum); the solver of the
+//!   shift-invert eigen iteration and of static problems.
+//! - `inertia`: A = L D L^T without pivoting; by Sylvester's law of inertia the number of
+//!   negative entries of D equals the number of eigenvalues of (K, M) below sigma (the Sturm
+//!   count). Used only to certify eigen results, with sigma placed in a spectral gap.
+
+use super::sparse::Pattern;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::{LdltParams, LdltRegularization};
+use faer::linalg::cholesky::llt::factor::{LltParams, LltRegularization};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymbolicCholeskyRaw, SymmetricOrdering,
+};
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::{Conj, MatMut, Par, Side, Spec};
+
+/// Failures of the sparse factorisation, with the pivot where they happened.
+#[derive(Debug, thiserror::Error)]
+pub enum FactorError {
+    #[error("symbolic analysis failed: {0}")]
+    Symbolic(String),
+    #[error("K - sigma M is not positive definite (pivot {pivot} of {n}): the model has unconstrained rigid-body motion at this shift, or a shift above the lowest eigenvalue")]
+    NotPositive { pivot: usize, n: usize },
+    #[error("zero pivot {pivot} of {n} in the LDL^T factorisation: the shift coincides with an eigenvalue")]
+    ZeroPivot { pivot: usize, n: usize },
+}
+
+/// Symbolic analysis (ordering + supernodal structure) of one pattern.
+pub struct Analysis {
+    symbolic: SymbolicCholesky<usize>,
+    n: usize,
+}
+
+fn par() -> Par {
+    if std::env::var_os("LINERCAV_SEQ").is_some() { Par::Seq } else { Par::rayon(0) }
+}
+
+impl Analysis {
+    /// Analyses `pattern` with the fill-reducing order `fwd` (fwd[new] = old) and its inverse.
+    pub fn new(pattern: &Pattern, fwd: &[usize], inv: &[usize]) -> Result<Self, FactorError> {
+        let perm = PermRef::new_checked(fwd, inv, pattern.n);
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_cholesky(
+            pattern.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Custom(perm),
+            params,
+        )
+        .map_err(|e| FactorError::Symbolic(format!("{e:?}")))?;
+        Ok(Self { symbolic, n: pattern.n })
+    }
+
+    /// Number of stored entries of the factor L.
+    pub fn factor_nnz(&self) -> usize {
+        self.symbolic.len_val()
+    }
+
+    /// L L^T factorisation of the matrix with `values` on `pattern`.
+    pub fn llt(&self, pattern: &Pattern, values: &[f64]) -> Result<Llt<'_>, FactorError> {
+        let mut l = vec![0.0; self.symbolic.len_val()];
+        let req = self
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(par(), Spec::<LltParams, f64>::default());
+        let mut mem = MemBuffer::new(req);
+        self.symbolic
+            .factorize_numeric_llt(
+                &mut l,
+                pattern.matrix(values),
+                Side::Lower,
+                LltRegularization::default(),
+                par(),
+                MemStack::new(&mut mem),
+                Spec::<LltParams, f64>::default(),
+            )
+            .map_err(|e| {
+                let faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } = e;
+                FactorError::NotPositive { pivot: index, n: self.n }
+            })?;
+        Ok(Llt { analysis: self, l })
+    }
+
+    /// Number of negative pivots of the L D L^T factorisation of the matrix with `values`:
+    /// the inertia count (number of eigenvalues below the shift).
+    pub fn negative_pivots(&self, pattern: &Pattern, values: &[f64]) -> Result<usize, FactorError> {
+        let mut l = vec![0.0; self.symbolic.len_val()];
+        let req = self
+            .symbolic
+            .factorize_numeric_ldlt_scratch::<f64>(par(), Spec::<LdltParams, f64>::default());
+        let mut mem = MemBuffer::new(req);
+        self.symbolic
+            .factorize_numeric_ldlt(
+                &mut l,
+                pattern.matrix(values),
+                Side::Lower,
+                LdltRegularization::default(),
+                par(),
+                MemStack::new(&mut mem),
+                Spec::<LdltParams, f64>::default(),
+            )
+            .map_err(|e| {
+                let faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } = e;
+                FactorError::ZeroPivot { pivot: index, n: self.n }
+            })?;
+        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
+            unreachable!("supernodal factorisation was forced in the analysis")
+        };
+        let ldlt = SupernodalLdltRef::new(sym, &l);
+        let mut negative = 0;
+        for s in 0..sym.n_supernodes() {
+            let node = ldlt.supernode(s);
+            let val = node.val();
+            let ncols = val.ncols();
+            for j in 0..ncols {
+                let d = val[(j, j)];
+                if d == 0.0 || !d.is_finite() {
+                    return Err(FactorError::ZeroPivot { pivot: node.start() + j, n: self.n });
+                }
+                if d < 0.0 {
+                    negative += 1;
+                }
+            }
+        }
+        Ok(negative)
+    }
+}
+
+/// A numeric L L^T factor bound to its analysis.
+pub struct Llt<'a> {
+    analysis: &'a Analysis,
+    l: Vec<f64>,
+}
+
+impl Llt<'_> {
+    /// Solves A X = B in place for the columns of `rhs` (n x k, column-major).
+    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        let k = rhs.ncols();
+        let sym = &self.analysis.symbolic;
+        let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<f64>(k, par()));
+        LltRef::new(sym, &self.l).solve_in_place_with_conj(Conj::No, rhs, par(), MemStack::new(&mut mem));
+    }
+
+    /// Solves A x = b in place for one vector.
+    pub fn solve_vec(&self, x: &mut [f64]) {
+        let n = x.len();
+        self.solve_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
+    }
+}

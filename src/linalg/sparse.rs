@@ -1,0 +1,81 @@
+//! Symmetric sparse matrices in compressed-column form with both triangles stored.
+//!
+//! K and M share one pattern ([`Pattern`]), so K - sigma M is a combination of two value arrays.
+//! The pattern is built once from the node graph of the mesh: every node couples with the nodes
+//! it shares an element with, each coupling a dense block over the free DOFs of the two nodes.
+//! Rows within a column are sorted (faer requires it).
+
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+
+/// Column-compressed symmetric pattern (both triangles), rows sorted in each column.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pattern {
+    pub n: usize,
+    pub col_ptr: Vec<usize>,
+    pub row_idx: Vec<usize>,
+}
+
+impl Pattern {
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+    /// faer view of the pattern.
+    pub fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
+        // SAFETY-free: new_checked validates sortedness and bounds once.
+        SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
+    }
+    /// faer view of a value array on this pattern.
+    pub fn matrix<'a>(&'a self, values: &'a [f64]) -> SparseColMatRef<'a, usize, f64> {
+        SparseColMatRef::new(self.symbolic(), values)
+    }
+    /// y = A x for a symmetric matrix stored with both triangles. By symmetry column c holds
+    /// row c, so y_c = sum_p A[row_p, c] x[row_p]: a gather per column, parallel over columns.
+    pub fn matvec(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
+        use rayon::prelude::*;
+        y.par_chunks_mut(4096).enumerate().for_each(|(chunk, ys)| {
+            let c0 = chunk * 4096;
+            for (k, yc) in ys.iter_mut().enumerate() {
+                let c = c0 + k;
+                let (a, b) = (self.col_ptr[c], self.col_ptr[c + 1]);
+                *yc = self.row_idx[a..b]
+                    .iter()
+                    .zip(&values[a..b])
+                    .map(|(&r, &v)| v * x[r])
+                    .sum();
+            }
+        });
+    }
+    /// Entries (row, col, value) of the lower triangle, column by column.
+    pub fn lower_entries<'a>(&'a self, values: &'a [f64]) -> impl Iterator<Item = (usize, usize, f64)> + 'a {
+        (0..self.n).flat_map(move |c| {
+            (self.col_ptr[c]..self.col_ptr[c + 1])
+                .filter(move |&p| self.row_idx[p] >= c)
+                .map(move |p| (self.row_idx[p], c, values[p]))
+        })
+    }
+    /// Dense copy (tests and small models only).
+    pub fn to_dense(&self, values: &[f64]) -> Vec<Vec<f64>> {
+        let mut a = vec![vec![0.0; self.n]; self.n];
+        for c in 0..self.n {
+            for p in self.col_ptr[c]..self.col_ptr[c + 1] {
+                a[self.row_idx[p]][c] = values[p];
+            }
+        }
+        a
+    }
+}
+
+/// Sparse symmetric matrix on a shared pattern: K and M of one model.
+#[derive(Clone, Debug)]
+pub struct StiffnessMass {
+    pub pattern: Pattern,
+    pub k: Vec<f64>,
+    pub m: Vec<f64>,
+}
+
+impl StiffnessMass {
+    /// Values of K - sigma M on the shared pattern.
+    pub fn shifted(&self, sigma: f64) -> Vec<f64> {
+        self.k.iter().zip(&self.m).map(|(k, m)| k - sigma * m).collect()
+    }
+}

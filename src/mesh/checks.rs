@@ -1,0 +1,131 @@
+//! Mesh checks run before assembly: inverted or degenerate elements and misplaced mid-edge
+//! nodes are errors; unused nodes are removed with a warning (they would make K and M
+//! singular); disconnected pieces are reported as a warning (each adds six rigid-body modes).
+
+use super::Mesh;
+use crate::fem::element::min_jacobian_ratio;
+
+/// A mesh defect that makes the model unusable.
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    #[error("element {element} ({kind}) is inverted or degenerate: smallest Jacobian {ratio:.3e} of the mean (must be > 0)")]
+    Inverted {
+        element: usize,
+        kind: String,
+        ratio: f64,
+    },
+    #[error("element {element} ({kind}): mid-edge node {node} lies {offset:.2} edge lengths from the midpoint of its edge (wrong node order or badly curved edge)")]
+    MidNode {
+        element: usize,
+        kind: String,
+        node: usize,
+        offset: f64,
+    },
+    #[error("the mesh has no solid elements")]
+    Empty,
+}
+
+/// Non-fatal findings.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CheckReport {
+    pub warnings: Vec<String>,
+    pub pieces: usize,
+    pub removed_nodes: usize,
+}
+
+fn find(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    x
+}
+
+/// Checks the mesh and compacts away unused nodes (renumbering elements and sets).
+pub fn check_and_compact(mesh: &mut Mesh) -> Result<CheckReport, MeshError> {
+    if mesh.num_elements() == 0 {
+        return Err(MeshError::Empty);
+    }
+    let mut report = CheckReport::default();
+    for (e, (kind, nodes)) in mesh.elements().enumerate() {
+        let x = mesh.coords_of(nodes);
+        let nc = kind.num_corners();
+        for (m, &(a, b)) in kind.mid_edges().iter().enumerate() {
+            let len = (0..3).map(|i| (x[a][i] - x[b][i]).powi(2)).sum::<f64>().sqrt();
+            let off = (0..3)
+                .map(|i| (x[nc + m][i] - 0.5 * (x[a][i] + x[b][i])).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            if off > 0.25 * len {
+                return Err(MeshError::MidNode {
+                    element: e,
+                    kind: format!("{kind:?}"),
+                    node: nodes[nc + m],
+                    offset: off / len,
+                });
+            }
+        }
+        let ratio = min_jacobian_ratio(kind, &x);
+        if !(ratio > 1e-6) {
+            return Err(MeshError::Inverted {
+                element: e,
+                kind: format!("{kind:?}"),
+                ratio,
+            });
+        }
+    }
+    // unused nodes
+    let mut used = vec![false; mesh.nodes.len()];
+    for b in &mesh.blocks {
+        for &n in &b.conn {
+            used[n] = true;
+        }
+    }
+    let unused = used.iter().filter(|u| !**u).count();
+    if unused > 0 {
+        let mut new_id = vec![usize::MAX; mesh.nodes.len()];
+        let mut nodes = Vec::with_capacity(mesh.nodes.len() - unused);
+        for (n, &u) in used.iter().enumerate() {
+            if u {
+                new_id[n] = nodes.len();
+                nodes.push(mesh.nodes[n]);
+            }
+        }
+        mesh.nodes = nodes;
+        for b in &mut mesh.blocks {
+            for n in &mut b.conn {
+                *n = new_id[*n];
+            }
+        }
+        for set in mesh.node_sets.values_mut() {
+            *set = set
+                .iter()
+                .filter(|&&n| new_id[n] != usize::MAX)
+                .map(|&n| new_id[n])
+                .collect();
+        }
+        report.removed_nodes = unused;
+        report.warnings.push(format!(
+            "{unused} node(s) belong to no solid element and were removed"
+        ));
+    }
+    // connected pieces
+    let mut parent: Vec<usize> = (0..mesh.nodes.len()).collect();
+    for (_, nodes) in mesh.elements() {
+        let r0 = find(&mut parent, nodes[0]);
+        for &n in &nodes[1..] {
+            let r = find(&mut parent, n);
+            if r != r0 {
+                parent[r] = r0;
+            }
+        }
+    }
+    let pieces = (0..mesh.nodes.len()).filter(|&n| find(&mut parent, n) == n).count();
+    report.pieces = pieces;
+    if pieces > 1 {
+        report.warnings.push(format!(
+            "the mesh has {pieces} disconnected pieces (each free piece adds six rigid-body modes)"
+        ));
+    }
+    Ok(report)
+}

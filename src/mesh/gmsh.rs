@@ -1,0 +1,389 @@
+//! Reader of Gmsh MSH 4.1 ASCII meshes.
+//!
+//! Solid elements: 4-node (type 4) and 10-node (11) tetrahedra, 8-node (5) and 20-node (17)
+//! hexahedra; node order is Gmsh's, which is also ours. Lower-dimensional elements (points,
+//! lines, triangles, quadrangles, of any order) only carry physical groups. Every physical group
+//! becomes a node set (all nodes of its elements) named by `$PhysicalNames`, or `"<dim>:<tag>"`
+//! when unnamed; volume groups also become element sets. Unknown sections are skipped.
+//! Binary files and older format versions are refused with a message saying what to do.
+
+use super::{ElementBlock, Mesh};
+use crate::fem::shape::ElementKind;
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+
+/// Why a mesh file could not be read: the file, the line and what was expected.
+#[derive(Debug, thiserror::Error)]
+#[error("{}:{line}: {msg}", path.display())]
+pub struct MshError {
+    pub path: PathBuf,
+    pub line: usize,
+    pub msg: String,
+}
+
+/// Nodes per element for the Gmsh element types we accept as carriers of physical groups.
+fn nodes_per_type(t: u32) -> Option<usize> {
+    Some(match t {
+        15 => 1,  // point
+        1 => 2,   // line
+        8 => 3,   // line3
+        2 => 3,   // triangle
+        9 => 6,   // triangle6
+        3 => 4,   // quadrangle
+        16 => 8,  // quadrangle8
+        10 => 9,  // quadrangle9
+        4 => 4,   // tetrahedron
+        11 => 10, // tetrahedron10
+        5 => 8,   // hexahedron
+        17 => 20, // hexahedron20
+        12 => 27, // hexahedron27 (refused below)
+        6 => 6,   // prism
+        7 => 5,   // pyramid
+        _ => return None,
+    })
+}
+
+struct Lines<'a> {
+    path: &'a Path,
+    it: std::iter::Enumerate<std::str::Lines<'a>>,
+    line: usize,
+}
+
+impl<'a> Lines<'a> {
+    fn err(&self, msg: impl Into<String>) -> MshError {
+        MshError {
+            path: self.path.to_path_buf(),
+            line: self.line,
+            msg: msg.into(),
+        }
+    }
+    fn next_line(&mut self) -> Result<&'a str, MshError> {
+        for (i, l) in self.it.by_ref() {
+            self.line = i + 1;
+            let t = l.trim();
+            if !t.is_empty() {
+                return Ok(t);
+            }
+        }
+        Err(self.err("unexpected end of file"))
+    }
+    fn numbers<T: std::str::FromStr>(&mut self, what: &str) -> Result<Vec<T>, MshError> {
+        let l = self.next_line()?;
+        l.split_whitespace()
+            .map(|w| {
+                w.parse::<T>()
+                    .map_err(|_| self.err(format!("expected {what}, found '{w}'")))
+            })
+            .collect()
+    }
+    fn expect(&mut self, tag: &str) -> Result<(), MshError> {
+        let l = self.next_line()?;
+        if l != tag {
+            return Err(self.err(format!("expected '{tag}', found '{l}'")));
+        }
+        Ok(())
+    }
+}
+
+fn need<T: Copy>(v: &[T], n: usize, lines: &Lines, what: &str) -> Result<(), MshError> {
+    if v.len() < n {
+        return Err(lines.err(format!(
+            "expected {n} numbers ({what}), found {}",
+            v.len()
+        )));
+    }
+    Ok(())
+}
+
+/// Reads an MSH 4.1 file from disk.
+pub fn read(path: &Path) -> Result<Mesh, MshError> {
+    let bytes = std::fs::read(path).map_err(|e| MshError {
+        path: path.to_path_buf(),
+        line: 0,
+        msg: format!("cannot read the file: {e}"),
+    })?;
+    let text = match std::str::from_utf8(&bytes) {
+        Ok(t) => t,
+        Err(_) => {
+            return Err(MshError {
+                path: path.to_path_buf(),
+                line: 0,
+                msg: "not a text file: binary MSH is not supported, save the mesh as ASCII MSH 4.1 (Gmsh: -format msh41 with Mesh.Binary = 0)".into(),
+            })
+        }
+    };
+    parse(path, text)
+}
+
+/// Parses MSH 4.1 ASCII text; `path` is used in messages only.
+pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
+    let mut lines = Lines {
+        path,
+        it: text.lines().enumerate(),
+        line: 0,
+    };
+    let mut names: HashMap<(i32, i32), String> = HashMap::new();
+    // (dim, entity tag) -> physical tags
+    let mut entity_phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
+    let mut node_id: HashMap<usize, usize> = HashMap::new();
+    let mut nodes: Vec<[f64; 3]> = Vec::new();
+    // element blocks: (dim, entity, gmsh type, flattened node tags)
+    let mut elem_blocks: Vec<(i32, i32, u32, Vec<usize>, usize)> = Vec::new();
+    let mut saw_format = false;
+    let mut saw_nodes = false;
+    let mut saw_elements = false;
+    loop {
+        let l = match lines.next_line() {
+            Ok(l) => l,
+            Err(_) => break,
+        };
+        match l {
+            "$MeshFormat" => {
+                let h = lines.next_line()?;
+                let f: Vec<&str> = h.split_whitespace().collect();
+                if f.len() < 3 {
+                    return Err(lines.err("expected 'version file-type data-size'"));
+                }
+                if f[0] != "4.1" {
+                    return Err(lines.err(format!(
+                        "MSH version {} is not supported: save the mesh as MSH 4.1 (Gmsh: -format msh41)",
+                        f[0]
+                    )));
+                }
+                if f[1] != "0" {
+                    return Err(lines.err(
+                        "binary MSH is not supported: save the mesh as ASCII MSH 4.1 (Mesh.Binary = 0)",
+                    ));
+                }
+                lines.expect("$EndMeshFormat")?;
+                saw_format = true;
+            }
+            "$PhysicalNames" => {
+                let n = lines.numbers::<usize>("number of physical names")?;
+                need(&n, 1, &lines, "count")?;
+                for _ in 0..n[0] {
+                    let l = lines.next_line()?;
+                    let mut it = l.splitn(3, char::is_whitespace);
+                    let dim = it.next().and_then(|w| w.parse::<i32>().ok());
+                    let tag = it.next().and_then(|w| w.parse::<i32>().ok());
+                    let name = it.next().map(|w| w.trim().trim_matches('"').to_string());
+                    match (dim, tag, name) {
+                        (Some(d), Some(t), Some(nm)) => {
+                            names.insert((d, t), nm);
+                        }
+                        _ => return Err(lines.err("expected 'dim tag \"name\"'")),
+                    }
+                }
+                lines.expect("$EndPhysicalNames")?;
+            }
+            "$Entities" => {
+                let c = lines.numbers::<usize>("entity counts")?;
+                need(&c, 4, &lines, "numPoints numCurves numSurfaces numVolumes")?;
+                for (dim, &count) in c.iter().take(4).enumerate() {
+                    for _ in 0..count {
+                        let v = lines.numbers::<f64>("entity record")?;
+                        // points: tag x y z nphys phys...; others: tag 6 bbox nphys phys...
+                        let at = if dim == 0 { 4 } else { 7 };
+                        need(&v, at + 1, &lines, "entity record")?;
+                        let np = v[at] as usize;
+                        need(&v, at + 1 + np, &lines, "physical tags")?;
+                        let tags = v[at + 1..at + 1 + np].iter().map(|&t| t as i32).collect();
+                        entity_phys.insert((dim as i32, v[0] as i32), tags);
+                    }
+                }
+                lines.expect("$EndEntities")?;
+            }
+            "$Nodes" => {
+                let h = lines.numbers::<usize>("'numEntityBlocks numNodes minTag maxTag'")?;
+                need(&h, 4, &lines, "numEntityBlocks numNodes minNodeTag maxNodeTag")?;
+                nodes.reserve(h[1]);
+                for _ in 0..h[0] {
+                    let b = lines.numbers::<i64>("node block header")?;
+                    need(&b, 4, &lines, "entityDim entityTag parametric numNodesInBlock")?;
+                    let parametric = b[2] != 0;
+                    let count = b[3] as usize;
+                    let mut tags = Vec::with_capacity(count);
+                    for _ in 0..count {
+                        let t = lines.numbers::<usize>("node tag")?;
+                        need(&t, 1, &lines, "node tag")?;
+                        tags.push(t[0]);
+                    }
+                    for tag in tags {
+                        let x = lines.numbers::<f64>("node coordinates")?;
+                        need(&x, if parametric { 4 } else { 3 }, &lines, "x y z")?;
+                        if x.iter().any(|v| !v.is_finite()) {
+                            return Err(lines.err("node coordinate is not finite"));
+                        }
+                        if node_id.insert(tag, nodes.len()).is_some() {
+                            return Err(lines.err(format!("node tag {tag} defined twice")));
+                        }
+                        nodes.push([x[0], x[1], x[2]]);
+                    }
+                }
+                lines.expect("$EndNodes")?;
+                saw_nodes = true;
+            }
+            "$Elements" => {
+                let h = lines.numbers::<usize>("'numEntityBlocks numElements minTag maxTag'")?;
+                need(&h, 4, &lines, "numEntityBlocks numElements minElementTag maxElementTag")?;
+                for _ in 0..h[0] {
+                    let b = lines.numbers::<i64>("element block header")?;
+                    need(&b, 4, &lines, "entityDim entityTag elementType numElementsInBlock")?;
+                    let (dim, ent, et, count) = (b[0] as i32, b[1] as i32, b[2] as u32, b[3] as usize);
+                    let nn = nodes_per_type(et).ok_or_else(|| {
+                        lines.err(format!("unsupported element type {et}"))
+                    })?;
+                    if dim == 3 && ElementKind::from_gmsh_type(et).is_none() {
+                        return Err(lines.err(format!(
+                            "solid element type {et} is not supported: use 4- or 10-node tetrahedra (4, 11) or 8- or 20-node hexahedra (5, 17)"
+                        )));
+                    }
+                    let mut conn = Vec::with_capacity(count * nn);
+                    for _ in 0..count {
+                        let v = lines.numbers::<usize>("element record")?;
+                        if v.len() != nn + 1 {
+                            return Err(lines.err(format!(
+                                "element of type {et} needs a tag and {nn} node tags, found {} numbers",
+                                v.len()
+                            )));
+                        }
+                        for &t in &v[1..] {
+                            let id = *node_id.get(&t).ok_or_else(|| {
+                                lines.err(format!("element refers to undefined node tag {t}"))
+                            })?;
+                            conn.push(id);
+                        }
+                    }
+                    elem_blocks.push((dim, ent, et, conn, nn));
+                }
+                lines.expect("$EndElements")?;
+                saw_elements = true;
+            }
+            s if s.starts_with("$End") => {
+                return Err(lines.err(format!("unexpected '{s}'")));
+            }
+            s if s.starts_with('$') => {
+                // skip an unknown section
+                let end = format!("$End{}", &s[1..]);
+                loop {
+                    if lines.next_line()? == end {
+                        break;
+                    }
+                }
+            }
+            other => {
+                return Err(lines.err(format!("expected a section header like '$Nodes', found '{other}'")));
+            }
+        }
+    }
+    let whole = |msg: &str| MshError {
+        path: path.to_path_buf(),
+        line: 0,
+        msg: msg.into(),
+    };
+    if !saw_format {
+        return Err(whole("no $MeshFormat section: not a Gmsh MSH file"));
+    }
+    if !saw_nodes || !saw_elements {
+        return Err(whole("the file needs both $Nodes and $Elements sections"));
+    }
+    let mut mesh = Mesh {
+        nodes,
+        ..Default::default()
+    };
+    let mut by_kind: BTreeMap<ElementKind, Vec<usize>> = BTreeMap::new();
+    let mut set_nodes: BTreeMap<String, BTreeSet<usize>> = BTreeMap::new();
+    let mut vol_blocks: Vec<(ElementKind, i32, usize, usize)> = Vec::new(); // kind, entity, start, count
+    for (dim, ent, et, conn, nn) in &elem_blocks {
+        let phys = entity_phys.get(&(*dim, *ent)).cloned().unwrap_or_default();
+        for p in &phys {
+            let name = names
+                .get(&(*dim, *p))
+                .cloned()
+                .unwrap_or_else(|| format!("{dim}:{p}"));
+            set_nodes.entry(name).or_default().extend(conn.iter().copied());
+        }
+        if *dim == 3 {
+            let kind = ElementKind::from_gmsh_type(*et).expect("checked above");
+            let list = by_kind.entry(kind).or_default();
+            vol_blocks.push((kind, *ent, list.len() / nn, conn.len() / nn));
+            list.extend_from_slice(conn);
+        }
+    }
+    // global element numbering: blocks in kind order
+    let mut offset: BTreeMap<ElementKind, usize> = BTreeMap::new();
+    let mut acc = 0;
+    for (kind, conn) in &by_kind {
+        offset.insert(*kind, acc);
+        acc += conn.len() / kind.num_nodes();
+    }
+    for (kind, ent, start, count) in vol_blocks {
+        for p in entity_phys.get(&(3, ent)).cloned().unwrap_or_default() {
+            let name = names.get(&(3, p)).cloned().unwrap_or_else(|| format!("3:{p}"));
+            let o = offset[&kind] + start;
+            mesh.element_sets.entry(name).or_default().extend(o..o + count);
+        }
+    }
+    mesh.blocks = by_kind
+        .into_iter()
+        .map(|(kind, conn)| ElementBlock { kind, conn })
+        .collect();
+    mesh.node_sets = set_nodes
+        .into_iter()
+        .map(|(k, v)| (k, v.into_iter().collect()))
+        .collect();
+    Ok(mesh)
+}
+
+/// Writes a mesh as MSH 4.1 ASCII: one volume entity per element block, one point entity per
+/// node set holding its nodes as 1-node elements (so the sets survive a round trip as physical
+/// groups of dimension 0).
+pub fn write(mesh: &Mesh, out: &mut impl std::io::Write) -> std::io::Result<()> {
+    writeln!(out, "$MeshFormat\n4.1 0 8\n$EndMeshFormat")?;
+    let sets: Vec<(&String, &Vec<usize>)> = mesh.node_sets.iter().collect();
+    writeln!(out, "$PhysicalNames\n{}", sets.len() + 1)?;
+    for (i, (name, _)) in sets.iter().enumerate() {
+        writeln!(out, "0 {} \"{}\"", i + 1, name)?;
+    }
+    writeln!(out, "3 1 \"solid\"\n$EndPhysicalNames")?;
+    writeln!(out, "$Entities\n{} 0 0 {}", sets.len(), mesh.blocks.len())?;
+    for (i, _) in sets.iter().enumerate() {
+        writeln!(out, "{} 0 0 0 1 {}", i + 1, i + 1)?;
+    }
+    for (b, _) in mesh.blocks.iter().enumerate() {
+        writeln!(out, "{} 0 0 0 0 0 0 1 1 0", b + 1)?;
+    }
+    writeln!(out, "$EndEntities")?;
+    let n = mesh.nodes.len();
+    writeln!(out, "$Nodes\n1 {n} 1 {n}\n3 1 0 {n}")?;
+    for i in 0..n {
+        writeln!(out, "{}", i + 1)?;
+    }
+    for x in &mesh.nodes {
+        writeln!(out, "{:.17e} {:.17e} {:.17e}", x[0], x[1], x[2])?;
+    }
+    writeln!(out, "$EndNodes")?;
+    let n_point_elems: usize = sets.iter().map(|(_, v)| v.len()).sum();
+    let total = mesh.num_elements() + n_point_elems;
+    writeln!(out, "$Elements\n{} {total} 1 {total}", sets.len() + mesh.blocks.len())?;
+    let mut tag = 1;
+    for (i, (_, v)) in sets.iter().enumerate() {
+        writeln!(out, "0 {} 15 {}", i + 1, v.len())?;
+        for &nd in v.iter() {
+            writeln!(out, "{tag} {}", nd + 1)?;
+            tag += 1;
+        }
+    }
+    for (b, blk) in mesh.blocks.iter().enumerate() {
+        writeln!(out, "3 {} {} {}", b + 1, blk.kind.gmsh_type(), blk.len())?;
+        for e in 0..blk.len() {
+            write!(out, "{tag}")?;
+            for &nd in blk.element(e) {
+                write!(out, " {}", nd + 1)?;
+            }
+            writeln!(out)?;
+            tag += 1;
+        }
+    }
+    writeln!(out, "$EndElements")
+}

@@ -1,0 +1,151 @@
+//! Parametric wet cylinder liner: an annular tube with a top flange.
+//!
+//! Frame: z is the cylinder axis, z = 0 at the liner bottom and z = `length` at its top (the
+//! cylinder-head face). The thrust side is +y (theta = 90 deg), the anti-thrust side -y; x is
+//! along the crankshaft. The flange occupies the top `flange_height` between the outer diameter
+//! and the flange diameter. Axial lattice planes are placed exactly at the flange underside, the
+//! top of the lower guide band and every analysis point, so those sets are exact node sets.
+//!
+//! Node sets produced:
+//! - `flange_seat`: flange underside (bears on the crankcase deck counterbore),
+//! - `flange_top`: flange top face (head-bolt clamp load),
+//! - `lower_guide`: outer surface for z <= `guide_height` (radial support in the crankcase),
+//! - `bore_thrust`, `bore_antithrust`: bore lines at theta = 90 and 270 deg (piston contact),
+//! - `outer_thrust`: coolant-side line at theta = 90 deg,
+//! - `point_1` .. `point_n`: single coolant-side nodes on the thrust side, top to bottom.
+
+use super::lattice::{Key, Lattice};
+use super::Mesh;
+use crate::fem::shape::ElementKind;
+use std::f64::consts::PI;
+
+/// Liner geometry, SI units (metres).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinerGeometry {
+    pub outer_diameter: f64,
+    pub inner_diameter: f64,
+    pub length: f64,
+    pub flange_outer_diameter: f64,
+    pub flange_height: f64,
+    pub guide_height: f64,
+    /// Depths of the analysis points below the liner top, top to bottom.
+    pub analysis_depths: Vec<f64>,
+}
+
+/// Mesh density and element kind of the generated liner.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinerMeshing {
+    pub kind: ElementKind,
+    /// Elements around the circumference (multiple of 4).
+    pub circumferential: usize,
+    /// Elements through the wall.
+    pub radial: usize,
+    /// Elements across the flange overhang.
+    pub radial_flange: usize,
+    /// Target axial element size [m].
+    pub axial_size: f64,
+}
+
+/// Splits [a, b] into `ceil((b - a) / h)` equal pieces (at least one) and appends the levels
+/// after `a`.
+fn subdivide(levels: &mut Vec<f64>, a: f64, b: f64, h: f64) {
+    let n = (((b - a) / h) - 1e-9).ceil().max(1.0) as usize;
+    for s in 1..=n {
+        levels.push(a + (b - a) * s as f64 / n as f64);
+    }
+}
+
+/// Coordinate of a doubled index on a level list: even -> level, odd -> midpoint.
+fn level_at(levels: &[f64], doubled: usize) -> f64 {
+    if doubled % 2 == 0 {
+        levels[doubled / 2]
+    } else {
+        0.5 * (levels[doubled / 2] + levels[doubled / 2 + 1])
+    }
+}
+
+/// Generates the liner mesh with its named node sets.
+pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
+    let (ri, ro, rf) = (
+        geo.inner_diameter / 2.0,
+        geo.outer_diameter / 2.0,
+        geo.flange_outer_diameter / 2.0,
+    );
+    let mut r_levels = vec![ri];
+    subdivide(&mut r_levels, ri, ro, (ro - ri) / meshing.radial as f64);
+    let nr_wall = meshing.radial;
+    if rf > ro {
+        subdivide(&mut r_levels, ro, rf, (rf - ro) / meshing.radial_flange.max(1) as f64);
+    }
+    let z_flange = geo.length - geo.flange_height;
+    let mut planes: Vec<f64> = vec![0.0, geo.guide_height, z_flange, geo.length];
+    planes.extend(geo.analysis_depths.iter().map(|d| geo.length - d));
+    planes.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    planes.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let mut z_levels = vec![planes[0]];
+    for w in planes.windows(2) {
+        subdivide(&mut z_levels, w[0], w[1], meshing.axial_size);
+    }
+    let nz = z_levels.len() - 1;
+    let nt = meshing.circumferential;
+    let k_flange = z_levels
+        .iter()
+        .position(|&z| (z - z_flange).abs() < 1e-9)
+        .expect("flange plane is a level");
+    let active = |i: usize, _j: usize, k: usize| i < nr_wall || k >= k_flange;
+    let coord = |key: Key| {
+        let r = level_at(&r_levels, key[0]);
+        let th = PI * key[1] as f64 / nt as f64;
+        let z = level_at(&z_levels, key[2]);
+        [r * th.cos(), r * th.sin(), z]
+    };
+    let lat = Lattice {
+        cells: [r_levels.len() - 1, nt, nz],
+        periodic_j: true,
+        active: &active,
+        coord: &coord,
+    };
+    let lm = lat.generate(meshing.kind);
+    let mut mesh = lm.mesh;
+    let keys = lm.keys;
+    let top = 2 * nz;
+    let kf = 2 * k_flange;
+    let iwall = 2 * nr_wall;
+    let jthrust = nt / 2; // theta = 90 deg in doubled indices (2 nt per turn)
+    let janti = 3 * nt / 2;
+    let z_index = |z: f64| {
+        2 * z_levels
+            .iter()
+            .position(|&l| (l - z).abs() < 1e-9)
+            .expect("plane is a level")
+    };
+    let kguide = z_index(geo.guide_height);
+    let select = |pred: &dyn Fn(&Key) -> bool| -> Vec<usize> {
+        (0..keys.len()).filter(|&n| pred(&keys[n])).collect()
+    };
+    let sets = &mut mesh.node_sets;
+    sets.insert("flange_seat".into(), select(&|k| k[2] == kf && k[0] >= iwall));
+    sets.insert("flange_top".into(), select(&|k| k[2] == top && k[0] >= iwall));
+    sets.insert("lower_guide".into(), select(&|k| k[0] == iwall && k[2] <= kguide));
+    sets.insert("bore_thrust".into(), select(&|k| k[0] == 0 && k[1] == jthrust));
+    sets.insert("bore_antithrust".into(), select(&|k| k[0] == 0 && k[1] == janti));
+    sets.insert(
+        "outer_thrust".into(),
+        select(&|k| k[0] == iwall && k[1] == jthrust && k[2] <= kf),
+    );
+    for (p, d) in geo.analysis_depths.iter().enumerate() {
+        let kz = z_index(geo.length - d);
+        sets.insert(
+            format!("point_{}", p + 1),
+            select(&|k| k[0] == iwall && k[1] == jthrust && k[2] == kz),
+        );
+    }
+    // sort bore lines by height so later stages can interpolate along them
+    for name in ["bore_thrust", "bore_antithrust", "outer_thrust"] {
+        let nodes = &mesh.nodes;
+        if let Some(v) = mesh.node_sets.get_mut(name) {
+            v.sort_by(|&a, &b| nodes[a][2].partial_cmp(&nodes[b][2]).unwrap());
+        }
+    }
+    mesh
+}
