@@ -10,9 +10,14 @@ fn main() {
              (apt-get install -y libarpack2-dev).\npkg-config said: {e}\n\n"
         );
     }
-    let metis_found = ["/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib", "/usr/local/lib"]
-        .iter()
-        .find(|d| std::path::Path::new(&format!("{d}/libmetis.so")).exists());
+    let metis_found = [
+        "/usr/lib/x86_64-linux-gnu",
+        "/usr/lib/aarch64-linux-gnu",
+        "/usr/lib",
+        "/usr/local/lib",
+    ]
+    .iter()
+    .find(|d| std::path::Path::new(&format!("{d}/libmetis.so")).exists());
     match metis_found {
         Some(dir) => {
             println!("cargo:rustc-link-search=native={dir}");

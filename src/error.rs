@@ -1,0 +1,42 @@
+//! The library's top-level error: every stage's typed error, classified for the exit code
+//! (2 = bad input the user can fix, 1 = numerical or system failure).
+
+use crate::fem::model::ModelError;
+use crate::mesh::checks::MeshError;
+use crate::mesh::gmsh::MshError;
+use crate::report::atomic::WriteError;
+use crate::scene::SceneError;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Msh(#[from] MshError),
+    #[error("{}: {source}", file.as_deref().unwrap_or("mesh"))]
+    Mesh {
+        file: Option<String>,
+        #[source]
+        source: MeshError,
+    },
+    #[error("{0}")]
+    Input(String),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error(transparent)]
+    Write(#[from] WriteError),
+}
+
+impl Error {
+    /// 2 for input the user can correct, 1 for failures of the computation or the system.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Scene(_) | Error::Msh(_) | Error::Mesh { .. } | Error::Input(_) => 2,
+            Error::Model(ModelError::Set(_)) | Error::Model(ModelError::NoDofs) => 2,
+            Error::Model(ModelError::Eigen(crate::eigen::EigenError::TooMany { .. })) => 2,
+            Error::Model(_) | Error::Write(_) => 1,
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

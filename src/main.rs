@@ -1,1 +1,175 @@
-fn main(){}
+//! linercav command-line front end: parses arguments, calls the library, prints the result and
+//! maps errors to exit codes (0 ok, 2 bad input, 1 failure), printing the whole cause chain.
+
+use clap::{Args, Parser, Subcommand};
+use linercav::app::{export, modes, ModelInput};
+use linercav::error::Error;
+use linercav::fem::material::Elastic;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(
+    name = "linercav",
+    version,
+    about = "Piston-slap-induced cavitation risk of wet cylinder liners"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// The model: a scene file with a part, or a bare Gmsh mesh with its material.
+#[derive(Args, Clone)]
+struct ModelArgs {
+    /// Scene file (TOML).
+    scene: Option<PathBuf>,
+    /// Part of the scene to analyse.
+    #[arg(long, default_value = "liner")]
+    part: String,
+    /// Override any scene field: --set liner.mesh.radial=3 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
+    /// Gmsh MSH 4.1 mesh instead of a scene.
+    #[arg(long, conflicts_with = "scene")]
+    mesh: Option<PathBuf>,
+    /// Young's modulus [Pa] (with --mesh).
+    #[arg(long, value_name = "PA", allow_negative_numbers = true)]
+    youngs: Option<f64>,
+    /// Poisson's ratio (with --mesh).
+    #[arg(long, value_name = "NU", allow_negative_numbers = true)]
+    poisson: Option<f64>,
+    /// Density [kg/m^3] (with --mesh).
+    #[arg(long, value_name = "KG_M3", allow_negative_numbers = true)]
+    density: Option<f64>,
+    /// Physical group / node set to clamp (repeatable).
+    #[arg(long = "fix", value_name = "GROUP")]
+    fix: Vec<String>,
+}
+
+impl ModelArgs {
+    fn input(&self) -> Result<ModelInput, Error> {
+        match (&self.scene, &self.mesh) {
+            (Some(scene), None) => Ok(ModelInput::Scene {
+                scene: scene.clone(),
+                part: self.part.clone(),
+                sets: self.sets.clone(),
+            }),
+            (None, Some(mesh)) => {
+                let need = |v: Option<f64>, flag: &str| {
+                    v.ok_or_else(|| Error::Input(format!("--mesh needs {flag}")))
+                };
+                Ok(ModelInput::Mesh {
+                    mesh: mesh.clone(),
+                    material: Elastic {
+                        young: need(self.youngs, "--youngs PA")?,
+                        poisson: need(self.poisson, "--poisson NU")?,
+                        density: need(self.density, "--density KG_M3")?,
+                    },
+                    fix: Vec::new(),
+                })
+            }
+            _ => Err(Error::Input("give a scene file or --mesh FILE.msh".into())),
+        }
+    }
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Lowest natural frequencies and modes of a part (ARPACK shift-invert, certified).
+    Modes {
+        #[command(flatten)]
+        model: ModelArgs,
+        /// Number of modes (rigid-body modes included).
+        #[arg(long)]
+        count: usize,
+        /// Shift frequency f_s of sigma = -(2 pi f_s)^2 [Hz] (default: the scene's, or 100).
+        #[arg(long, value_name = "HZ")]
+        shift_hz: Option<f64>,
+        /// Print JSON on stdout.
+        #[arg(long)]
+        json: bool,
+        /// Write the mode shapes to a VTU file for ParaView.
+        #[arg(long, value_name = "FILE.vtu")]
+        vtu: Option<PathBuf>,
+    },
+    /// Write K.mtx and M.mtx (Matrix Market, symmetric, constrained DOFs removed).
+    ExportMatrices {
+        #[command(flatten)]
+        model: ModelArgs,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Write the part's mesh as Gmsh MSH 4.1 ASCII, node sets as physical groups.
+    ExportMesh {
+        #[command(flatten)]
+        model: ModelArgs,
+        /// Output file.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+fn run(cli: Cli, started: Instant) -> Result<(), Error> {
+    match cli.command {
+        Command::Modes {
+            model,
+            count,
+            shift_hz,
+            json,
+            vtu,
+        } => {
+            let req = modes::ModesRequest {
+                input: model.input()?,
+                count,
+                extra_fix: if model.scene.is_some() || model.mesh.is_some() {
+                    model.fix.clone()
+                } else {
+                    vec![]
+                },
+                vtu,
+                shift_hz,
+            };
+            let report = modes::run(&req, started)?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report).expect("serialisable")
+                );
+            } else {
+                print!("{}", report.to_text());
+            }
+        }
+        Command::ExportMatrices { model, out } => {
+            let r = export::export_matrices(&model.input()?, &model.fix, &out)?;
+            println!(
+                "wrote {} and {} ({} DOFs, {} lower-triangle entries)",
+                r.files[0].display(),
+                r.files[1].display(),
+                r.dofs,
+                r.nnz_lower
+            );
+        }
+        Command::ExportMesh { model, out } => {
+            let n = export::export_mesh(&model.input()?, &out)?;
+            println!("wrote {} ({n} nodes)", out.display());
+        }
+    }
+    Ok(())
+}
+
+fn main() {
+    let started = Instant::now();
+    let cli = Cli::parse();
+    if let Err(e) = run(cli, started) {
+        eprint!("error: {e}");
+        let mut source = std::error::Error::source(&e);
+        while let Some(s) = source {
+            eprint!("\n  caused by: {s}");
+            source = s.source();
+        }
+        eprintln!();
+        std::process::exit(e.exit_code());
+    }
+}

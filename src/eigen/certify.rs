@@ -28,7 +28,10 @@ pub fn residuals(km: &StiffnessMass, modes: &Modes, sigma: f64) -> Vec<f64> {
             km.pattern.matvec(&km.m, phi, &mut mx);
             let lam = modes.eigenvalues[j];
             let r: Vec<f64> = kx.iter().zip(&mx).map(|(k, m)| k - lam * m).collect();
-            norm(&r) / norm(&kx).max(sigma.abs() * norm(&mx)).max(f64::MIN_POSITIVE)
+            norm(&r)
+                / norm(&kx)
+                    .max(sigma.abs() * norm(&mx))
+                    .max(f64::MIN_POSITIVE)
         })
         .collect()
 }
@@ -39,12 +42,18 @@ pub fn m_orthogonality_error(km: &StiffnessMass, modes: &Modes) -> f64 {
     let c = modes.count();
     let mut mphi = vec![0.0; n * c];
     for j in 0..c {
-        km.pattern.matvec(&km.m, modes.vector(j), &mut mphi[j * n..(j + 1) * n]);
+        km.pattern
+            .matvec(&km.m, modes.vector(j), &mut mphi[j * n..(j + 1) * n]);
     }
     let mut worst: f64 = 0.0;
     for i in 0..c {
         for j in 0..c {
-            let dot: f64 = modes.vector(i).iter().zip(&mphi[j * n..(j + 1) * n]).map(|(a, b)| a * b).sum();
+            let dot: f64 = modes
+                .vector(i)
+                .iter()
+                .zip(&mphi[j * n..(j + 1) * n])
+                .map(|(a, b)| a * b)
+                .sum();
             let e = if i == j { 1.0 } else { 0.0 };
             worst = worst.max((dot - e).abs());
         }

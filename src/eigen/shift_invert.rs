@@ -96,7 +96,9 @@ fn start_vector(n: usize) -> Vec<f64> {
     let mut s: u64 = 0x2545_f491_4f6c_dd1d;
     (0..n)
         .map(|_| {
-            s = s.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            s = s
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
             0.5 + ((s >> 11) as f64) / ((1u64 << 53) as f64)
         })
         .collect()

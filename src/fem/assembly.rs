@@ -131,14 +131,19 @@ impl Assembler {
         let mut m = vec![0.0; nnz];
         let elems: Vec<(crate::fem::shape::ElementKind, &[usize])> = mesh.elements().collect();
         const CHUNK: usize = 512;
-        for (c, chunk) in elems.chunks(CHUNK * rayon::current_num_threads().max(1)).enumerate() {
+        for (c, chunk) in elems
+            .chunks(CHUNK * rayon::current_num_threads().max(1))
+            .enumerate()
+        {
             let mats: Vec<Result<(Vec<f64>, Vec<f64>), AssemblyError>> = chunk
                 .par_iter()
                 .enumerate()
                 .map(|(i, (kind, nodes))| {
-                    stiffness_mass(*kind, &mesh.coords_of(nodes), mat).map_err(|source| AssemblyError {
-                        element: c * CHUNK * rayon::current_num_threads().max(1) + i,
-                        source,
+                    stiffness_mass(*kind, &mesh.coords_of(nodes), mat).map_err(|source| {
+                        AssemblyError {
+                            element: c * CHUNK * rayon::current_num_threads().max(1) + i,
+                            source,
+                        }
                     })
                 })
                 .collect();

@@ -56,10 +56,18 @@ pub fn rules(kind: ElementKind) -> &'static [Tabulated; 2] {
     static H8: OnceLock<[Tabulated; 2]> = OnceLock::new();
     static H20: OnceLock<[Tabulated; 2]> = OnceLock::new();
     match kind {
-        ElementKind::Tet4 => T4.get_or_init(|| [tabulate(kind, tet_rule(1)), tabulate(kind, tet_rule(2))]),
-        ElementKind::Tet10 => T10.get_or_init(|| [tabulate(kind, tet_rule4()), tabulate(kind, tet_rule(4))]),
-        ElementKind::Hex8 => H8.get_or_init(|| [tabulate(kind, hex_rule(2)), tabulate(kind, hex_rule(2))]),
-        ElementKind::Hex20 => H20.get_or_init(|| [tabulate(kind, hex_rule(3)), tabulate(kind, hex_rule(3))]),
+        ElementKind::Tet4 => {
+            T4.get_or_init(|| [tabulate(kind, tet_rule(1)), tabulate(kind, tet_rule(2))])
+        }
+        ElementKind::Tet10 => {
+            T10.get_or_init(|| [tabulate(kind, tet_rule4()), tabulate(kind, tet_rule(4))])
+        }
+        ElementKind::Hex8 => {
+            H8.get_or_init(|| [tabulate(kind, hex_rule(2)), tabulate(kind, hex_rule(2))])
+        }
+        ElementKind::Hex20 => {
+            H20.get_or_init(|| [tabulate(kind, hex_rule(3)), tabulate(kind, hex_rule(3))])
+        }
     }
 }
 
@@ -88,7 +96,10 @@ fn gradients(
     if !(det > 0.0) {
         return Err(ElementError::BadJacobian { det, xi });
     }
-    let jit = j.try_inverse().ok_or(ElementError::BadJacobian { det, xi })?.transpose();
+    let jit = j
+        .try_inverse()
+        .ok_or(ElementError::BadJacobian { det, xi })?
+        .transpose();
     for (ga, d) in g.iter_mut().zip(dn) {
         let v = jit * Vector3::new(d[0], d[1], d[2]);
         *ga = [v[0], v[1], v[2]];
@@ -97,7 +108,17 @@ fn gradients(
 }
 
 /// Adds w * K_ab(g_a, g_b) for all node pairs to the dense `k` (size nd x nd, nd = 3 n).
-fn add_isotropic_stiffness(k: &mut [f64], nd: usize, ga: &[[f64; 3]], gb: &[[f64; 3]], lam: f64, mu: f64, w: f64, row0: usize, col0: usize) {
+fn add_isotropic_stiffness(
+    k: &mut [f64],
+    nd: usize,
+    ga: &[[f64; 3]],
+    gb: &[[f64; 3]],
+    lam: f64,
+    mu: f64,
+    w: f64,
+    row0: usize,
+    col0: usize,
+) {
     for (a, p) in ga.iter().enumerate() {
         for (b, q) in gb.iter().enumerate() {
             let dot = p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
@@ -155,7 +176,12 @@ pub fn stiffness_mass(
 }
 
 /// Adds the Wilson–Taylor incompatible modes to a Hex8 stiffness and condenses them out.
-fn condense_incompatible_modes(coords: &[[f64; 3]], lam: f64, mu: f64, k: &mut [f64]) -> Result<(), ElementError> {
+fn condense_incompatible_modes(
+    coords: &[[f64; 3]],
+    lam: f64,
+    mu: f64,
+    k: &mut [f64],
+) -> Result<(), ElementError> {
     let [kr, _] = rules(ElementKind::Hex8);
     let mut dn0 = vec![[0.0; 3]; 8];
     let mut n0 = vec![0.0; 8];
@@ -163,9 +189,18 @@ fn condense_incompatible_modes(coords: &[[f64; 3]], lam: f64, mu: f64, k: &mut [
     let j0 = jacobian(coords, &dn0);
     let det0 = j0.determinant();
     if !(det0 > 0.0) {
-        return Err(ElementError::BadJacobian { det: det0, xi: [0.0; 3] });
+        return Err(ElementError::BadJacobian {
+            det: det0,
+            xi: [0.0; 3],
+        });
     }
-    let j0it = j0.try_inverse().ok_or(ElementError::BadJacobian { det: det0, xi: [0.0; 3] })?.transpose();
+    let j0it = j0
+        .try_inverse()
+        .ok_or(ElementError::BadJacobian {
+            det: det0,
+            xi: [0.0; 3],
+        })?
+        .transpose();
     // Combined matrix over 8 nodes + 3 bubble "nodes" (33 x 33): [K_uu K_ua; K_au K_aa].
     let nt = 33;
     let mut kt = vec![0.0; nt * nt];
@@ -183,7 +218,10 @@ fn condense_incompatible_modes(coords: &[[f64; 3]], lam: f64, mu: f64, k: &mut [
     }
     let kaa = DMatrix::from_fn(9, 9, |r, c| kt[(24 + r) * nt + 24 + c]);
     let kau = DMatrix::from_fn(9, 24, |r, c| kt[(24 + r) * nt + c]);
-    let chol = kaa.cholesky().ok_or(ElementError::BadJacobian { det: det0, xi: [0.0; 3] })?;
+    let chol = kaa.cholesky().ok_or(ElementError::BadJacobian {
+        det: det0,
+        xi: [0.0; 3],
+    })?;
     let x = chol.solve(&kau); // K_aa^{-1} K_au
     for r in 0..24 {
         for c in 0..24 {

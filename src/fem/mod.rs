@@ -5,7 +5,7 @@ pub mod assembly;
 pub mod dofs;
 pub mod element;
 pub mod material;
+pub mod model;
 pub mod quadrature;
 pub mod shape;
-pub mod model;
 pub mod statics;

@@ -93,7 +93,12 @@ impl FeModel {
 
     /// The lowest `count` modes with shift `sigma`, certified (residuals, M-orthogonality,
     /// Sturm count). `guard` extra modes are computed to locate a spectral gap for the check.
-    pub fn modes(&mut self, count: usize, sigma: f64, guard: usize) -> Result<ModalSolution, ModelError> {
+    pub fn modes(
+        &mut self,
+        count: usize,
+        sigma: f64,
+        guard: usize,
+    ) -> Result<ModalSolution, ModelError> {
         let n = self.n_free();
         let nev = (count + guard).min(n.saturating_sub(1)).max(count);
         let t = Instant::now();

@@ -61,7 +61,10 @@ pub fn tet_rule4() -> Vec<QuadPoint> {
     let b = 0.138_196_601_125_010_5;
     [[b, b, b], [a, b, b], [b, a, b], [b, b, a]]
         .into_iter()
-        .map(|xi| QuadPoint { xi, weight: 1.0 / 24.0 })
+        .map(|xi| QuadPoint {
+            xi,
+            weight: 1.0 / 24.0,
+        })
         .collect()
 }
 
@@ -106,8 +109,8 @@ mod tests {
             for a in 0..=max_deg {
                 for b in 0..=(max_deg - a) {
                     for c in 0..=(max_deg - a - b) {
-                        let exact = factorial(a) * factorial(b) * factorial(c)
-                            / factorial(a + b + c + 3);
+                        let exact =
+                            factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + 3);
                         let q: f64 = rule
                             .iter()
                             .map(|p| {
@@ -127,11 +130,23 @@ mod tests {
     #[test]
     fn tet_rule4_exact_to_degree_2() {
         let rule = tet_rule4();
-        for (a, b, c) in [(0, 0, 0), (1, 0, 0), (0, 1, 1), (2, 0, 0), (0, 0, 2), (1, 1, 0)] {
+        for (a, b, c) in [
+            (0, 0, 0),
+            (1, 0, 0),
+            (0, 1, 1),
+            (2, 0, 0),
+            (0, 0, 2),
+            (1, 1, 0),
+        ] {
             let exact = factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + 3);
             let q: f64 = rule
                 .iter()
-                .map(|p| p.weight * p.xi[0].powi(a as i32) * p.xi[1].powi(b as i32) * p.xi[2].powi(c as i32))
+                .map(|p| {
+                    p.weight
+                        * p.xi[0].powi(a as i32)
+                        * p.xi[1].powi(b as i32)
+                        * p.xi[2].powi(c as i32)
+                })
                 .sum();
             assert!((q - exact).abs() < 1e-15);
         }
@@ -142,7 +157,11 @@ mod tests {
     fn gauss_legendre_exact_to_degree_2n_minus_1() {
         for n in 1..=4usize {
             for k in 0..(2 * n) {
-                let exact = if k % 2 == 1 { 0.0 } else { 2.0 / (k as f64 + 1.0) };
+                let exact = if k % 2 == 1 {
+                    0.0
+                } else {
+                    2.0 / (k as f64 + 1.0)
+                };
                 let q: f64 = gauss_legendre(n)
                     .iter()
                     .map(|(x, w)| w * x.powi(k as i32))

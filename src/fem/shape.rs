@@ -251,7 +251,11 @@ mod tests {
                     assert!((n[a] - e).abs() < 1e-14, "{kind:?} N_{a}(x_{b})");
                 }
             }
-            let xi = if kind.is_tet() { [0.2, 0.3, 0.1] } else { [0.3, -0.4, 0.7] };
+            let xi = if kind.is_tet() {
+                [0.2, 0.3, 0.1]
+            } else {
+                [0.3, -0.4, 0.7]
+            };
             kind.eval(xi, &mut n, &mut dn);
             assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-14);
             for k in 0..3 {
@@ -265,7 +269,11 @@ mod tests {
     fn derivatives_match_finite_differences() {
         for kind in ALL {
             let nn = kind.num_nodes();
-            let xi = if kind.is_tet() { [0.21, 0.17, 0.33] } else { [0.3, -0.45, 0.62] };
+            let xi = if kind.is_tet() {
+                [0.21, 0.17, 0.33]
+            } else {
+                [0.3, -0.45, 0.62]
+            };
             let (mut n, mut dn) = (vec![0.0; nn], vec![[0.0; 3]; nn]);
             let (mut np, mut nm, mut scratch) = (vec![0.0; nn], vec![0.0; nn], vec![[0.0; 3]; nn]);
             kind.eval(xi, &mut n, &mut dn);

@@ -12,11 +12,11 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltParams, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltParams, LltRegularization};
 use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
     SymbolicCholeskyRaw, SymmetricOrdering,
 };
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Conj, MatMut, Par, Side, Spec};
 
@@ -38,7 +38,11 @@ pub struct Analysis {
 }
 
 fn par() -> Par {
-    if std::env::var_os("LINERCAV_SEQ").is_some() { Par::Seq } else { Par::rayon(0) }
+    if std::env::var_os("LINERCAV_SEQ").is_some() {
+        Par::Seq
+    } else {
+        Par::rayon(0)
+    }
 }
 
 impl Analysis {
@@ -56,7 +60,10 @@ impl Analysis {
             params,
         )
         .map_err(|e| FactorError::Symbolic(format!("{e:?}")))?;
-        Ok(Self { symbolic, n: pattern.n })
+        Ok(Self {
+            symbolic,
+            n: pattern.n,
+        })
     }
 
     /// Number of stored entries of the factor L.
@@ -83,7 +90,10 @@ impl Analysis {
             )
             .map_err(|e| {
                 let faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } = e;
-                FactorError::NotPositive { pivot: index, n: self.n }
+                FactorError::NotPositive {
+                    pivot: index,
+                    n: self.n,
+                }
             })?;
         Ok(Llt { analysis: self, l })
     }
@@ -108,7 +118,10 @@ impl Analysis {
             )
             .map_err(|e| {
                 let faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } = e;
-                FactorError::ZeroPivot { pivot: index, n: self.n }
+                FactorError::ZeroPivot {
+                    pivot: index,
+                    n: self.n,
+                }
             })?;
         let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
             unreachable!("supernodal factorisation was forced in the analysis")
@@ -122,7 +135,10 @@ impl Analysis {
             for j in 0..ncols {
                 let d = val[(j, j)];
                 if d == 0.0 || !d.is_finite() {
-                    return Err(FactorError::ZeroPivot { pivot: node.start() + j, n: self.n });
+                    return Err(FactorError::ZeroPivot {
+                        pivot: node.start() + j,
+                        n: self.n,
+                    });
                 }
                 if d < 0.0 {
                     negative += 1;
@@ -145,7 +161,12 @@ impl Llt<'_> {
         let k = rhs.ncols();
         let sym = &self.analysis.symbolic;
         let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<f64>(k, par()));
-        LltRef::new(sym, &self.l).solve_in_place_with_conj(Conj::No, rhs, par(), MemStack::new(&mut mem));
+        LltRef::new(sym, &self.l).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            par(),
+            MemStack::new(&mut mem),
+        );
     }
 
     /// Solves A x = b in place for one vector.

@@ -59,7 +59,11 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>,
 
 /// Expands a node order to a DOF order: the free DOFs of each node in the node order.
 /// `node_dofs[node]` lists that node's free DOF indices. Returns (fwd, inv) with fwd[new] = old.
-pub fn expand_to_dofs(node_perm: &[usize], node_dofs: &[Vec<usize>], n_dofs: usize) -> (Vec<usize>, Vec<usize>) {
+pub fn expand_to_dofs(
+    node_perm: &[usize],
+    node_dofs: &[Vec<usize>],
+    n_dofs: usize,
+) -> (Vec<usize>, Vec<usize>) {
     let mut fwd = Vec::with_capacity(n_dofs);
     for &node in node_perm {
         fwd.extend_from_slice(&node_dofs[node]);

@@ -46,7 +46,10 @@ impl Pattern {
         });
     }
     /// Entries (row, col, value) of the lower triangle, column by column.
-    pub fn lower_entries<'a>(&'a self, values: &'a [f64]) -> impl Iterator<Item = (usize, usize, f64)> + 'a {
+    pub fn lower_entries<'a>(
+        &'a self,
+        values: &'a [f64],
+    ) -> impl Iterator<Item = (usize, usize, f64)> + 'a {
         (0..self.n).flat_map(move |c| {
             (self.col_ptr[c]..self.col_ptr[c + 1])
                 .filter(move |&p| self.row_idx[p] >= c)
@@ -76,6 +79,10 @@ pub struct StiffnessMass {
 impl StiffnessMass {
     /// Values of K - sigma M on the shared pattern.
     pub fn shifted(&self, sigma: f64) -> Vec<f64> {
-        self.k.iter().zip(&self.m).map(|(k, m)| k - sigma * m).collect()
+        self.k
+            .iter()
+            .zip(&self.m)
+            .map(|(k, m)| k - sigma * m)
+            .collect()
     }
 }

@@ -51,7 +51,10 @@ pub fn check_and_compact(mesh: &mut Mesh) -> Result<CheckReport, MeshError> {
         let x = mesh.coords_of(nodes);
         let nc = kind.num_corners();
         for (m, &(a, b)) in kind.mid_edges().iter().enumerate() {
-            let len = (0..3).map(|i| (x[a][i] - x[b][i]).powi(2)).sum::<f64>().sqrt();
+            let len = (0..3)
+                .map(|i| (x[a][i] - x[b][i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
             let off = (0..3)
                 .map(|i| (x[nc + m][i] - 0.5 * (x[a][i] + x[b][i])).powi(2))
                 .sum::<f64>()
@@ -120,7 +123,9 @@ pub fn check_and_compact(mesh: &mut Mesh) -> Result<CheckReport, MeshError> {
             }
         }
     }
-    let pieces = (0..mesh.nodes.len()).filter(|&n| find(&mut parent, n) == n).count();
+    let pieces = (0..mesh.nodes.len())
+        .filter(|&n| find(&mut parent, n) == n)
+        .count();
     report.pieces = pieces;
     if pieces > 1 {
         report.warnings.push(format!(

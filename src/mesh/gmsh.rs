@@ -87,10 +87,7 @@ impl<'a> Lines<'a> {
 
 fn need<T: Copy>(v: &[T], n: usize, lines: &Lines, what: &str) -> Result<(), MshError> {
     if v.len() < n {
-        return Err(lines.err(format!(
-            "expected {n} numbers ({what}), found {}",
-            v.len()
-        )));
+        return Err(lines.err(format!("expected {n} numbers ({what}), found {}", v.len())));
     }
     Ok(())
 }
@@ -195,11 +192,21 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
             }
             "$Nodes" => {
                 let h = lines.numbers::<usize>("'numEntityBlocks numNodes minTag maxTag'")?;
-                need(&h, 4, &lines, "numEntityBlocks numNodes minNodeTag maxNodeTag")?;
+                need(
+                    &h,
+                    4,
+                    &lines,
+                    "numEntityBlocks numNodes minNodeTag maxNodeTag",
+                )?;
                 nodes.reserve(h[1]);
                 for _ in 0..h[0] {
                     let b = lines.numbers::<i64>("node block header")?;
-                    need(&b, 4, &lines, "entityDim entityTag parametric numNodesInBlock")?;
+                    need(
+                        &b,
+                        4,
+                        &lines,
+                        "entityDim entityTag parametric numNodesInBlock",
+                    )?;
                     let parametric = b[2] != 0;
                     let count = b[3] as usize;
                     let mut tags = Vec::with_capacity(count);
@@ -225,14 +232,24 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
             }
             "$Elements" => {
                 let h = lines.numbers::<usize>("'numEntityBlocks numElements minTag maxTag'")?;
-                need(&h, 4, &lines, "numEntityBlocks numElements minElementTag maxElementTag")?;
+                need(
+                    &h,
+                    4,
+                    &lines,
+                    "numEntityBlocks numElements minElementTag maxElementTag",
+                )?;
                 for _ in 0..h[0] {
                     let b = lines.numbers::<i64>("element block header")?;
-                    need(&b, 4, &lines, "entityDim entityTag elementType numElementsInBlock")?;
-                    let (dim, ent, et, count) = (b[0] as i32, b[1] as i32, b[2] as u32, b[3] as usize);
-                    let nn = nodes_per_type(et).ok_or_else(|| {
-                        lines.err(format!("unsupported element type {et}"))
-                    })?;
+                    need(
+                        &b,
+                        4,
+                        &lines,
+                        "entityDim entityTag elementType numElementsInBlock",
+                    )?;
+                    let (dim, ent, et, count) =
+                        (b[0] as i32, b[1] as i32, b[2] as u32, b[3] as usize);
+                    let nn = nodes_per_type(et)
+                        .ok_or_else(|| lines.err(format!("unsupported element type {et}")))?;
                     if dim == 3 && ElementKind::from_gmsh_type(et).is_none() {
                         return Err(lines.err(format!(
                             "solid element type {et} is not supported: use 4- or 10-node tetrahedra (4, 11) or 8- or 20-node hexahedra (5, 17)"
@@ -272,7 +289,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                 }
             }
             other => {
-                return Err(lines.err(format!("expected a section header like '$Nodes', found '{other}'")));
+                return Err(lines.err(format!(
+                    "expected a section header like '$Nodes', found '{other}'"
+                )));
             }
         }
     }
@@ -301,7 +320,10 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                 .get(&(*dim, *p))
                 .cloned()
                 .unwrap_or_else(|| format!("{dim}:{p}"));
-            set_nodes.entry(name).or_default().extend(conn.iter().copied());
+            set_nodes
+                .entry(name)
+                .or_default()
+                .extend(conn.iter().copied());
         }
         if *dim == 3 {
             let kind = ElementKind::from_gmsh_type(*et).expect("checked above");
@@ -319,9 +341,15 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
     }
     for (kind, ent, start, count) in vol_blocks {
         for p in entity_phys.get(&(3, ent)).cloned().unwrap_or_default() {
-            let name = names.get(&(3, p)).cloned().unwrap_or_else(|| format!("3:{p}"));
+            let name = names
+                .get(&(3, p))
+                .cloned()
+                .unwrap_or_else(|| format!("3:{p}"));
             let o = offset[&kind] + start;
-            mesh.element_sets.entry(name).or_default().extend(o..o + count);
+            mesh.element_sets
+                .entry(name)
+                .or_default()
+                .extend(o..o + count);
         }
     }
     mesh.blocks = by_kind
@@ -365,7 +393,11 @@ pub fn write(mesh: &Mesh, out: &mut impl std::io::Write) -> std::io::Result<()> 
     writeln!(out, "$EndNodes")?;
     let n_point_elems: usize = sets.iter().map(|(_, v)| v.len()).sum();
     let total = mesh.num_elements() + n_point_elems;
-    writeln!(out, "$Elements\n{} {total} 1 {total}", sets.len() + mesh.blocks.len())?;
+    writeln!(
+        out,
+        "$Elements\n{} {total} 1 {total}",
+        sets.len() + mesh.blocks.len()
+    )?;
     let mut tag = 1;
     for (i, (_, v)) in sets.iter().enumerate() {
         writeln!(out, "0 {} 15 {}", i + 1, v.len())?;

@@ -16,7 +16,14 @@ use std::collections::HashMap;
 pub type Key = [usize; 3];
 
 /// The six Kuhn tetrahedra of the unit cube as paths of corner bit-vectors.
-const KUHN: [[usize; 3]; 6] = [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]];
+const KUHN: [[usize; 3]; 6] = [
+    [0, 1, 2],
+    [0, 2, 1],
+    [1, 0, 2],
+    [1, 2, 0],
+    [2, 0, 1],
+    [2, 1, 0],
+];
 /// Gmsh hex corner order as (di, dj, dk) offsets.
 const HEX_OFFSETS: [[usize; 3]; 8] = [
     [0, 0, 0],
@@ -94,8 +101,10 @@ impl Lattice<'_> {
                     for mut corners in cells_corners {
                         if kind.is_tet() {
                             // orient positively: signed volume of the corner tetrahedron
-                            let p: Vec<[f64; 3]> =
-                                corners.iter().map(|&c| (self.coord)(self.wrap(c))).collect();
+                            let p: Vec<[f64; 3]> = corners
+                                .iter()
+                                .map(|&c| (self.coord)(self.wrap(c)))
+                                .collect();
                             if signed_tet_volume(&p) < 0.0 {
                                 corners.swap(1, 2);
                             }

@@ -75,7 +75,12 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
     subdivide(&mut r_levels, ri, ro, (ro - ri) / meshing.radial as f64);
     let nr_wall = meshing.radial;
     if rf > ro {
-        subdivide(&mut r_levels, ro, rf, (rf - ro) / meshing.radial_flange.max(1) as f64);
+        subdivide(
+            &mut r_levels,
+            ro,
+            rf,
+            (rf - ro) / meshing.radial_flange.max(1) as f64,
+        );
     }
     let z_flange = geo.length - geo.flange_height;
     let mut planes: Vec<f64> = vec![0.0, geo.guide_height, z_flange, geo.length];
@@ -124,11 +129,26 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
         (0..keys.len()).filter(|&n| pred(&keys[n])).collect()
     };
     let sets = &mut mesh.node_sets;
-    sets.insert("flange_seat".into(), select(&|k| k[2] == kf && k[0] >= iwall));
-    sets.insert("flange_top".into(), select(&|k| k[2] == top && k[0] >= iwall));
-    sets.insert("lower_guide".into(), select(&|k| k[0] == iwall && k[2] <= kguide));
-    sets.insert("bore_thrust".into(), select(&|k| k[0] == 0 && k[1] == jthrust));
-    sets.insert("bore_antithrust".into(), select(&|k| k[0] == 0 && k[1] == janti));
+    sets.insert(
+        "flange_seat".into(),
+        select(&|k| k[2] == kf && k[0] >= iwall),
+    );
+    sets.insert(
+        "flange_top".into(),
+        select(&|k| k[2] == top && k[0] >= iwall),
+    );
+    sets.insert(
+        "lower_guide".into(),
+        select(&|k| k[0] == iwall && k[2] <= kguide),
+    );
+    sets.insert(
+        "bore_thrust".into(),
+        select(&|k| k[0] == 0 && k[1] == jthrust),
+    );
+    sets.insert(
+        "bore_antithrust".into(),
+        select(&|k| k[0] == 0 && k[1] == janti),
+    );
     sets.insert(
         "outer_thrust".into(),
         select(&|k| k[0] == iwall && k[1] == jthrust && k[2] <= kf),

@@ -5,8 +5,8 @@
 
 pub mod checks;
 pub mod gmsh;
-pub mod liner;
 pub mod lattice;
+pub mod liner;
 
 use crate::fem::shape::ElementKind;
 use std::collections::BTreeMap;

@@ -1,0 +1,322 @@
+//! Scenes: one TOML file describes the engine, its parts, materials and solver settings.
+//!
+//! Loading goes text -> TOML tree -> `--set` overrides -> raw structs (serde, unknown keys
+//! rejected) -> validated [`Scene`] in SI units. Every error names the file and the key.
+
+pub mod overrides;
+pub mod raw;
+
+use crate::fem::material::Elastic;
+use crate::fem::shape::ElementKind;
+use crate::mesh::liner::{LinerGeometry, LinerMeshing};
+use raw::RawScene;
+use std::path::{Path, PathBuf};
+
+/// A scene that cannot be used, with the file and key at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{}: cannot read the scene file: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: not valid TOML: {msg}", path.display())]
+    Syntax { path: PathBuf, msg: String },
+    #[error("{}: key '{key}': {msg}", path.display())]
+    Field {
+        path: PathBuf,
+        key: String,
+        msg: String,
+    },
+    #[error(transparent)]
+    Override(#[from] overrides::OverrideError),
+}
+
+/// Engine layout and operating point, SI.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Engine {
+    pub cylinders: usize,
+    pub firing_order: Vec<usize>,
+    pub bore: f64,
+    pub stroke: f64,
+    pub rod_length: f64,
+    pub cylinder_pitch: f64,
+    pub speed_rpm: f64,
+}
+
+/// Where a part's mesh comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MeshSource {
+    Liner {
+        geometry: LinerGeometry,
+        meshing: LinerMeshing,
+    },
+    File(PathBuf),
+}
+
+/// One part: mesh source, material and the sets fixed in a stand-alone modal analysis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    pub name: String,
+    pub source: MeshSource,
+    pub material: Elastic,
+    pub fix: Vec<String>,
+}
+
+/// Modal solver settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solver {
+    pub shift_hz: f64,
+    pub guard_modes: usize,
+}
+
+impl Solver {
+    /// The shift sigma = -(2 pi f_s)^2 [rad^2/s^2].
+    pub fn sigma(&self) -> f64 {
+        -(2.0 * std::f64::consts::PI * self.shift_hz).powi(2)
+    }
+}
+
+/// A validated scene, SI units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub path: PathBuf,
+    pub title: String,
+    pub engine: Engine,
+    pub liner: Part,
+    pub solver: Solver,
+}
+
+/// Part names a scene knows.
+pub const PARTS: [&str; 1] = ["liner"];
+
+impl Scene {
+    /// Reads, overrides and validates a scene file.
+    pub fn load(path: &Path, sets: &[String]) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_str_with(path, &text, sets)
+    }
+
+    /// Parses scene text; `path` locates relative mesh files and names the file in errors.
+    pub fn from_str_with(path: &Path, text: &str, sets: &[String]) -> Result<Self, SceneError> {
+        let mut table: toml::Table =
+            text.parse()
+                .map_err(|e: toml::de::Error| SceneError::Syntax {
+                    path: path.to_path_buf(),
+                    msg: e.to_string(),
+                })?;
+        for s in sets {
+            overrides::apply(&mut table, s)?;
+        }
+        let de = toml::Value::Table(table);
+        let raw: RawScene =
+            serde_path_to_error::deserialize(de).map_err(|e| SceneError::Field {
+                path: path.to_path_buf(),
+                key: e.path().to_string(),
+                msg: e.inner().to_string(),
+            })?;
+        validate(path, raw)
+    }
+
+    /// The part called `name`.
+    pub fn part(&self, name: &str) -> Option<&Part> {
+        match name {
+            "liner" => Some(&self.liner),
+            _ => None,
+        }
+    }
+}
+
+struct Checker<'a> {
+    path: &'a Path,
+}
+
+impl Checker<'_> {
+    fn err(&self, key: &str, msg: impl Into<String>) -> SceneError {
+        SceneError::Field {
+            path: self.path.to_path_buf(),
+            key: key.to_string(),
+            msg: msg.into(),
+        }
+    }
+    /// A finite value > 0 (mm converted to m when `mm`).
+    fn positive(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("must be a positive number, got {v}")))
+        }
+    }
+    fn mm(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        Ok(self.positive(key, v)? * 1e-3)
+    }
+}
+
+fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
+    let c = Checker { path };
+    let e = &raw.engine;
+    if e.cylinders == 0 {
+        return Err(c.err("engine.cylinders", "must be at least 1"));
+    }
+    let mut fo = e.firing_order.clone();
+    fo.sort_unstable();
+    if fo != (1..=e.cylinders).collect::<Vec<_>>() {
+        return Err(c.err(
+            "engine.firing_order",
+            format!(
+                "must be a permutation of 1..={}, got {:?}",
+                e.cylinders, e.firing_order
+            ),
+        ));
+    }
+    let engine = Engine {
+        cylinders: e.cylinders,
+        firing_order: e.firing_order.clone(),
+        bore: c.mm("engine.bore_mm", e.bore_mm)?,
+        stroke: c.mm("engine.stroke_mm", e.stroke_mm)?,
+        rod_length: c.mm("engine.rod_length_mm", e.rod_length_mm)?,
+        cylinder_pitch: c.mm("engine.cylinder_pitch_mm", e.cylinder_pitch_mm)?,
+        speed_rpm: c.positive("engine.speed_rpm", e.speed_rpm)?,
+    };
+    if engine.rod_length <= engine.stroke / 2.0 {
+        return Err(c.err(
+            "engine.rod_length_mm",
+            "must exceed half the stroke (crank radius), or the crank cannot turn",
+        ));
+    }
+    for (name, m) in &raw.materials {
+        let el = Elastic {
+            young: m.youngs_pa,
+            poisson: m.poisson,
+            density: m.density_kg_m3,
+        };
+        el.validate()
+            .map_err(|msg| c.err(&format!("materials.{name}"), msg))?;
+    }
+    let material = |key: &str, name: &str| -> Result<Elastic, SceneError> {
+        let m = raw.materials.get(name).ok_or_else(|| {
+            c.err(
+                key,
+                format!(
+                    "unknown material '{name}'; [materials] defines: {}",
+                    raw.materials.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })?;
+        Ok(Elastic {
+            young: m.youngs_pa,
+            poisson: m.poisson,
+            density: m.density_kg_m3,
+        })
+    };
+    let l = &raw.liner;
+    let geometry = LinerGeometry {
+        outer_diameter: c.mm("liner.outer_diameter_mm", l.outer_diameter_mm)?,
+        inner_diameter: c.mm("liner.inner_diameter_mm", l.inner_diameter_mm)?,
+        length: c.mm("liner.length_mm", l.length_mm)?,
+        flange_outer_diameter: c
+            .mm("liner.flange_outer_diameter_mm", l.flange_outer_diameter_mm)?,
+        flange_height: c.mm("liner.flange_height_mm", l.flange_height_mm)?,
+        guide_height: c.mm("liner.guide_height_mm", l.guide_height_mm)?,
+        analysis_depths: (0..l.analysis_points)
+            .map(|i| (l.analysis_first_depth_mm + i as f64 * l.analysis_spacing_mm) * 1e-3)
+            .collect(),
+    };
+    if geometry.inner_diameter >= geometry.outer_diameter {
+        return Err(c.err(
+            "liner.inner_diameter_mm",
+            "must be smaller than outer_diameter_mm",
+        ));
+    }
+    if (geometry.inner_diameter - engine.bore).abs() > 1e-9 {
+        return Err(c.err(
+            "liner.inner_diameter_mm",
+            format!("must equal engine.bore_mm ({} mm)", e.bore_mm),
+        ));
+    }
+    if geometry.flange_outer_diameter < geometry.outer_diameter {
+        return Err(c.err(
+            "liner.flange_outer_diameter_mm",
+            "must be at least outer_diameter_mm",
+        ));
+    }
+    if engine.cylinder_pitch <= geometry.flange_outer_diameter {
+        return Err(c.err(
+            "engine.cylinder_pitch_mm",
+            "must exceed the liner flange diameter (liners would overlap)",
+        ));
+    }
+    if geometry.flange_height + geometry.guide_height >= geometry.length {
+        return Err(c.err(
+            "liner.guide_height_mm",
+            "flange and guide band together must be shorter than the liner",
+        ));
+    }
+    c.positive("liner.analysis_spacing_mm", l.analysis_spacing_mm)?;
+    c.positive("liner.analysis_first_depth_mm", l.analysis_first_depth_mm)?;
+    if l.analysis_points == 0 {
+        return Err(c.err("liner.analysis_points", "must be at least 1"));
+    }
+    let deepest = geometry.analysis_depths.last().copied().unwrap_or(0.0);
+    if geometry.analysis_depths[0] <= geometry.flange_height
+        || deepest >= geometry.length - geometry.guide_height
+    {
+        return Err(c.err(
+            "liner.analysis_first_depth_mm",
+            "analysis points must lie in the coolant zone, between the flange and the lower guide band",
+        ));
+    }
+    let mesh = &l.mesh;
+    let kind = match mesh.element.as_str() {
+        "hex20" => ElementKind::Hex20,
+        "tet10" => ElementKind::Tet10,
+        "hex8" => ElementKind::Hex8,
+        "tet4" => ElementKind::Tet4,
+        other => {
+            return Err(c.err(
+                "liner.mesh.element",
+                format!("expected \"hex20\", \"tet10\", \"hex8\" or \"tet4\", got \"{other}\""),
+            ))
+        }
+    };
+    if mesh.circumferential < 8 || mesh.circumferential % 4 != 0 {
+        return Err(c.err(
+            "liner.mesh.circumferential",
+            "must be a multiple of 4 and at least 8 (thrust and anti-thrust lines fall on nodes)",
+        ));
+    }
+    if mesh.radial == 0 || mesh.radial_flange == 0 {
+        return Err(c.err("liner.mesh.radial", "must be at least 1"));
+    }
+    let meshing = LinerMeshing {
+        kind,
+        circumferential: mesh.circumferential,
+        radial: mesh.radial,
+        radial_flange: mesh.radial_flange,
+        axial_size: c.mm("liner.mesh.axial_size_mm", mesh.axial_size_mm)?,
+    };
+    let source = match &l.mesh_file {
+        Some(f) => MeshSource::File(path.parent().unwrap_or(Path::new(".")).join(f)),
+        None => MeshSource::Liner { geometry, meshing },
+    };
+    let liner = Part {
+        name: "liner".into(),
+        source,
+        material: material("liner.material", &l.material)?,
+        fix: l.fix.clone(),
+    };
+    let solver = Solver {
+        shift_hz: c.positive("solver.shift_hz", raw.solver.shift_hz)?,
+        guard_modes: raw.solver.guard_modes,
+    };
+    Ok(Scene {
+        path: path.to_path_buf(),
+        title: raw.title,
+        engine,
+        liner,
+        solver,
+    })
+}

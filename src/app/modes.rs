@@ -1,0 +1,164 @@
+//! `linercav modes`: the lowest modes of one part, certified.
+
+use super::progress::Progress;
+use super::{load_part, ModelInput};
+use crate::error::Result;
+use crate::fem::model::{FeModel, Timings};
+use crate::report::{atomic, vtu};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// What to compute.
+#[derive(Clone, Debug)]
+pub struct ModesRequest {
+    pub input: ModelInput,
+    pub count: usize,
+    pub extra_fix: Vec<String>,
+    pub vtu: Option<PathBuf>,
+    /// Overrides the scene's shift frequency [Hz].
+    pub shift_hz: Option<f64>,
+}
+
+/// The result as printed (JSON with `--json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct ModesReport {
+    pub frequencies_hz: Vec<f64>,
+    pub residuals: Vec<f64>,
+    pub dofs: usize,
+    pub sturm_count_ok: bool,
+    pub seconds: f64,
+    pub model: String,
+    pub nodes: usize,
+    pub elements: usize,
+    pub fixed_sets: Vec<String>,
+    pub max_residual: f64,
+    pub m_orthogonality_error: f64,
+    pub sturm: Option<crate::eigen::certify::SturmCheck>,
+    pub shift_hz: f64,
+    pub factor_nnz: usize,
+    pub solves: usize,
+    pub mass_products: usize,
+    pub ncv: usize,
+    pub timings: Timings,
+    pub warnings: Vec<String>,
+}
+
+/// Runs the modal analysis; `started` is the process start so `seconds` covers everything.
+pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
+    let progress = Progress::new();
+    progress.phase("reading mesh");
+    let part = load_part(&req.input, &req.extra_fix)?;
+    let shift_hz = req.shift_hz.unwrap_or(part.shift_hz);
+    if !(shift_hz.is_finite() && shift_hz > 0.0) {
+        return Err(crate::error::Error::Input(format!(
+            "--shift-hz must be a positive number, got {shift_hz}"
+        )));
+    }
+    if req.count == 0 {
+        return Err(crate::error::Error::Input(
+            "--count must be at least 1".into(),
+        ));
+    }
+    let (nodes, elements) = (part.mesh.nodes.len(), part.mesh.num_elements());
+    progress.phase("assembling K and M");
+    let mut model = FeModel::build(part.mesh, &part.material, &part.fix)?;
+    if req.count >= model.n_free() {
+        return Err(crate::error::Error::Input(format!(
+            "--count {} must be smaller than the number of free DOFs ({})",
+            req.count,
+            model.n_free()
+        )));
+    }
+    progress.phase("factorising and solving (ARPACK shift-invert)");
+    let sigma = -(2.0 * std::f64::consts::PI * shift_hz).powi(2);
+    let sol = model.modes(req.count, sigma, part.guard_modes)?;
+    if let Some(path) = &req.vtu {
+        progress.phase("writing VTU");
+        let full: Vec<Vec<f64>> = (0..sol.modes.count())
+            .map(|j| model.dofs.expand(sol.modes.vector(j)))
+            .collect();
+        let fields: Vec<vtu::Field> = full
+            .iter()
+            .enumerate()
+            .map(|(j, v)| vtu::Field {
+                name: format!("mode_{:02}_{:.1}Hz", j + 1, sol.modes.frequency_hz(j)),
+                values: v,
+            })
+            .collect();
+        atomic::write_atomic(path, |w| vtu::write(&model.mesh, &fields, w))?;
+    }
+    let max_residual = sol.residuals.iter().copied().fold(0.0, f64::max);
+    Ok(ModesReport {
+        frequencies_hz: (0..sol.modes.count())
+            .map(|j| sol.modes.frequency_hz(j))
+            .collect(),
+        residuals: sol.residuals.clone(),
+        dofs: model.n_free(),
+        sturm_count_ok: sol.sturm.as_ref().is_some_and(|s| s.ok),
+        seconds: started.elapsed().as_secs_f64(),
+        model: part.label,
+        nodes,
+        elements,
+        fixed_sets: part.fix,
+        max_residual,
+        m_orthogonality_error: sol.m_orthogonality,
+        sturm: sol.sturm,
+        shift_hz,
+        factor_nnz: model.analysis.factor_nnz(),
+        solves: sol.modes.solves,
+        mass_products: sol.modes.mass_products,
+        ncv: sol.modes.ncv,
+        timings: model.timings.clone(),
+        warnings: part.checks.warnings,
+    })
+}
+
+impl ModesReport {
+    /// Human-readable table.
+    pub fn to_text(&self) -> String {
+        let mut s = format!(
+            "model      {}\nmesh       {} nodes, {} elements, {} free DOFs{}\n",
+            self.model,
+            self.nodes,
+            self.elements,
+            self.dofs,
+            if self.fixed_sets.is_empty() {
+                " (free-free)".to_string()
+            } else {
+                format!(", fixed: {}", self.fixed_sets.join(", "))
+            }
+        );
+        s += "\n mode   frequency [Hz]   rel. residual\n";
+        for (j, (f, r)) in self.frequencies_hz.iter().zip(&self.residuals).enumerate() {
+            s += &format!(" {:>4}   {:>14.3}   {:>13.2e}\n", j + 1, f, r);
+        }
+        s += &format!(
+            "\nM-orthonormality error {:.1e}; largest residual {:.1e}\n",
+            self.m_orthogonality_error, self.max_residual
+        );
+        s += &match &self.sturm {
+            Some(st) => format!(
+                "Sturm check at {:.1} Hz: {} eigenvalues below, {} computed -> {}\n",
+                st.shift_hz,
+                st.found,
+                st.expected,
+                if st.ok {
+                    "no mode missed"
+                } else {
+                    "MISMATCH: a mode was missed"
+                }
+            ),
+            None => "Sturm check: no spectral gap among the computed modes, not certified\n".into(),
+        };
+        s += &format!(
+            "work: {} solves, {} M-products, ncv {}, factor nnz {}\ntime: {:.2} s (assembly {:.2}, ordering {:.2}, factorisation {:.2}, eigen {:.2}, certification {:.2})\n",
+            self.solves, self.mass_products, self.ncv, self.factor_nnz, self.seconds,
+            self.timings.assembly, self.timings.ordering, self.timings.factorisation, self.timings.eigen, self.timings.certification
+        );
+        for w in &self.warnings {
+            s += &format!("warning: {w}\n");
+        }
+        s
+    }
+}

@@ -1,0 +1,141 @@
+//! Raw scene structures, exactly as written in the TOML file. Units are SI unless the key names
+//! another (`bore_mm`); unknown keys are rejected. [`super::validate`] turns these into the
+//! validated model.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// A whole scene file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawScene {
+    /// Free text shown in reports.
+    #[serde(default)]
+    pub title: String,
+    pub engine: RawEngine,
+    /// Named isotropic materials, referred to by parts.
+    pub materials: BTreeMap<String, RawMaterial>,
+    pub liner: RawLiner,
+    #[serde(default)]
+    pub solver: RawSolver,
+}
+
+/// Engine layout and operating point.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawEngine {
+    /// Number of cylinders in line, >= 1.
+    pub cylinders: usize,
+    /// Firing order, a permutation of 1..=cylinders.
+    pub firing_order: Vec<usize>,
+    /// Cylinder bore [mm]; must equal the liner's inner diameter.
+    pub bore_mm: f64,
+    /// Piston stroke [mm].
+    pub stroke_mm: f64,
+    /// Connecting-rod length, centre to centre [mm]; longer than half the stroke.
+    pub rod_length_mm: f64,
+    /// Distance between neighbouring bore axes [mm]; larger than the liner flange diameter.
+    pub cylinder_pitch_mm: f64,
+    /// Engine speed [rpm], > 0.
+    pub speed_rpm: f64,
+}
+
+/// An isotropic linear-elastic material.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawMaterial {
+    /// Young's modulus [Pa], > 0.
+    pub youngs_pa: f64,
+    /// Poisson's ratio, in (-1, 0.5).
+    pub poisson: f64,
+    /// Density [kg/m^3], > 0.
+    pub density_kg_m3: f64,
+}
+
+/// The wet liner: parametric geometry, or a Gmsh mesh file with the same named sets.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawLiner {
+    /// Name of an entry of `[materials]`.
+    pub material: String,
+    /// Outer (coolant-side) diameter [mm].
+    pub outer_diameter_mm: f64,
+    /// Inner (bore) diameter [mm].
+    pub inner_diameter_mm: f64,
+    /// Overall length [mm].
+    pub length_mm: f64,
+    /// Diameter of the top flange [mm]; equal to the outer diameter for no flange.
+    pub flange_outer_diameter_mm: f64,
+    /// Height of the top flange [mm].
+    pub flange_height_mm: f64,
+    /// Height of the lower guide band from the liner bottom [mm].
+    pub guide_height_mm: f64,
+    /// Depth of the first analysis point below the liner top [mm].
+    pub analysis_first_depth_mm: f64,
+    /// Spacing of the analysis points, top to bottom [mm] (paper: 25).
+    pub analysis_spacing_mm: f64,
+    /// Number of analysis points (paper: 4).
+    pub analysis_points: usize,
+    /// Optional Gmsh MSH 4.1 mesh of the liner (path relative to the scene file); replaces the
+    /// parametric mesh. It must provide the node sets the later stages use.
+    #[serde(default)]
+    pub mesh_file: Option<String>,
+    /// Node sets held fixed in a stand-alone modal analysis (`modes --part liner`); empty for
+    /// free-free.
+    #[serde(default)]
+    pub fix: Vec<String>,
+    pub mesh: RawLinerMesh,
+}
+
+/// Density of the parametric liner mesh.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawLinerMesh {
+    /// "hex20" (default, best accuracy per DOF), "tet10", "hex8" (incompatible modes), "tet4".
+    #[serde(default = "default_element")]
+    pub element: String,
+    /// Elements around the circumference, a multiple of 4 and >= 8.
+    pub circumferential: usize,
+    /// Elements through the wall, >= 1.
+    pub radial: usize,
+    /// Elements across the flange overhang, >= 1.
+    #[serde(default = "one")]
+    pub radial_flange: usize,
+    /// Target axial element size [mm].
+    pub axial_size_mm: f64,
+}
+
+fn default_element() -> String {
+    "hex20".into()
+}
+fn one() -> usize {
+    1
+}
+
+/// Numerical settings of the modal solve.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawSolver {
+    /// Frequency f_s of the negative shift sigma = -(2 pi f_s)^2 [Hz], > 0; well below the
+    /// first elastic mode, so rigid-body modes stay regular.
+    #[serde(default = "default_shift_hz")]
+    pub shift_hz: f64,
+    /// Extra modes computed beyond the request to place the Sturm check in a spectral gap.
+    #[serde(default = "default_guard")]
+    pub guard_modes: usize,
+}
+
+impl Default for RawSolver {
+    fn default() -> Self {
+        Self {
+            shift_hz: default_shift_hz(),
+            guard_modes: default_guard(),
+        }
+    }
+}
+fn default_shift_hz() -> f64 {
+    100.0
+}
+fn default_guard() -> usize {
+    4
+}
