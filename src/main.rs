@@ -101,6 +101,20 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Write the report of a scene (liner modes so far) into a directory.
+    Report {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Override any scene field (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Output directory.
+        #[arg(long, default_value = "reports")]
+        out: PathBuf,
+        /// Number of liner modes in the report.
+        #[arg(long, default_value_t = 16)]
+        count: usize,
+    },
     /// Write the part's mesh as Gmsh MSH 4.1 ASCII, node sets as physical groups.
     ExportMesh {
         #[command(flatten)]
@@ -150,6 +164,16 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 r.dofs,
                 r.nnz_lower
             );
+        }
+        Command::Report {
+            scene,
+            sets,
+            out,
+            count,
+        } => {
+            let r = linercav::app::summary::run(&scene, &sets, &out, count)?;
+            print!("{}", r.to_text());
+            println!("report written to {}", out.display());
         }
         Command::ExportMesh { model, out } => {
             let n = export::export_mesh(&model.input()?, &out)?;

@@ -48,8 +48,9 @@ fn tabulate(kind: ElementKind, points: Vec<QuadPoint>) -> Tabulated {
 }
 
 /// Quadrature for stiffness (index 0) and mass (index 1).
-/// Tet4: 1-point exactness suffices for K; Tet10: K integrand of degree 2, M of degree 4 on
-/// straight-sided tetrahedra; hexahedra: 2x2x2 (Hex8) and 3x3x3 (Hex20) full integration.
+/// Tet4: the 4-point rule (degree 2) is exact for both; Tet10: K integrand of degree 2 and M of
+/// degree 4 on straight-sided tetrahedra (curved ones use [`curved_tet10_stiffness_rule`]);
+/// hexahedra: 2x2x2 (Hex8) and 3x3x3 (Hex20) full integration.
 pub fn rules(kind: ElementKind) -> &'static [Tabulated; 2] {
     static T4: OnceLock<[Tabulated; 2]> = OnceLock::new();
     static T10: OnceLock<[Tabulated; 2]> = OnceLock::new();
@@ -57,7 +58,7 @@ pub fn rules(kind: ElementKind) -> &'static [Tabulated; 2] {
     static H20: OnceLock<[Tabulated; 2]> = OnceLock::new();
     match kind {
         ElementKind::Tet4 => {
-            T4.get_or_init(|| [tabulate(kind, tet_rule(1)), tabulate(kind, tet_rule(2))])
+            T4.get_or_init(|| [tabulate(kind, tet_rule4()), tabulate(kind, tet_rule4())])
         }
         ElementKind::Tet10 => {
             T10.get_or_init(|| [tabulate(kind, tet_rule4()), tabulate(kind, tet_rule(4))])
@@ -69,6 +70,26 @@ pub fn rules(kind: ElementKind) -> &'static [Tabulated; 2] {
             H20.get_or_init(|| [tabulate(kind, hex_rule(3)), tabulate(kind, hex_rule(3))])
         }
     }
+}
+
+/// Stiffness rule of curved 10-node tetrahedra: with a quadratic geometry map,
+/// det(J) dN/dx = adj(J)^T dN/dxi is a cubic polynomial, so a degree-3-exact rule (collapsed
+/// Gauss, 3 points per direction) integrates int dN_a/dx dV exactly and the patch test holds.
+pub fn curved_tet10_stiffness_rule() -> &'static Tabulated {
+    static R: OnceLock<Tabulated> = OnceLock::new();
+    R.get_or_init(|| tabulate(ElementKind::Tet10, tet_rule(3)))
+}
+
+/// True when every mid-edge node sits at its edge midpoint (to 1e-9 of the edge length).
+fn straight_sided(kind: ElementKind, coords: &[[f64; 3]]) -> bool {
+    let nc = kind.num_corners();
+    kind.mid_edges().iter().enumerate().all(|(m, &(a, b))| {
+        let len2: f64 = (0..3).map(|i| (coords[a][i] - coords[b][i]).powi(2)).sum();
+        let off2: f64 = (0..3)
+            .map(|i| (coords[nc + m][i] - 0.5 * (coords[a][i] + coords[b][i])).powi(2))
+            .sum();
+        off2 <= 1e-18 * len2
+    })
 }
 
 /// Jacobian J_ij = sum_a x_a,i dN_a/dxi_j.
@@ -146,6 +167,11 @@ pub fn stiffness_mass(
     let nd = 3 * nn;
     let (lam, mu) = (mat.lambda(), mat.mu());
     let [kr, mr] = rules(kind);
+    let kr = if kind == ElementKind::Tet10 && !straight_sided(kind, coords) {
+        curved_tet10_stiffness_rule()
+    } else {
+        kr
+    };
     let mut k = vec![0.0; nd * nd];
     let mut m = vec![0.0; nd * nd];
     let mut g = vec![[0.0; 3]; nn];

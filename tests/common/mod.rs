@@ -1,0 +1,58 @@
+//! Helpers shared by the integration tests: small structured meshes and dense oracles.
+#![allow(dead_code)]
+
+use linercav::fem::shape::ElementKind;
+use linercav::mesh::lattice::Lattice;
+use linercav::mesh::Mesh;
+
+/// A box [0, lx] x [0, ly] x [0, lz] of n cells per axis, optionally distorted by a smooth map
+/// that keeps the outer faces planar (interior nodes move).
+pub fn box_mesh(kind: ElementKind, n: [usize; 3], l: [f64; 3], distort: f64) -> Mesh {
+    let coord = move |k: [usize; 3]| {
+        let s: Vec<f64> = (0..3).map(|a| k[a] as f64 / (2 * n[a]) as f64).collect();
+        let bump = |t: f64| (std::f64::consts::PI * t).sin();
+        let w = bump(s[0]) * bump(s[1]) * bump(s[2]);
+        [
+            l[0] * (s[0] + distort * w * (2.0 * s[1] - 1.0) * 0.5),
+            l[1] * (s[1] + distort * w * (2.0 * s[2] - 1.0) * 0.5),
+            l[2] * (s[2] + distort * w * (2.0 * s[0] - 1.0) * 0.5),
+        ]
+    };
+    let active = |_: usize, _: usize, _: usize| true;
+    let lat = Lattice {
+        cells: n,
+        periodic_j: false,
+        active: &active,
+        coord: &coord,
+    };
+    let lm = lat.generate(kind);
+    let mut mesh = lm.mesh;
+    let ends: Vec<usize> = (0..lm.keys.len()).filter(|&i| lm.keys[i][0] == 0).collect();
+    mesh.node_sets.insert("x0".into(), ends);
+    let boundary: Vec<usize> = (0..lm.keys.len())
+        .filter(|&i| (0..3).any(|a| lm.keys[i][a] == 0 || lm.keys[i][a] == 2 * n[a]))
+        .collect();
+    mesh.node_sets.insert("boundary".into(), boundary);
+    mesh
+}
+
+/// Dense generalised symmetric eigenvalues of (K, M) by Cholesky of M, ascending.
+pub fn dense_eigenvalues(k: &[Vec<f64>], m: &[Vec<f64>]) -> Vec<f64> {
+    let n = k.len();
+    let km = nalgebra::DMatrix::from_fn(n, n, |i, j| k[i][j]);
+    let mm = nalgebra::DMatrix::from_fn(n, n, |i, j| m[i][j]);
+    let l = mm.cholesky().expect("M is positive definite").l();
+    let linv = l.clone().try_inverse().expect("invertible");
+    let a = &linv * km * linv.transpose();
+    let a = (&a + a.transpose()) * 0.5;
+    let mut ev: Vec<f64> = a.symmetric_eigen().eigenvalues.iter().copied().collect();
+    ev.sort_by(f64::total_cmp);
+    ev
+}
+
+pub const KINDS: [ElementKind; 4] = [
+    ElementKind::Tet4,
+    ElementKind::Tet10,
+    ElementKind::Hex8,
+    ElementKind::Hex20,
+];
