@@ -1,0 +1,335 @@
+//! The command-line contract: JSON fields, Gmsh import of Gmsh-made meshes, the MSH round trip,
+//! Matrix Market export, scene overrides, and bad input (exit code 2, one clear message naming
+//! the input, no output file left).
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn linercav(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_linercav"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn json(out: &Output) -> Value {
+    assert!(
+        out.status.success(),
+        "failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
+}
+
+fn freqs(v: &Value) -> Vec<f64> {
+    v["frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+const STEEL: [&str; 6] = ["--youngs", "210e9", "--poisson", "0.3", "--density", "7850"];
+
+/// A small scene: the default engine with a coarse liner mesh (fast).
+fn small_scene_args() -> Vec<&'static str> {
+    vec![
+        "models/engine.toml",
+        "--set",
+        "liner.mesh.circumferential=16",
+        "--set",
+        "liner.mesh.radial=1",
+        "--set",
+        "liner.mesh.axial_size_mm=30",
+    ]
+}
+
+#[test]
+fn modes_json_contract_on_gmsh_meshes() {
+    let mut by_kind = Vec::new();
+    for mesh in [
+        "tests/fixtures/block_tet10.msh",
+        "tests/fixtures/block_hex20.msh",
+    ] {
+        let mut args = vec!["modes", "--mesh", mesh, "--count", "10", "--json"];
+        args.extend(STEEL);
+        let v = json(&linercav(&args));
+        let f = freqs(&v);
+        assert_eq!(f.len(), 10);
+        assert_eq!(v["residuals"].as_array().unwrap().len(), 10);
+        assert!(v["dofs"].as_u64().unwrap() > 1000);
+        assert_eq!(v["sturm_count_ok"], Value::Bool(true));
+        assert!(v["seconds"].as_f64().unwrap() > 0.0);
+        assert!(v["residuals"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|r| r.as_f64().unwrap() < 1e-8));
+        assert!(
+            f[..6].iter().all(|&x| x < 1e-3 * f[6]),
+            "six rigid-body modes first: {f:?}"
+        );
+        by_kind.push(f);
+    }
+    // Two independent discretisations by Gmsh (tetrahedra and bricks) of one block agree on
+    // the first elastic modes within 1 % (each is within a fraction of a percent of converged).
+    for j in 6..10 {
+        let rel = (by_kind[0][j] - by_kind[1][j]).abs() / by_kind[1][j];
+        assert!(
+            rel < 0.01,
+            "mode {j}: tet10 {} vs hex20 {}",
+            by_kind[0][j],
+            by_kind[1][j]
+        );
+    }
+}
+
+#[test]
+fn fixing_a_group_removes_rigid_modes() {
+    let mut args = vec![
+        "modes",
+        "--mesh",
+        "tests/fixtures/block_hex20.msh",
+        "--count",
+        "4",
+        "--json",
+        "--fix",
+        "clamp",
+    ];
+    args.extend(STEEL);
+    let v = json(&linercav(&args));
+    let f = freqs(&v);
+    // clamped 0.2 m steel cantilever of depth 0.05 m: first bending ~ 1.02 kHz by beam theory
+    // (f = 1.875^2 / (2 pi L^2) sqrt(E I / rho A)); 3-D and shear effects keep it within 10 %.
+    let beam = 1.875f64.powi(2) / (2.0 * std::f64::consts::PI * 0.04)
+        * (210e9 * 0.05f64.powi(2) / 12.0 / 7850.0).sqrt();
+    assert!(
+        (f[0] - beam).abs() / beam < 0.10,
+        "first clamped mode {} vs beam {beam}",
+        f[0]
+    );
+}
+
+#[test]
+fn mesh_round_trip_and_scene_part_agree() {
+    let dir = tempfile::tempdir().unwrap();
+    let msh = dir.path().join("liner.msh");
+    let mut args = vec!["export-mesh"];
+    args.extend(small_scene_args());
+    args.extend(["--out", msh.to_str().unwrap()]);
+    assert!(linercav(&args).status.success());
+    let mut a = vec!["modes"];
+    a.extend(small_scene_args());
+    a.extend(["--count", "12", "--json"]);
+    let from_scene = freqs(&json(&linercav(&a)));
+    let b = [
+        "modes",
+        "--mesh",
+        msh.to_str().unwrap(),
+        "--youngs",
+        "140e9",
+        "--poisson",
+        "0.26",
+        "--density",
+        "7200",
+        "--count",
+        "12",
+        "--json",
+    ];
+    let from_file = freqs(&json(&linercav(&b)));
+    for j in 6..12 {
+        let rel = (from_scene[j] - from_file[j]).abs() / from_scene[j];
+        assert!(
+            rel < 1e-9,
+            "mode {j}: {} vs {}",
+            from_scene[j],
+            from_file[j]
+        );
+    }
+}
+
+/// Exported K and M are read back independently: the translation field is in K's null space
+/// (free-free) and u^T M u of a unit translation is the part's mass rho V.
+#[test]
+fn exported_matrices_are_consistent() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mtx");
+    let mut args = vec![
+        "export-matrices",
+        "--mesh",
+        "tests/fixtures/block_hex20.msh",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(STEEL);
+    assert!(
+        linercav(&args).status.success(),
+        "{}",
+        String::from_utf8_lossy(&linercav(&args).stderr)
+    );
+    let read = |name: &str| -> (usize, Vec<(usize, usize, f64)>) {
+        let text = std::fs::read_to_string(out.join(name)).unwrap();
+        let mut lines = text.lines().filter(|l| !l.starts_with('%'));
+        assert!(text.starts_with("%%MatrixMarket matrix coordinate real symmetric"));
+        let head: Vec<usize> = lines
+            .next()
+            .unwrap()
+            .split_whitespace()
+            .map(|w| w.parse().unwrap())
+            .collect();
+        let e: Vec<(usize, usize, f64)> = lines
+            .map(|l| {
+                let w: Vec<&str> = l.split_whitespace().collect();
+                (
+                    w[0].parse::<usize>().unwrap() - 1,
+                    w[1].parse::<usize>().unwrap() - 1,
+                    w[2].parse().unwrap(),
+                )
+            })
+            .collect();
+        assert_eq!(e.len(), head[2]);
+        assert!(e.iter().all(|&(r, c, _)| r >= c), "lower triangle only");
+        (head[0], e)
+    };
+    let (n, k) = read("K.mtx");
+    let (_, m) = read("M.mtx");
+    let ux: Vec<f64> = (0..n).map(|d| if d % 3 == 0 { 1.0 } else { 0.0 }).collect();
+    let sym_mul = |e: &[(usize, usize, f64)], x: &[f64]| {
+        let mut y = vec![0.0; n];
+        for &(r, c, v) in e {
+            y[r] += v * x[c];
+            if r != c {
+                y[c] += v * x[r];
+            }
+        }
+        y
+    };
+    let ku = sym_mul(&k, &ux);
+    let kmax = k.iter().fold(0.0f64, |a, e| a.max(e.2.abs()));
+    assert!(ku.iter().all(|v| v.abs() < 1e-9 * kmax));
+    let mass: f64 = sym_mul(&m, &ux).iter().zip(&ux).map(|(a, b)| a * b).sum();
+    let expected = 7850.0 * 0.2 * 0.1 * 0.05;
+    assert!(
+        (mass - expected).abs() < 1e-9 * expected,
+        "mass {mass} vs {expected}"
+    );
+}
+
+#[test]
+fn scene_overrides_change_the_model() {
+    let mut a = vec!["modes"];
+    a.extend(small_scene_args());
+    a.extend(["--count", "8", "--json"]);
+    let base = freqs(&json(&linercav(&a)));
+    a.extend(["--set", "materials.boron_cast_iron.youngs_pa=280e9"]);
+    let stiff = freqs(&json(&linercav(&a)));
+    // f scales with sqrt(E): doubling E raises every elastic frequency by sqrt(2)
+    let ratio = stiff[6] / base[6];
+    assert!((ratio - 2f64.sqrt()).abs() < 1e-6, "ratio {ratio}");
+}
+
+/// Runs a failing command; checks exit code 2, a message naming `needle`, and no output file.
+fn refused(args: &[&str], needle: &str, out: Option<&Path>) {
+    let o = linercav(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "args {args:?}: stderr {err}");
+    assert!(
+        err.contains(needle),
+        "message for {args:?} should name '{needle}': {err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    if let Some(p) = out {
+        assert!(!p.exists(), "{} left behind", p.display());
+        let leftovers: Vec<_> = std::fs::read_dir(p.parent().unwrap()).unwrap().collect();
+        assert!(leftovers.is_empty(), "temporary files left behind");
+    }
+}
+
+#[test]
+fn bad_input_is_refused_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("out")).unwrap();
+    let vtu = dir.path().join("out").join("modes.vtu");
+    let vtu_s = vtu.to_str().unwrap();
+    let good = "tests/fixtures/block_tet10.msh";
+    let with = |mesh: &'static str, extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = vec!["modes", "--mesh", mesh, "--count", "4"];
+        v.extend(extra);
+        v
+    };
+    // malformed and unsupported meshes
+    let bad = dir.path().join("bad.msh");
+    let text = std::fs::read_to_string(good).unwrap();
+    std::fs::write(&bad, &text[..text.len() / 2]).unwrap();
+    let bad_s: &'static str = Box::leak(bad.to_str().unwrap().to_string().into_boxed_str());
+    let mut a = with(bad_s, &STEEL);
+    a.extend(["--vtu", vtu_s]);
+    refused(&a, "bad.msh", Some(&vtu));
+    let v22 = dir.path().join("old.msh");
+    std::fs::write(&v22, text.replacen("4.1 0 8", "2.2 0 8", 1)).unwrap();
+    let v22_s: &'static str = Box::leak(v22.to_str().unwrap().to_string().into_boxed_str());
+    refused(&with(v22_s, &STEEL), "MSH version 2.2", None);
+    let binary = dir.path().join("bin.msh");
+    std::fs::write(&binary, text.replacen("4.1 0 8", "4.1 1 8", 1)).unwrap();
+    let bin_s: &'static str = Box::leak(binary.to_str().unwrap().to_string().into_boxed_str());
+    refused(&with(bin_s, &STEEL), "binary", None);
+    // unknown group, bad material, bad count
+    let mut a = with(good, &STEEL);
+    a.extend(["--fix", "nosuchgroup", "--vtu", vtu_s]);
+    refused(&a, "nosuchgroup", Some(&vtu));
+    refused(
+        &with(
+            good,
+            &["--youngs", "-1", "--poisson", "0.3", "--density", "7850"],
+        ),
+        "Young",
+        None,
+    );
+    refused(
+        &with(
+            good,
+            &["--youngs", "0", "--poisson", "0.3", "--density", "7850"],
+        ),
+        "Young",
+        None,
+    );
+    refused(
+        &with(
+            good,
+            &["--youngs", "1e9", "--poisson", "0.5", "--density", "7850"],
+        ),
+        "Poisson",
+        None,
+    );
+    refused(
+        &with(
+            good,
+            &["--youngs", "1e9", "--poisson", "0.3", "--density", "0"],
+        ),
+        "density",
+        None,
+    );
+    let mut a = vec!["modes", "--mesh", good, "--count", "0"];
+    a.extend(STEEL);
+    refused(&a, "count", None);
+    refused(
+        &with("tests/fixtures/missing.msh", &STEEL),
+        "missing.msh",
+        None,
+    );
+    // scenes: unknown key, bad value, unknown part
+    let mut a = vec!["modes"];
+    a.extend(small_scene_args());
+    a.extend(["--count", "4", "--set", "liner.mesh.circumferentail=32"]);
+    refused(&a, "circumferentail", None);
+    let mut a = vec!["modes"];
+    a.extend(small_scene_args());
+    a.extend(["--count", "4", "--set", "liner.mesh.circumferential=30"]);
+    refused(&a, "liner.mesh.circumferential", None);
+    let mut a = vec!["modes"];
+    a.extend(small_scene_args());
+    a.extend(["--count", "4", "--part", "crankshaft"]);
+    refused(&a, "crankshaft", None);
+}

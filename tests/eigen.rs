@@ -1,0 +1,96 @@
+//! Eigen-solver verification: ARPACK shift-invert against a dense oracle, rigid-body modes of
+//! a free-free block, residuals, M-orthonormality and the Sturm (inertia) count.
+
+mod common;
+use common::{box_mesh, dense_eigenvalues};
+use linercav::fem::material::Elastic;
+use linercav::fem::model::FeModel;
+use linercav::fem::shape::ElementKind;
+
+const STEEL: Elastic = Elastic {
+    young: 210e9,
+    poisson: 0.3,
+    density: 7850.0,
+};
+const SIGMA: f64 = -(2.0 * std::f64::consts::PI * 100.0) * (2.0 * std::f64::consts::PI * 100.0);
+
+/// The oracle first: dense generalised eigenvalues (Cholesky of M + symmetric QR) of a small
+/// model; ARPACK's must agree to 1e-9 relative (both are backward stable; the dense path loses
+/// ~cond(M) * eps ~ 1e-12, ARPACK's tolerance is machine epsilon).
+#[test]
+fn shift_invert_matches_dense_oracle() {
+    for kind in [ElementKind::Hex20, ElementKind::Tet10] {
+        let mesh = box_mesh(kind, [3, 2, 1], [0.3, 0.2, 0.1], 0.2);
+        let mut model = FeModel::build(mesh, &STEEL, &["x0".to_string()]).unwrap();
+        let dense = dense_eigenvalues(
+            &model.km.pattern.to_dense(&model.km.k),
+            &model.km.pattern.to_dense(&model.km.m),
+        );
+        let sol = model.modes(12, SIGMA, 4).unwrap();
+        for (j, &lam) in sol.modes.eigenvalues.iter().enumerate() {
+            let rel = (lam - dense[j]).abs() / dense[j];
+            assert!(rel < 1e-9, "{kind:?} mode {j}: {lam} vs dense {}", dense[j]);
+        }
+        let st = sol.sturm.expect("a gap exists");
+        assert!(st.ok, "{st:?}");
+        // the Sturm count against the dense spectrum at the check's shift
+        let sigma_c = (2.0 * std::f64::consts::PI * st.shift_hz).powi(2);
+        assert_eq!(st.found, dense.iter().filter(|&&l| l < sigma_c).count());
+    }
+}
+
+/// A free-free block has exactly six rigid-body modes: six eigenvalues at zero (to 1e-9 of the
+/// first elastic one), then a clear gap; residuals below 1e-8, M-orthonormal to 1e-10.
+#[test]
+fn free_free_block_has_six_rigid_modes() {
+    let mesh = box_mesh(ElementKind::Hex20, [6, 3, 2], [0.3, 0.15, 0.1], 0.1);
+    let mut model = FeModel::build(mesh, &STEEL, &[]).unwrap();
+    let sol = model.modes(12, SIGMA, 4).unwrap();
+    let ev = &sol.modes.eigenvalues;
+    let first_elastic = ev[6];
+    for (j, l) in ev.iter().take(6).enumerate() {
+        assert!(
+            l.abs() < 1e-9 * first_elastic,
+            "mode {j} = {l} is not rigid"
+        );
+    }
+    assert!(first_elastic > 1e3 * (-SIGMA), "a seventh near-zero mode");
+    let worst = sol.residuals.iter().copied().fold(0.0, f64::max);
+    assert!(worst < 1e-8, "residual {worst:e}");
+    assert!(
+        sol.m_orthogonality < 1e-10,
+        "M-orthonormality {:e}",
+        sol.m_orthogonality
+    );
+    assert!(sol.sturm.unwrap().ok);
+}
+
+/// The Sturm check can fail: a count that includes a mode the solver did not return is seen.
+/// Remove one computed eigenvalue from the list and the inertia count disagrees.
+#[test]
+fn sturm_count_detects_a_missed_mode() {
+    use linercav::eigen::certify::sturm_shift;
+    let mesh = box_mesh(ElementKind::Hex20, [4, 2, 1], [0.3, 0.15, 0.1], 0.0);
+    let mut model = FeModel::build(mesh, &STEEL, &["x0".to_string()]).unwrap();
+    let sol = model.modes(12, SIGMA, 0).unwrap();
+    let mut ev = sol.modes.eigenvalues.clone();
+    ev.remove(3); // pretend mode 4 was missed
+    let (sigma_c, expected) = sturm_shift(&ev, 7, 1e-4).unwrap();
+    let found = model
+        .analysis
+        .negative_pivots(&model.km.pattern, &model.km.shifted(sigma_c))
+        .unwrap();
+    assert_eq!(
+        found,
+        expected + 1,
+        "the inertia count must reveal the missing mode"
+    );
+}
+
+/// Bad requests are refused with typed errors, not panics.
+#[test]
+fn too_many_modes_is_an_error() {
+    let mesh = box_mesh(ElementKind::Hex8, [1, 1, 1], [0.1, 0.1, 0.1], 0.0);
+    let mut model = FeModel::build(mesh, &STEEL, &[]).unwrap();
+    assert!(model.modes(24, SIGMA, 0).is_err());
+}
