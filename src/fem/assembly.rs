@@ -20,6 +20,9 @@ pub struct AssemblyError {
     pub source: ElementError,
 }
 
+/// Element stiffness and mass, dense row-major.
+type ElementPair = (Vec<f64>, Vec<f64>);
+
 /// Node adjacency (including the node itself) in CSR form, neighbours sorted.
 pub struct NodeGraph {
     pub ptr: Vec<usize>,
@@ -98,8 +101,13 @@ impl Assembler {
         for a in 0..mesh.nodes.len() {
             let mut off = 0;
             let mut rows = Vec::new();
-            for s in graph.ptr[a]..graph.ptr[a + 1] {
-                let b = graph.adj[s];
+            for (s, &b) in graph
+                .adj
+                .iter()
+                .enumerate()
+                .take(graph.ptr[a + 1])
+                .skip(graph.ptr[a])
+            {
                 slot_offset[s] = off;
                 off += nfree_of(b);
                 rows.extend((0..3).map(|j| dofs.dof[3 * b + j]).filter(|&d| d != FIXED));
@@ -135,7 +143,7 @@ impl Assembler {
             .chunks(CHUNK * rayon::current_num_threads().max(1))
             .enumerate()
         {
-            let mats: Vec<Result<(Vec<f64>, Vec<f64>), AssemblyError>> = chunk
+            let mats: Vec<Result<ElementPair, AssemblyError>> = chunk
                 .par_iter()
                 .enumerate()
                 .map(|(i, (kind, nodes))| {

@@ -114,7 +114,7 @@ fn gradients(
 ) -> Result<f64, ElementError> {
     let j = jacobian(coords, dn);
     let det = j.determinant();
-    if !(det > 0.0) {
+    if det.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(ElementError::BadJacobian { det, xi });
     }
     let jit = j
@@ -137,14 +137,12 @@ fn add_isotropic_stiffness(
     lam: f64,
     mu: f64,
     w: f64,
-    row0: usize,
-    col0: usize,
 ) {
     for (a, p) in ga.iter().enumerate() {
         for (b, q) in gb.iter().enumerate() {
             let dot = p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
             for i in 0..3 {
-                let row = (row0 + 3 * a + i) * nd + col0 + 3 * b;
+                let row = (3 * a + i) * nd + 3 * b;
                 for j in 0..3 {
                     let mut v = lam * p[i] * q[j] + mu * p[j] * q[i];
                     if i == j {
@@ -177,11 +175,11 @@ pub fn stiffness_mass(
     let mut g = vec![[0.0; 3]; nn];
     for (q, p) in kr.points.iter().enumerate() {
         let det = gradients(coords, &kr.dn[q], p.xi, &mut g)?;
-        add_isotropic_stiffness(&mut k, nd, &g, &g, lam, mu, p.weight * det, 0, 0);
+        add_isotropic_stiffness(&mut k, nd, &g, &g, lam, mu, p.weight * det);
     }
     for (q, p) in mr.points.iter().enumerate() {
         let det = jacobian(coords, &mr.dn[q]).determinant();
-        if !(det > 0.0) {
+        if det.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(ElementError::BadJacobian { det, xi: p.xi });
         }
         let w = p.weight * det * mat.density;
@@ -214,7 +212,7 @@ fn condense_incompatible_modes(
     ElementKind::Hex8.eval([0.0; 3], &mut n0, &mut dn0);
     let j0 = jacobian(coords, &dn0);
     let det0 = j0.determinant();
-    if !(det0 > 0.0) {
+    if det0.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(ElementError::BadJacobian {
             det: det0,
             xi: [0.0; 3],
@@ -240,7 +238,7 @@ fn condense_incompatible_modes(
             let v = j0it * d * scale;
             g[8 + kk] = [v[0], v[1], v[2]];
         }
-        add_isotropic_stiffness(&mut kt, nt, &g, &g, lam, mu, p.weight * det, 0, 0);
+        add_isotropic_stiffness(&mut kt, nt, &g, &g, lam, mu, p.weight * det);
     }
     let kaa = DMatrix::from_fn(9, 9, |r, c| kt[(24 + r) * nt + 24 + c]);
     let kau = DMatrix::from_fn(9, 24, |r, c| kt[(24 + r) * nt + c]);

@@ -61,7 +61,8 @@ impl Pattern {
         let mut a = vec![vec![0.0; self.n]; self.n];
         for c in 0..self.n {
             for p in self.col_ptr[c]..self.col_ptr[c + 1] {
-                a[self.row_idx[p]][c] = values[p];
+                let r = self.row_idx[p];
+                a[r][c] = values[p];
             }
         }
         a

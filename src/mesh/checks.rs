@@ -69,7 +69,7 @@ pub fn check_and_compact(mesh: &mut Mesh) -> Result<CheckReport, MeshError> {
             }
         }
         let ratio = min_jacobian_ratio(kind, &x);
-        if !(ratio > 1e-6) {
+        if ratio.partial_cmp(&1e-6) != Some(std::cmp::Ordering::Greater) {
             return Err(MeshError::Inverted {
                 element: e,
                 kind: format!("{kind:?}"),

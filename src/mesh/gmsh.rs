@@ -129,11 +129,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
     let mut saw_format = false;
     let mut saw_nodes = false;
     let mut saw_elements = false;
-    loop {
-        let l = match lines.next_line() {
-            Ok(l) => l,
-            Err(_) => break,
-        };
+    while let Ok(l) = lines.next_line() {
         match l {
             "$MeshFormat" => {
                 let h = lines.next_line()?;

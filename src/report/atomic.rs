@@ -43,14 +43,12 @@ pub fn write_atomic(
     })
 }
 
+/// Fills one output file.
+pub type Filler<'a> = Box<dyn FnOnce(&mut dyn Write) -> std::io::Result<()> + 'a>;
+
 /// Writes several files so that either all appear or none: each goes to a temporary name first,
 /// and the renames happen only when every file was written.
-pub fn write_all_atomic(
-    files: Vec<(
-        PathBuf,
-        Box<dyn FnOnce(&mut dyn Write) -> std::io::Result<()> + '_>,
-    )>,
-) -> Result<(), WriteError> {
+pub fn write_all_atomic(files: Vec<(PathBuf, Filler<'_>)>) -> Result<(), WriteError> {
     let mut done: Vec<(PathBuf, PathBuf)> = Vec::new();
     for (path, fill) in files {
         let tmp = temp_path(&path);
