@@ -14,10 +14,15 @@ use std::path::Path;
 fn bench(c: &mut Criterion) {
     let scene = Scene::load(
         Path::new("models/engine.toml"),
-        &["liner.mesh.circumferential=32".into(), "liner.mesh.axial_size_mm=13".into()],
+        &[
+            "liner.mesh.circumferential=32".into(),
+            "liner.mesh.axial_size_mm=13".into(),
+        ],
     )
     .unwrap();
-    let MeshSource::Liner { geometry, meshing } = &scene.liner.source else { unreachable!() };
+    let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
+        unreachable!()
+    };
     let mesh = generate(geometry, meshing);
     let mat = scene.liner.material;
     let dofs = DofMap::free(mesh.nodes.len());
