@@ -25,6 +25,10 @@ pub enum Error {
     Model(#[from] ModelError),
     #[error(transparent)]
     Write(#[from] WriteError),
+    #[error("{0}")]
+    Failure(String),
+    #[error(transparent)]
+    Rom(#[from] crate::reduce::rom::RomError),
 }
 
 impl Error {
@@ -34,7 +38,8 @@ impl Error {
             Error::Scene(_) | Error::Msh(_) | Error::Mesh { .. } | Error::Input(_) => 2,
             Error::Model(ModelError::Set(_)) | Error::Model(ModelError::NoDofs) => 2,
             Error::Model(ModelError::Eigen(crate::eigen::EigenError::TooMany { .. })) => 2,
-            Error::Model(_) | Error::Write(_) => 1,
+            Error::Rom(e) => e.exit_code(),
+            Error::Model(_) | Error::Write(_) | Error::Failure(_) => 1,
         }
     }
 }

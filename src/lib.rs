@@ -10,5 +10,6 @@ pub mod error;
 pub mod fem;
 pub mod linalg;
 pub mod mesh;
+pub mod reduce;
 pub mod report;
 pub mod scene;

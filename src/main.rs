@@ -2,7 +2,8 @@
 //! maps errors to exit codes (0 ok, 2 bad input, 1 failure), printing the whole cause chain.
 
 use clap::{Args, Parser, Subcommand};
-use linercav::app::{export, modes, ModelInput};
+use linercav::app::{export, modes, rom, ModelInput};
+use linercav::scene::Scene;
 use linercav::error::Error;
 use linercav::fem::material::Elastic;
 use std::path::PathBuf;
@@ -74,6 +75,26 @@ impl ModelArgs {
     }
 }
 
+/// ROM cache options.
+#[derive(Args, Clone)]
+struct CacheArgs {
+    /// Build the ROM without reading or writing the cache.
+    #[arg(long)]
+    no_cache: bool,
+    /// Cache directory (default: the scene's rom.cache_dir).
+    #[arg(long, value_name = "DIR")]
+    cache_dir: Option<PathBuf>,
+}
+
+impl CacheArgs {
+    fn options(&self) -> rom::CacheOptions {
+        rom::CacheOptions {
+            no_cache: self.no_cache,
+            dir: self.cache_dir.clone(),
+        }
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Lowest natural frequencies and modes of a part (ARPACK shift-invert, certified).
@@ -92,6 +113,44 @@ enum Command {
         /// Write the mode shapes to a VTU file for ParaView.
         #[arg(long, value_name = "FILE.vtu")]
         vtu: Option<PathBuf>,
+        /// Coupled engine modes (crankcase + liners) instead of one part.
+        #[arg(long)]
+        assembly: bool,
+        /// With --assembly: the full FE model (the reference).
+        #[arg(long, requires = "assembly", conflicts_with = "rom")]
+        full: bool,
+        /// With --assembly: the engine ROM.
+        #[arg(long, requires = "assembly")]
+        rom: bool,
+        #[command(flatten)]
+        cache: CacheArgs,
+    },
+    /// Build or load the engine reduced-order model and describe it.
+    Rom {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Override any scene field (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Print JSON on stdout.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        cache: CacheArgs,
+    },
+    /// Mode-shape coefficients: radial thrust-side amplitude of each system mode at every
+    /// cylinder's analysis points, normalised per mode.
+    Shapes {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Override any scene field (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Print JSON on stdout.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        cache: CacheArgs,
     },
     /// Write K.mtx and M.mtx (Matrix Market, symmetric, constrained DOFs removed).
     ExportMatrices {
@@ -133,7 +192,24 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             shift_hz,
             json,
             vtu,
+            assembly,
+            full,
+            rom: _,
+            cache,
         } => {
+            if assembly {
+                let scene_path = model.scene.clone().ok_or_else(|| {
+                    Error::Input("--assembly needs a scene file".into())
+                })?;
+                let scene = Scene::load(&scene_path, &model.sets)?;
+                let report = modes::run_assembly(&scene, count, full, vtu.as_deref(), &cache.options(), started)?;
+                if json {
+                    println!("{}", serde_json::to_string_pretty(&report).expect("serialisable"));
+                } else {
+                    print!("{}", report.to_text());
+                }
+                return Ok(());
+            }
             let req = modes::ModesRequest {
                 input: model.input()?,
                 count,
@@ -174,6 +250,41 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             let r = linercav::app::summary::run(&scene, &sets, &out, count)?;
             print!("{}", r.to_text());
             println!("report written to {}", out.display());
+        }
+        Command::Rom {
+            scene,
+            sets,
+            json,
+            cache,
+        } => {
+            let sc = Scene::load(&scene, &sets)?;
+            let loaded = rom::get_rom(&sc, &cache.options())?;
+            let mut report = rom::RomReport::new(&loaded);
+            report.seconds = started.elapsed().as_secs_f64();
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report).expect("serialisable"));
+            } else {
+                print!("{}", report.to_text());
+            }
+        }
+        Command::Shapes {
+            scene,
+            sets,
+            json,
+            cache,
+        } => {
+            let sc = Scene::load(&scene, &sets)?;
+            let loaded = rom::get_rom(&sc, &cache.options())?;
+            let report = rom::ShapesReport {
+                modes: rom::shapes(&loaded.rom),
+                cylinders: loaded.rom.cylinders.iter().map(|c| c.cylinder).collect(),
+                cache: loaded.cache,
+            };
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report).expect("serialisable"));
+            } else {
+                print!("{}", report.to_text());
+            }
         }
         Command::ExportMesh { model, out } => {
             let n = export::export_mesh(&model.input()?, &out)?;

@@ -4,6 +4,7 @@
 pub mod export;
 pub mod modes;
 pub mod progress;
+pub mod rom;
 pub mod summary;
 
 use crate::error::{Error, Result};

@@ -162,3 +162,105 @@ impl ModesReport {
         s
     }
 }
+
+/// Coupled engine modes (`modes --assembly`).
+#[derive(Clone, Debug, Serialize)]
+pub struct AssemblyReport {
+    pub frequencies_hz: Vec<f64>,
+    pub dofs: usize,
+    pub seconds: f64,
+    /// "rom" or "full".
+    pub source: &'static str,
+    /// ROM: cache hit, miss or bypassed; full: "none".
+    pub cache: &'static str,
+    /// Full model only: relative residuals and the Sturm certificate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residuals: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sturm_count_ok: Option<bool>,
+    /// ROM only: DOFs of the full model it stands for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub full_dofs: Option<usize>,
+}
+
+impl AssemblyReport {
+    pub fn to_text(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "coupled engine modes from the {} ({} DOFs, {:.2} s{})",
+            if self.source == "rom" { "ROM" } else { "full FE model" },
+            self.dofs,
+            self.seconds,
+            if self.source == "rom" { format!(", cache {}", self.cache) } else { String::new() }
+        );
+        for (i, f) in self.frequencies_hz.iter().enumerate() {
+            let r = self
+                .residuals
+                .as_ref()
+                .map(|r| format!("   residual {:.1e}", r[i]))
+                .unwrap_or_default();
+            let _ = writeln!(s, "  {:3}  {:10.2} Hz{r}", i + 1, f);
+        }
+        if let Some(ok) = self.sturm_count_ok {
+            let _ = writeln!(s, "  Sturm count: {}", if ok { "ok (no mode missed)" } else { "MISMATCH" });
+        }
+        s
+    }
+}
+
+/// Coupled engine modes from the ROM or the full FE model.
+pub fn run_assembly(
+    scene: &crate::scene::Scene,
+    count: usize,
+    full: bool,
+    vtu_path: Option<&std::path::Path>,
+    cache: &super::rom::CacheOptions,
+    started: Instant,
+) -> Result<AssemblyReport> {
+    use crate::error::Error;
+    if count == 0 {
+        return Err(Error::Input("--count must be at least 1".into()));
+    }
+    if full {
+        let r = crate::reduce::full::run(scene, count, vtu_path)?;
+        return Ok(AssemblyReport {
+            frequencies_hz: r.frequencies_hz,
+            dofs: r.dofs,
+            seconds: started.elapsed().as_secs_f64(),
+            source: "full",
+            cache: "none",
+            residuals: Some(r.residuals),
+            sturm_count_ok: Some(r.sturm_ok),
+            full_dofs: None,
+        });
+    }
+    let (rom, cache_state) = if let Some(path) = vtu_path {
+        // mode shapes on the meshes need the full bases: build in this run
+        let (b, lm, cm) = super::rom::build_rom(scene, true)?;
+        let n = count.min(b.rom.frequencies_hz.len());
+        crate::reduce::full::write_vtu(path, scene, &lm, &cm, &b, n)?;
+        (b.rom, "bypassed")
+    } else {
+        let l = super::rom::get_rom(scene, cache)?;
+        (l.rom, l.cache)
+    };
+    if rom.frequencies_hz.len() < count {
+        return Err(Error::Input(format!(
+            "the ROM holds {} system modes below its cut-off {:.0} Hz; ask for fewer or raise rom.band_hz",
+            rom.frequencies_hz.len(),
+            rom.info.cutoff_hz
+        )));
+    }
+    Ok(AssemblyReport {
+        frequencies_hz: rom.frequencies_hz[..count].to_vec(),
+        dofs: rom.info.reduced_dofs,
+        seconds: started.elapsed().as_secs_f64(),
+        source: "rom",
+        cache: cache_state,
+        residuals: None,
+        sturm_count_ok: None,
+        full_dofs: Some(rom.info.full_dofs),
+    })
+}

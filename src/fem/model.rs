@@ -99,51 +99,70 @@ impl FeModel {
         sigma: f64,
         guard: usize,
     ) -> Result<ModalSolution, ModelError> {
-        let n = self.n_free();
-        let nev = (count + guard).min(n.saturating_sub(1)).max(count);
-        let t = Instant::now();
-        let shifted = self.km.shifted(sigma);
-        let llt = self.analysis.llt(&self.km.pattern, &shifted)?;
-        drop(shifted);
-        self.timings.factorisation = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let pattern = &self.km.pattern;
-        let m = &self.km.m;
-        let all = solve_modes(
-            n,
-            &EigenSettings::new(nev, sigma),
-            |x, y| pattern.matvec(m, x, y),
-            |x| llt.solve_vec(x),
-        )?;
-        drop(llt);
-        self.timings.eigen = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let sturm = match certify::sturm_shift(&all.eigenvalues, count, 1e-4) {
-            Some((sigma_c, expected)) => {
-                let found = self
-                    .analysis
-                    .negative_pivots(&self.km.pattern, &self.km.shifted(sigma_c))?;
-                Some(SturmCheck {
-                    shift_hz: sigma_c.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
-                    expected,
-                    found,
-                    ok: found == expected,
-                })
-            }
-            None => None,
-        };
-        let mut modes = all;
-        modes.eigenvalues.truncate(count);
-        modes.vectors.truncate(count * n);
-        let residuals = certify::residuals(&self.km, &modes, sigma);
-        let m_orthogonality = certify::m_orthogonality_error(&self.km, &modes);
-        self.timings.certification = t.elapsed().as_secs_f64();
-        Ok(ModalSolution {
+        let (sol, t) = certified_modes(&self.km, &self.analysis, count, sigma, guard)?;
+        self.timings.factorisation = t.factorisation;
+        self.timings.eigen = t.eigen;
+        self.timings.certification = t.certification;
+        Ok(sol)
+    }
+}
+
+/// The lowest `count` modes of (K, M) on an analysed pattern, certified: shift-invert ARPACK
+/// with K - sigma M = L L^T, residuals, M-orthogonality, and a Sturm count at a shift placed in
+/// a spectral gap found among `guard` extra modes.
+pub fn certified_modes(
+    km: &StiffnessMass,
+    analysis: &Analysis,
+    count: usize,
+    sigma: f64,
+    guard: usize,
+) -> Result<(ModalSolution, Timings), ModelError> {
+    let mut timings = Timings::default();
+    let n = km.pattern.n;
+    let nev = (count + guard).min(n.saturating_sub(1)).max(count);
+    let t = Instant::now();
+    let shifted = km.shifted(sigma);
+    let llt = analysis.llt(&km.pattern, &shifted)?;
+    drop(shifted);
+    timings.factorisation = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let pattern = &km.pattern;
+    let m = &km.m;
+    let all = solve_modes(
+        n,
+        &EigenSettings::new(nev, sigma),
+        |x, y| pattern.matvec(m, x, y),
+        |x| llt.solve_vec(x),
+    )?;
+    drop(llt);
+    timings.eigen = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let sturm = match certify::sturm_shift(&all.eigenvalues, count, 1e-4) {
+        Some((sigma_c, expected)) => {
+            let found = analysis.negative_pivots(&km.pattern, &km.shifted(sigma_c))?;
+            Some(SturmCheck {
+                shift_hz: sigma_c.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
+                expected,
+                found,
+                ok: found == expected,
+            })
+        }
+        None => None,
+    };
+    let mut modes = all;
+    modes.eigenvalues.truncate(count);
+    modes.vectors.truncate(count * n);
+    let residuals = certify::residuals(km, &modes, sigma);
+    let m_orthogonality = certify::m_orthogonality_error(km, &modes);
+    timings.certification = t.elapsed().as_secs_f64();
+    Ok((
+        ModalSolution {
             modes,
             residuals,
             m_orthogonality,
             sturm,
             sigma,
-        })
-    }
+        },
+        timings,
+    ))
 }

@@ -20,7 +20,7 @@ use crate::fem::shape::ElementKind;
 use std::f64::consts::PI;
 
 /// Liner geometry, SI units (metres).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct LinerGeometry {
     pub outer_diameter: f64,
     pub inner_diameter: f64,
@@ -33,7 +33,7 @@ pub struct LinerGeometry {
 }
 
 /// Mesh density and element kind of the generated liner.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct LinerMeshing {
     pub kind: ElementKind,
     /// Elements around the circumference (multiple of 4).

@@ -4,9 +4,11 @@
 //! produce a [`Mesh`]; `checks` validates it before any matrix is built.
 
 pub mod checks;
+pub mod crankcase;
 pub mod gmsh;
 pub mod lattice;
 pub mod liner;
+pub mod merge;
 
 use crate::fem::shape::ElementKind;
 use std::collections::BTreeMap;

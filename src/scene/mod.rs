@@ -8,6 +8,7 @@ pub mod raw;
 
 use crate::fem::material::Elastic;
 use crate::fem::shape::ElementKind;
+use crate::mesh::crankcase::{CrankcaseGeometry, CrankcaseMeshing};
 use crate::mesh::liner::{LinerGeometry, LinerMeshing};
 use raw::RawScene;
 use std::path::{Path, PathBuf};
@@ -77,6 +78,38 @@ impl Solver {
     }
 }
 
+/// Where the crankcase mesh comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CrankcaseSource {
+    Parametric {
+        geometry: CrankcaseGeometry,
+        meshing: CrankcaseMeshing,
+    },
+    File(PathBuf),
+}
+
+/// The validated crankcase.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Crankcase {
+    pub source: CrankcaseSource,
+    pub material: Elastic,
+    pub fix: Vec<String>,
+    /// Clamp force on each liner flange [N].
+    pub clamp_force: f64,
+}
+
+/// Engine ROM settings, SI.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rom {
+    pub band_hz: f64,
+    /// Cut-off of part and system modes [Hz] (band x cutoff factor).
+    pub cutoff_hz: f64,
+    pub harmonics: usize,
+    /// Modelled cylinders, 1-based, ascending.
+    pub cylinders: Vec<usize>,
+    pub cache_dir: PathBuf,
+}
+
 /// A validated scene, SI units.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -84,7 +117,12 @@ pub struct Scene {
     pub title: String,
     pub engine: Engine,
     pub liner: Part,
+    /// The liner geometry (also when the mesh comes from a file: interfaces and analysis
+    /// heights are defined by it).
+    pub liner_geometry: LinerGeometry,
+    pub crankcase: Option<Crankcase>,
     pub solver: Solver,
+    pub rom: Rom,
 }
 
 /// Part names a scene knows.
@@ -298,8 +336,10 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         radial_flange: mesh.radial_flange,
         axial_size: c.mm("liner.mesh.axial_size_mm", mesh.axial_size_mm)?,
     };
+    let base = path.parent().unwrap_or(Path::new("."));
+    let liner_geometry = geometry.clone();
     let source = match &l.mesh_file {
-        Some(f) => MeshSource::File(path.parent().unwrap_or(Path::new(".")).join(f)),
+        Some(f) => MeshSource::File(base.join(f)),
         None => MeshSource::Liner { geometry, meshing },
     };
     let liner = Part {
@@ -312,11 +352,129 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         shift_hz: c.positive("solver.shift_hz", raw.solver.shift_hz)?,
         guard_modes: raw.solver.guard_modes,
     };
+    let crankcase = match &raw.crankcase {
+        None => None,
+        Some(cc) => Some(validate_crankcase(&c, base, cc, &engine, &liner_geometry, &material)?),
+    };
+    let r = &raw.rom;
+    let band_hz = c.positive("rom.band_hz", r.band_hz)?;
+    if !(r.cutoff_factor.is_finite() && r.cutoff_factor >= 1.0) {
+        return Err(c.err("rom.cutoff_factor", format!("must be at least 1, got {}", r.cutoff_factor)));
+    }
+    if r.interface_harmonics == 0 {
+        return Err(c.err("rom.interface_harmonics", "must be at least 1 (rigid liner motion needs n = 1)"));
+    }
+    let mut cylinders = if r.cylinders.is_empty() {
+        (1..=engine.cylinders).collect()
+    } else {
+        r.cylinders.clone()
+    };
+    cylinders.sort_unstable();
+    cylinders.dedup();
+    if let Some(&bad) = cylinders.iter().find(|&&k| k == 0 || k > engine.cylinders) {
+        return Err(c.err("rom.cylinders", format!("cylinder {bad} does not exist (1..={})", engine.cylinders)));
+    }
+    let rom = Rom {
+        band_hz,
+        cutoff_hz: band_hz * r.cutoff_factor,
+        harmonics: r.interface_harmonics,
+        cylinders,
+        cache_dir: base.join(&r.cache_dir),
+    };
     Ok(Scene {
         path: path.to_path_buf(),
         title: raw.title,
         engine,
         liner,
+        liner_geometry,
+        crankcase,
         solver,
+        rom,
+    })
+}
+
+fn validate_crankcase(
+    c: &Checker<'_>,
+    base: &Path,
+    cc: &raw::RawCrankcase,
+    engine: &Engine,
+    liner: &LinerGeometry,
+    material: &dyn Fn(&str, &str) -> Result<Elastic, SceneError>,
+) -> Result<Crankcase, SceneError> {
+    let geometry = CrankcaseGeometry {
+        cylinders: engine.cylinders,
+        pitch: engine.cylinder_pitch,
+        liner_outer_radius: liner.outer_diameter / 2.0,
+        flange_radius: liner.flange_outer_diameter / 2.0,
+        seat_z: liner.length - liner.flange_height,
+        guide_height: liner.guide_height,
+        deck_thickness: c.mm("crankcase.deck_thickness_mm", cc.deck_thickness_mm)?,
+        jacket_wall: c.mm("crankcase.jacket_wall_mm", cc.jacket_wall_mm)?,
+        skirt_depth: c.mm("crankcase.skirt_depth_mm", cc.skirt_depth_mm)?,
+        front_wall: c.mm("crankcase.front_wall_mm", cc.front_wall_mm)?,
+        rear_wall: c.mm("crankcase.rear_wall_mm", cc.rear_wall_mm)?,
+        rail_width: c.mm("crankcase.rail_width_mm", cc.rail_width_mm)?,
+        rail_height: c.mm("crankcase.rail_height_mm", cc.rail_height_mm)?,
+        analysis_z: liner.analysis_depths.iter().map(|d| liner.length - d).collect(),
+    };
+    if liner.flange_outer_diameter <= liner.outer_diameter {
+        return Err(c.err(
+            "liner.flange_outer_diameter_mm",
+            "the crankcase needs a liner flange to seat on (flange diameter > outer diameter)",
+        ));
+    }
+    if geometry.seat_z - geometry.deck_thickness <= geometry.guide_height + 1e-9 {
+        return Err(c.err(
+            "crankcase.deck_thickness_mm",
+            "the deck reaches down into the lower guide band: no water jacket left",
+        ));
+    }
+    if let Some(&z) = geometry.analysis_z.first() {
+        if z >= geometry.seat_z - geometry.deck_thickness {
+            return Err(c.err(
+                "crankcase.deck_thickness_mm",
+                "the first analysis point lies inside the deck, not in the coolant zone",
+            ));
+        }
+    }
+    if geometry.rail_height >= geometry.skirt_depth {
+        return Err(c.err("crankcase.rail_height_mm", "must be smaller than skirt_depth_mm"));
+    }
+    let m = &cc.mesh;
+    let kind = match m.element.as_str() {
+        "hex20" => ElementKind::Hex20,
+        "tet10" => ElementKind::Tet10,
+        other => {
+            return Err(c.err(
+                "crankcase.mesh.element",
+                format!("expected \"hex20\" or \"tet10\", got \"{other}\""),
+            ))
+        }
+    };
+    if m.per_sector < 2 || m.per_sector % 2 != 0 {
+        return Err(c.err(
+            "crankcase.mesh.per_sector",
+            "must be even and at least 2 (the thrust line falls on nodes)",
+        ));
+    }
+    if m.wall_layers == 0 {
+        return Err(c.err("crankcase.mesh.wall_layers", "must be at least 1"));
+    }
+    let meshing = CrankcaseMeshing {
+        kind,
+        per_sector: m.per_sector,
+        wall_layers: m.wall_layers,
+        axial_size: c.mm("crankcase.mesh.axial_size_mm", m.axial_size_mm)?,
+    };
+    let source = match &cc.mesh_file {
+        Some(f) => CrankcaseSource::File(base.join(f)),
+        None => CrankcaseSource::Parametric { geometry, meshing },
+    };
+    let clamp_force = c.positive("crankcase.flange_clamp_kn", cc.flange_clamp_kn)? * 1e3;
+    Ok(Crankcase {
+        source,
+        material: material("crankcase.material", &cc.material)?,
+        fix: cc.fix.clone(),
+        clamp_force,
     })
 }

@@ -16,8 +16,110 @@ pub struct RawScene {
     /// Named isotropic materials, referred to by parts.
     pub materials: BTreeMap<String, RawMaterial>,
     pub liner: RawLiner,
+    /// The crankcase; needed by the engine commands (`rom`, `modes --assembly`, `shapes`).
+    #[serde(default)]
+    pub crankcase: Option<RawCrankcase>,
     #[serde(default)]
     pub solver: RawSolver,
+    /// Engine reduced-order model settings.
+    #[serde(default)]
+    pub rom: RawRom,
+}
+
+/// The crankcase: parametric (dimensions below) or a Gmsh mesh with the same named sets.
+/// Dimensions that follow from the engine and liner (bore positions, seat and guide radii and
+/// heights) are taken from there.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCrankcase {
+    /// Name of an entry of `[materials]`.
+    pub material: String,
+    /// Deck plate thickness below the liner flange seat [mm].
+    pub deck_thickness_mm: f64,
+    /// Water-jacket outer wall thickness at the thrust/anti-thrust side, at the cylinder centre
+    /// line [mm] (the wall thickens towards the cylinder junctions).
+    pub jacket_wall_mm: f64,
+    /// Depth of the crank bay (skirt) below the liner bottom [mm].
+    pub skirt_depth_mm: f64,
+    /// Front (gear-end) wall thickness [mm].
+    pub front_wall_mm: f64,
+    /// Rear (flywheel-end) wall thickness [mm].
+    pub rear_wall_mm: f64,
+    /// Oil-pan rail: outward flange width [mm] and height [mm] at the skirt bottom.
+    pub rail_width_mm: f64,
+    pub rail_height_mm: f64,
+    /// Head-bolt clamp force carried by each liner flange [kN] (bolt preload from torque:
+    /// F = T / (k d)); pushes the flange down and pulls the deck up (the bolt reaction).
+    pub flange_clamp_kn: f64,
+    /// Node sets held fixed (engine mounting); the parametric mesh offers `pan_rail`.
+    #[serde(default)]
+    pub fix: Vec<String>,
+    /// Optional Gmsh MSH 4.1 mesh (path relative to the scene file) replacing the parametric
+    /// one; it must provide `seat_<c>`, `guide_<c>` and `point_<c>_<k>` node sets in the
+    /// engine frame (see the README).
+    #[serde(default)]
+    pub mesh_file: Option<String>,
+    pub mesh: RawCrankcaseMesh,
+}
+
+/// Density of the parametric crankcase mesh.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCrankcaseMesh {
+    /// "hex20" (default) or "tet10".
+    #[serde(default = "default_element")]
+    pub element: String,
+    /// Elements per quarter of each bore's circumference, even, >= 2.
+    pub per_sector: usize,
+    /// Element rings through the jacket wall, >= 1.
+    pub wall_layers: usize,
+    /// Target axial element size [mm].
+    pub axial_size_mm: f64,
+}
+
+/// Engine reduced-order model (Craig-Bampton) settings.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawRom {
+    /// Highest frequency of interest [Hz] (spectra, responses), > 0.
+    #[serde(default = "default_band")]
+    pub band_hz: f64,
+    /// Cut-off of part and system modes as a multiple of `band_hz`, >= 1 (default 2.5).
+    #[serde(default = "default_cutoff_factor")]
+    pub cutoff_factor: f64,
+    /// Highest circumferential harmonic N of the interface fields, >= 1.
+    #[serde(default = "default_harmonics")]
+    pub interface_harmonics: usize,
+    /// Cylinders whose liners are modelled (1-based); empty = all.
+    #[serde(default)]
+    pub cylinders: Vec<usize>,
+    /// Directory of the ROM cache, relative to the scene file.
+    #[serde(default = "default_cache_dir")]
+    pub cache_dir: String,
+}
+
+impl Default for RawRom {
+    fn default() -> Self {
+        Self {
+            band_hz: default_band(),
+            cutoff_factor: default_cutoff_factor(),
+            interface_harmonics: default_harmonics(),
+            cylinders: Vec::new(),
+            cache_dir: default_cache_dir(),
+        }
+    }
+}
+fn default_band() -> f64 {
+    3000.0
+}
+fn default_cutoff_factor() -> f64 {
+    2.5
+}
+fn default_harmonics() -> usize {
+    6
+}
+fn default_cache_dir() -> String {
+    ".linercav-cache".into()
 }
 
 /// Engine layout and operating point.

@@ -1,0 +1,299 @@
+//! Parametric crankcase of an in-line engine with wet liners.
+//!
+//! Frame (shared with the liner, see [`super::liner`]): z is the cylinder axis with z = 0 at the
+//! liner bottom; x runs along the crankshaft; the thrust side is +y. Cylinder c (1-based) has
+//! its axis at x_c = (c - (N + 1) / 2) p, y = 0 (p the cylinder pitch).
+//!
+//! Plan: each cylinder owns a cell x in [x_c - p/2, x_c + p/2], y in [-b, b] (b = r_f + t_w,
+//! r_f the flange radius, t_w the jacket wall) meshed as an O-grid: ring 0 between the liner
+//! outer radius r_o and r_f, then `wall_layers` rings blending linearly from the circle r_f to
+//! the cell rectangle. The circumference is split into four sectors at the rectangle's corner
+//! angles (alpha = atan(b / (p/2))) so the rectangle's corners are nodes and neighbouring cells
+//! share their boundary nodes; thrust (+y) and anti-thrust lines fall on nodes.
+//!
+//! Height zones, bottom to top, and what is solid in each:
+//! - oil-pan rail (one element layer at the bottom): skirt walls, bulkheads, end walls and an
+//!   outward flange (the rail) on both sides;
+//! - crank bay (below the liner, down to `skirt_depth`): skirt walls (the wall rings on the
+//!   y-sides), bulkheads (all rings on the x-sides, between cylinders and at the ends);
+//! - lower support (z in [0, guide_height]): all rings; its bore (r = r_o) is the liner's radial
+//!   guide seat;
+//! - water jacket (up to the deck): the wall rings only; ring 0 is the coolant space;
+//! - deck (`deck_thickness` below the flange seat): all rings; its top face carries the liner
+//!   flange (seat annulus r_o..r_f) under the head-bolt clamp load.
+//! Front (gear-end, -x) and rear (flywheel-end, +x) end walls of their own thickness close the
+//! block over its full height.
+//!
+//! Node sets: `seat_c` (deck top, r <= r_f around cylinder c), `guide_c` (support bore,
+//! r = r_o, 0 <= z <= guide height), `point_c_k` (jacket wall, thrust side, at the liner's
+//! analysis heights, top to bottom), `deck_top`, `pan_rail` (bottom face, z = -skirt_depth).
+
+use super::lattice::{Key, Lattice};
+use super::merge::merge;
+use super::Mesh;
+use crate::fem::shape::ElementKind;
+use std::f64::consts::PI;
+
+/// Crankcase geometry, SI (metres).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CrankcaseGeometry {
+    pub cylinders: usize,
+    pub pitch: f64,
+    /// Liner outer radius r_o: bore of the deck ledge and of the lower support.
+    pub liner_outer_radius: f64,
+    /// Flange radius r_f: outer edge of the seat annulus, inner face of the jacket wall.
+    pub flange_radius: f64,
+    /// Height of the flange seat (deck top face) above the liner bottom.
+    pub seat_z: f64,
+    pub guide_height: f64,
+    pub deck_thickness: f64,
+    /// Thrust/anti-thrust jacket wall thickness t_w at the cylinder centre line.
+    pub jacket_wall: f64,
+    /// Depth of the crank bay below the liner bottom (bottom face at z = -skirt_depth).
+    pub skirt_depth: f64,
+    pub front_wall: f64,
+    pub rear_wall: f64,
+    pub rail_width: f64,
+    pub rail_height: f64,
+    /// Heights of the analysis points (z), top to bottom.
+    pub analysis_z: Vec<f64>,
+}
+
+/// Mesh density of the generated crankcase.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CrankcaseMeshing {
+    pub kind: ElementKind,
+    /// Elements per quarter sector of the circumference (even).
+    pub per_sector: usize,
+    /// Element rings through the jacket wall.
+    pub wall_layers: usize,
+    /// Target axial element size [m].
+    pub axial_size: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Zone {
+    Rail,
+    Bay,
+    Support,
+    Jacket,
+    Deck,
+}
+
+impl CrankcaseGeometry {
+    /// Axis x of cylinder `c` (0-based).
+    pub fn axis_x(&self, c: usize) -> f64 {
+        (c as f64 - (self.cylinders as f64 - 1.0) / 2.0) * self.pitch
+    }
+    /// Half-width b of the block (y extent of a cell).
+    pub fn half_width(&self) -> f64 {
+        self.flange_radius + self.jacket_wall
+    }
+    /// Corner angle alpha of a cell rectangle.
+    fn corner_angle(&self) -> f64 {
+        self.half_width().atan2(self.pitch / 2.0)
+    }
+}
+
+/// Angle of doubled circumferential index `j2` (of `8 s` per turn, `s` elements per sector);
+/// sector 0 spans [-alpha, alpha], 1 [alpha, pi - alpha], 2 and 3 likewise.
+fn sector_angle(j2: usize, s: usize, alpha: f64) -> f64 {
+    let per = 2 * s;
+    let sector = (j2 / per) % 4;
+    let u = (j2 % per) as f64 / per as f64;
+    let (start, span) = match sector {
+        0 => (-alpha, 2.0 * alpha),
+        1 => (alpha, PI - 2.0 * alpha),
+        2 => (PI - alpha, 2.0 * alpha),
+        _ => (PI + alpha, PI - 2.0 * alpha),
+    };
+    start + u * span
+}
+
+/// Point where the ray at angle `th` from the cell centre leaves the rectangle |x| <= a, |y| <= b.
+fn rect_point(th: f64, a: f64, b: f64) -> [f64; 2] {
+    let (c, s) = (th.cos(), th.sin());
+    let t = (a / c.abs().max(1e-300)).min(b / s.abs().max(1e-300));
+    [t * c, t * s]
+}
+
+fn subdivide(levels: &mut Vec<f64>, a: f64, b: f64, h: f64) {
+    let n = (((b - a) / h) - 1e-9).ceil().max(1.0) as usize;
+    for s in 1..=n {
+        levels.push(a + (b - a) * s as f64 / n as f64);
+    }
+}
+
+fn level_at(levels: &[f64], doubled: usize) -> f64 {
+    if doubled % 2 == 0 {
+        levels[doubled / 2]
+    } else {
+        0.5 * (levels[doubled / 2] + levels[doubled / 2 + 1])
+    }
+}
+
+/// Generates the crankcase mesh with its named node sets.
+pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
+    let (ro, rf) = (geo.liner_outer_radius, geo.flange_radius);
+    let (a, b) = (geo.pitch / 2.0, geo.half_width());
+    let alpha = geo.corner_angle();
+    let s = meshing.per_sector;
+    let nw = meshing.wall_layers;
+    let z_bot = -geo.skirt_depth;
+    let z_deck = geo.seat_z - geo.deck_thickness;
+    // z planes: zone limits and the analysis heights are exact levels
+    let mut z_levels = vec![z_bot, z_bot + geo.rail_height];
+    subdivide(&mut z_levels, z_bot + geo.rail_height, 0.0, meshing.axial_size);
+    subdivide(&mut z_levels, 0.0, geo.guide_height, meshing.axial_size);
+    let mut planes = vec![geo.guide_height, z_deck];
+    planes.extend(geo.analysis_z.iter().copied());
+    planes.sort_by(|p, q| p.partial_cmp(q).unwrap());
+    planes.dedup_by(|p, q| (*p - *q).abs() < 1e-9);
+    for w in planes.windows(2) {
+        subdivide(&mut z_levels, w[0], w[1], meshing.axial_size);
+    }
+    subdivide(&mut z_levels, z_deck, geo.seat_z, meshing.axial_size);
+    let nz = z_levels.len() - 1;
+    let zone = |k: usize| -> Zone {
+        let zm = 0.5 * (z_levels[k] + z_levels[k + 1]);
+        if k == 0 {
+            Zone::Rail
+        } else if zm < 0.0 {
+            Zone::Bay
+        } else if zm < geo.guide_height {
+            Zone::Support
+        } else if zm < z_deck {
+            Zone::Jacket
+        } else {
+            Zone::Deck
+        }
+    };
+    let kind = meshing.kind;
+    let mut parts: Vec<Mesh> = Vec::new();
+    // cylinder cells
+    for c in 0..geo.cylinders {
+        let xc = geo.axis_x(c);
+        let active = |i: usize, j: usize, k: usize| -> bool {
+            let x_side = (j / s) % 2 == 0;
+            match zone(k) {
+                Zone::Deck | Zone::Support => true,
+                Zone::Jacket => i >= 1,
+                Zone::Bay | Zone::Rail => x_side || i >= 1,
+            }
+        };
+        let coord = |key: Key| -> [f64; 3] {
+            let th = sector_angle(key[1], s, alpha);
+            let z = level_at(&z_levels, key[2]);
+            let (x, y) = if key[0] <= 2 {
+                let r = ro + (rf - ro) * key[0] as f64 / 2.0;
+                (r * th.cos(), r * th.sin())
+            } else {
+                let t = (key[0] - 2) as f64 / (2 * nw) as f64;
+                let p = rect_point(th, a, b);
+                (
+                    (1.0 - t) * rf * th.cos() + t * p[0],
+                    (1.0 - t) * rf * th.sin() + t * p[1],
+                )
+            };
+            [xc + x, y, z]
+        };
+        let lat = Lattice {
+            cells: [1 + nw, 4 * s, nz],
+            periodic_j: true,
+            active: &active,
+            coord: &coord,
+        };
+        parts.push(lat.generate(kind).mesh);
+    }
+    // end walls: front (-x; i -> -x, j -> -y) and rear (+x; i -> +x, j -> +y)
+    let all = |_: usize, _: usize, _: usize| true;
+    let x_front = geo.axis_x(0) - a;
+    let x_rear = geo.axis_x(geo.cylinders - 1) + a;
+    for (x0, dir, t, sector) in [
+        (x_front, -1.0, geo.front_wall, 2usize),
+        (x_rear, 1.0, geo.rear_wall, 0usize),
+    ] {
+        let coord = |key: Key| -> [f64; 3] {
+            let th = sector_angle(sector * 2 * s + key[1], s, alpha);
+            let y = rect_point(th, a, b)[1];
+            [x0 + dir * t * key[0] as f64 / 2.0, y, level_at(&z_levels, key[2])]
+        };
+        let lat = Lattice {
+            cells: [1, s, nz],
+            periodic_j: false,
+            active: &all,
+            coord: &coord,
+        };
+        parts.push(lat.generate(kind).mesh);
+    }
+    // oil-pan rails: x stations along the side, front end wall to rear end wall (doubled)
+    let mut xs: Vec<f64> = vec![x_front - geo.front_wall, x_front - geo.front_wall / 2.0];
+    for c in 0..geo.cylinders {
+        let xc = geo.axis_x(c);
+        // sector 3 runs from x = -a to x = +a along y = -b
+        for j2 in 0..2 * s {
+            let th = sector_angle(6 * s + j2, s, alpha);
+            xs.push(xc + rect_point(th, a, b)[0]);
+        }
+    }
+    xs.push(x_rear);
+    xs.push(x_rear + geo.rear_wall / 2.0);
+    xs.push(x_rear + geo.rear_wall);
+    let nx = (xs.len() - 1) / 2;
+    for side in [-1.0f64, 1.0] {
+        // -y side: i -> -y, j -> +x; +y side: i -> +y, j -> -x (right-handed with k -> z)
+        let coord = |key: Key| -> [f64; 3] {
+            let x = if side < 0.0 {
+                xs[key[1]]
+            } else {
+                xs[xs.len() - 1 - key[1]]
+            };
+            let y = side * (b + geo.rail_width * key[0] as f64 / 2.0);
+            [x, y, level_at(&z_levels, key[2])]
+        };
+        let lat = Lattice {
+            cells: [1, nx, 1],
+            periodic_j: false,
+            active: &all,
+            coord: &coord,
+        };
+        parts.push(lat.generate(kind).mesh);
+    }
+    let mut mesh = merge(parts, 1e-7 * geo.pitch);
+    // named sets
+    let tol = 1e-6 * geo.pitch;
+    let nodes = &mesh.nodes;
+    let mut sets = std::collections::BTreeMap::new();
+    let select = |pred: &dyn Fn(&[f64; 3]) -> bool| -> Vec<usize> {
+        (0..nodes.len()).filter(|&n| pred(&nodes[n])).collect()
+    };
+    for c in 0..geo.cylinders {
+        let xc = geo.axis_x(c);
+        let r = |p: &[f64; 3]| ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
+        sets.insert(
+            format!("seat_{}", c + 1),
+            select(&|p| (p[2] - geo.seat_z).abs() < tol && r(p) <= rf + tol),
+        );
+        sets.insert(
+            format!("guide_{}", c + 1),
+            select(&|p| {
+                (r(p) - ro).abs() < tol && p[2] > -tol && p[2] < geo.guide_height + tol
+            }),
+        );
+        for (k, &z) in geo.analysis_z.iter().enumerate() {
+            sets.insert(
+                format!("point_{}_{}", c + 1, k + 1),
+                select(&|p| {
+                    (p[0] - xc).abs() < tol && (p[1] - rf).abs() < tol && (p[2] - z).abs() < tol
+                }),
+            );
+        }
+    }
+    sets.insert(
+        "deck_top".into(),
+        select(&|p| (p[2] - geo.seat_z).abs() < tol),
+    );
+    sets.insert("pan_rail".into(), select(&|p| (p[2] - z_bot).abs() < tol));
+    mesh.node_sets = sets;
+    mesh
+}

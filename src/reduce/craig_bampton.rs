@@ -1,0 +1,423 @@
+//! Craig-Bampton reduction of one part with interface fields (see [`super::interface`]).
+//!
+//! The part's DOFs split into boundary b (all DOFs of the interface nodes) and interior i. The
+//! reduced basis Phi = [Phi_c | Phi_n | Phi_a] (full-part DOFs x reduced coordinates) holds:
+//! - constraint modes: boundary displacement = one interface shape psi, interior in static
+//!   equilibrium: u_i = -K_ii^-1 K_ib psi;
+//! - fixed-interface normal modes: K_ii phi = lambda M_ii phi, phi^T M_ii phi = 1, all modes
+//!   with frequency below the cut-off (their number from a Sturm count at the cut-off);
+//! - residual attachment modes for loads f at interior DOFs (contact lines, clamp load):
+//!   u_a = K_ii^-1 f - sum_j phi_j phi_j^T f / lambda_j, M-orthonormalised; they carry the
+//!   static response the truncated modes miss (the static correction).
+//! Reduced matrices K_r = Phi^T K Phi, M_r = Phi^T M Phi. By construction K_cn = 0, K_an = 0,
+//! K_ca = 0 and K_nn = diag(lambda). Rows of Phi at output DOFs (node, direction) are kept so
+//! the engine ROM can report responses without the full basis.
+
+use super::interface;
+use crate::eigen::{solve_modes, EigenSettings};
+use crate::fem::dofs::{DofMap, FIXED};
+use crate::fem::material::Elastic;
+use crate::fem::model::{FeModel, ModelError};
+use crate::mesh::Mesh;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par};
+use std::ops::Range;
+use std::time::Instant;
+
+/// A block of interface shapes on one node set.
+pub struct InterfaceBlock {
+    /// Node set of the part carrying the shapes.
+    pub set: String,
+    /// Shapes, 3 rows per node of the set (set order), one column per shape.
+    pub psi: Mat<f64>,
+}
+
+/// A load pattern at interior DOFs: (node, force vector) pairs.
+pub struct Load {
+    pub name: String,
+    pub entries: Vec<(usize, [f64; 3])>,
+}
+
+/// An output: the displacement of `node` along the unit vector `dir`.
+#[derive(Clone, Debug)]
+pub struct Output {
+    pub node: usize,
+    pub dir: [f64; 3],
+}
+
+/// Failures of a reduction, naming the part.
+#[derive(Debug, thiserror::Error)]
+pub enum ReduceError {
+    #[error("part '{part}': {source}")]
+    Model {
+        part: String,
+        #[source]
+        source: ModelError,
+    },
+    #[error("part '{part}': interface set '{set}': {msg}")]
+    Interface {
+        part: String,
+        set: String,
+        msg: String,
+    },
+    #[error("part '{part}': {msg}")]
+    Other { part: String, msg: String },
+}
+
+/// Work counters and timings of one reduction.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct CbStats {
+    pub full_dofs: usize,
+    pub interior_dofs: usize,
+    pub constraint_modes: usize,
+    pub normal_modes: usize,
+    pub attachment_modes: usize,
+    pub highest_mode_hz: f64,
+    pub seconds: f64,
+}
+
+/// The reduced part.
+pub struct PartReduction {
+    pub k: Mat<f64>,
+    pub m: Mat<f64>,
+    /// Columns of each interface block, in input order.
+    pub interface_cols: Vec<Range<usize>>,
+    pub modes: Range<usize>,
+    pub mode_frequencies_hz: Vec<f64>,
+    pub attachments: Range<usize>,
+    /// Rows of Phi along the output directions (outputs x reduced coordinates).
+    pub outputs: Mat<f64>,
+    /// Phi^T f of each load (reduced coordinates x loads).
+    pub loads: Mat<f64>,
+    /// Full basis in the part's free-DOF numbering (kept on request, for recovery).
+    pub basis: Option<Mat<f64>>,
+    pub dofs: DofMap,
+    pub stats: CbStats,
+}
+
+impl PartReduction {
+    pub fn size(&self) -> usize {
+        self.k.nrows()
+    }
+}
+
+/// Settings of one reduction.
+pub struct CbSettings {
+    pub cutoff_hz: f64,
+    pub keep_basis: bool,
+}
+
+fn columns_solve(
+    llt: &crate::linalg::factor::Llt<'_>,
+    mut rhs: Mat<f64>,
+) -> Mat<f64> {
+    let n = rhs.ncols();
+    let chunk = 64;
+    let mut c0 = 0;
+    while c0 < n {
+        let c1 = (c0 + chunk).min(n);
+        llt.solve_in_place(rhs.as_mut().subcols_mut(c0, c1 - c0));
+        c0 = c1;
+    }
+    rhs
+}
+
+/// Reduces one part. `fix` are the sets held fixed for good (e.g. the engine mounts),
+/// `interfaces` the coupled boundaries, `loads` the attachment load patterns.
+pub fn reduce(
+    part: &str,
+    mesh: &Mesh,
+    material: &Elastic,
+    fix: &[String],
+    interfaces: &[InterfaceBlock],
+    loads: &[Load],
+    outputs: &[Output],
+    settings: &CbSettings,
+) -> Result<PartReduction, ReduceError> {
+    let t0 = Instant::now();
+    let verbose = std::env::var_os("LINERCAV_VERBOSE").is_some();
+    let tick = |what: &str| {
+        if verbose {
+            eprintln!("[{part}] {:7.2} s  {what}", t0.elapsed().as_secs_f64());
+        }
+    };
+    let err_model = |source| ReduceError::Model {
+        part: part.to_string(),
+        source,
+    };
+    let full = FeModel::build(mesh.clone(), material, fix).map_err(err_model)?;
+    let mut sets: Vec<String> = fix.to_vec();
+    for b in interfaces {
+        let nodes = mesh
+            .node_set(&b.set)
+            .ok_or_else(|| ReduceError::Interface {
+                part: part.into(),
+                set: b.set.clone(),
+                msg: format!(
+                    "the mesh has no such node set (it has: {})",
+                    mesh.set_names().join(", ")
+                ),
+            })?;
+        if nodes.is_empty() {
+            return Err(ReduceError::Interface {
+                part: part.into(),
+                set: b.set.clone(),
+                msg: "the set is empty: the part does not reach this interface".into(),
+            });
+        }
+        if b.psi.nrows() != 3 * nodes.len() {
+            return Err(ReduceError::Other {
+                part: part.into(),
+                msg: format!("interface '{}' shapes do not match its node set", b.set),
+            });
+        }
+        sets.push(b.set.clone());
+    }
+    let inner = FeModel::build(mesh.clone(), material, &sets).map_err(err_model)?;
+    let (na, nb) = (full.n_free(), inner.n_free());
+    tick(&format!("assembled: {na} DOFs, {nb} interior"));
+    let llt = inner
+        .analysis
+        .llt(&inner.km.pattern, &inner.km.k)
+        .map_err(|e| err_model(e.into()))?;
+    // number of fixed-interface modes below the cut-off (Sturm count)
+    let omega_c2 = (2.0 * std::f64::consts::PI * settings.cutoff_hz).powi(2);
+    let count = inner
+        .analysis
+        .negative_pivots(&inner.km.pattern, &inner.km.shifted(omega_c2))
+        .map_err(|e| err_model(e.into()))?;
+    tick(&format!("factorised; {count} fixed-interface modes below the cut-off"));
+    let (lambdas, modes_b): (Vec<f64>, Mat<f64>) = if count > 0 {
+        let pattern = &inner.km.pattern;
+        let m = &inner.km.m;
+        let modes = solve_modes(
+            nb,
+            &EigenSettings::new(count.min(nb - 1), 0.0),
+            |x, y| pattern.matvec(m, x, y),
+            |x| llt.solve_vec(x),
+        )
+        .map_err(|e| err_model(e.into()))?;
+        let k = modes.count();
+        let mat = Mat::from_fn(nb, k, |i, j| modes.vectors[j * nb + i]);
+        (modes.eigenvalues.clone(), mat)
+    } else {
+        (Vec::new(), Mat::zeros(nb, 0))
+    };
+    tick("modes");
+    // map full (A) numbering to interior (B) numbering
+    let a_to_b: Vec<usize> = {
+        let mut v = vec![FIXED; na];
+        for (slot, &a) in full.dofs.dof.iter().enumerate() {
+            if a != FIXED {
+                v[a] = inner.dofs.dof[slot];
+            }
+        }
+        v
+    };
+    let b_to_a: Vec<usize> = {
+        let mut v = vec![0; nb];
+        for (a, &b) in a_to_b.iter().enumerate() {
+            if b != FIXED {
+                v[b] = a;
+            }
+        }
+        v
+    };
+    // constraint modes
+    let nc: usize = interfaces.iter().map(|b| b.psi.ncols()).sum();
+    let mut g = Mat::<f64>::zeros(na, nc);
+    let mut interface_cols = Vec::new();
+    let mut col = 0;
+    for b in interfaces {
+        let nodes = mesh.node_set(&b.set).unwrap();
+        for j in 0..b.psi.ncols() {
+            for (a, &node) in nodes.iter().enumerate() {
+                for i in 0..3 {
+                    let d = full.dofs.dof[3 * node + i];
+                    if d != FIXED {
+                        g[(d, col + j)] = b.psi[(3 * a + i, j)];
+                    }
+                }
+            }
+        }
+        interface_cols.push(col..col + b.psi.ncols());
+        col += b.psi.ncols();
+    }
+    let kg = sparse_times(&full, false, &g);
+    let mut rhs = Mat::<f64>::zeros(nb, nc);
+    for j in 0..nc {
+        for bi in 0..nb {
+            rhs[(bi, j)] = -kg[(b_to_a[bi], j)];
+        }
+    }
+    let sol = columns_solve(&llt, rhs);
+    tick(&format!("{nc} constraint modes"));
+    let mut phi_c = g;
+    for j in 0..nc {
+        for bi in 0..nb {
+            phi_c[(b_to_a[bi], j)] = sol[(bi, j)];
+        }
+    }
+    // residual attachment modes
+    let nl = loads.len();
+    let mut f_a = Mat::<f64>::zeros(na, nl);
+    for (j, l) in loads.iter().enumerate() {
+        for &(node, f) in &l.entries {
+            for i in 0..3 {
+                let d = full.dofs.dof[3 * node + i];
+                if d != FIXED {
+                    f_a[(d, j)] += f[i];
+                }
+            }
+        }
+    }
+    let mut att = Mat::<f64>::zeros(nb, nl);
+    for j in 0..nl {
+        for bi in 0..nb {
+            att[(bi, j)] = f_a[(b_to_a[bi], j)];
+        }
+    }
+    let f_b = att.clone();
+    let mut att = columns_solve(&llt, att);
+    let nm = lambdas.len();
+    if nm > 0 && nl > 0 {
+        // u -= Phi_n Lambda^-1 Phi_n^T f
+        let mut pf = modes_b.transpose() * &f_b;
+        for r in 0..nm {
+            for j in 0..nl {
+                pf[(r, j)] /= lambdas[r];
+            }
+        }
+        matmul(att.as_mut(), Accum::Add, modes_b.as_ref(), pf.as_ref(), -1.0, Par::rayon(0));
+    }
+    drop(llt);
+    tick(&format!("{nl} attachment modes"));
+    // M-orthonormalise the attachment block (drops dependent load shapes)
+    let att = if nl > 0 {
+        let mut att_a = Mat::<f64>::zeros(na, nl);
+        for j in 0..nl {
+            for bi in 0..nb {
+                att_a[(b_to_a[bi], j)] = att[(bi, j)];
+            }
+        }
+        let m_att = sparse_times(&full, true, &att_a);
+        let gram = att_a.transpose() * &m_att;
+        let evd = gram
+            .self_adjoint_eigen(faer::Side::Lower)
+            .map_err(|e| ReduceError::Other {
+                part: part.into(),
+                msg: format!("attachment modes: eigen-decomposition failed: {e:?}"),
+            })?;
+        let s = evd.S().column_vector();
+        let smax = (0..nl).map(|i| s[i]).fold(0.0f64, f64::max);
+        let keep: Vec<usize> = (0..nl).filter(|&i| s[i] > 1e-10 * smax).collect();
+        let u = evd.U();
+        let tr = Mat::from_fn(nl, keep.len(), |r, c| u[(r, keep[c])] / s[keep[c]].sqrt());
+        &att_a * &tr
+    } else {
+        Mat::zeros(na, 0)
+    };
+    let na_cols = att.ncols();
+    // assemble the basis in full numbering
+    let nr = nc + nm + na_cols;
+    let mut phi = Mat::<f64>::zeros(na, nr);
+    phi.as_mut().subcols_mut(0, nc).copy_from(&phi_c);
+    drop(phi_c);
+    for j in 0..nm {
+        for bi in 0..nb {
+            phi[(b_to_a[bi], nc + j)] = modes_b[(bi, j)];
+        }
+    }
+    phi.as_mut().subcols_mut(nc + nm, na_cols).copy_from(&att);
+    drop(att);
+    let kphi = sparse_times(&full, false, &phi);
+    let mut k = phi.transpose() * &kphi;
+    drop(kphi);
+    let mphi = sparse_times(&full, true, &phi);
+    let mut m = phi.transpose() * &mphi;
+    drop(mphi);
+    symmetrise(&mut k);
+    symmetrise(&mut m);
+    tick(&format!("projected onto {nr} coordinates"));
+    if verbose {
+        let d: Vec<f64> = (0..nr).map(|i| 1.0 / m[(i, i)].max(1e-300).sqrt()).collect();
+        let ks = Mat::from_fn(nr, nr, |i, j| d[i] * k[(i, j)] * d[j]);
+        let ms = Mat::from_fn(nr, nr, |i, j| d[i] * m[(i, j)] * d[j]);
+        let ek = ks.self_adjoint_eigenvalues(faer::Side::Lower).unwrap_or_default();
+        let em = ms.self_adjoint_eigenvalues(faer::Side::Lower).unwrap_or_default();
+        eprintln!(
+            "[{part}] scaled K_r eigenvalues {:?} .. {:?}; M_r {:?} .. {:?}",
+            &ek[..ek.len().min(8)],
+            ek.last(),
+            &em[..em.len().min(3)],
+            em.last()
+        );
+    }
+    let loads_r = phi.transpose() * &f_a;
+    let mut out = Mat::<f64>::zeros(outputs.len(), nr);
+    for (r, o) in outputs.iter().enumerate() {
+        for i in 0..3 {
+            let d = full.dofs.dof[3 * o.node + i];
+            if d != FIXED && o.dir[i] != 0.0 {
+                for j in 0..nr {
+                    out[(r, j)] += o.dir[i] * phi[(d, j)];
+                }
+            }
+        }
+    }
+    let freqs: Vec<f64> = lambdas
+        .iter()
+        .map(|l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI))
+        .collect();
+    let stats = CbStats {
+        full_dofs: na,
+        interior_dofs: nb,
+        constraint_modes: nc,
+        normal_modes: nm,
+        attachment_modes: na_cols,
+        highest_mode_hz: freqs.last().copied().unwrap_or(0.0),
+        seconds: t0.elapsed().as_secs_f64(),
+    };
+    let _ = interface::count; // shapes come from the caller
+    Ok(PartReduction {
+        k,
+        m,
+        interface_cols,
+        modes: nc..nc + nm,
+        mode_frequencies_hz: freqs,
+        attachments: nc + nm..nr,
+        outputs: out,
+        loads: loads_r,
+        basis: settings.keep_basis.then_some(phi),
+        dofs: full.dofs.clone(),
+        stats,
+    })
+}
+
+/// K X or M X for the full model's sparse matrix and a dense block X.
+fn sparse_times(model: &FeModel, mass: bool, x: &Mat<f64>) -> Mat<f64> {
+    let vals = if mass { &model.km.m } else { &model.km.k };
+    let a = model.km.pattern.matrix(vals);
+    let mut y = Mat::<f64>::zeros(x.nrows(), x.ncols());
+    faer::sparse::linalg::matmul::sparse_dense_matmul(
+        y.as_mut(),
+        Accum::Replace,
+        a,
+        x.as_ref(),
+        1.0,
+        Par::rayon(0),
+    );
+    y
+}
+
+/// A <- (A + A^T) / 2.
+pub fn symmetrise(a: &mut Mat<f64>) {
+    let n = a.nrows();
+    for j in 0..n {
+        for i in j + 1..n {
+            let v = 0.5 * (a[(i, j)] + a[(j, i)]);
+            a[(i, j)] = v;
+            a[(j, i)] = v;
+        }
+    }
+}

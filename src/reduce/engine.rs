@@ -1,0 +1,181 @@
+//! The engine reduced-order model: crankcase + liners coupled through shared interface
+//! coordinates, diagonalised into system modes with a static correction.
+//!
+//! Coordinates of the assembled model: all reduced coordinates of the crankcase (its interface
+//! coordinates at every bore, its fixed-interface modes, its attachment modes), then per
+//! modelled cylinder the liner's private coordinates (guide tangential/axial field, its
+//! fixed-interface modes and attachment modes). The liner's seat field and guide radial field
+//! are the crankcase's coordinates of that bore (shared), which couples the parts:
+//! K_g = sum_p L_p^T K_p L_p, M_g likewise (L_p the 0/1 index map of part p).
+//!
+//! System modes: K_g y = lambda M_g y, solved densely by M_g = C C^T and the symmetric
+//! eigenproblem of C^-1 K_g C^-T; modes kept up to the cut-off, mass-normalised. Static
+//! correction at the contact DOFs (residual flexibility of the dropped modes):
+//! R = G (sum_{dropped} y y^T / lambda) G^T, G the output rows of the contact DOFs.
+//! Preload: K_g u0 = F_clamp (liner flange top pressed down, bolt reaction up on the deck).
+
+use super::craig_bampton::{symmetrise, PartReduction};
+use faer::linalg::solvers::Solve;
+use faer::{Mat, Side};
+
+/// A row-major dense matrix for storage (cache) and reporting.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Dense {
+    pub rows: usize,
+    pub cols: usize,
+    pub data: Vec<f64>,
+}
+
+impl Dense {
+    pub fn from_mat(m: &Mat<f64>) -> Self {
+        let (rows, cols) = (m.nrows(), m.ncols());
+        let mut data = Vec::with_capacity(rows * cols);
+        for i in 0..rows {
+            for j in 0..cols {
+                data.push(m[(i, j)]);
+            }
+        }
+        Self { rows, cols, data }
+    }
+    pub fn at(&self, i: usize, j: usize) -> f64 {
+        self.data[i * self.cols + j]
+    }
+    pub fn row(&self, i: usize) -> &[f64] {
+        &self.data[i * self.cols..(i + 1) * self.cols]
+    }
+}
+
+/// Where a part's reduced coordinates go in the assembled model.
+pub struct Placement<'a> {
+    pub part: &'a PartReduction,
+    /// Global index of each reduced coordinate of the part.
+    pub map: Vec<usize>,
+}
+
+/// Result of the dense system eigen-solve.
+pub struct SystemModes {
+    /// Eigenvalues of all system modes, ascending.
+    pub lambdas: Vec<f64>,
+    /// Mass-normalised eigenvectors (global coordinates x modes).
+    pub vectors: Mat<f64>,
+    /// The assembled stiffness (kept for static solves).
+    pub k: Mat<f64>,
+}
+
+/// Failure of the dense system solve.
+#[derive(Debug, thiserror::Error)]
+pub enum SystemError {
+    #[error("the assembled reduced mass matrix is not positive definite: dependent reduced coordinates (interface shapes the part's mesh cannot carry?)")]
+    MassNotPositive,
+    #[error("the assembled reduced stiffness matrix is singular: the engine is not held (check the crankcase 'fix' sets)")]
+    StiffnessSingular,
+    #[error("dense eigen-decomposition did not converge")]
+    Eigen,
+}
+
+/// Assembles the parts into global K_g, M_g of size `n`.
+pub fn assemble(n: usize, parts: &[Placement<'_>]) -> (Mat<f64>, Mat<f64>) {
+    let mut k = Mat::<f64>::zeros(n, n);
+    let mut m = Mat::<f64>::zeros(n, n);
+    for p in parts {
+        let nr = p.part.size();
+        for j in 0..nr {
+            let gj = p.map[j];
+            for i in 0..nr {
+                let gi = p.map[i];
+                k[(gi, gj)] += p.part.k[(i, j)];
+                m[(gi, gj)] += p.part.m[(i, j)];
+            }
+        }
+    }
+    symmetrise(&mut k);
+    symmetrise(&mut m);
+    (k, m)
+}
+
+/// Solves K y = lambda M y densely (all modes), mass-normalised.
+///
+/// The coordinates are first scaled to unit modal mass (D = diag(M)^-1/2, K' = D K D,
+/// M' = D M D): constraint-mode columns carry metre-sized interface shapes next to
+/// mass-normalised modes, and without the scaling roundoff in C^-1 K C^-T grows with the
+/// spread of their magnitudes.
+pub fn system_modes(k: Mat<f64>, m: &Mat<f64>) -> Result<SystemModes, SystemError> {
+    let n = k.nrows();
+    let d: Vec<f64> = (0..n)
+        .map(|i| {
+            let v = m[(i, i)];
+            if v > 0.0 {
+                1.0 / v.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let ks = Mat::from_fn(n, n, |i, j| d[i] * k[(i, j)] * d[j]);
+    let ms = Mat::from_fn(n, n, |i, j| d[i] * m[(i, j)] * d[j]);
+    let chol = ms.llt(Side::Lower).map_err(|_| SystemError::MassNotPositive)?;
+    let c = chol.L();
+    // A = C^-1 K C^-T
+    let mut a = ks;
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(c, a.as_mut(), faer::Par::rayon(0));
+    let mut at = a.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(c, at.as_mut(), faer::Par::rayon(0));
+    symmetrise(&mut at);
+    let evd = at
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| SystemError::Eigen)?;
+    let s = evd.S().column_vector();
+    let lambdas: Vec<f64> = (0..n).map(|i| s[i]).collect();
+    // y = C^-T z
+    let mut y = evd.U().to_owned();
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+        c.transpose(),
+        y.as_mut(),
+        faer::Par::rayon(0),
+    );
+    for i in 0..n {
+        for j in 0..n {
+            y[(i, j)] *= d[i];
+        }
+    }
+    if std::env::var_os("LINERCAV_VERBOSE").is_some() {
+        eprintln!("system: n = {n}, lowest eigenvalues {:?}", &lambdas[..n.min(4)]);
+    }
+    if lambdas.first().is_some_and(|&l| l <= 0.0) {
+        return Err(SystemError::StiffnessSingular);
+    }
+    Ok(SystemModes {
+        lambdas,
+        vectors: y,
+        k,
+    })
+}
+
+/// Frequency [Hz] of an eigenvalue lambda = omega^2.
+pub fn hz(lambda: f64) -> f64 {
+    lambda.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
+}
+
+/// Residual flexibility of the modes from `kept` on at the rows `g` (outputs x global):
+/// R = G (sum_{j >= kept} y_j y_j^T / lambda_j) G^T.
+pub fn residual_flexibility(g: &Mat<f64>, sys: &SystemModes, kept: usize) -> Mat<f64> {
+    let n = sys.lambdas.len();
+    let nd = n - kept;
+    let mut gy = g * sys.vectors.as_ref().subcols(kept, nd);
+    for j in 0..nd {
+        let s = 1.0 / sys.lambdas[kept + j].sqrt();
+        for i in 0..gy.nrows() {
+            gy[(i, j)] *= s;
+        }
+    }
+    &gy * gy.transpose()
+}
+
+/// Static solve K_g u = f with the assembled (SPD) stiffness.
+pub fn static_solve(sys: &SystemModes, f: &Mat<f64>) -> Result<Mat<f64>, SystemError> {
+    let chol = sys
+        .k
+        .llt(Side::Lower)
+        .map_err(|_| SystemError::StiffnessSingular)?;
+    Ok(chol.solve(f))
+}

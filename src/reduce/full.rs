@@ -1,0 +1,437 @@
+//! The full-order coupled engine model: the reference the ROM is judged against.
+//!
+//! Unknowns: the interior DOFs of every part instance (crankcase, one liner per modelled
+//! cylinder; interior = not on an interface set) and the global interface coordinates q (the
+//! same interface fields as the ROM, see [`super::interface`]). A part's displacement is
+//! u = P_i u_i + G q_p (G: the interface shapes on its boundary DOFs), so its contribution is
+//!
+//!   [ K_ii        K_ib G     ]      (and likewise for M)
+//!   [ G^T K_bi    G^T K_bb G ]
+//!
+//! No modal truncation: the only difference from the ROM is the Craig-Bampton truncation, which
+//! is what the comparison measures. The matrix is sparse (interface coordinates couple only to
+//! DOFs next to their interface); it is ordered part by part (METIS on each part's interior
+//! node graph) with q last, factorised once and solved by the certified ARPACK driver.
+
+use super::rom::RomBuild;
+use crate::app::rom::{load_meshes, rom_inputs};
+use crate::error::{Error, Result};
+use crate::fem::assembly::NodeGraph;
+use crate::fem::dofs::{DofMap, FIXED};
+use crate::fem::model::{certified_modes, FeModel};
+use crate::linalg::factor::Analysis;
+use crate::linalg::ordering;
+use crate::linalg::sparse::{Pattern, StiffnessMass};
+use crate::mesh::Mesh;
+use crate::report::{atomic, vtu};
+use crate::scene::Scene;
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+/// Result of the full coupled modal solve.
+pub struct FullModes {
+    pub frequencies_hz: Vec<f64>,
+    pub residuals: Vec<f64>,
+    pub sturm_ok: bool,
+    pub dofs: usize,
+    /// Mode shapes per part instance in the part's free-DOF numbering (instance-major:
+    /// liners of the modelled cylinders, then the crankcase), one Vec per mode.
+    pub shapes: Vec<Vec<Vec<f64>>>,
+}
+
+/// One part type prepared for coupling.
+struct PartData {
+    model: FeModel,
+    /// Interior numbering (B) of each A DOF, FIXED on the boundary.
+    a_to_b: Vec<usize>,
+    n_int: usize,
+    /// Interior DOF order (B indices) from nested dissection.
+    order: Vec<usize>,
+    /// Boundary coupling rows: A row -> K G and M G rows (length n_q of the part).
+    kg: HashMap<usize, (Vec<f64>, Vec<f64>)>,
+    qq_k: Vec<f64>,
+    qq_m: Vec<f64>,
+    nq: usize,
+    /// G rows: boundary A DOF -> (column, value).
+    g: HashMap<usize, Vec<(usize, f64)>>,
+}
+
+fn prepare(
+    mesh: &Mesh,
+    material: &crate::fem::material::Elastic,
+    fix: &[String],
+    blocks: &[super::craig_bampton::InterfaceBlock],
+) -> Result<PartData> {
+    let model = FeModel::build(mesh.clone(), material, fix)?;
+    let mut sets = fix.to_vec();
+    sets.extend(blocks.iter().map(|b| b.set.clone()));
+    let inner = DofMap::with_fixed_sets(mesh, &sets).map_err(crate::fem::model::ModelError::from)?;
+    let na = model.n_free();
+    let mut a_to_b = vec![FIXED; na];
+    for (slot, &a) in model.dofs.dof.iter().enumerate() {
+        if a != FIXED {
+            a_to_b[a] = inner.dof[slot];
+        }
+    }
+    // G rows
+    let mut g: HashMap<usize, Vec<(usize, f64)>> = HashMap::new();
+    let mut col0 = 0;
+    for b in blocks {
+        let nodes = mesh.node_set(&b.set).unwrap_or(&[]);
+        for (k, &node) in nodes.iter().enumerate() {
+            for i in 0..3 {
+                let a = model.dofs.dof[3 * node + i];
+                if a == FIXED {
+                    continue;
+                }
+                let row = g.entry(a).or_default();
+                for j in 0..b.psi.ncols() {
+                    let v = b.psi[(3 * k + i, j)];
+                    if v != 0.0 {
+                        row.push((col0 + j, v));
+                    }
+                }
+            }
+        }
+        col0 += b.psi.ncols();
+    }
+    let nq = col0;
+    let p = &model.km.pattern;
+    let mut kg: HashMap<usize, (Vec<f64>, Vec<f64>)> = HashMap::new();
+    for (&b, row) in &g {
+        for q in p.col_ptr[b]..p.col_ptr[b + 1] {
+            let r = p.row_idx[q];
+            let (kv, mv) = (model.km.k[q], model.km.m[q]);
+            let e = kg.entry(r).or_insert_with(|| (vec![0.0; nq], vec![0.0; nq]));
+            for &(j, v) in row {
+                e.0[j] += kv * v;
+                e.1[j] += mv * v;
+            }
+        }
+    }
+    let mut qq_k = vec![0.0; nq * nq];
+    let mut qq_m = vec![0.0; nq * nq];
+    for (&b, row) in &g {
+        if let Some((kr, mr)) = kg.get(&b) {
+            for &(i, v) in row {
+                for j in 0..nq {
+                    qq_k[i * nq + j] += v * kr[j];
+                    qq_m[i * nq + j] += v * mr[j];
+                }
+            }
+        }
+    }
+    kg.retain(|&r, _| a_to_b[r] != FIXED);
+    // nested dissection of the interior node graph
+    let graph = NodeGraph::new(mesh);
+    let node_dofs = inner.node_dofs();
+    let keep: Vec<bool> = node_dofs.iter().map(|d| !d.is_empty()).collect();
+    let (xadj, adjncy, ids) = graph.without_self_loops(&keep);
+    let order_nodes = ordering::nested_dissection(&xadj, &adjncy)
+        .map_err(|e| Error::Failure(format!("ordering: {e}")))?;
+    let node_perm: Vec<usize> = order_nodes.iter().map(|&v| ids[v]).collect();
+    let (order, _) = ordering::expand_to_dofs(&node_perm, &node_dofs, inner.n_free);
+    Ok(PartData {
+        model,
+        a_to_b,
+        n_int: inner.n_free,
+        order,
+        kg,
+        qq_k,
+        qq_m,
+        nq,
+        g,
+    })
+}
+
+/// Builds and solves the full coupled model of a scene for `count` modes.
+pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullModes> {
+    let (lm, cm) = load_meshes(scene)?;
+    let inp = rom_inputs(scene, &lm, &cm, false);
+    let (liner_blocks, cc_blocks) =
+        super::rom::interface_blocks(&inp).map_err(Error::from)?;
+    let liner = prepare(&lm, &inp.liner_material, &[], &liner_blocks)?;
+    let cc = prepare(&cm, &inp.crankcase_material, &inp.crankcase_fix, &cc_blocks)?;
+    // instances: liners then crankcase
+    let ncyl = inp.axis_x.len();
+    let cc_cols: Vec<std::ops::Range<usize>> = {
+        let mut v = Vec::new();
+        let mut c0 = 0;
+        for b in &cc_blocks {
+            v.push(c0..c0 + b.psi.ncols());
+            c0 += b.psi.ncols();
+        }
+        v
+    };
+    let liner_cols: Vec<std::ops::Range<usize>> = {
+        let mut v = Vec::new();
+        let mut c0 = 0;
+        for b in &liner_blocks {
+            v.push(c0..c0 + b.psi.ncols());
+            c0 += b.psi.ncols();
+        }
+        v
+    };
+    let _ = ncyl;
+    let nl = inp.cylinders.len();
+    let n_int_total = nl * liner.n_int + cc.n_int;
+    let mut nq_total = cc.nq;
+    let mut qmaps: Vec<Vec<usize>> = Vec::new();
+    for &cyl in &inp.cylinders {
+        let c = cyl - 1;
+        let mut map = vec![usize::MAX; liner.nq];
+        for (lb, cb) in [(0usize, 3 * c), (1, 3 * c + 1)] {
+            for (lj, gj) in liner_cols[lb].clone().zip(cc_cols[cb].clone()) {
+                map[lj] = gj;
+            }
+        }
+        for slot in map.iter_mut() {
+            if *slot == usize::MAX {
+                *slot = nq_total;
+                nq_total += 1;
+            }
+        }
+        qmaps.push(map);
+    }
+    qmaps.push((0..cc.nq).collect());
+    let n = n_int_total + nq_total;
+    let offsets: Vec<usize> = (0..=nl).map(|i| i * liner.n_int).collect();
+    let parts: Vec<&PartData> = (0..nl).map(|_| &liner).chain(std::iter::once(&cc)).collect();
+    // columns
+    let mut col_ptr = vec![0usize; n + 1];
+    let mut row_idx: Vec<usize> = Vec::new();
+    let mut kv: Vec<f64> = Vec::new();
+    let mut mv: Vec<f64> = Vec::new();
+    let mut qcols: Vec<BTreeMap<usize, (f64, f64)>> = vec![BTreeMap::new(); nq_total];
+    let mut col = 0;
+    for (inst, part) in parts.iter().enumerate() {
+        let off = offsets[inst];
+        let qmap = &qmaps[inst];
+        let p = &part.model.km.pattern;
+        let mut b_to_a = vec![0; part.n_int];
+        for (a, &b) in part.a_to_b.iter().enumerate() {
+            if b != FIXED {
+                b_to_a[b] = a;
+            }
+        }
+        for (b, &a) in b_to_a.iter().enumerate() {
+            debug_assert_eq!(col, off + b);
+            let mut entries: Vec<(usize, f64, f64)> = Vec::new();
+            for q in p.col_ptr[a]..p.col_ptr[a + 1] {
+                let r = part.a_to_b[p.row_idx[q]];
+                if r != FIXED {
+                    entries.push((off + r, part.model.km.k[q], part.model.km.m[q]));
+                }
+            }
+            if let Some((kr, mr)) = part.kg.get(&a) {
+                for j in 0..part.nq {
+                    let gq = n_int_total + qmap[j];
+                    entries.push((gq, kr[j], mr[j]));
+                    let e = qcols[qmap[j]].entry(off + b).or_insert((0.0, 0.0));
+                    e.0 += kr[j];
+                    e.1 += mr[j];
+                }
+            }
+            entries.sort_by_key(|e| e.0);
+            for (r, k, m) in entries {
+                row_idx.push(r);
+                kv.push(k);
+                mv.push(m);
+            }
+            col += 1;
+            col_ptr[col] = row_idx.len();
+        }
+        for i in 0..part.nq {
+            for j in 0..part.nq {
+                let e = qcols[qmap[j]]
+                    .entry(n_int_total + qmap[i])
+                    .or_insert((0.0, 0.0));
+                e.0 += part.qq_k[i * part.nq + j];
+                e.1 += part.qq_m[i * part.nq + j];
+            }
+        }
+    }
+    for qc in &qcols {
+        for (&r, &(k, m)) in qc {
+            row_idx.push(r);
+            kv.push(k);
+            mv.push(m);
+        }
+        col += 1;
+        col_ptr[col] = row_idx.len();
+    }
+    drop(qcols);
+    let pattern = Pattern {
+        n,
+        col_ptr,
+        row_idx,
+    };
+    let km = StiffnessMass {
+        pattern,
+        k: kv,
+        m: mv,
+    };
+    let mut fwd: Vec<usize> = Vec::with_capacity(n);
+    for (inst, part) in parts.iter().enumerate() {
+        fwd.extend(part.order.iter().map(|&b| offsets[inst] + b));
+    }
+    fwd.extend(n_int_total..n);
+    let mut inv = vec![0; n];
+    for (new, &old) in fwd.iter().enumerate() {
+        inv[old] = new;
+    }
+    let analysis = Analysis::new(&km.pattern, &fwd, &inv).map_err(crate::fem::model::ModelError::from)?;
+    let sigma = scene.solver.sigma();
+    let (sol, _) = certified_modes(&km, &analysis, count, sigma, scene.solver.guard_modes)?;
+    // recover part shapes
+    let mut shapes = Vec::new();
+    for j in 0..sol.modes.count() {
+        let v = sol.modes.vector(j);
+        let mut per = Vec::new();
+        for (inst, part) in parts.iter().enumerate() {
+            let na = part.model.n_free();
+            let mut u = vec![0.0; na];
+            for (a, &b) in part.a_to_b.iter().enumerate() {
+                if b != FIXED {
+                    u[a] = v[offsets[inst] + b];
+                }
+            }
+            for (&a, row) in &part.g {
+                u[a] = row
+                    .iter()
+                    .map(|&(c, val)| val * v[n_int_total + qmaps[inst][c]])
+                    .sum();
+            }
+            per.push(u);
+        }
+        shapes.push(per);
+    }
+    let out = FullModes {
+        frequencies_hz: (0..sol.modes.count()).map(|j| sol.modes.frequency_hz(j)).collect(),
+        residuals: sol.residuals.clone(),
+        sturm_ok: sol.sturm.as_ref().map(|s| s.ok).unwrap_or(false),
+        dofs: n,
+        shapes,
+    };
+    if let Some(path) = vtu_path {
+        let parts_dofs: Vec<&DofMap> = parts.iter().map(|p| &p.model.dofs).collect();
+        write_engine_vtu(path, &inp.cylinders, &inp.axis_x, &lm, &cm, &parts_dofs, &out.shapes, &out.frequencies_hz)?;
+    }
+    Ok(out)
+}
+
+/// Writes coupled mode shapes on the placed meshes (liners of the modelled cylinders, then the
+/// crankcase) as one VTU file. `shapes[mode][instance]` are in each instance's free-DOF order.
+#[allow(clippy::too_many_arguments)]
+fn write_engine_vtu(
+    path: &Path,
+    cylinders: &[usize],
+    axis_x: &[f64],
+    lm: &Mesh,
+    cm: &Mesh,
+    dofs: &[&DofMap],
+    shapes: &[Vec<Vec<f64>>],
+    freqs: &[f64],
+) -> Result<()> {
+    let mut meshes = Vec::new();
+    for &cyl in cylinders {
+        let mut m = lm.clone();
+        for p in m.nodes.iter_mut() {
+            p[0] += axis_x[cyl - 1];
+        }
+        m.node_sets.clear();
+        m.element_sets.clear();
+        meshes.push(m);
+    }
+    let mut c = cm.clone();
+    c.node_sets.clear();
+    c.element_sets.clear();
+    meshes.push(c);
+    // concatenate without merging (parts touch but are separate bodies)
+    let mut all = Mesh::default();
+    let mut node_off = Vec::new();
+    for m in &meshes {
+        node_off.push(all.nodes.len());
+        let off = all.nodes.len();
+        all.nodes.extend_from_slice(&m.nodes);
+        for b in &m.blocks {
+            let conn = b.conn.iter().map(|&n| n + off);
+            match all.blocks.iter_mut().find(|x| x.kind == b.kind) {
+                Some(x) => x.conn.extend(conn),
+                None => all.blocks.push(crate::mesh::ElementBlock {
+                    kind: b.kind,
+                    conn: conn.collect(),
+                }),
+            }
+        }
+    }
+    let fields: Vec<Vec<f64>> = shapes
+        .iter()
+        .map(|per| {
+            let mut v = vec![0.0; 3 * all.nodes.len()];
+            for (inst, u) in per.iter().enumerate() {
+                let full = dofs[inst].expand(u);
+                let o = 3 * node_off[inst];
+                v[o..o + full.len()].copy_from_slice(&full);
+            }
+            v
+        })
+        .collect();
+    let named: Vec<vtu::Field<'_>> = fields
+        .iter()
+        .zip(freqs)
+        .enumerate()
+        .map(|(j, (v, f))| vtu::Field {
+            name: format!("mode_{:02}_{:.1}Hz", j + 1, f),
+            values: v,
+        })
+        .collect();
+    atomic::write_atomic(path, |w| vtu::write(&all, &named, w))?;
+    Ok(())
+}
+
+/// Writes the first `count` ROM system modes recovered on the meshes.
+pub fn write_vtu(
+    path: &Path,
+    scene: &Scene,
+    lm: &Mesh,
+    cm: &Mesh,
+    b: &RomBuild,
+    count: usize,
+) -> Result<()> {
+    let lb = b.liner.basis.as_ref().ok_or_else(|| Error::Failure("liner basis not kept".into()))?;
+    let cb = b.crankcase.basis.as_ref().ok_or_else(|| Error::Failure("crankcase basis not kept".into()))?;
+    let axis_x: Vec<f64> = (0..scene.engine.cylinders)
+        .map(|c| (c as f64 - (scene.engine.cylinders as f64 - 1.0) / 2.0) * scene.engine.cylinder_pitch)
+        .collect();
+    let mut shapes = Vec::new();
+    for j in 0..count {
+        let y = b.system.vectors.as_ref().col(j);
+        let mut per = Vec::new();
+        let recover = |basis: &faer::Mat<f64>, map: &[usize]| -> Vec<f64> {
+            let mut u = vec![0.0; basis.nrows()];
+            for (k, &g) in map.iter().enumerate() {
+                let c = y[g];
+                if c != 0.0 {
+                    for i in 0..basis.nrows() {
+                        u[i] += basis[(i, k)] * c;
+                    }
+                }
+            }
+            u
+        };
+        for map in &b.liner_maps {
+            per.push(recover(lb, map));
+        }
+        per.push(recover(cb, &b.crankcase_map));
+        shapes.push(per);
+    }
+    let dofs: Vec<&DofMap> = b
+        .liner_maps
+        .iter()
+        .map(|_| &b.liner.dofs)
+        .chain(std::iter::once(&b.crankcase.dofs))
+        .collect();
+    let cyls: Vec<usize> = b.rom.cylinders.iter().map(|c| c.cylinder).collect();
+    write_engine_vtu(path, &cyls, &axis_x, lm, cm, &dofs, &shapes, &b.rom.frequencies_hz[..count])
+}

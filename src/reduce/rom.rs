@@ -1,0 +1,540 @@
+//! Building the engine ROM from a scene: meshes, interface fields, one liner reduction reused
+//! for every modelled cylinder, the crankcase reduction, assembly, system modes, static
+//! correction and preload.
+
+use super::craig_bampton::{reduce, CbSettings, CbStats, InterfaceBlock, Load, Output, PartReduction};
+use super::engine::{self, assemble, hz, residual_flexibility, static_solve, Dense, Placement, SystemModes};
+use super::interface::{self, Direction, InterfaceShape};
+use crate::fem::material::Elastic;
+use crate::mesh::Mesh;
+use faer::Mat;
+use std::time::Instant;
+
+/// Version of the ROM layout; part of the cache key.
+pub const ROM_FORMAT: u32 = 1;
+
+/// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
+/// system modes along the stated direction.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct CylinderRom {
+    /// 1-based cylinder number.
+    pub cylinder: usize,
+    pub axis_x: f64,
+    /// Heights of the bore-line nodes (ascending) on the thrust (+y) and anti-thrust (-y) side.
+    pub thrust_z: Vec<f64>,
+    pub antithrust_z: Vec<f64>,
+    /// Outward radial displacement of the bore-line nodes (nodes x modes).
+    pub thrust_modes: Dense,
+    pub antithrust_modes: Dense,
+    /// Liner analysis points, radial toward the coolant (+y), top to bottom (points x modes).
+    pub point_modes: Dense,
+    /// Crankcase jacket-wall points facing them (+y).
+    pub crankcase_point_modes: Dense,
+    /// Head-bolt preload displacement at the bore-line nodes and points [m].
+    pub preload_thrust: Vec<f64>,
+    pub preload_antithrust: Vec<f64>,
+    pub preload_points: Vec<f64>,
+    /// Offset of this cylinder's contact DOFs (thrust, then anti-thrust) in the residual
+    /// flexibility matrix.
+    pub contact_offset: usize,
+}
+
+/// Per-part summary.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct PartInfo {
+    pub name: String,
+    pub stats: CbStats,
+    /// How many copies of this reduction the engine uses.
+    pub copies: usize,
+}
+
+/// What the ROM holds and how it was made.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct RomInfo {
+    pub full_dofs: usize,
+    pub reduced_dofs: usize,
+    pub system_modes: usize,
+    pub band_hz: f64,
+    pub cutoff_hz: f64,
+    pub interface_harmonics: usize,
+    pub parts: Vec<PartInfo>,
+    pub build_seconds: f64,
+    /// Largest relative change of a system frequency below the band when the part-mode
+    /// cut-off is lowered to 2/3 of its value: an upper estimate of the truncation error.
+    pub estimated_error: f64,
+    pub left_out: Vec<String>,
+}
+
+/// The cached engine reduced-order model.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct EngineRom {
+    /// System modes kept (below the cut-off), ascending [Hz].
+    pub frequencies_hz: Vec<f64>,
+    pub cylinders: Vec<CylinderRom>,
+    /// Residual flexibility of the dropped modes at all contact DOFs [m/N].
+    pub residual_flexibility: Dense,
+    pub info: RomInfo,
+}
+
+/// Everything the build needs, already loaded and checked.
+pub struct RomInputs<'a> {
+    pub liner: &'a Mesh,
+    pub liner_material: Elastic,
+    pub crankcase: &'a Mesh,
+    pub crankcase_material: Elastic,
+    pub crankcase_fix: Vec<String>,
+    /// Liner radii and heights that define the interfaces [m].
+    pub liner_outer_radius: f64,
+    pub flange_radius: f64,
+    pub seat_z: f64,
+    pub guide_height: f64,
+    pub analysis_points: usize,
+    /// Bore axis x of every cylinder (all cylinders of the crankcase).
+    pub axis_x: Vec<f64>,
+    pub pitch: f64,
+    /// Modelled cylinders, 1-based.
+    pub cylinders: Vec<usize>,
+    pub clamp_force: f64,
+    pub band_hz: f64,
+    pub cutoff_hz: f64,
+    pub harmonics: usize,
+    /// Keep full bases for recovery (mode shapes on the meshes).
+    pub keep_bases: bool,
+}
+
+/// Failures of the ROM build, naming part and set.
+#[derive(Debug, thiserror::Error)]
+pub enum RomError {
+    #[error(transparent)]
+    Reduce(#[from] super::craig_bampton::ReduceError),
+    #[error("part '{part}': node set '{set}': {msg}")]
+    Set {
+        part: String,
+        set: String,
+        msg: String,
+    },
+    #[error("engine assembly: {0}")]
+    System(#[from] engine::SystemError),
+}
+
+impl RomError {
+    /// 2 when the input (meshes, sets, scene) is at fault, 1 for numerical failures.
+    pub fn exit_code(&self) -> i32 {
+        use super::craig_bampton::ReduceError;
+        use crate::fem::model::ModelError;
+        match self {
+            RomError::Set { .. } => 2,
+            RomError::Reduce(ReduceError::Interface { .. }) => 2,
+            RomError::Reduce(ReduceError::Model {
+                source: ModelError::Set(_) | ModelError::NoDofs,
+                ..
+            }) => 2,
+            _ => 1,
+        }
+    }
+}
+
+fn set<'m>(mesh: &'m Mesh, part: &str, name: &str) -> Result<&'m [usize], RomError> {
+    match mesh.node_set(name) {
+        Some(s) if !s.is_empty() => Ok(s),
+        Some(_) => Err(RomError::Set {
+            part: part.into(),
+            set: name.into(),
+            msg: "is empty".into(),
+        }),
+        None => Err(RomError::Set {
+            part: part.into(),
+            set: name.into(),
+            msg: format!(
+                "is missing (the mesh has: {})",
+                mesh.set_names().join(", ")
+            ),
+        }),
+    }
+}
+
+fn block(
+    mesh: &Mesh,
+    part: &str,
+    name: &str,
+    cx: f64,
+    shape: InterfaceShape,
+    harmonics: usize,
+    dirs: &[Direction],
+) -> Result<InterfaceBlock, RomError> {
+    let nodes = set(mesh, part, name)?;
+    let coords = mesh.coords_of(nodes);
+    let psi = interface::shapes(&coords, cx, shape, harmonics, dirs);
+    let cond = interface::conditioning(&psi);
+    if cond < 1e-6 {
+        return Err(RomError::Set {
+            part: part.into(),
+            set: name.into(),
+            msg: format!(
+                "cannot carry the interface field (conditioning {cond:.1e}): too few nodes, or all on one radius/height; refine the mesh there or lower rom.interface_harmonics"
+            ),
+        });
+    }
+    Ok(InterfaceBlock {
+        set: name.into(),
+        psi,
+    })
+}
+
+/// Checks that the crankcase leaves room for each liner and seats it where the liner's
+/// flange is (part and set named in the error).
+fn check_fit(inp: &RomInputs<'_>) -> Result<(), RomError> {
+    let tol = 1e-4 * inp.pitch;
+    for (c, &xc) in inp.axis_x.iter().enumerate() {
+        if let Some(n) = inp.crankcase.nodes.iter().position(|p| {
+            let r = ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
+            r < inp.liner_outer_radius - tol && p[2] > tol && p[2] < inp.seat_z - tol
+        }) {
+            return Err(RomError::Set {
+                part: "crankcase".into(),
+                set: format!("bore {}", c + 1),
+                msg: format!(
+                    "crankcase node {} at {:?} lies inside the liner of cylinder {}: the parts overlap",
+                    n + 1,
+                    inp.crankcase.nodes[n],
+                    c + 1
+                ),
+            });
+        }
+        let seat = set(inp.crankcase, "crankcase", &format!("seat_{}", c + 1))?;
+        for &n in seat {
+            let p = inp.crankcase.nodes[n];
+            let r = ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
+            if (p[2] - inp.seat_z).abs() > tol || r > inp.flange_radius + tol {
+                return Err(RomError::Set {
+                    part: "crankcase".into(),
+                    set: format!("seat_{}", c + 1),
+                    msg: format!(
+                        "node {} at {:?} is not under the liner flange (z = {} m, r <= {} m)",
+                        n + 1,
+                        p,
+                        inp.seat_z,
+                        inp.flange_radius
+                    ),
+                });
+            }
+        }
+    }
+    for &n in set(inp.liner, "liner", "flange_seat")? {
+        let z = inp.liner.nodes[n][2];
+        if (z - inp.seat_z).abs() > tol {
+            return Err(RomError::Set {
+                part: "liner".into(),
+                set: "flange_seat".into(),
+                msg: format!("node {} is at z = {z} m, not at the flange underside z = {} m", n + 1, inp.seat_z),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// A built ROM plus (on request) what is needed to recover full mode shapes.
+pub struct RomBuild {
+    pub rom: EngineRom,
+    pub liner: PartReduction,
+    pub crankcase: PartReduction,
+    /// Global index of each liner coordinate, per modelled cylinder (same order as
+    /// `rom.cylinders`), and of each crankcase coordinate.
+    pub liner_maps: Vec<Vec<usize>>,
+    pub crankcase_map: Vec<usize>,
+    pub system: SystemModes,
+}
+
+/// Interface shape blocks of the liner (in its own frame) and of the crankcase (per bore):
+/// seat (radial, tangential, axial; shared), guide radial (shared), guide tangential/axial
+/// (private to each part).
+pub fn interface_blocks(inp: &RomInputs<'_>) -> Result<(Vec<InterfaceBlock>, Vec<InterfaceBlock>), RomError> {
+    use Direction::*;
+    let nh = inp.harmonics;
+    let seat = InterfaceShape::Seat {
+        r_in: inp.liner_outer_radius,
+        r_out: inp.flange_radius,
+    };
+    let guide = InterfaceShape::Guide {
+        z0: 0.0,
+        z1: inp.guide_height,
+    };
+    let lm = inp.liner;
+    let liner = vec![
+        block(lm, "liner", "flange_seat", 0.0, seat, nh, &[Radial, Tangential, Axial])?,
+        block(lm, "liner", "lower_guide", 0.0, guide, nh, &[Radial])?,
+        block(lm, "liner", "lower_guide", 0.0, guide, nh, &[Tangential, Axial])?,
+    ];
+    let cm = inp.crankcase;
+    let mut cc = Vec::new();
+    for (c, &xc) in inp.axis_x.iter().enumerate() {
+        let k = c + 1;
+        cc.push(block(cm, "crankcase", &format!("seat_{k}"), xc, seat, nh, &[Radial, Tangential, Axial])?);
+        cc.push(block(cm, "crankcase", &format!("guide_{k}"), xc, guide, nh, &[Radial])?);
+        cc.push(block(cm, "crankcase", &format!("guide_{k}"), xc, guide, nh, &[Tangential, Axial])?);
+    }
+    Ok((liner, cc))
+}
+
+/// Builds the engine ROM.
+pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, RomError> {
+    let t0 = Instant::now();
+    check_fit(inp)?;
+    let nh = inp.harmonics;
+    progress("reducing the liner");
+    let lm = inp.liner;
+    let (liner_blocks, cc_blocks) = interface_blocks(inp)?;
+    let thrust = set(lm, "liner", "bore_thrust")?.to_vec();
+    let anti = set(lm, "liner", "bore_antithrust")?.to_vec();
+    let mut points = Vec::new();
+    for k in 1..=inp.analysis_points {
+        points.push(set(lm, "liner", &format!("point_{k}"))?[0]);
+    }
+    let top = set(lm, "liner", "flange_top")?;
+    let mut loads: Vec<Load> = Vec::new();
+    for (name, nodes, dir) in [("thrust", &thrust, [0.0, 1.0, 0.0]), ("antithrust", &anti, [0.0, -1.0, 0.0])] {
+        for &n in nodes.iter() {
+            loads.push(Load {
+                name: format!("{name}_{n}"),
+                entries: vec![(n, dir)],
+            });
+        }
+    }
+    let fz = -inp.clamp_force / top.len() as f64;
+    loads.push(Load {
+        name: "clamp".into(),
+        entries: top.iter().map(|&n| (n, [0.0, 0.0, fz])).collect(),
+    });
+    let clamp_load = loads.len() - 1;
+    let mut outputs: Vec<Output> = Vec::new();
+    outputs.extend(thrust.iter().map(|&n| Output { node: n, dir: [0.0, 1.0, 0.0] }));
+    outputs.extend(anti.iter().map(|&n| Output { node: n, dir: [0.0, -1.0, 0.0] }));
+    outputs.extend(points.iter().map(|&n| Output { node: n, dir: [0.0, 1.0, 0.0] }));
+    let settings = CbSettings {
+        cutoff_hz: inp.cutoff_hz,
+        keep_basis: inp.keep_bases,
+    };
+    let liner = reduce("liner", lm, &inp.liner_material, &[], &liner_blocks, &loads, &outputs, &settings)?;
+    drop(liner_blocks);
+    // crankcase
+    progress("reducing the crankcase");
+    let cm = inp.crankcase;
+    let ncyl = inp.axis_x.len();
+    let mut cc_outputs = Vec::new();
+    let mut cc_loads = Vec::new();
+    let deck = cm.node_set("deck_top");
+    for (c, &xc) in inp.axis_x.iter().enumerate() {
+        let k = c + 1;
+        for p in 1..=inp.analysis_points {
+            let n = set(cm, "crankcase", &format!("point_{k}_{p}"))?[0];
+            cc_outputs.push(Output { node: n, dir: [0.0, 1.0, 0.0] });
+        }
+        if let Some(deck) = deck {
+            let tol = 1e-6 * inp.pitch;
+            let bolts: Vec<usize> = deck
+                .iter()
+                .copied()
+                .filter(|&n| {
+                    let p = cm.nodes[n];
+                    let r = ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
+                    (p[0] - xc).abs() < inp.pitch / 2.0 - tol && r > inp.flange_radius + tol
+                })
+                .collect();
+            if !bolts.is_empty() {
+                let f = inp.clamp_force / bolts.len() as f64;
+                cc_loads.push(Load {
+                    name: format!("bolts_{k}"),
+                    entries: bolts.iter().map(|&n| (n, [0.0, 0.0, f])).collect(),
+                });
+            }
+        }
+    }
+    let crankcase = reduce("crankcase", cm, &inp.crankcase_material, &inp.crankcase_fix, &cc_blocks, &cc_loads, &cc_outputs, &settings)?;
+    drop(cc_blocks);
+    progress("assembling the engine");
+    // global layout
+    let n_c = crankcase.size();
+    let crankcase_map: Vec<usize> = (0..n_c).collect();
+    let mut next = n_c;
+    let mut liner_maps = Vec::new();
+    for &cyl in &inp.cylinders {
+        let c = cyl - 1;
+        let mut map = vec![usize::MAX; liner.size()];
+        for (b, cc_b) in [(0usize, 3 * c), (1, 3 * c + 1)] {
+            for (lj, gj) in liner.interface_cols[b].clone().zip(crankcase.interface_cols[cc_b].clone()) {
+                map[lj] = gj;
+            }
+        }
+        for slot in map.iter_mut() {
+            if *slot == usize::MAX {
+                *slot = next;
+                next += 1;
+            }
+        }
+        liner_maps.push(map);
+    }
+    let n_g = next;
+    let mut placements = vec![Placement { part: &crankcase, map: crankcase_map.clone() }];
+    for map in &liner_maps {
+        placements.push(Placement { part: &liner, map: map.clone() });
+    }
+    let (kg, mg) = assemble(n_g, &placements);
+    progress("system modes");
+    let sys = engine::system_modes(kg.clone(), &mg)?;
+    let omega_c2 = (2.0 * std::f64::consts::PI * inp.cutoff_hz).powi(2);
+    let kept = sys.lambdas.iter().take_while(|&&l| l <= omega_c2).count();
+    // output rows in global coordinates
+    let n_lout = liner.outputs.nrows();
+    let (nt, na, np) = (thrust.len(), anti.len(), points.len());
+    let scatter_rows = |rows: &Mat<f64>, map: &[usize], r0: usize, nr: usize| -> Mat<f64> {
+        let mut g = Mat::<f64>::zeros(nr, n_g);
+        for i in 0..nr {
+            for j in 0..rows.ncols() {
+                g[(i, map[j])] += rows[(r0 + i, j)];
+            }
+        }
+        g
+    };
+    let ymodes = sys.vectors.as_ref().subcols(0, kept).to_owned();
+    // preload: liner clamp + bolt reactions
+    let mut f = Mat::<f64>::zeros(n_g, 1);
+    for map in &liner_maps {
+        for j in 0..liner.size() {
+            f[(map[j], 0)] += liner.loads[(j, clamp_load)];
+        }
+    }
+    for l in 0..crankcase.loads.ncols() {
+        for j in 0..n_c {
+            f[(j, 0)] += crankcase.loads[(j, l)];
+        }
+    }
+    let u0 = static_solve(&sys, &f)?;
+    let mut cylinders = Vec::new();
+    let mut contact_rows: Vec<Mat<f64>> = Vec::new();
+    let mut offset = 0;
+    for (idx, &cyl) in inp.cylinders.iter().enumerate() {
+        let map = &liner_maps[idx];
+        let g_all = scatter_rows(&liner.outputs, map, 0, n_lout);
+        let modes_rows = &g_all * &ymodes;
+        let pre = &g_all * &u0;
+        let c = cyl - 1;
+        let g_cc = scatter_rows(&crankcase.outputs, &crankcase_map, c * inp.analysis_points, inp.analysis_points);
+        let cc_modes = &g_cc * &ymodes;
+        let sub = |r0: usize, nr: usize| Dense::from_mat(&modes_rows.as_ref().subrows(r0, nr).to_owned());
+        let zs = |nodes: &[usize]| nodes.iter().map(|&n| lm.nodes[n][2]).collect::<Vec<_>>();
+        cylinders.push(CylinderRom {
+            cylinder: cyl,
+            axis_x: inp.axis_x[c],
+            thrust_z: zs(&thrust),
+            antithrust_z: zs(&anti),
+            thrust_modes: sub(0, nt),
+            antithrust_modes: sub(nt, na),
+            point_modes: sub(nt + na, np),
+            crankcase_point_modes: Dense::from_mat(&cc_modes),
+            preload_thrust: (0..nt).map(|i| pre[(i, 0)]).collect(),
+            preload_antithrust: (0..na).map(|i| pre[(nt + i, 0)]).collect(),
+            preload_points: (0..np).map(|i| pre[(nt + na + i, 0)]).collect(),
+            contact_offset: offset,
+        });
+        offset += nt + na;
+        contact_rows.push(g_all.as_ref().subrows(0, nt + na).to_owned());
+    }
+    let mut gc = Mat::<f64>::zeros(offset, n_g);
+    let mut r0 = 0;
+    for g in &contact_rows {
+        gc.as_mut().subrows_mut(r0, g.nrows()).copy_from(g);
+        r0 += g.nrows();
+    }
+    let rflex = residual_flexibility(&gc, &sys, kept);
+    // error estimate: lower the part-mode cut-off to 2/3 and compare frequencies in the band
+    progress("error estimate");
+    let estimated_error = {
+        let limit = inp.cutoff_hz * 2.0 / 3.0;
+        let drop_cols = |p: &PartReduction, map: &[usize], out: &mut Vec<bool>| {
+            for (j, f) in p.modes.clone().zip(&p.mode_frequencies_hz) {
+                if *f > limit {
+                    out[map[j]] = false;
+                }
+            }
+        };
+        let mut keep = vec![true; n_g];
+        drop_cols(&crankcase, &crankcase_map, &mut keep);
+        for map in &liner_maps {
+            drop_cols(&liner, map, &mut keep);
+        }
+        let idx: Vec<usize> = (0..n_g).filter(|&i| keep[i]).collect();
+        let kk = Mat::from_fn(idx.len(), idx.len(), |i, j| kg[(idx[i], idx[j])]);
+        let mm = Mat::from_fn(idx.len(), idx.len(), |i, j| mg[(idx[i], idx[j])]);
+        match engine::system_modes(kk, &mm) {
+            Ok(s2) => {
+                let band = (2.0 * std::f64::consts::PI * inp.band_hz).powi(2);
+                sys.lambdas
+                    .iter()
+                    .zip(&s2.lambdas)
+                    .take_while(|(l, _)| **l <= band)
+                    .map(|(a, b)| (hz(*b) - hz(*a)).abs() / hz(*a))
+                    .fold(0.0, f64::max)
+            }
+            Err(_) => f64::NAN,
+        }
+    };
+    let mut left_out = Vec::new();
+    let modelled: Vec<usize> = inp.cylinders.clone();
+    let missing: Vec<String> = (1..=ncyl)
+        .filter(|c| !modelled.contains(c))
+        .map(|c| c.to_string())
+        .collect();
+    if !missing.is_empty() {
+        left_out.push(format!(
+            "liners of cylinders {} (their bores are free; rom.cylinders)",
+            missing.join(", ")
+        ));
+    }
+    left_out.push(format!(
+        "system modes above the cut-off {:.0} Hz ({} of {}), represented statically at the contact DOFs",
+        inp.cutoff_hz,
+        n_g - kept,
+        n_g
+    ));
+    if deck.is_none() {
+        left_out.push("head-bolt reaction on the deck (the crankcase mesh has no 'deck_top' set)".into());
+    }
+    let full_dofs = crankcase.stats.full_dofs + inp.cylinders.len() * liner.stats.full_dofs;
+    let info = RomInfo {
+        full_dofs,
+        reduced_dofs: n_g,
+        system_modes: kept,
+        band_hz: inp.band_hz,
+        cutoff_hz: inp.cutoff_hz,
+        interface_harmonics: nh,
+        parts: vec![
+            PartInfo {
+                name: "liner".into(),
+                stats: liner.stats.clone(),
+                copies: inp.cylinders.len(),
+            },
+            PartInfo {
+                name: "crankcase".into(),
+                stats: crankcase.stats.clone(),
+                copies: 1,
+            },
+        ],
+        build_seconds: t0.elapsed().as_secs_f64(),
+        estimated_error,
+        left_out,
+    };
+    let rom = EngineRom {
+        frequencies_hz: sys.lambdas[..kept].iter().map(|&l| hz(l)).collect(),
+        cylinders,
+        residual_flexibility: Dense::from_mat(&rflex),
+        info,
+    };
+    Ok(RomBuild {
+        rom,
+        liner,
+        crankcase,
+        liner_maps,
+        crankcase_map,
+        system: sys,
+    })
+}
