@@ -3,9 +3,9 @@
 
 use clap::{Args, Parser, Subcommand};
 use linercav::app::{export, modes, rom, ModelInput};
-use linercav::scene::Scene;
 use linercav::error::Error;
 use linercav::fem::material::Elastic;
+use linercav::scene::Scene;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -198,13 +198,24 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             cache,
         } => {
             if assembly {
-                let scene_path = model.scene.clone().ok_or_else(|| {
-                    Error::Input("--assembly needs a scene file".into())
-                })?;
+                let scene_path = model
+                    .scene
+                    .clone()
+                    .ok_or_else(|| Error::Input("--assembly needs a scene file".into()))?;
                 let scene = Scene::load(&scene_path, &model.sets)?;
-                let report = modes::run_assembly(&scene, count, full, vtu.as_deref(), &cache.options(), started)?;
+                let report = modes::run_assembly(
+                    &scene,
+                    count,
+                    full,
+                    vtu.as_deref(),
+                    &cache.options(),
+                    started,
+                )?;
                 if json {
-                    println!("{}", serde_json::to_string_pretty(&report).expect("serialisable"));
+                    println!(
+                        "{}",
+                        serde_json::to_string_pretty(&report).expect("serialisable")
+                    );
                 } else {
                     print!("{}", report.to_text());
                 }
@@ -262,7 +273,10 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             let mut report = rom::RomReport::new(&loaded);
             report.seconds = started.elapsed().as_secs_f64();
             if json {
-                println!("{}", serde_json::to_string_pretty(&report).expect("serialisable"));
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report).expect("serialisable")
+                );
             } else {
                 print!("{}", report.to_text());
             }
@@ -281,7 +295,10 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 cache: loaded.cache,
             };
             if json {
-                println!("{}", serde_json::to_string_pretty(&report).expect("serialisable"));
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report).expect("serialisable")
+                );
             } else {
                 print!("{}", report.to_text());
             }

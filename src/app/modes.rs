@@ -190,10 +190,18 @@ impl AssemblyReport {
         let _ = writeln!(
             s,
             "coupled engine modes from the {} ({} DOFs, {:.2} s{})",
-            if self.source == "rom" { "ROM" } else { "full FE model" },
+            if self.source == "rom" {
+                "ROM"
+            } else {
+                "full FE model"
+            },
             self.dofs,
             self.seconds,
-            if self.source == "rom" { format!(", cache {}", self.cache) } else { String::new() }
+            if self.source == "rom" {
+                format!(", cache {}", self.cache)
+            } else {
+                String::new()
+            }
         );
         for (i, f) in self.frequencies_hz.iter().enumerate() {
             let r = self
@@ -204,7 +212,15 @@ impl AssemblyReport {
             let _ = writeln!(s, "  {:3}  {:10.2} Hz{r}", i + 1, f);
         }
         if let Some(ok) = self.sturm_count_ok {
-            let _ = writeln!(s, "  Sturm count: {}", if ok { "ok (no mode missed)" } else { "MISMATCH" });
+            let _ = writeln!(
+                s,
+                "  Sturm count: {}",
+                if ok {
+                    "ok (no mode missed)"
+                } else {
+                    "MISMATCH"
+                }
+            );
         }
         s
     }

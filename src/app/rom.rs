@@ -55,12 +55,20 @@ pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
         MeshSource::Liner { geometry, meshing } => (liner::generate(geometry, meshing), None),
         MeshSource::File(p) => (gmsh::read(p)?, Some(p.display().to_string())),
     };
-    check_and_compact(&mut lm).map_err(|source| Error::Mesh { file: lfile, source })?;
+    check_and_compact(&mut lm).map_err(|source| Error::Mesh {
+        file: lfile,
+        source,
+    })?;
     let (mut cm, cfile) = match &cc.source {
-        CrankcaseSource::Parametric { geometry, meshing } => (crankcase::generate(geometry, meshing), None),
+        CrankcaseSource::Parametric { geometry, meshing } => {
+            (crankcase::generate(geometry, meshing), None)
+        }
         CrankcaseSource::File(p) => (gmsh::read(p)?, Some(p.display().to_string())),
     };
-    check_and_compact(&mut cm).map_err(|source| Error::Mesh { file: cfile, source })?;
+    check_and_compact(&mut cm).map_err(|source| Error::Mesh {
+        file: cfile,
+        source,
+    })?;
     for name in &cc.fix {
         if cm.node_set(name).is_none() {
             return Err(Error::Input(format!(
@@ -75,13 +83,20 @@ pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
 
 /// The canonical description hashed into the cache key.
 pub fn key_description(scene: &Scene) -> Result<String> {
-    let cc = scene.crankcase.as_ref().ok_or_else(|| Error::Input("no crankcase".into()))?;
+    let cc = scene
+        .crankcase
+        .as_ref()
+        .ok_or_else(|| Error::Input("no crankcase".into()))?;
     let liner_src = match &scene.liner.source {
-        MeshSource::Liner { geometry, meshing } => serde_json::json!({"geometry": geometry, "meshing": meshing}),
+        MeshSource::Liner { geometry, meshing } => {
+            serde_json::json!({"geometry": geometry, "meshing": meshing})
+        }
         MeshSource::File(p) => serde_json::json!({"file": file_digest(p)?}),
     };
     let cc_src = match &cc.source {
-        CrankcaseSource::Parametric { geometry, meshing } => serde_json::json!({"geometry": geometry, "meshing": meshing}),
+        CrankcaseSource::Parametric { geometry, meshing } => {
+            serde_json::json!({"geometry": geometry, "meshing": meshing})
+        }
         CrankcaseSource::File(p) => serde_json::json!({"file": file_digest(p)?}),
     };
     let d = serde_json::json!({
@@ -114,8 +129,16 @@ pub fn build_rom(scene: &Scene, keep_bases: bool) -> Result<(RomBuild, Mesh, Mes
 }
 
 /// The ROM build inputs of a scene whose meshes are loaded.
-pub fn rom_inputs<'a>(scene: &Scene, lm: &'a Mesh, cm: &'a Mesh, keep_bases: bool) -> RomInputs<'a> {
-    let cc = scene.crankcase.as_ref().expect("load_meshes checked the crankcase");
+pub fn rom_inputs<'a>(
+    scene: &Scene,
+    lm: &'a Mesh,
+    cm: &'a Mesh,
+    keep_bases: bool,
+) -> RomInputs<'a> {
+    let cc = scene
+        .crankcase
+        .as_ref()
+        .expect("load_meshes checked the crankcase");
     let g = &scene.liner_geometry;
     let e = &scene.engine;
     let axis_x: Vec<f64> = (0..e.cylinders)
@@ -146,7 +169,10 @@ pub fn rom_inputs<'a>(scene: &Scene, lm: &'a Mesh, cm: &'a Mesh, keep_bases: boo
 /// Gets the ROM of a scene: from the cache when a valid entry exists, else built (and stored).
 pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
     let t = Instant::now();
-    let dir = opts.dir.clone().unwrap_or_else(|| scene.rom.cache_dir.clone());
+    let dir = opts
+        .dir
+        .clone()
+        .unwrap_or_else(|| scene.rom.cache_dir.clone());
     let key = cache::key_of(&key_description(scene)?);
     let path = cache::path_for(&dir, &key);
     let mut replaced = None;
@@ -163,10 +189,7 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
                 })
             }
             Lookup::Corrupt(reason) => {
-                eprintln!(
-                    "warning: {}: {reason}; rebuilding the ROM",
-                    path.display()
-                );
+                eprintln!("warning: {}: {reason}; rebuilding the ROM", path.display());
                 replaced = Some(reason);
             }
             Lookup::Miss => {}
@@ -234,11 +257,23 @@ impl RomReport {
     pub fn to_text(&self) -> String {
         use std::fmt::Write;
         let mut s = String::new();
-        let _ = writeln!(s, "engine ROM ({} cache, {:.2} s; built in {:.1} s)", self.cache, self.seconds, self.build_seconds);
+        let _ = writeln!(
+            s,
+            "engine ROM ({} cache, {:.2} s; built in {:.1} s)",
+            self.cache, self.seconds, self.build_seconds
+        );
         let _ = writeln!(s, "  full DOFs        {}", self.full_dofs);
         let _ = writeln!(s, "  reduced DOFs     {}", self.reduced_dofs);
-        let _ = writeln!(s, "  band / cut-off   {:.0} Hz / {:.0} Hz", self.band_hz, self.cutoff_hz);
-        let _ = writeln!(s, "  system modes     {} below the cut-off", self.system_modes);
+        let _ = writeln!(
+            s,
+            "  band / cut-off   {:.0} Hz / {:.0} Hz",
+            self.band_hz, self.cutoff_hz
+        );
+        let _ = writeln!(
+            s,
+            "  system modes     {} below the cut-off",
+            self.system_modes
+        );
         for p in &self.parts {
             let st = &p.stats;
             let _ = writeln!(
@@ -247,11 +282,19 @@ impl RomReport {
                 p.name, p.copies, st.full_dofs, st.constraint_modes, st.normal_modes, st.highest_mode_hz, st.attachment_modes, st.seconds
             );
         }
-        let _ = writeln!(s, "  estimated error  {:.2e} (relative frequency change in the band at 2/3 cut-off)", self.estimated_error);
+        let _ = writeln!(
+            s,
+            "  estimated error  {:.2e} (relative frequency change in the band at 2/3 cut-off)",
+            self.estimated_error
+        );
         for l in &self.left_out {
             let _ = writeln!(s, "  left out: {l}");
         }
-        let f: Vec<String> = self.first_frequencies_hz.iter().map(|f| format!("{f:.1}")).collect();
+        let f: Vec<String> = self
+            .first_frequencies_hz
+            .iter()
+            .map(|f| format!("{f:.1}"))
+            .collect();
         let _ = writeln!(s, "  first modes [Hz]: {}", f.join(", "));
         s
     }
@@ -280,13 +323,20 @@ pub fn shapes(rom: &EngineRom) -> Vec<ShapeMode> {
             let raw: Vec<Vec<f64>> = rom
                 .cylinders
                 .iter()
-                .map(|c| (0..c.point_modes.rows).map(|p| c.point_modes.at(p, j)).collect())
+                .map(|c| {
+                    (0..c.point_modes.rows)
+                        .map(|p| c.point_modes.at(p, j))
+                        .collect()
+                })
                 .collect();
             let max = raw.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
             let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
             ShapeMode {
                 frequency_hz: rom.frequencies_hz[j],
-                coefficients: raw.into_iter().map(|r| r.into_iter().map(|v| v * scale).collect()).collect(),
+                coefficients: raw
+                    .into_iter()
+                    .map(|r| r.into_iter().map(|v| v * scale).collect())
+                    .collect(),
             }
         })
         .collect()

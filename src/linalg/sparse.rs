@@ -45,6 +45,54 @@ impl Pattern {
             }
         });
     }
+    /// Y = A X for a dense block X (column-major), blocked: 16 columns of X at a time are
+    /// copied row-major so each stored entry of A is read once per block and multiplies a
+    /// contiguous row of X (the single-vector gather is memory-bound on A).
+    pub fn mul_dense(
+        &self,
+        values: &[f64],
+        x: faer::MatRef<'_, f64>,
+        mut y: faer::MatMut<'_, f64>,
+    ) {
+        use rayon::prelude::*;
+        const B: usize = 16;
+        let n = self.n;
+        let ncol = x.ncols();
+        let mut c0 = 0;
+        let mut xr = vec![0.0; n * B];
+        let mut yr = vec![0.0; n * B];
+        while c0 < ncol {
+            let w = (ncol - c0).min(B);
+            for r in 0..n {
+                for k in 0..w {
+                    xr[r * B + k] = x[(r, c0 + k)];
+                }
+            }
+            yr.par_chunks_mut(B * 1024)
+                .enumerate()
+                .for_each(|(chunk, ys)| {
+                    let r0 = chunk * 1024;
+                    for (i, yrow) in ys.chunks_mut(B).enumerate() {
+                        let r = r0 + i;
+                        let mut acc = [0.0f64; B];
+                        for p in self.col_ptr[r]..self.col_ptr[r + 1] {
+                            let v = values[p];
+                            let xrow = &xr[self.row_idx[p] * B..self.row_idx[p] * B + B];
+                            for k in 0..B {
+                                acc[k] += v * xrow[k];
+                            }
+                        }
+                        yrow.copy_from_slice(&acc);
+                    }
+                });
+            for r in 0..n {
+                for k in 0..w {
+                    y[(r, c0 + k)] = yr[r * B + k];
+                }
+            }
+            c0 += w;
+        }
+    }
     /// Entries (row, col, value) of the lower triangle, column by column.
     pub fn lower_entries<'a>(
         &'a self,

@@ -21,6 +21,7 @@
 //! - water jacket (up to the deck): the wall rings only; ring 0 is the coolant space;
 //! - deck (`deck_thickness` below the flange seat): all rings; its top face carries the liner
 //!   flange (seat annulus r_o..r_f) under the head-bolt clamp load.
+//!
 //! Front (gear-end, -x) and rear (flywheel-end, +x) end walls of their own thickness close the
 //! block over its full height.
 //!
@@ -143,7 +144,12 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
     let z_deck = geo.seat_z - geo.deck_thickness;
     // z planes: zone limits and the analysis heights are exact levels
     let mut z_levels = vec![z_bot, z_bot + geo.rail_height];
-    subdivide(&mut z_levels, z_bot + geo.rail_height, 0.0, meshing.axial_size);
+    subdivide(
+        &mut z_levels,
+        z_bot + geo.rail_height,
+        0.0,
+        meshing.axial_size,
+    );
     subdivide(&mut z_levels, 0.0, geo.guide_height, meshing.axial_size);
     let mut planes = vec![geo.guide_height, z_deck];
     planes.extend(geo.analysis_z.iter().copied());
@@ -216,7 +222,11 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
         let coord = |key: Key| -> [f64; 3] {
             let th = sector_angle(sector * 2 * s + key[1], s, alpha);
             let y = rect_point(th, a, b)[1];
-            [x0 + dir * t * key[0] as f64 / 2.0, y, level_at(&z_levels, key[2])]
+            [
+                x0 + dir * t * key[0] as f64 / 2.0,
+                y,
+                level_at(&z_levels, key[2]),
+            ]
         };
         let lat = Lattice {
             cells: [1, s, nz],
@@ -276,9 +286,7 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
         );
         sets.insert(
             format!("guide_{}", c + 1),
-            select(&|p| {
-                (r(p) - ro).abs() < tol && p[2] > -tol && p[2] < geo.guide_height + tol
-            }),
+            select(&|p| (r(p) - ro).abs() < tol && p[2] > -tol && p[2] < geo.guide_height + tol),
         );
         for (k, &z) in geo.analysis_z.iter().enumerate() {
             sets.insert(

@@ -59,7 +59,10 @@ fn decode(bytes: &[u8]) -> Result<EngineRom, String> {
     let len = u64::from_le_bytes(bytes[12..20].try_into().unwrap()) as usize;
     let payload = &bytes[header..];
     if payload.len() != len {
-        return Err(format!("payload is {} bytes, header says {len} (truncated?)", payload.len()));
+        return Err(format!(
+            "payload is {} bytes, header says {len} (truncated?)",
+            payload.len()
+        ));
     }
     if blake3::hash(payload).as_bytes() != &bytes[20..52] {
         return Err("checksum mismatch (corrupt file)".into());

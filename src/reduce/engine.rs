@@ -113,13 +113,23 @@ pub fn system_modes(k: Mat<f64>, m: &Mat<f64>) -> Result<SystemModes, SystemErro
         .collect();
     let ks = Mat::from_fn(n, n, |i, j| d[i] * k[(i, j)] * d[j]);
     let ms = Mat::from_fn(n, n, |i, j| d[i] * m[(i, j)] * d[j]);
-    let chol = ms.llt(Side::Lower).map_err(|_| SystemError::MassNotPositive)?;
+    let chol = ms
+        .llt(Side::Lower)
+        .map_err(|_| SystemError::MassNotPositive)?;
     let c = chol.L();
     // A = C^-1 K C^-T
     let mut a = ks;
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(c, a.as_mut(), faer::Par::rayon(0));
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        c,
+        a.as_mut(),
+        faer::Par::rayon(0),
+    );
     let mut at = a.transpose().to_owned();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(c, at.as_mut(), faer::Par::rayon(0));
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        c,
+        at.as_mut(),
+        faer::Par::rayon(0),
+    );
     symmetrise(&mut at);
     let evd = at
         .self_adjoint_eigen(Side::Lower)
@@ -139,7 +149,10 @@ pub fn system_modes(k: Mat<f64>, m: &Mat<f64>) -> Result<SystemModes, SystemErro
         }
     }
     if std::env::var_os("LINERCAV_VERBOSE").is_some() {
-        eprintln!("system: n = {n}, lowest eigenvalues {:?}", &lambdas[..n.min(4)]);
+        eprintln!(
+            "system: n = {n}, lowest eigenvalues {:?}",
+            &lambdas[..n.min(4)]
+        );
     }
     if lambdas.first().is_some_and(|&l| l <= 0.0) {
         return Err(SystemError::StiffnessSingular);
@@ -149,6 +162,30 @@ pub fn system_modes(k: Mat<f64>, m: &Mat<f64>) -> Result<SystemModes, SystemErro
         vectors: y,
         k,
     })
+}
+
+/// All eigenvalues of K y = lambda M y (ascending), rigid-body zeros allowed (diagnostics and
+/// tests of free parts).
+pub fn system_modes_allow_rigid(k: Mat<f64>, m: &Mat<f64>) -> Result<Vec<f64>, SystemError> {
+    let chol = m
+        .llt(Side::Lower)
+        .map_err(|_| SystemError::MassNotPositive)?;
+    let c = chol.L();
+    let mut a = k;
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        c,
+        a.as_mut(),
+        faer::Par::rayon(0),
+    );
+    let mut at = a.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        c,
+        at.as_mut(),
+        faer::Par::rayon(0),
+    );
+    symmetrise(&mut at);
+    at.self_adjoint_eigenvalues(Side::Lower)
+        .map_err(|_| SystemError::Eigen)
 }
 
 /// Frequency [Hz] of an eigenvalue lambda = omega^2.

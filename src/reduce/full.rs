@@ -65,7 +65,8 @@ fn prepare(
     let model = FeModel::build(mesh.clone(), material, fix)?;
     let mut sets = fix.to_vec();
     sets.extend(blocks.iter().map(|b| b.set.clone()));
-    let inner = DofMap::with_fixed_sets(mesh, &sets).map_err(crate::fem::model::ModelError::from)?;
+    let inner =
+        DofMap::with_fixed_sets(mesh, &sets).map_err(crate::fem::model::ModelError::from)?;
     let na = model.n_free();
     let mut a_to_b = vec![FIXED; na];
     for (slot, &a) in model.dofs.dof.iter().enumerate() {
@@ -102,7 +103,9 @@ fn prepare(
         for q in p.col_ptr[b]..p.col_ptr[b + 1] {
             let r = p.row_idx[q];
             let (kv, mv) = (model.km.k[q], model.km.m[q]);
-            let e = kg.entry(r).or_insert_with(|| (vec![0.0; nq], vec![0.0; nq]));
+            let e = kg
+                .entry(r)
+                .or_insert_with(|| (vec![0.0; nq], vec![0.0; nq]));
             for &(j, v) in row {
                 e.0[j] += kv * v;
                 e.1[j] += mv * v;
@@ -148,8 +151,7 @@ fn prepare(
 pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullModes> {
     let (lm, cm) = load_meshes(scene)?;
     let inp = rom_inputs(scene, &lm, &cm, false);
-    let (liner_blocks, cc_blocks) =
-        super::rom::interface_blocks(&inp).map_err(Error::from)?;
+    let (liner_blocks, cc_blocks) = super::rom::interface_blocks(&inp).map_err(Error::from)?;
     let liner = prepare(&lm, &inp.liner_material, &[], &liner_blocks)?;
     let cc = prepare(&cm, &inp.crankcase_material, &inp.crankcase_fix, &cc_blocks)?;
     // instances: liners then crankcase
@@ -196,7 +198,10 @@ pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullM
     qmaps.push((0..cc.nq).collect());
     let n = n_int_total + nq_total;
     let offsets: Vec<usize> = (0..=nl).map(|i| i * liner.n_int).collect();
-    let parts: Vec<&PartData> = (0..nl).map(|_| &liner).chain(std::iter::once(&cc)).collect();
+    let parts: Vec<&PartData> = (0..nl)
+        .map(|_| &liner)
+        .chain(std::iter::once(&cc))
+        .collect();
     // columns
     let mut col_ptr = vec![0usize; n + 1];
     let mut row_idx: Vec<usize> = Vec::new();
@@ -280,7 +285,8 @@ pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullM
     for (new, &old) in fwd.iter().enumerate() {
         inv[old] = new;
     }
-    let analysis = Analysis::new(&km.pattern, &fwd, &inv).map_err(crate::fem::model::ModelError::from)?;
+    let analysis =
+        Analysis::new(&km.pattern, &fwd, &inv).map_err(crate::fem::model::ModelError::from)?;
     let sigma = scene.solver.sigma();
     let (sol, _) = certified_modes(&km, &analysis, count, sigma, scene.solver.guard_modes)?;
     // recover part shapes
@@ -307,7 +313,9 @@ pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullM
         shapes.push(per);
     }
     let out = FullModes {
-        frequencies_hz: (0..sol.modes.count()).map(|j| sol.modes.frequency_hz(j)).collect(),
+        frequencies_hz: (0..sol.modes.count())
+            .map(|j| sol.modes.frequency_hz(j))
+            .collect(),
         residuals: sol.residuals.clone(),
         sturm_ok: sol.sturm.as_ref().map(|s| s.ok).unwrap_or(false),
         dofs: n,
@@ -315,7 +323,16 @@ pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullM
     };
     if let Some(path) = vtu_path {
         let parts_dofs: Vec<&DofMap> = parts.iter().map(|p| &p.model.dofs).collect();
-        write_engine_vtu(path, &inp.cylinders, &inp.axis_x, &lm, &cm, &parts_dofs, &out.shapes, &out.frequencies_hz)?;
+        write_engine_vtu(
+            path,
+            &inp.cylinders,
+            &inp.axis_x,
+            &lm,
+            &cm,
+            &parts_dofs,
+            &out.shapes,
+            &out.frequencies_hz,
+        )?;
     }
     Ok(out)
 }
@@ -399,11 +416,44 @@ pub fn write_vtu(
     b: &RomBuild,
     count: usize,
 ) -> Result<()> {
-    let lb = b.liner.basis.as_ref().ok_or_else(|| Error::Failure("liner basis not kept".into()))?;
-    let cb = b.crankcase.basis.as_ref().ok_or_else(|| Error::Failure("crankcase basis not kept".into()))?;
     let axis_x: Vec<f64> = (0..scene.engine.cylinders)
-        .map(|c| (c as f64 - (scene.engine.cylinders as f64 - 1.0) / 2.0) * scene.engine.cylinder_pitch)
+        .map(|c| {
+            (c as f64 - (scene.engine.cylinders as f64 - 1.0) / 2.0) * scene.engine.cylinder_pitch
+        })
         .collect();
+    let shapes = recover_shapes(b, count)?;
+    let dofs: Vec<&DofMap> = b
+        .liner_maps
+        .iter()
+        .map(|_| &b.liner.dofs)
+        .chain(std::iter::once(&b.crankcase.dofs))
+        .collect();
+    let cyls: Vec<usize> = b.rom.cylinders.iter().map(|c| c.cylinder).collect();
+    write_engine_vtu(
+        path,
+        &cyls,
+        &axis_x,
+        lm,
+        cm,
+        &dofs,
+        &shapes,
+        &b.rom.frequencies_hz[..count],
+    )
+}
+
+/// The first `count` ROM system modes on the parts' free DOFs (instance-major: liners of the
+/// modelled cylinders, then the crankcase), from a build that kept its bases.
+pub fn recover_shapes(b: &RomBuild, count: usize) -> Result<Vec<Vec<Vec<f64>>>> {
+    let lb = b
+        .liner
+        .basis
+        .as_ref()
+        .ok_or_else(|| Error::Failure("liner basis not kept".into()))?;
+    let cb = b
+        .crankcase
+        .basis
+        .as_ref()
+        .ok_or_else(|| Error::Failure("crankcase basis not kept".into()))?;
     let mut shapes = Vec::new();
     for j in 0..count {
         let y = b.system.vectors.as_ref().col(j);
@@ -426,12 +476,5 @@ pub fn write_vtu(
         per.push(recover(cb, &b.crankcase_map));
         shapes.push(per);
     }
-    let dofs: Vec<&DofMap> = b
-        .liner_maps
-        .iter()
-        .map(|_| &b.liner.dofs)
-        .chain(std::iter::once(&b.crankcase.dofs))
-        .collect();
-    let cyls: Vec<usize> = b.rom.cylinders.iter().map(|c| c.cylinder).collect();
-    write_engine_vtu(path, &cyls, &axis_x, lm, cm, &dofs, &shapes, &b.rom.frequencies_hz[..count])
+    Ok(shapes)
 }

@@ -2,8 +2,12 @@
 //! for every modelled cylinder, the crankcase reduction, assembly, system modes, static
 //! correction and preload.
 
-use super::craig_bampton::{reduce, CbSettings, CbStats, InterfaceBlock, Load, Output, PartReduction};
-use super::engine::{self, assemble, hz, residual_flexibility, static_solve, Dense, Placement, SystemModes};
+use super::craig_bampton::{
+    reduce, CbSettings, CbStats, InterfaceBlock, Load, Output, PartReduction,
+};
+use super::engine::{
+    self, assemble, hz, residual_flexibility, static_solve, Dense, Placement, SystemModes,
+};
 use super::interface::{self, Direction, InterfaceShape};
 use crate::fem::material::Elastic;
 use crate::mesh::Mesh;
@@ -145,10 +149,7 @@ fn set<'m>(mesh: &'m Mesh, part: &str, name: &str) -> Result<&'m [usize], RomErr
         None => Err(RomError::Set {
             part: part.into(),
             set: name.into(),
-            msg: format!(
-                "is missing (the mesh has: {})",
-                mesh.set_names().join(", ")
-            ),
+            msg: format!("is missing (the mesh has: {})", mesh.set_names().join(", ")),
         }),
     }
 }
@@ -226,7 +227,11 @@ fn check_fit(inp: &RomInputs<'_>) -> Result<(), RomError> {
             return Err(RomError::Set {
                 part: "liner".into(),
                 set: "flange_seat".into(),
-                msg: format!("node {} is at z = {z} m, not at the flange underside z = {} m", n + 1, inp.seat_z),
+                msg: format!(
+                    "node {} is at z = {z} m, not at the flange underside z = {} m",
+                    n + 1,
+                    inp.seat_z
+                ),
             });
         }
     }
@@ -248,7 +253,9 @@ pub struct RomBuild {
 /// Interface shape blocks of the liner (in its own frame) and of the crankcase (per bore):
 /// seat (radial, tangential, axial; shared), guide radial (shared), guide tangential/axial
 /// (private to each part).
-pub fn interface_blocks(inp: &RomInputs<'_>) -> Result<(Vec<InterfaceBlock>, Vec<InterfaceBlock>), RomError> {
+pub fn interface_blocks(
+    inp: &RomInputs<'_>,
+) -> Result<(Vec<InterfaceBlock>, Vec<InterfaceBlock>), RomError> {
     use Direction::*;
     let nh = inp.harmonics;
     let seat = InterfaceShape::Seat {
@@ -261,17 +268,57 @@ pub fn interface_blocks(inp: &RomInputs<'_>) -> Result<(Vec<InterfaceBlock>, Vec
     };
     let lm = inp.liner;
     let liner = vec![
-        block(lm, "liner", "flange_seat", 0.0, seat, nh, &[Radial, Tangential, Axial])?,
+        block(
+            lm,
+            "liner",
+            "flange_seat",
+            0.0,
+            seat,
+            nh,
+            &[Radial, Tangential, Axial],
+        )?,
         block(lm, "liner", "lower_guide", 0.0, guide, nh, &[Radial])?,
-        block(lm, "liner", "lower_guide", 0.0, guide, nh, &[Tangential, Axial])?,
+        block(
+            lm,
+            "liner",
+            "lower_guide",
+            0.0,
+            guide,
+            nh,
+            &[Tangential, Axial],
+        )?,
     ];
     let cm = inp.crankcase;
     let mut cc = Vec::new();
     for (c, &xc) in inp.axis_x.iter().enumerate() {
         let k = c + 1;
-        cc.push(block(cm, "crankcase", &format!("seat_{k}"), xc, seat, nh, &[Radial, Tangential, Axial])?);
-        cc.push(block(cm, "crankcase", &format!("guide_{k}"), xc, guide, nh, &[Radial])?);
-        cc.push(block(cm, "crankcase", &format!("guide_{k}"), xc, guide, nh, &[Tangential, Axial])?);
+        cc.push(block(
+            cm,
+            "crankcase",
+            &format!("seat_{k}"),
+            xc,
+            seat,
+            nh,
+            &[Radial, Tangential, Axial],
+        )?);
+        cc.push(block(
+            cm,
+            "crankcase",
+            &format!("guide_{k}"),
+            xc,
+            guide,
+            nh,
+            &[Radial],
+        )?);
+        cc.push(block(
+            cm,
+            "crankcase",
+            &format!("guide_{k}"),
+            xc,
+            guide,
+            nh,
+            &[Tangential, Axial],
+        )?);
     }
     Ok((liner, cc))
 }
@@ -292,7 +339,10 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     }
     let top = set(lm, "liner", "flange_top")?;
     let mut loads: Vec<Load> = Vec::new();
-    for (name, nodes, dir) in [("thrust", &thrust, [0.0, 1.0, 0.0]), ("antithrust", &anti, [0.0, -1.0, 0.0])] {
+    for (name, nodes, dir) in [
+        ("thrust", &thrust, [0.0, 1.0, 0.0]),
+        ("antithrust", &anti, [0.0, -1.0, 0.0]),
+    ] {
         for &n in nodes.iter() {
             loads.push(Load {
                 name: format!("{name}_{n}"),
@@ -307,14 +357,32 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     });
     let clamp_load = loads.len() - 1;
     let mut outputs: Vec<Output> = Vec::new();
-    outputs.extend(thrust.iter().map(|&n| Output { node: n, dir: [0.0, 1.0, 0.0] }));
-    outputs.extend(anti.iter().map(|&n| Output { node: n, dir: [0.0, -1.0, 0.0] }));
-    outputs.extend(points.iter().map(|&n| Output { node: n, dir: [0.0, 1.0, 0.0] }));
+    outputs.extend(thrust.iter().map(|&n| Output {
+        node: n,
+        dir: [0.0, 1.0, 0.0],
+    }));
+    outputs.extend(anti.iter().map(|&n| Output {
+        node: n,
+        dir: [0.0, -1.0, 0.0],
+    }));
+    outputs.extend(points.iter().map(|&n| Output {
+        node: n,
+        dir: [0.0, 1.0, 0.0],
+    }));
     let settings = CbSettings {
         cutoff_hz: inp.cutoff_hz,
         keep_basis: inp.keep_bases,
     };
-    let liner = reduce("liner", lm, &inp.liner_material, &[], &liner_blocks, &loads, &outputs, &settings)?;
+    let liner = reduce(
+        "liner",
+        lm,
+        &inp.liner_material,
+        &[],
+        &liner_blocks,
+        &loads,
+        &outputs,
+        &settings,
+    )?;
     drop(liner_blocks);
     // crankcase
     progress("reducing the crankcase");
@@ -327,7 +395,10 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         let k = c + 1;
         for p in 1..=inp.analysis_points {
             let n = set(cm, "crankcase", &format!("point_{k}_{p}"))?[0];
-            cc_outputs.push(Output { node: n, dir: [0.0, 1.0, 0.0] });
+            cc_outputs.push(Output {
+                node: n,
+                dir: [0.0, 1.0, 0.0],
+            });
         }
         if let Some(deck) = deck {
             let tol = 1e-6 * inp.pitch;
@@ -349,7 +420,16 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
             }
         }
     }
-    let crankcase = reduce("crankcase", cm, &inp.crankcase_material, &inp.crankcase_fix, &cc_blocks, &cc_loads, &cc_outputs, &settings)?;
+    let crankcase = reduce(
+        "crankcase",
+        cm,
+        &inp.crankcase_material,
+        &inp.crankcase_fix,
+        &cc_blocks,
+        &cc_loads,
+        &cc_outputs,
+        &settings,
+    )?;
     drop(cc_blocks);
     progress("assembling the engine");
     // global layout
@@ -361,7 +441,10 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         let c = cyl - 1;
         let mut map = vec![usize::MAX; liner.size()];
         for (b, cc_b) in [(0usize, 3 * c), (1, 3 * c + 1)] {
-            for (lj, gj) in liner.interface_cols[b].clone().zip(crankcase.interface_cols[cc_b].clone()) {
+            for (lj, gj) in liner.interface_cols[b]
+                .clone()
+                .zip(crankcase.interface_cols[cc_b].clone())
+            {
                 map[lj] = gj;
             }
         }
@@ -374,9 +457,15 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         liner_maps.push(map);
     }
     let n_g = next;
-    let mut placements = vec![Placement { part: &crankcase, map: crankcase_map.clone() }];
+    let mut placements = vec![Placement {
+        part: &crankcase,
+        map: crankcase_map.clone(),
+    }];
     for map in &liner_maps {
-        placements.push(Placement { part: &liner, map: map.clone() });
+        placements.push(Placement {
+            part: &liner,
+            map: map.clone(),
+        });
     }
     let (kg, mg) = assemble(n_g, &placements);
     progress("system modes");
@@ -418,9 +507,15 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         let modes_rows = &g_all * &ymodes;
         let pre = &g_all * &u0;
         let c = cyl - 1;
-        let g_cc = scatter_rows(&crankcase.outputs, &crankcase_map, c * inp.analysis_points, inp.analysis_points);
+        let g_cc = scatter_rows(
+            &crankcase.outputs,
+            &crankcase_map,
+            c * inp.analysis_points,
+            inp.analysis_points,
+        );
         let cc_modes = &g_cc * &ymodes;
-        let sub = |r0: usize, nr: usize| Dense::from_mat(&modes_rows.as_ref().subrows(r0, nr).to_owned());
+        let sub =
+            |r0: usize, nr: usize| Dense::from_mat(&modes_rows.as_ref().subrows(r0, nr).to_owned());
         let zs = |nodes: &[usize]| nodes.iter().map(|&n| lm.nodes[n][2]).collect::<Vec<_>>();
         cylinders.push(CylinderRom {
             cylinder: cyl,
@@ -497,7 +592,9 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         n_g
     ));
     if deck.is_none() {
-        left_out.push("head-bolt reaction on the deck (the crankcase mesh has no 'deck_top' set)".into());
+        left_out.push(
+            "head-bolt reaction on the deck (the crankcase mesh has no 'deck_top' set)".into(),
+        );
     }
     let full_dofs = crankcase.stats.full_dofs + inp.cylinders.len() * liner.stats.full_dofs;
     let info = RomInfo {

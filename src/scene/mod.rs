@@ -354,15 +354,28 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
     };
     let crankcase = match &raw.crankcase {
         None => None,
-        Some(cc) => Some(validate_crankcase(&c, base, cc, &engine, &liner_geometry, &material)?),
+        Some(cc) => Some(validate_crankcase(
+            &c,
+            base,
+            cc,
+            &engine,
+            &liner_geometry,
+            &material,
+        )?),
     };
     let r = &raw.rom;
     let band_hz = c.positive("rom.band_hz", r.band_hz)?;
     if !(r.cutoff_factor.is_finite() && r.cutoff_factor >= 1.0) {
-        return Err(c.err("rom.cutoff_factor", format!("must be at least 1, got {}", r.cutoff_factor)));
+        return Err(c.err(
+            "rom.cutoff_factor",
+            format!("must be at least 1, got {}", r.cutoff_factor),
+        ));
     }
     if r.interface_harmonics == 0 {
-        return Err(c.err("rom.interface_harmonics", "must be at least 1 (rigid liner motion needs n = 1)"));
+        return Err(c.err(
+            "rom.interface_harmonics",
+            "must be at least 1 (rigid liner motion needs n = 1)",
+        ));
     }
     let mut cylinders = if r.cylinders.is_empty() {
         (1..=engine.cylinders).collect()
@@ -372,7 +385,10 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
     cylinders.sort_unstable();
     cylinders.dedup();
     if let Some(&bad) = cylinders.iter().find(|&&k| k == 0 || k > engine.cylinders) {
-        return Err(c.err("rom.cylinders", format!("cylinder {bad} does not exist (1..={})", engine.cylinders)));
+        return Err(c.err(
+            "rom.cylinders",
+            format!("cylinder {bad} does not exist (1..={})", engine.cylinders),
+        ));
     }
     let rom = Rom {
         band_hz,
@@ -415,7 +431,11 @@ fn validate_crankcase(
         rear_wall: c.mm("crankcase.rear_wall_mm", cc.rear_wall_mm)?,
         rail_width: c.mm("crankcase.rail_width_mm", cc.rail_width_mm)?,
         rail_height: c.mm("crankcase.rail_height_mm", cc.rail_height_mm)?,
-        analysis_z: liner.analysis_depths.iter().map(|d| liner.length - d).collect(),
+        analysis_z: liner
+            .analysis_depths
+            .iter()
+            .map(|d| liner.length - d)
+            .collect(),
     };
     if liner.flange_outer_diameter <= liner.outer_diameter {
         return Err(c.err(
@@ -438,7 +458,10 @@ fn validate_crankcase(
         }
     }
     if geometry.rail_height >= geometry.skirt_depth {
-        return Err(c.err("crankcase.rail_height_mm", "must be smaller than skirt_depth_mm"));
+        return Err(c.err(
+            "crankcase.rail_height_mm",
+            "must be smaller than skirt_depth_mm",
+        ));
     }
     let m = &cc.mesh;
     let kind = match m.element.as_str() {

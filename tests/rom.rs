@@ -1,0 +1,330 @@
+//! Engine ROM: Craig-Bampton reduction against the full coupled FE model, reuse of the liner
+//! reduction, the cache, and interface errors. Runs on the coarse two-cylinder scene
+//! tests/fixtures/engine_small.toml (a few seconds per build).
+
+use linercav::app::rom::{
+    build_rom, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
+};
+use linercav::reduce::craig_bampton::{reduce, CbSettings, InterfaceBlock};
+use linercav::reduce::full;
+use linercav::reduce::interface::{self, Direction, InterfaceShape};
+use linercav::scene::Scene;
+use std::path::Path;
+use std::process::Command;
+
+const SMALL: &str = "tests/fixtures/engine_small.toml";
+
+fn scene(sets: &[&str]) -> Scene {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    Scene::load(Path::new(SMALL), &sets).expect("small scene loads")
+}
+
+fn mac(a: &[f64], b: &[f64]) -> f64 {
+    let ab: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+    let aa: f64 = a.iter().map(|x| x * x).sum();
+    let bb: f64 = b.iter().map(|x| x * x).sum();
+    ab * ab / (aa * bb)
+}
+
+/// Floor of issue 3: every coupled mode below half the cut-off within 0.5 % of the full FE
+/// model, paired mode shapes with MAC > 0.98. The full model uses the same interface fields
+/// and no modal truncation, so the difference is the Craig-Bampton truncation alone.
+#[test]
+fn rom_matches_full_coupled_model() {
+    let sc = scene(&[]);
+    let (b, _, _) = build_rom(&sc, true).unwrap();
+    let half = sc.rom.cutoff_hz / 2.0;
+    let n = b.rom.frequencies_hz.iter().filter(|&&f| f < half).count();
+    assert!(n >= 10, "only {n} modes below half the cut-off");
+    let reference = full::run(&sc, n, None).unwrap();
+    assert!(reference.sturm_ok);
+    let rom_shapes = full::recover_shapes(&b, n + 2).unwrap();
+    let flat = |per: &Vec<Vec<f64>>| per.concat();
+    let mut worst_f: f64 = 0.0;
+    let mut worst_mac: f64 = 1.0;
+    for j in 0..n {
+        let (fr, ff) = (b.rom.frequencies_hz[j], reference.frequencies_hz[j]);
+        let rel = (fr - ff).abs() / ff;
+        worst_f = worst_f.max(rel);
+        // pair by best MAC among ROM modes of nearly equal frequency (close pairs may swap)
+        let full_shape = flat(&reference.shapes[j]);
+        let best = (0..n + 2)
+            .filter(|&k| (b.rom.frequencies_hz[k] - ff).abs() / ff < 0.01)
+            .map(|k| mac(&flat(&rom_shapes[k]), &full_shape))
+            .fold(0.0, f64::max);
+        worst_mac = worst_mac.min(best);
+        println!(
+            "mode {:2}: full {ff:9.2} Hz  ROM {fr:9.2} Hz  rel {rel:.2e}  MAC {best:.5}",
+            j + 1
+        );
+    }
+    println!("worst relative frequency error {worst_f:.2e}, worst MAC {worst_mac:.5}");
+    assert!(worst_f < 5e-3, "frequency error {worst_f}");
+    assert!(worst_mac > 0.98, "MAC {worst_mac}");
+}
+
+/// The liner is reduced once in its own frame and reused at every bore. Reducing a copy
+/// translated to another bore (interface fields evaluated about that axis) must give the same
+/// reduced matrices to roundoff: the reuse is exact, not an approximation.
+#[test]
+fn reused_liner_reduction_equals_reducing_a_placed_copy() {
+    let sc = scene(&[]);
+    let (lm, cm) = load_meshes(&sc).unwrap();
+    let inp = rom_inputs(&sc, &lm, &cm, false);
+    let settings = CbSettings {
+        cutoff_hz: inp.cutoff_hz,
+        keep_basis: false,
+    };
+    let blocks = |mesh: &linercav::mesh::Mesh, cx: f64| -> Vec<InterfaceBlock> {
+        let seat = InterfaceShape::Seat {
+            r_in: inp.liner_outer_radius,
+            r_out: inp.flange_radius,
+        };
+        let guide = InterfaceShape::Guide {
+            z0: 0.0,
+            z1: inp.guide_height,
+        };
+        let mk = |set: &str, shape, dirs: &[Direction]| InterfaceBlock {
+            set: set.into(),
+            psi: interface::shapes(
+                &mesh.coords_of(mesh.node_set(set).unwrap()),
+                cx,
+                shape,
+                inp.harmonics,
+                dirs,
+            ),
+        };
+        vec![
+            mk(
+                "flange_seat",
+                seat,
+                &[Direction::Radial, Direction::Tangential, Direction::Axial],
+            ),
+            mk("lower_guide", guide, &[Direction::Radial]),
+            mk(
+                "lower_guide",
+                guide,
+                &[Direction::Tangential, Direction::Axial],
+            ),
+        ]
+    };
+    let local = reduce(
+        "liner",
+        &lm,
+        &inp.liner_material,
+        &[],
+        &blocks(&lm, 0.0),
+        &[],
+        &[],
+        &settings,
+    )
+    .unwrap();
+    let x = inp.axis_x[1];
+    let mut placed_mesh = lm.clone();
+    for p in placed_mesh.nodes.iter_mut() {
+        p[0] += x;
+    }
+    let placed = reduce(
+        "liner",
+        &placed_mesh,
+        &inp.liner_material,
+        &[],
+        &blocks(&placed_mesh, x),
+        &[],
+        &[],
+        &settings,
+    )
+    .unwrap();
+    assert_eq!(local.size(), placed.size());
+    // Degenerate mode pairs (ovalling cos/sin) come out in an arbitrary rotation, so compare
+    // invariants: the interface block (deterministic constraint modes) entry by entry, and the
+    // Ritz values of the whole reduced pair (K_r, M_r), i.e. the subspace itself.
+    let nc = local.interface_cols.last().unwrap().end;
+    let blk = |a: &faer::Mat<f64>| a.as_ref().submatrix(0, 0, nc, nc).to_owned();
+    let d = (&blk(&local.k) - &blk(&placed.k)).norm_l2() / blk(&local.k).norm_l2();
+    let ritz = |p: &linercav::reduce::craig_bampton::PartReduction| {
+        let n = p.size();
+        let dm: Vec<f64> = (0..n).map(|i| 1.0 / p.m[(i, i)].sqrt()).collect();
+        let k = faer::Mat::from_fn(n, n, |i, j| dm[i] * p.k[(i, j)] * dm[j]);
+        let m = faer::Mat::from_fn(n, n, |i, j| dm[i] * p.m[(i, j)] * dm[j]);
+        linercav::reduce::engine::system_modes_allow_rigid(k, &m).unwrap()
+    };
+    let (a, b) = (ritz(&local), ritz(&placed));
+    let top = a.last().copied().unwrap();
+    let worst = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs() / top.max(1.0))
+        .fold(0.0, f64::max);
+    println!("interface block difference {d:.1e}; largest Ritz value difference / max {worst:.1e}");
+    // roundoff of an ARPACK-converged basis (tolerance eps) through a few hundred products
+    assert!(d < 1e-8, "interface block {d}");
+    assert!(worst < 1e-8, "Ritz values {worst}");
+}
+
+/// The cache key covers what the reduction depends on and nothing else.
+#[test]
+fn cache_key_follows_the_reduction_inputs() {
+    let base = key_description(&scene(&[])).unwrap();
+    for same in [
+        "engine.speed_rpm=1200",
+        "engine.stroke_mm=150",
+        "engine.rod_length_mm=240",
+        "title=\"x\"",
+    ] {
+        assert_eq!(
+            key_description(&scene(&[same])).unwrap(),
+            base,
+            "{same} must not invalidate the ROM"
+        );
+    }
+    for changed in [
+        "liner.length_mm=250",
+        "liner.mesh.circumferential=20",
+        "materials.boron_cast_iron.youngs_pa=1.5e11",
+        "materials.grey_cast_iron.density_kg_m3=7000",
+        "crankcase.jacket_wall_mm=12",
+        "crankcase.mesh.axial_size_mm=30",
+        "crankcase.flange_clamp_kn=90",
+        "rom.band_hz=2500",
+        "rom.interface_harmonics=5",
+        "rom.cylinders=[1]",
+        "engine.cylinder_pitch_mm=160",
+    ] {
+        assert_ne!(
+            key_description(&scene(&[changed])).unwrap(),
+            base,
+            "{changed} must invalidate the ROM"
+        );
+    }
+}
+
+/// Miss, then hit with identical content; a truncated or bit-flipped file is detected and
+/// rebuilt, never trusted.
+#[test]
+fn cache_hit_miss_and_corruption() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = CacheOptions {
+        no_cache: false,
+        dir: Some(dir.path().to_path_buf()),
+    };
+    let sc = scene(&[]);
+    let first = get_rom(&sc, &opts).unwrap();
+    assert_eq!(first.cache, "miss");
+    let path = first.cache_file.clone().unwrap();
+    let second = get_rom(&sc, &opts).unwrap();
+    assert_eq!(second.cache, "hit");
+    assert_eq!(first.rom.frequencies_hz, second.rom.frequencies_hz);
+    // only operating data changed: same file reused
+    let faster = scene(&["engine.speed_rpm=2200"]);
+    assert_eq!(get_rom(&faster, &opts).unwrap().cache, "hit");
+    // corruptions
+    let good = std::fs::read(&path).unwrap();
+    let mut flipped = good.clone();
+    let k = flipped.len() - 100;
+    flipped[k] ^= 0x40;
+    for (what, bytes) in [
+        ("truncated", good[..good.len() / 2].to_vec()),
+        ("bit-flipped", flipped),
+    ] {
+        std::fs::write(&path, bytes).unwrap();
+        let r = get_rom(&sc, &opts).unwrap();
+        assert_eq!(r.cache, "miss", "{what} file must be rebuilt");
+        assert!(r.replaced.is_some(), "{what} file must be reported");
+        assert_eq!(r.rom.frequencies_hz, first.rom.frequencies_hz);
+        assert!(
+            matches!(
+                linercav::reduce::cache::load(&path),
+                linercav::reduce::cache::Lookup::Hit(_)
+            ),
+            "rebuilt file valid"
+        );
+    }
+}
+
+fn linercav(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_linercav"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn rom_and_shapes_json_contract() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let out = linercav(&["rom", SMALL, "--json", "--cache-dir", d]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["full_dofs"].as_u64().unwrap() > v["reduced_dofs"].as_u64().unwrap());
+    assert_eq!(v["cutoff_hz"].as_f64().unwrap(), 5000.0);
+    assert_eq!(v["cache"], "miss");
+    assert!(v["seconds"].as_f64().unwrap() > 0.0);
+    let out = linercav(&["shapes", SMALL, "--json", "--cache-dir", d]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let modes = v["modes"].as_array().unwrap();
+    assert!(!modes.is_empty());
+    for m in modes {
+        let c = m["coefficients"].as_array().unwrap();
+        assert_eq!(c.len(), 2, "two cylinders");
+        let mut max: f64 = 0.0;
+        for row in c {
+            let row = row.as_array().unwrap();
+            assert_eq!(row.len(), 4, "four points");
+            for x in row {
+                max = max.max(x.as_f64().unwrap().abs());
+            }
+        }
+        assert!((max - 1.0).abs() < 1e-12, "normalised to 1, got {max}");
+    }
+    let out = linercav(&[
+        "modes",
+        SMALL,
+        "--assembly",
+        "--rom",
+        "--count",
+        "5",
+        "--json",
+        "--cache-dir",
+        d,
+    ]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["frequencies_hz"].as_array().unwrap().len(), 5);
+    assert_eq!(v["cache"], "hit");
+}
+
+#[test]
+fn interface_errors_name_part_and_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let cases: [(&[&str], &str); 3] = [
+        (&["--set", "crankcase.fix=[\"mounts\"]"], "mounts"),
+        (&["--set", "liner.flange_outer_diameter_mm=135"], "flange"),
+        (
+            &["--set", "crankcase.deck_thickness_mm=240"],
+            "deck_thickness_mm",
+        ),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["rom", SMALL, "--cache-dir", d];
+        args.extend_from_slice(extra);
+        let out = linercav(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(
+            err.contains(needle),
+            "{extra:?}: message must name {needle}: {err}"
+        );
+    }
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "nothing written"
+    );
+}
