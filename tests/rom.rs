@@ -231,9 +231,10 @@ fn cache_hit_miss_and_corruption() {
         let r = get_rom(&sc, &opts).unwrap();
         assert_eq!(r.cache, "miss", "{what} file must be rebuilt");
         assert!(r.replaced.is_some(), "{what} file must be reported");
-        // a rebuild equals the first build to roundoff (parallel sums are not bitwise stable)
+        // a rebuild equals the first build to solver roundoff: parallel sums and ARPACK start
+        // order are not bitwise stable (seen 4e-9); 1e-6 is far below the 1e-4 ROM error
         for (a, b) in r.rom.frequencies_hz.iter().zip(&first.rom.frequencies_hz) {
-            assert!((a - b).abs() <= 1e-9 * b, "{what}: {a} vs {b}");
+            assert!((a - b).abs() <= 1e-6 * b, "{what}: {a} vs {b}");
         }
         assert!(
             matches!(
