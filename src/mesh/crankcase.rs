@@ -29,7 +29,7 @@
 //! r = r_o, 0 <= z <= guide height), `point_c_k` (jacket wall, thrust side, at the liner's
 //! analysis heights, top to bottom), `deck_top`, `pan_rail` (bottom face, z = -skirt_depth).
 
-use super::lattice::{Key, Lattice};
+use super::lattice::{level_at, subdivide, Key, Lattice};
 use super::merge::merge;
 use super::Mesh;
 use crate::fem::shape::ElementKind;
@@ -116,21 +116,6 @@ fn rect_point(th: f64, a: f64, b: f64) -> [f64; 2] {
     let (c, s) = (th.cos(), th.sin());
     let t = (a / c.abs().max(1e-300)).min(b / s.abs().max(1e-300));
     [t * c, t * s]
-}
-
-fn subdivide(levels: &mut Vec<f64>, a: f64, b: f64, h: f64) {
-    let n = (((b - a) / h) - 1e-9).ceil().max(1.0) as usize;
-    for s in 1..=n {
-        levels.push(a + (b - a) * s as f64 / n as f64);
-    }
-}
-
-fn level_at(levels: &[f64], doubled: usize) -> f64 {
-    if doubled % 2 == 0 {
-        levels[doubled / 2]
-    } else {
-        0.5 * (levels[doubled / 2] + levels[doubled / 2 + 1])
-    }
 }
 
 /// Generates the crankcase mesh with its named node sets.

@@ -145,3 +145,21 @@ pub fn signed_tet_volume(p: &[[f64; 3]]) -> f64 {
         + u[2] * (v[0] * w[1] - v[1] * w[0]))
         / 6.0
 }
+
+/// Splits [a, b] into `ceil((b - a) / h)` equal pieces (at least one) and appends the levels
+/// after `a`.
+pub fn subdivide(levels: &mut Vec<f64>, a: f64, b: f64, h: f64) {
+    let n = (((b - a) / h) - 1e-9).ceil().max(1.0) as usize;
+    for s in 1..=n {
+        levels.push(a + (b - a) * s as f64 / n as f64);
+    }
+}
+
+/// Coordinate of a doubled index on a level list: even -> level, odd -> midpoint.
+pub fn level_at(levels: &[f64], doubled: usize) -> f64 {
+    if doubled % 2 == 0 {
+        levels[doubled / 2]
+    } else {
+        0.5 * (levels[doubled / 2] + levels[doubled / 2 + 1])
+    }
+}

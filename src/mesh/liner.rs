@@ -14,7 +14,7 @@
 //! - `outer_thrust`: coolant-side line at theta = 90 deg,
 //! - `point_1` .. `point_n`: single coolant-side nodes on the thrust side, top to bottom.
 
-use super::lattice::{Key, Lattice};
+use super::lattice::{level_at, subdivide, Key, Lattice};
 use super::Mesh;
 use crate::fem::shape::ElementKind;
 use std::f64::consts::PI;
@@ -44,24 +44,6 @@ pub struct LinerMeshing {
     pub radial_flange: usize,
     /// Target axial element size [m].
     pub axial_size: f64,
-}
-
-/// Splits [a, b] into `ceil((b - a) / h)` equal pieces (at least one) and appends the levels
-/// after `a`.
-fn subdivide(levels: &mut Vec<f64>, a: f64, b: f64, h: f64) {
-    let n = (((b - a) / h) - 1e-9).ceil().max(1.0) as usize;
-    for s in 1..=n {
-        levels.push(a + (b - a) * s as f64 / n as f64);
-    }
-}
-
-/// Coordinate of a doubled index on a level list: even -> level, odd -> midpoint.
-fn level_at(levels: &[f64], doubled: usize) -> f64 {
-    if doubled % 2 == 0 {
-        levels[doubled / 2]
-    } else {
-        0.5 * (levels[doubled / 2] + levels[doubled / 2 + 1])
-    }
 }
 
 /// Generates the liner mesh with its named node sets.

@@ -117,20 +117,7 @@ pub fn system_modes(k: Mat<f64>, m: &Mat<f64>) -> Result<SystemModes, SystemErro
         .llt(Side::Lower)
         .map_err(|_| SystemError::MassNotPositive)?;
     let c = chol.L();
-    // A = C^-1 K C^-T
-    let mut a = ks;
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-        c,
-        a.as_mut(),
-        faer::Par::rayon(0),
-    );
-    let mut at = a.transpose().to_owned();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-        c,
-        at.as_mut(),
-        faer::Par::rayon(0),
-    );
-    symmetrise(&mut at);
+    let at = standard_form(c, ks);
     let evd = at
         .self_adjoint_eigen(Side::Lower)
         .map_err(|_| SystemError::Eigen)?;
@@ -170,22 +157,20 @@ pub fn system_modes_allow_rigid(k: Mat<f64>, m: &Mat<f64>) -> Result<Vec<f64>, S
     let chol = m
         .llt(Side::Lower)
         .map_err(|_| SystemError::MassNotPositive)?;
-    let c = chol.L();
-    let mut a = k;
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-        c,
-        a.as_mut(),
-        faer::Par::rayon(0),
-    );
-    let mut at = a.transpose().to_owned();
-    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-        c,
-        at.as_mut(),
-        faer::Par::rayon(0),
-    );
-    symmetrise(&mut at);
-    at.self_adjoint_eigenvalues(Side::Lower)
+    standard_form(chol.L(), k)
+        .self_adjoint_eigenvalues(Side::Lower)
         .map_err(|_| SystemError::Eigen)
+}
+
+/// A = C^-1 K C^-T for M = C C^T: the symmetric standard form of K y = lambda M y.
+fn standard_form(c: faer::MatRef<'_, f64>, k: Mat<f64>) -> Mat<f64> {
+    let mut a = k;
+    let par = faer::Par::rayon(0);
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(c, a.as_mut(), par);
+    let mut at = a.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(c, at.as_mut(), par);
+    symmetrise(&mut at);
+    at
 }
 
 /// Frequency [Hz] of an eigenvalue lambda = omega^2.
