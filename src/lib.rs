@@ -10,6 +10,8 @@ pub mod error;
 pub mod fem;
 pub mod linalg;
 pub mod mesh;
+pub mod piston;
 pub mod reduce;
 pub mod report;
 pub mod scene;
+pub mod transient;

@@ -1,0 +1,126 @@
+//! The piston: crank-slider kinematics, cylinder pressure, skirt profile and contact law, and
+//! its secondary-motion equations.
+//!
+//! Secondary motion of one piston, q = (y, phi): y the lateral displacement of the piston axis
+//! from the bore axis (+ toward thrust), phi the tilt about the pin (+ when the crown moves
+//! toward thrust). The piston (mass m_p, centre of gravity a above and b beside the pin, tilt
+//! inertia I_pin about the pin) and the pin (mass m_pin) move vertically with the pin motion
+//! z(theta) of [`kinematics`]; the rod is a massless link (its small-end share is part of the
+//! pin mass). With the gas force F_g = (p - p_cc) A on the crown (on the piston axis, the pin
+//! offset e_p beside the pin):
+//!
+//!   [m_p + m_pin   m_p a ] [y'' ]   [ C_z tan(beta)           ]
+//!   [m_p a         I_pin ] [phi''] = [ -e_p F_g + b m_p z''    ] + sum_i F_i b_i,
+//!   C_z = F_g + (m_p + m_pin) z''   (vertical balance: the rod's axial push),
+//!
+//! F_i >= 0 the contact force of skirt slice i (height h_i above the pin) with the penetration
+//! p_i = s_i . q - g_i - u_i: s_i = (1, h_i) on the thrust side, (-1, -h_i) on the anti-thrust
+//! side. Its generalised force is b_i = -s_i + mu sgn(z') (tan(beta), +-R) with friction
+//! coefficient mu: the friction force -mu F sgn(z') acts on the skirt surface (lever +-R about
+//! the pin) and adds to the rod force.
+//! The quasi-static side force pressing the liner toward thrust is C_z tan(beta).
+
+pub mod kinematics;
+pub mod pressure;
+pub mod skirt;
+
+use kinematics::CrankSlider;
+use pressure::PressureCurve;
+use skirt::Skirt;
+
+/// One piston with its cylinder pressure, SI.
+#[derive(Clone, Debug)]
+pub struct Piston {
+    pub kinematics: CrankSlider,
+    pub pressure: PressureCurve,
+    /// Crankcase (back-side) pressure [Pa].
+    pub crankcase_pa: f64,
+    /// Bore area A [m^2].
+    pub area: f64,
+    pub mass: f64,
+    pub pin_mass: f64,
+    /// Tilt inertia about the pin axis [kg m^2].
+    pub tilt_inertia: f64,
+    /// Centre of gravity above the pin [m] and beside it toward thrust [m].
+    pub cg_above_pin: f64,
+    pub cg_lateral: f64,
+    /// Pin offset from the piston axis toward thrust [m].
+    pub pin_offset: f64,
+    /// Pin height below the liner top at top dead centre [m].
+    pub pin_depth_at_tdc: f64,
+    pub skirt: Skirt,
+    /// Contact damping per slice [N s/m].
+    pub contact_damping: f64,
+    /// Coulomb friction coefficient of the skirt.
+    pub friction: f64,
+}
+
+/// Loads on the secondary motion at one instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PistonLoads {
+    /// Generalised force on (y, phi) without contact [N, N m].
+    pub force: [f64; 2],
+    /// Quasi-static side force C_z tan(beta) [N] (+: presses the thrust side).
+    pub side_force: f64,
+    /// Pin height below the liner top [m].
+    pub pin_depth: f64,
+    /// tan(beta) and the sign of the piston's axial velocity.
+    pub tan_beta: f64,
+    pub axial_sign: f64,
+    /// Gas pressure [Pa].
+    pub pressure: f64,
+}
+
+impl Piston {
+    /// The 2 x 2 mass matrix of (y, phi), row-major.
+    pub fn mass_matrix(&self) -> [[f64; 2]; 2] {
+        let ma = self.mass * self.cg_above_pin;
+        [
+            [self.mass + self.pin_mass, ma],
+            [ma, self.tilt_inertia],
+        ]
+    }
+
+    /// Loads at the cylinder's own crank angle `deg` (firing TDC at 360).
+    pub fn loads(&self, deg: f64) -> PistonLoads {
+        let k = self.kinematics.at(deg.to_radians());
+        let p = self.pressure.at(deg);
+        let fg = (p - self.crankcase_pa) * self.area;
+        let cz = fg + (self.mass + self.pin_mass) * k.ddz;
+        let side = cz * k.tan_beta;
+        PistonLoads {
+            force: [
+                side,
+                -self.pin_offset * fg + self.cg_lateral * self.mass * k.ddz,
+            ],
+            side_force: side,
+            pin_depth: self.pin_depth_at_tdc + (self.kinematics.z_top() - k.z),
+            tan_beta: k.tan_beta,
+            axial_sign: if k.dz >= 0.0 { 1.0 } else { -1.0 },
+            pressure: p,
+        }
+    }
+
+    /// Kinematic row s_i (d p_i / d q) of slice `i` on the thrust (`thrust`) or anti-thrust side.
+    pub fn slice_row(&self, i: usize, thrust: bool) -> [f64; 2] {
+        let h = self.skirt.heights[i];
+        if thrust {
+            [1.0, h]
+        } else {
+            [-1.0, -h]
+        }
+    }
+
+    /// Generalised force per unit contact force b_i of slice `i`.
+    pub fn slice_force_row(&self, i: usize, thrust: bool, l: &PistonLoads) -> [f64; 2] {
+        let s = self.slice_row(i, thrust);
+        let r = self.area_radius();
+        let side = if thrust { 1.0 } else { -1.0 };
+        let mu = self.friction * l.axial_sign;
+        [-s[0] + mu * l.tan_beta, -s[1] + mu * side * r]
+    }
+
+    fn area_radius(&self) -> f64 {
+        (self.area / std::f64::consts::PI).sqrt()
+    }
+}

@@ -1,0 +1,250 @@
+//! One implicit step of rigid bodies (pistons, 2 DOF each) in penalty contact with a linear
+//! structure, the structure condensed to the contact slices.
+//!
+//! Unknowns of the step: the body coordinates q (Newmark, average acceleration or the
+//! scheme's beta, gamma) and the slice forces F. With the structure condensed,
+//!   u = u~ + G F,   u' = u'~ + G_v F
+//! (u~ the structure's predictor at the slices, G its compliance for this step), and a slice in
+//! a fixed linear piece of its law, F = a + k_t p + c_d p' with p = s . q - g - u, the forces
+//! of the active slices A solve
+//!   W F_A = r0 + (K_t + kappa C_d) S q,   W = I + K_t G_AA + C_d G_v,AA,
+//!   r0 = a - K_t (g + u~) + C_d (S v^ - kappa S q^ - u'~),  kappa = gamma / (beta dt),
+//! and the bodies
+//!   [M / (beta dt^2) - B^T W^-1 (K_t + kappa C_d) S] q = f_ext + M q^ / (beta dt^2) + B^T W^-1 r0.
+//! Newton on the piecewise-linear contact: solve for the assumed pieces, recompute every
+//! slice's penetration, repeat until no slice changes its piece (the exact solution of the
+//! step). Only contact-sized systems are solved.
+
+use nalgebra::{DMatrix, DVector};
+
+/// Where a slice touches the structure: up to two structure contact DOFs with weights
+/// (linear interpolation along a bore line).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Location {
+    pub dofs: [usize; 2],
+    pub weights: [f64; 2],
+}
+
+/// The linear structure as the contact sees it during one step.
+pub trait Structure {
+    /// Predicted displacement and velocity at a location (no new contact force).
+    fn predicted(&self, at: &Location) -> (f64, f64);
+    /// Compliances G (displacement per force) and G_v (velocity per force) among `locs`.
+    fn compliance(&self, locs: &[Location]) -> (DMatrix<f64>, DMatrix<f64>);
+    /// Displacement at `at` caused by the forces `forces` at `loaded`: (G F)_at.
+    fn response(&self, loaded: &[Location], forces: &[f64], at: &[Location]) -> Vec<f64>;
+}
+
+/// A slice that may touch during the step.
+#[derive(Clone, Debug)]
+pub struct Slice<'a> {
+    pub body: usize,
+    /// d p / d q of the body, and the generalised force per unit contact force.
+    pub row: [f64; 2],
+    pub force_row: [f64; 2],
+    /// Penetration offset: p = row . q - gap - u.
+    pub gap: f64,
+    pub law: &'a crate::piston::skirt::SliceLaw,
+    pub damping: f64,
+    pub at: Location,
+    /// Penetration rate at the previous step (not used by the law; kept for output).
+    pub prev_penetration: f64,
+}
+
+/// A body's Newmark state and this step's loads.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Body {
+    pub mass: [[f64; 2]; 2],
+    pub q: [f64; 2],
+    pub v: [f64; 2],
+    pub a: [f64; 2],
+    /// External generalised force at the new time.
+    pub force: [f64; 2],
+}
+
+/// Result of one step.
+#[derive(Clone, Debug)]
+pub struct StepResult {
+    pub bodies: Vec<Body>,
+    /// Force of every slice (0 when apart) and its penetration.
+    pub forces: Vec<f64>,
+    pub penetrations: Vec<f64>,
+    pub iterations: usize,
+}
+
+/// Why a step failed (the caller retries with a smaller step or reports).
+#[derive(Clone, Debug, PartialEq)]
+pub enum StepFailure {
+    NoConvergence { iterations: usize },
+    Singular,
+}
+
+/// Solves one step of size `dt` (bodies with Newmark `beta`, `gamma`).
+pub fn step(
+    bodies: &[Body],
+    slices: &[Slice<'_>],
+    structure: &dyn Structure,
+    dt: f64,
+    beta: f64,
+    gamma: f64,
+    max_iterations: usize,
+) -> Result<StepResult, StepFailure> {
+    let nb = bodies.len();
+    let nq = 2 * nb;
+    let kappa = gamma / (beta * dt);
+    let c_acc = 1.0 / (beta * dt * dt);
+    // Newmark predictors of the bodies
+    let qh: Vec<[f64; 2]> = bodies
+        .iter()
+        .map(|b| {
+            let f = |k: usize| b.q[k] + dt * b.v[k] + dt * dt * (0.5 - beta) * b.a[k];
+            [f(0), f(1)]
+        })
+        .collect();
+    let vh: Vec<[f64; 2]> = bodies
+        .iter()
+        .map(|b| {
+            let f = |k: usize| b.v[k] + dt * (1.0 - gamma) * b.a[k];
+            [f(0), f(1)]
+        })
+        .collect();
+    let pred: Vec<(f64, f64)> = slices.iter().map(|s| structure.predicted(&s.at)).collect();
+    // penetration of each slice without new contact forces: first guess of the pieces
+    let dot = |r: [f64; 2], q: [f64; 2]| r[0] * q[0] + r[1] * q[1];
+    let mut pen: Vec<f64> = slices
+        .iter()
+        .zip(&pred)
+        .map(|(s, &(u, _))| dot(s.row, qh[s.body]) - s.gap - u)
+        .collect();
+    let mut pieces: Vec<(u8, bool)> = slices
+        .iter()
+        .zip(&pen)
+        .map(|(s, &p)| (s.law.piece(p).mask, p > 0.0))
+        .collect();
+    let mut g_cache: Option<(Vec<usize>, DMatrix<f64>, DMatrix<f64>)> = None;
+    for it in 1..=max_iterations {
+        let active: Vec<usize> = (0..slices.len())
+            .filter(|&i| pieces[i].0 != 0 || pieces[i].1)
+            .collect();
+        let na = active.len();
+        // compliance of the active set (reused while the set is unchanged)
+        if g_cache.as_ref().is_none_or(|(a, _, _)| *a != active) {
+            let locs: Vec<Location> = active.iter().map(|&i| slices[i].at).collect();
+            let (g, gv) = structure.compliance(&locs);
+            g_cache = Some((active.clone(), g, gv));
+        }
+        let (_, g, gv) = g_cache.as_ref().expect("set above");
+        // linear pieces
+        let mut kt = vec![0.0; na];
+        let mut av = vec![0.0; na];
+        let mut cd = vec![0.0; na];
+        for (r, &i) in active.iter().enumerate() {
+            let s = &slices[i];
+            let piece = s.law.piece(if pieces[i].0 != 0 {
+                // a point inside the assumed piece: reuse the current penetration
+                pen[i]
+            } else {
+                f64::NEG_INFINITY
+            });
+            kt[r] = piece.kt;
+            av[r] = piece.a;
+            cd[r] = if pieces[i].1 { s.damping } else { 0.0 };
+        }
+        // W and right-hand sides [r0 | (Kt + kappa Cd) S]
+        let mut w = DMatrix::<f64>::identity(na, na);
+        let mut rhs = DMatrix::<f64>::zeros(na, 1 + nq);
+        for (r, &i) in active.iter().enumerate() {
+            let s = &slices[i];
+            for (c2, _) in active.iter().enumerate() {
+                w[(r, c2)] += kt[r] * g[(r, c2)] + cd[r] * gv[(r, c2)];
+            }
+            let (u, du) = pred[i];
+            let b = s.body;
+            rhs[(r, 0)] = av[r] - kt[r] * (s.gap + u)
+                + cd[r] * (dot(s.row, vh[b]) - kappa * dot(s.row, qh[b]) - du);
+            let f = kt[r] + kappa * cd[r];
+            rhs[(r, 1 + 2 * b)] = f * s.row[0];
+            rhs[(r, 2 + 2 * b)] = f * s.row[1];
+        }
+        let sol = if na > 0 {
+            w.lu().solve(&rhs).ok_or(StepFailure::Singular)?
+        } else {
+            rhs.clone()
+        };
+        // body system
+        let mut a = DMatrix::<f64>::zeros(nq, nq);
+        let mut bvec = DVector::<f64>::zeros(nq);
+        for (k, body) in bodies.iter().enumerate() {
+            for i in 0..2 {
+                for j in 0..2 {
+                    a[(2 * k + i, 2 * k + j)] = body.mass[i][j] * c_acc;
+                    bvec[2 * k + i] += body.mass[i][j] * c_acc * qh[k][j];
+                }
+                bvec[2 * k + i] += body.force[i];
+            }
+        }
+        for (r, &i) in active.iter().enumerate() {
+            let s = &slices[i];
+            let row = 2 * s.body;
+            for d in 0..2 {
+                bvec[row + d] += s.force_row[d] * sol[(r, 0)];
+                for col in 0..nq {
+                    a[(row + d, col)] -= s.force_row[d] * sol[(r, 1 + col)];
+                }
+            }
+        }
+        let q = a.lu().solve(&bvec).ok_or(StepFailure::Singular)?;
+        // forces of the active slices, new displacements and penetrations
+        let mut fa = vec![0.0; na];
+        for r in 0..na {
+            fa[r] = sol[(r, 0)] + (0..nq).map(|c| sol[(r, 1 + c)] * q[c]).sum::<f64>();
+        }
+        let mut forces = vec![0.0; slices.len()];
+        for (r, &i) in active.iter().enumerate() {
+            forces[i] = fa[r];
+        }
+        // displacement at every slice includes the compliance to the active forces
+        let extra = if na > 0 {
+            let loaded: Vec<Location> = active.iter().map(|&i| slices[i].at).collect();
+            let all: Vec<Location> = slices.iter().map(|s| s.at).collect();
+            structure.response(&loaded, &fa, &all)
+        } else {
+            vec![0.0; slices.len()]
+        };
+        let mut changed = false;
+        for i in 0..slices.len() {
+            let s = &slices[i];
+            let qb = [q[2 * s.body], q[2 * s.body + 1]];
+            pen[i] = dot(s.row, qb) - s.gap - pred[i].0 - extra[i];
+            let np = (s.law.piece(pen[i]).mask, pen[i] > 0.0);
+            if np != pieces[i] {
+                changed = true;
+                pieces[i] = np;
+            }
+        }
+        if !changed {
+            let mut out = Vec::with_capacity(nb);
+            for (k, body) in bodies.iter().enumerate() {
+                let mut b = *body;
+                for d in 0..2 {
+                    let qn = q[2 * k + d];
+                    let an = (qn - qh[k][d]) * c_acc;
+                    b.q[d] = qn;
+                    b.a[d] = an;
+                    b.v[d] = vh[k][d] + gamma * dt * an;
+                }
+                out.push(b);
+            }
+            return Ok(StepResult {
+                bodies: out,
+                forces,
+                penetrations: pen,
+                iterations: it,
+            });
+        }
+    }
+    Err(StepFailure::NoConvergence {
+        iterations: max_iterations,
+    })
+}
+

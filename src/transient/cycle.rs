@@ -1,0 +1,653 @@
+//! The engine cycle: six pistons slapping their liners on one shared crankcase, integrated in
+//! the engine ROM's modal coordinates.
+//!
+//! Cylinder k of the firing order (k = 0 .. N-1) fires 720 k / N deg after cylinder
+//! `firing_order[0]`; its own crank angle is theta_c = theta - 720 k / N (firing TDC at 360).
+//! Each base step (the scene's crank-angle step) is one implicit step of all pistons and the
+//! structure ([`super::contact::step`]); with `adaptive`, a step whose contact iteration fails
+//! or whose penetration exceeds the limit is halved (up to `max_halvings` times) and counted as
+//! rejected. Several cycles are run from rest (pistons centred, structure at the preload state);
+//! the last one is reported, and the change of its peaks against the cycle before shows how
+//! close to the periodic steady state it is.
+//!
+//! Energy balance of the structure (mass-normalised modes): E = 1/2 sum (eta'^2 + omega^2 eta^2);
+//! per step dE = 1/2 (f_n + f_{n+1}) . (eta_{n+1} - eta_n) - dt sum c_j vbar_j^2, exactly for the
+//! average-acceleration rule; the accumulated difference is reported, and growth beyond a
+//! small fraction of the energy scale stops the run (a numerical instability).
+
+use super::contact::{self, Body, Location, Slice, StepFailure};
+use super::modal::ModalStructure;
+use super::scheme::{ModalIntegrator, Scheme};
+use crate::piston::Piston;
+use crate::reduce::engine::Dense;
+use crate::reduce::rom::{CylinderRom, EngineRom};
+
+/// Numerical settings of the transient.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CycleSettings {
+    pub scheme: Scheme,
+    /// Base step [deg crank angle].
+    pub step_deg: f64,
+    /// Cycles run; the last is reported.
+    pub cycles: usize,
+    /// Halve failing steps.
+    pub adaptive: bool,
+    pub max_halvings: usize,
+    /// Modal damping ratio of every system mode.
+    pub damping_ratio: f64,
+    /// Largest allowed penetration [m].
+    pub max_penetration: f64,
+    pub max_newton: usize,
+    /// Use system modes up to this frequency only [Hz] (None: all of the ROM).
+    pub modes_below_hz: Option<f64>,
+    /// Static correction (residual flexibility) at the contact.
+    pub static_correction: bool,
+}
+
+/// The engine for the transient.
+pub struct EngineSetup<'a> {
+    pub rom: &'a EngineRom,
+    pub piston: &'a Piston,
+    pub firing_order: &'a [usize],
+    /// Crank speed [rad/s].
+    pub omega: f64,
+    /// Height of the liner top in the liner frame [m].
+    pub liner_top: f64,
+}
+
+/// Where and when the transient failed.
+#[derive(Debug, thiserror::Error)]
+pub enum TransientError {
+    #[error("contact iteration did not converge at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s) after {iterations} iterations even with the step halved {halvings} times")]
+    NoConvergence {
+        crank_angle_deg: f64,
+        time_s: f64,
+        iterations: usize,
+        halvings: usize,
+    },
+    #[error("deep penetration: cylinder {cylinder}, {side} side, slice {slice} (height {height_mm:.1} mm on the liner): {penetration_um:.1} um > {limit_um:.1} um at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s); the contact stiffness is too low for the load, or the step too large")]
+    DeepPenetration {
+        cylinder: usize,
+        side: &'static str,
+        slice: usize,
+        height_mm: f64,
+        penetration_um: f64,
+        limit_um: f64,
+        crank_angle_deg: f64,
+        time_s: f64,
+    },
+    #[error("the solution is not finite at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s), cylinder {cylinder}: check the pressure curve and the scene's numbers")]
+    NonFinite {
+        crank_angle_deg: f64,
+        time_s: f64,
+        cylinder: usize,
+    },
+    #[error("energy growth: the structure gained {excess_j:.3e} J more than the contact forces put in (scale {scale_j:.3e} J) by crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s): the integration is unstable (scheme or step)")]
+    EnergyGrowth {
+        excess_j: f64,
+        scale_j: f64,
+        crank_angle_deg: f64,
+        time_s: f64,
+    },
+    #[error("singular contact system at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s)")]
+    Singular { crank_angle_deg: f64, time_s: f64 },
+}
+
+/// Work counters and checks of a run.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Stats {
+    pub steps: usize,
+    pub newton_iterations: usize,
+    pub max_newton_per_step: usize,
+    pub rejected_steps: usize,
+    pub modes: usize,
+    /// Accumulated energy-balance error relative to the energy scale (E - W_contact + W_damping).
+    pub energy_error: f64,
+    /// Largest penetration [m].
+    pub max_penetration_m: f64,
+    /// Largest relative change of a peak negative acceleration between the last two cycles.
+    pub cycle_change: f64,
+    pub dt_s: f64,
+}
+
+/// Time series of the last cycle, one row per base step.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Series {
+    /// Global crank angle [deg] (cylinder `firing_order[0]`'s own angle) and time [s].
+    pub crank_angle_deg: Vec<f64>,
+    pub time_s: Vec<f64>,
+    /// Per modelled cylinder.
+    pub cylinders: Vec<CylinderSeries>,
+}
+
+/// One cylinder's series.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct CylinderSeries {
+    pub cylinder: usize,
+    /// Liner point accelerations [m/s^2] (points x steps), + toward the coolant.
+    pub acceleration: Vec<Vec<f64>>,
+    /// Crankcase jacket-wall accelerations at the facing points [m/s^2].
+    pub crankcase_acceleration: Vec<Vec<f64>>,
+    pub lateral_m: Vec<f64>,
+    pub tilt_rad: Vec<f64>,
+    /// Summed contact force on the thrust and anti-thrust side [N].
+    pub thrust_force_n: Vec<f64>,
+    pub antithrust_force_n: Vec<f64>,
+    /// Quasi-static side force [N] and cylinder pressure [Pa].
+    pub side_force_n: Vec<f64>,
+    pub pressure_pa: Vec<f64>,
+}
+
+/// A peak value and the cylinder's own crank angle where it occurs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Peak {
+    pub value: f64,
+    pub crank_angle_deg: f64,
+}
+
+/// Peaks of one cylinder over the reported cycle.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct CylinderPeaks {
+    pub cylinder: usize,
+    /// Per analysis point: largest negative acceleration as a positive magnitude, largest
+    /// positive acceleration.
+    pub peak_negative: Vec<Peak>,
+    pub peak_positive: Vec<Peak>,
+    /// Largest |net contact force - quasi-static side force| (the dynamic slap) [N].
+    pub slap_force: Peak,
+    /// Largest quasi-static side force toward thrust [N].
+    pub side_force: Peak,
+}
+
+/// Result of a run.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CycleResult {
+    pub peaks: Vec<CylinderPeaks>,
+    pub series: Series,
+    pub stats: Stats,
+}
+
+/// A piston slice's fixed data: which side, and its bore line.
+struct Cyl<'a> {
+    rom: &'a CylinderRom,
+    /// Firing phase [deg].
+    phase: f64,
+    body: Body,
+}
+
+/// The running engine transient.
+pub struct EngineRun<'a> {
+    setup: &'a EngineSetup<'a>,
+    settings: CycleSettings,
+    pub structure: ModalStructure,
+    cyls: Vec<Cyl<'a>>,
+    /// Point mode rows (stacked per cylinder) for outputs.
+    pub time: f64,
+    energy_work: f64,
+    energy_damped: f64,
+    energy_scale: f64,
+    pub stats: Stats,
+    /// Contact forces of the last step (per cylinder, thrust then anti, per slice).
+    pub last_forces: Vec<(f64, f64)>,
+}
+
+/// Modes kept and the contact-DOF rows/flexibility/preload of the ROM.
+fn contact_data(rom: &EngineRom, nm: usize) -> (Dense, Vec<f64>) {
+    let ndof = rom.residual_flexibility.rows;
+    let mut rows = Dense {
+        rows: ndof,
+        cols: nm,
+        data: vec![0.0; ndof * nm],
+    };
+    let mut pre = vec![0.0; ndof];
+    for c in &rom.cylinders {
+        let nt = c.thrust_z.len();
+        for (k, (m, p)) in [
+            (&c.thrust_modes, &c.preload_thrust),
+            (&c.antithrust_modes, &c.preload_antithrust),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            for i in 0..m.rows {
+                let r = c.contact_offset + k * nt + i;
+                rows.data[r * nm..(r + 1) * nm].copy_from_slice(&m.row(i)[..nm]);
+                pre[r] = p[i];
+            }
+        }
+    }
+    (rows, pre)
+}
+
+/// Location of height `z` on a bore line with ascending node heights `zs`, DOFs from `first`.
+fn locate(zs: &[f64], z: f64, first: usize) -> Option<Location> {
+    let n = zs.len();
+    if n < 2 || z < zs[0] || z > zs[n - 1] {
+        return None;
+    }
+    let i = zs.partition_point(|&a| a <= z).clamp(1, n - 1);
+    let t = (z - zs[i - 1]) / (zs[i] - zs[i - 1]);
+    Some(Location {
+        dofs: [first + i - 1, first + i],
+        weights: [1.0 - t, t],
+    })
+}
+
+impl<'a> EngineRun<'a> {
+    /// A run at rest at global crank angle 0.
+    pub fn new(setup: &'a EngineSetup<'a>, settings: CycleSettings) -> Self {
+        let rom = setup.rom;
+        let nm = match settings.modes_below_hz {
+            Some(f) => rom.frequencies_hz.iter().take_while(|&&x| x <= f).count(),
+            None => rom.frequencies_hz.len(),
+        };
+        let omega: Vec<f64> = rom.frequencies_hz[..nm]
+            .iter()
+            .map(|f| 2.0 * std::f64::consts::PI * f)
+            .collect();
+        let zeta = vec![settings.damping_ratio; nm];
+        let integrator = ModalIntegrator::new(&omega, &zeta, settings.scheme);
+        let (rows, pre) = contact_data(rom, nm);
+        let mut structure =
+            ModalStructure::new(integrator, rows, rom.residual_flexibility.clone(), pre);
+        structure.static_correction = settings.static_correction;
+        let n = setup.firing_order.len();
+        let cyls = rom
+            .cylinders
+            .iter()
+            .map(|c| {
+                let k = setup
+                    .firing_order
+                    .iter()
+                    .position(|&f| f == c.cylinder)
+                    .unwrap_or(0);
+                let phase = 720.0 * k as f64 / n as f64;
+                let mass = setup.piston.mass_matrix();
+                let loads = setup.piston.loads(-phase);
+                let det = mass[0][0] * mass[1][1] - mass[0][1] * mass[1][0];
+                let f = loads.force;
+                let a = [
+                    (mass[1][1] * f[0] - mass[0][1] * f[1]) / det,
+                    (mass[0][0] * f[1] - mass[1][0] * f[0]) / det,
+                ];
+                Cyl {
+                    rom: c,
+                    phase,
+                    body: Body {
+                        mass,
+                        a,
+                        ..Body::default()
+                    },
+                }
+            })
+            .collect();
+        let stats = Stats {
+            modes: nm,
+            ..Stats::default()
+        };
+        Self {
+            setup,
+            settings,
+            structure,
+            cyls,
+            time: 0.0,
+            energy_work: 0.0,
+            energy_damped: 0.0,
+            energy_scale: 0.0,
+            stats,
+            last_forces: Vec::new(),
+        }
+    }
+
+    /// Global crank angle [deg] at time `t`.
+    pub fn angle_at(&self, t: f64) -> f64 {
+        t * self.setup.omega.to_degrees()
+    }
+
+    /// Base step [s].
+    pub fn base_dt(&self) -> f64 {
+        self.settings.step_deg.to_radians() / self.setup.omega
+    }
+
+    /// Advances one step of `dt`, halving on failure when adaptive.
+    pub fn advance(&mut self, dt: f64) -> Result<(), TransientError> {
+        self.advance_depth(dt, 0)
+    }
+
+    fn advance_depth(&mut self, dt: f64, depth: usize) -> Result<(), TransientError> {
+        match self.try_step(dt) {
+            Ok(()) => Ok(()),
+            Err(fail) => {
+                if !self.settings.adaptive || depth >= self.settings.max_halvings {
+                    return Err(fail.into_error(self, dt, depth));
+                }
+                self.stats.rejected_steps += 1;
+                self.advance_depth(dt / 2.0, depth + 1)?;
+                self.advance_depth(dt / 2.0, depth + 1)
+            }
+        }
+    }
+
+    fn try_step(&mut self, dt: f64) -> Result<(), Failure> {
+        let t1 = self.time + dt;
+        let theta = self.angle_at(t1);
+        self.structure.integrator.predict(dt);
+        let piston = self.setup.piston;
+        let skirt = &piston.skirt;
+        let mut slices: Vec<Slice<'_>> = Vec::with_capacity(self.cyls.len() * 2 * skirt.heights.len());
+        let mut meta: Vec<(usize, bool, usize, f64)> = Vec::new();
+        let mut bodies = Vec::with_capacity(self.cyls.len());
+        for (b, cyl) in self.cyls.iter().enumerate() {
+            let loads = piston.loads(theta - cyl.phase);
+            let mut body = cyl.body;
+            body.force = loads.force;
+            bodies.push(body);
+            let nt = cyl.rom.thrust_z.len();
+            for (side, zs, first) in [
+                (true, &cyl.rom.thrust_z, cyl.rom.contact_offset),
+                (false, &cyl.rom.antithrust_z, cyl.rom.contact_offset + nt),
+            ] {
+                for i in 0..skirt.heights.len() {
+                    let z = self.setup.liner_top - loads.pin_depth + skirt.heights[i];
+                    if let Some(at) = locate(zs, z, first) {
+                        slices.push(Slice {
+                            body: b,
+                            row: piston.slice_row(i, side),
+                            force_row: piston.slice_force_row(i, side, &loads),
+                            gap: skirt.gaps[i],
+                            law: &skirt.laws[i],
+                            damping: piston.contact_damping,
+                            at,
+                            prev_penetration: 0.0,
+                        });
+                        meta.push((b, side, i, z));
+                    }
+                }
+            }
+        }
+        let s = self.settings.scheme;
+        let res = contact::step(
+            &bodies,
+            &slices,
+            &self.structure,
+            dt,
+            s.beta,
+            s.gamma,
+            self.settings.max_newton,
+        )
+        .map_err(Failure::Step)?;
+        // penetration limit
+        if let Some((k, &p)) = res
+            .penetrations
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+        {
+            if p > self.settings.max_penetration {
+                let (b, side, i, z) = meta[k];
+                return Err(Failure::Deep {
+                    cylinder: self.cyls[b].rom.cylinder,
+                    side,
+                    slice: i + 1,
+                    height: z,
+                    penetration: p,
+                });
+            }
+            self.stats.max_penetration_m = self.stats.max_penetration_m.max(p);
+        }
+        if res
+            .bodies
+            .iter()
+            .any(|b| !(b.q.iter().chain(&b.v).chain(&b.a).all(|x| x.is_finite())))
+        {
+            let b = res
+                .bodies
+                .iter()
+                .position(|b| !b.q.iter().chain(&b.a).all(|x| x.is_finite()))
+                .unwrap_or(0);
+            return Err(Failure::NonFinite(self.cyls[b].rom.cylinder));
+        }
+        // commit
+        let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
+        let f = self.structure.modal_force(&locs, &res.forces);
+        let it = &self.structure.integrator;
+        let (eta0, v0, f0) = (it.eta.clone(), it.deta.clone(), it.force.clone());
+        self.structure.integrator.commit(&f);
+        let it = &self.structure.integrator;
+        let mut work = 0.0;
+        let mut vbar = vec![0.0; it.len()];
+        for j in 0..it.len() {
+            work += 0.5 * (f0[j] + f[j]) * (it.eta[j] - eta0[j]);
+            vbar[j] = 0.5 * (v0[j] + it.deta[j]);
+        }
+        self.energy_work += work;
+        self.energy_damped += dt * it.damping_power(&vbar);
+        if !it.eta.iter().all(|x| x.is_finite()) {
+            return Err(Failure::NonFinite(0));
+        }
+        for (cyl, b) in self.cyls.iter_mut().zip(&res.bodies) {
+            cyl.body = *b;
+        }
+        let mut per = vec![(0.0, 0.0); self.cyls.len()];
+        for (k, &(b, side, _, _)) in meta.iter().enumerate() {
+            if side {
+                per[b].0 += res.forces[k];
+            } else {
+                per[b].1 += res.forces[k];
+            }
+        }
+        self.last_forces = per;
+        self.time = t1;
+        self.stats.steps += 1;
+        self.stats.newton_iterations += res.iterations;
+        self.stats.max_newton_per_step = self.stats.max_newton_per_step.max(res.iterations);
+        Ok(())
+    }
+
+    /// Energy balance: (E - W + D) and the scale max(E, |W|, D).
+    pub fn energy_balance(&mut self) -> (f64, f64) {
+        let e = self.structure.integrator.energy();
+        self.energy_scale = self
+            .energy_scale
+            .max(e)
+            .max(self.energy_work.abs())
+            .max(self.energy_damped);
+        (e - self.energy_work + self.energy_damped, self.energy_scale)
+    }
+
+    /// Piston states (lateral, tilt) per modelled cylinder.
+    pub fn pistons(&self) -> Vec<[f64; 2]> {
+        self.cyls.iter().map(|c| c.body.q).collect()
+    }
+
+    /// Liner point accelerations of cylinder index `c` (points), + toward the coolant.
+    pub fn point_accelerations(&self, c: usize, crankcase: bool) -> Vec<f64> {
+        let rom = self.cyls[c].rom;
+        let m = if crankcase {
+            &rom.crankcase_point_modes
+        } else {
+            &rom.point_modes
+        };
+        let a = &self.structure.integrator.ddeta;
+        (0..m.rows)
+            .map(|p| m.row(p).iter().zip(a).map(|(x, y)| x * y).sum())
+            .collect()
+    }
+
+    /// Runs `settings.cycles` cycles and returns the peaks and series of the last one.
+    pub fn run(mut self, mut on_step: impl FnMut(usize, usize)) -> Result<CycleResult, TransientError> {
+        let steps_per_cycle = (720.0 / self.settings.step_deg).round() as usize;
+        let dt = self.base_dt();
+        self.stats.dt_s = dt;
+        let cycles = self.settings.cycles.max(1);
+        let total = steps_per_cycle * cycles;
+        let mut prev_peaks: Option<Vec<CylinderPeaks>> = None;
+        let mut result = None;
+        let piston = self.setup.piston;
+        for cycle in 0..cycles {
+            let mut series = Series {
+                crank_angle_deg: Vec::with_capacity(steps_per_cycle),
+                time_s: Vec::with_capacity(steps_per_cycle),
+                cylinders: self
+                    .cyls
+                    .iter()
+                    .map(|c| CylinderSeries {
+                        cylinder: c.rom.cylinder,
+                        acceleration: vec![Vec::with_capacity(steps_per_cycle); c.rom.point_modes.rows],
+                        crankcase_acceleration: vec![
+                            Vec::with_capacity(steps_per_cycle);
+                            c.rom.crankcase_point_modes.rows
+                        ],
+                        ..CylinderSeries::default()
+                    })
+                    .collect(),
+            };
+            for s in 0..steps_per_cycle {
+                let target = ((cycle * steps_per_cycle + s + 1) as f64) * dt;
+                let h = target - self.time;
+                self.advance(h)?;
+                let (err, scale) = self.energy_balance();
+                if scale > 1e-12 && err > 1e-4 * scale {
+                    return Err(TransientError::EnergyGrowth {
+                        excess_j: err,
+                        scale_j: scale,
+                        crank_angle_deg: self.angle_at(self.time),
+                        time_s: self.time,
+                    });
+                }
+                let theta = self.angle_at(self.time);
+                series.crank_angle_deg.push(theta - 720.0 * cycle as f64);
+                series.time_s.push(self.time);
+                for (c, cs) in series.cylinders.iter_mut().enumerate() {
+                    for (p, a) in self.point_accelerations(c, false).into_iter().enumerate() {
+                        cs.acceleration[p].push(a);
+                    }
+                    for (p, a) in self.point_accelerations(c, true).into_iter().enumerate() {
+                        cs.crankcase_acceleration[p].push(a);
+                    }
+                    let q = self.cyls[c].body.q;
+                    cs.lateral_m.push(q[0]);
+                    cs.tilt_rad.push(q[1]);
+                    let (ft, fa) = self.last_forces.get(c).copied().unwrap_or((0.0, 0.0));
+                    cs.thrust_force_n.push(ft);
+                    cs.antithrust_force_n.push(fa);
+                    let loads = piston.loads(theta - self.cyls[c].phase);
+                    cs.side_force_n.push(loads.side_force);
+                    cs.pressure_pa.push(loads.pressure);
+                }
+                on_step(cycle * steps_per_cycle + s + 1, total);
+            }
+            let peaks = self.peaks(&series);
+            if let Some(prev) = &prev_peaks {
+                let mut change: f64 = 0.0;
+                for (a, b) in peaks.iter().zip(prev) {
+                    for (x, y) in a.peak_negative.iter().zip(&b.peak_negative) {
+                        change = change.max((x.value - y.value).abs() / x.value.abs().max(1e-9));
+                    }
+                }
+                self.stats.cycle_change = change;
+            }
+            prev_peaks = Some(peaks.clone());
+            result = Some((peaks, series));
+        }
+        let (err, scale) = self.energy_balance();
+        self.stats.energy_error = if scale > 0.0 { err / scale } else { 0.0 };
+        let (peaks, series) = result.expect("at least one cycle");
+        Ok(CycleResult {
+            peaks,
+            series,
+            stats: self.stats,
+        })
+    }
+
+    fn peaks(&self, series: &Series) -> Vec<CylinderPeaks> {
+        series
+            .cylinders
+            .iter()
+            .zip(&self.cyls)
+            .map(|(cs, cyl)| {
+                let local = |k: usize| (series.crank_angle_deg[k] - cyl.phase).rem_euclid(720.0);
+                let arg = |v: &[f64], f: &dyn Fn(f64) -> f64| -> Peak {
+                    let mut best = Peak {
+                        value: f64::NEG_INFINITY,
+                        crank_angle_deg: 0.0,
+                    };
+                    for (k, &x) in v.iter().enumerate() {
+                        if f(x) > best.value {
+                            best = Peak {
+                                value: f(x),
+                                crank_angle_deg: local(k),
+                            };
+                        }
+                    }
+                    best
+                };
+                let dyn_force: Vec<f64> = (0..cs.side_force_n.len())
+                    .map(|k| cs.thrust_force_n[k] - cs.antithrust_force_n[k] - cs.side_force_n[k])
+                    .collect();
+                CylinderPeaks {
+                    cylinder: cs.cylinder,
+                    peak_negative: cs.acceleration.iter().map(|a| arg(a, &|x| -x)).collect(),
+                    peak_positive: cs.acceleration.iter().map(|a| arg(a, &|x| x)).collect(),
+                    slap_force: arg(&dyn_force, &|x| x.abs()),
+                    side_force: arg(&cs.side_force_n, &|x| x),
+                }
+            })
+            .collect()
+    }
+}
+
+/// A failed step attempt.
+enum Failure {
+    Step(StepFailure),
+    Deep {
+        cylinder: usize,
+        side: bool,
+        slice: usize,
+        height: f64,
+        penetration: f64,
+    },
+    NonFinite(usize),
+}
+
+impl Failure {
+    fn into_error(self, run: &EngineRun<'_>, dt: f64, halvings: usize) -> TransientError {
+        let t = run.time + dt;
+        let crank_angle_deg = run.angle_at(t);
+        match self {
+            Failure::Step(StepFailure::NoConvergence { iterations }) => {
+                TransientError::NoConvergence {
+                    crank_angle_deg,
+                    time_s: t,
+                    iterations,
+                    halvings,
+                }
+            }
+            Failure::Step(StepFailure::Singular) => TransientError::Singular {
+                crank_angle_deg,
+                time_s: t,
+            },
+            Failure::Deep {
+                cylinder,
+                side,
+                slice,
+                height,
+                penetration,
+            } => TransientError::DeepPenetration {
+                cylinder,
+                side: if side { "thrust" } else { "anti-thrust" },
+                slice,
+                height_mm: height * 1e3,
+                penetration_um: penetration * 1e6,
+                limit_um: run.settings.max_penetration * 1e6,
+                crank_angle_deg,
+                time_s: t,
+            },
+            Failure::NonFinite(cylinder) => TransientError::NonFinite {
+                crank_angle_deg,
+                time_s: t,
+                cylinder,
+            },
+        }
+    }
+}

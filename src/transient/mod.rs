@@ -1,0 +1,7 @@
+//! Transients: Newmark/HHT time integration, penalty contact of the piston skirts with the
+//! liners, and the engine cycle on the engine ROM.
+
+pub mod contact;
+pub mod cycle;
+pub mod modal;
+pub mod scheme;
