@@ -2,7 +2,7 @@
 //! maps errors to exit codes (0 ok, 2 bad input, 1 failure), printing the whole cause chain.
 
 use clap::{Args, Parser, Subcommand};
-use linercav::app::{export, modes, rom, ModelInput};
+use linercav::app::{export, modes, rom, simulate, ModelInput};
 use linercav::error::Error;
 use linercav::fem::material::Elastic;
 use linercav::scene::Scene;
@@ -152,6 +152,27 @@ enum Command {
         #[command(flatten)]
         cache: CacheArgs,
     },
+    /// Piston-slap transient of the engine on the ROM: peak liner accelerations per cylinder
+    /// and analysis point, side and slap forces, time series, solver statistics.
+    Simulate {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Override any scene field: --set piston.clearance_um=120 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Print JSON on stdout.
+        #[arg(long)]
+        json: bool,
+        /// Write time_series.csv and simulate.json into this directory.
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Also run the full-order FE reference on a window around firing TDC of the first
+        /// cylinder and report the ROM's error and speed-up.
+        #[arg(long)]
+        full_order: bool,
+        #[command(flatten)]
+        cache: CacheArgs,
+    },
     /// Write K.mtx and M.mtx (Matrix Market, symmetric, constrained DOFs removed).
     ExportMatrices {
         #[command(flatten)]
@@ -294,6 +315,31 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 cylinders: loaded.rom.cylinders.iter().map(|c| c.cylinder).collect(),
                 cache: loaded.cache,
             };
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report).expect("serialisable")
+                );
+            } else {
+                print!("{}", report.to_text());
+            }
+        }
+        Command::Simulate {
+            scene,
+            sets,
+            json,
+            out,
+            full_order,
+            cache,
+        } => {
+            let req = simulate::SimulateRequest {
+                scene,
+                sets,
+                out,
+                full_order,
+                cache: cache.options(),
+            };
+            let report = simulate::run(&req, started)?;
             if json {
                 println!(
                     "{}",

@@ -2,9 +2,11 @@
 //! serialisable report, and writes its files atomically.
 
 pub mod export;
+pub mod full_order;
 pub mod modes;
 pub mod progress;
 pub mod rom;
+pub mod simulate;
 pub mod summary;
 
 use crate::error::{Error, Result};

@@ -76,6 +76,22 @@ impl SliceLaw {
         out
     }
 
+    /// The linear piece with the samples of `mask` in contact.
+    pub fn piece_of(&self, mask: u8) -> Piece {
+        let mut out = Piece {
+            a: 0.0,
+            kt: 0.0,
+            mask,
+        };
+        for j in 0..7 {
+            if mask & (1 << j) != 0 {
+                out.kt += self.k[j] * self.c[j] * self.c[j];
+                out.a -= self.k[j] * self.c[j] * self.o[j];
+            }
+        }
+        out
+    }
+
     /// Elastic force F(p) [N].
     pub fn force(&self, p: f64) -> f64 {
         let pc = self.piece(p);

@@ -110,6 +110,58 @@ pub struct Rom {
     pub cache_dir: PathBuf,
 }
 
+/// Where the cylinder pressure comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PressureSource {
+    File(PathBuf),
+    Wiebe(crate::piston::pressure::Wiebe),
+}
+
+/// Piston data, SI (see [`raw::RawPiston`] for the meaning of each field).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PistonSpec {
+    pub mass: f64,
+    pub pin_mass: f64,
+    pub tilt_inertia: f64,
+    pub cg_above_pin: f64,
+    pub cg_lateral: f64,
+    pub pin_offset: f64,
+    pub crank_offset: f64,
+    pub compression_height: f64,
+    pub crown_depth_at_tdc: f64,
+    pub skirt: crate::piston::skirt::SkirtSpec,
+    pub contact_damping: f64,
+    pub friction: f64,
+}
+
+/// Operating point besides the speed, SI.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Operating {
+    pub load: f64,
+    pub pressure: PressureSource,
+    pub crankcase_pa: f64,
+}
+
+/// Transient settings, SI.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransientSpec {
+    pub scheme: crate::transient::scheme::Scheme,
+    pub step_deg: f64,
+    pub cycles: usize,
+    pub adaptive: bool,
+    pub damping_ratio: f64,
+    pub max_penetration: f64,
+    pub mode_cutoff_hz: Option<f64>,
+}
+
+/// What `simulate` needs beyond the ROM.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Simulation {
+    pub piston: PistonSpec,
+    pub operating: Operating,
+    pub transient: TransientSpec,
+}
+
 /// A validated scene, SI units.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -123,6 +175,8 @@ pub struct Scene {
     pub crankcase: Option<Crankcase>,
     pub solver: Solver,
     pub rom: Rom,
+    /// Piston, operating point and transient settings, when the scene has all three sections.
+    pub simulation: Option<Simulation>,
 }
 
 /// Part names a scene knows.
@@ -397,6 +451,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         cylinders,
         cache_dir: base.join(&r.cache_dir),
     };
+    let simulation = validate_simulation(&c, base, &raw, &engine, &liner_geometry)?;
     Ok(Scene {
         path: path.to_path_buf(),
         title: raw.title,
@@ -406,7 +461,214 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         crankcase,
         solver,
         rom,
+        simulation,
     })
+}
+
+fn validate_simulation(
+    c: &Checker<'_>,
+    base: &Path,
+    raw: &RawScene,
+    engine: &Engine,
+    liner: &LinerGeometry,
+) -> Result<Option<Simulation>, SceneError> {
+    let (p, o, t) = match (&raw.piston, &raw.operating, &raw.transient) {
+        (None, None, None) => return Ok(None),
+        (Some(p), Some(o), Some(t)) => (p, o, t),
+        _ => {
+            return Err(c.err(
+                "piston",
+                "[piston], [operating] and [transient] go together: give all three or none",
+            ))
+        }
+    };
+    let nonneg = |key: &str, v: f64| -> Result<f64, SceneError> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(c.err(key, format!("must be a number >= 0, got {v}")))
+        }
+    };
+    let finite = |key: &str, v: f64| -> Result<f64, SceneError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(c.err(key, format!("must be a finite number, got {v}")))
+        }
+    };
+    let mass = c.positive("piston.mass_kg", p.mass_kg)?;
+    let cg_above_pin = finite("piston.cg_above_pin_mm", p.cg_above_pin_mm)? * 1e-3;
+    let tilt_inertia = c.positive("piston.tilt_inertia_kg_m2", p.tilt_inertia_kg_m2)?;
+    if tilt_inertia <= mass * cg_above_pin * cg_above_pin {
+        return Err(c.err(
+            "piston.tilt_inertia_kg_m2",
+            format!(
+                "must exceed mass x cg_above_pin^2 = {:.3e} kg m^2 (it is the inertia about the pin, including the parallel-axis part)",
+                mass * cg_above_pin * cg_above_pin
+            ),
+        ));
+    }
+    let compression_height = c.mm("piston.compression_height_mm", p.compression_height_mm)?;
+    let skirt_length = c.mm("piston.skirt_length_mm", p.skirt_length_mm)?;
+    let top_above_pin = finite("piston.pin_below_skirt_top_mm", p.pin_below_skirt_top_mm)? * 1e-3;
+    if top_above_pin >= compression_height || top_above_pin <= 0.0 || top_above_pin >= skirt_length {
+        return Err(c.err(
+            "piston.pin_below_skirt_top_mm",
+            "the pin must lie within the skirt, and the skirt top below the crown",
+        ));
+    }
+    let crown_depth = nonneg("piston.crown_depth_at_tdc_mm", p.crown_depth_at_tdc_mm)? * 1e-3;
+    if crown_depth + compression_height >= liner.length {
+        return Err(c.err(
+            "piston.compression_height_mm",
+            "the pin at top dead centre would lie below the liner",
+        ));
+    }
+    if p.slices < 10 {
+        return Err(c.err("piston.slices", format!("must be at least 10, got {}", p.slices)));
+    }
+    let th = &p.thermal;
+    let temp = |key: &str, v: f64| -> Result<f64, SceneError> {
+        if v.is_finite() && (-50.0..=400.0).contains(&v) {
+            Ok(v)
+        } else {
+            Err(c.err(key, format!("must be a temperature in [-50, 400] deg C, got {v}")))
+        }
+    };
+    let expansion = |key: &str, v: f64| -> Result<f64, SceneError> {
+        if v.is_finite() && (0.0..1e-4).contains(&v) {
+            Ok(v)
+        } else {
+            Err(c.err(key, format!("must be in [0, 1e-4] 1/K, got {v}")))
+        }
+    };
+    let skirt = crate::piston::skirt::SkirtSpec {
+        bore: engine.bore,
+        length: skirt_length,
+        top_above_pin,
+        slices: p.slices,
+        clearance: nonneg("piston.clearance_um", p.clearance_um)? * 1e-6,
+        barrel: nonneg("piston.barrel_um", p.barrel_um)? * 1e-6,
+        barrel_max_below_pin: finite("piston.barrel_max_below_pin_mm", p.barrel_max_below_pin_mm)? * 1e-3,
+        ovality: nonneg("piston.ovality_um", p.ovality_um)? * 1e-6,
+        piston_expansion: expansion("piston.thermal.piston_expansion_per_k", th.piston_expansion_per_k)?,
+        skirt_top_temp_c: temp("piston.thermal.skirt_top_temp_c", th.skirt_top_temp_c)?,
+        skirt_bottom_temp_c: temp("piston.thermal.skirt_bottom_temp_c", th.skirt_bottom_temp_c)?,
+        liner_expansion: expansion("piston.thermal.liner_expansion_per_k", th.liner_expansion_per_k)?,
+        liner_temp_c: temp("piston.thermal.liner_temp_c", th.liner_temp_c)?,
+        reference_temp_c: temp("piston.thermal.reference_temp_c", th.reference_temp_c)?,
+        stiffness: c.positive("piston.contact_stiffness_n_per_m", p.contact_stiffness_n_per_m)?,
+    };
+    let piston = PistonSpec {
+        mass,
+        pin_mass: nonneg("piston.pin_mass_kg", p.pin_mass_kg)?,
+        tilt_inertia,
+        cg_above_pin,
+        cg_lateral: finite("piston.cg_offset_mm", p.cg_offset_mm)? * 1e-3,
+        pin_offset: finite("piston.pin_offset_mm", p.pin_offset_mm)? * 1e-3,
+        crank_offset: finite("piston.crank_offset_mm", p.crank_offset_mm)? * 1e-3,
+        compression_height,
+        crown_depth_at_tdc: crown_depth,
+        skirt,
+        contact_damping: nonneg("piston.contact_damping_n_s_per_m", p.contact_damping_n_s_per_m)?,
+        friction: nonneg("piston.friction", p.friction)?,
+    };
+    let offset = (piston.pin_offset - piston.crank_offset).abs();
+    if offset + engine.stroke / 2.0 >= engine.rod_length {
+        return Err(c.err("piston.pin_offset_mm", "the offset is too large for the rod"));
+    }
+    if !(o.load.is_finite() && (0.0..=1.0).contains(&o.load)) {
+        return Err(c.err("operating.load", format!("must be in [0, 1], got {}", o.load)));
+    }
+    let cb = &o.combustion;
+    if !(cb.compression_ratio.is_finite() && cb.compression_ratio > 1.0) {
+        return Err(c.err("operating.combustion.compression_ratio", "must exceed 1"));
+    }
+    if !(cb.intake_bar.is_finite() && cb.intake_bar >= 1.0) {
+        return Err(c.err("operating.combustion.intake_bar", "must be at least 1 bar (absolute)"));
+    }
+    if !(cb.polytropic > 1.0 && cb.polytropic < 1.67) {
+        return Err(c.err("operating.combustion.polytropic", "must lie in (1, 1.67)"));
+    }
+    if !(cb.evo_deg > 450.0 && cb.evo_deg < 700.0) {
+        return Err(c.err("operating.combustion.evo_deg", "must lie in (450, 700) deg"));
+    }
+    if !(cb.start_deg > 180.0 && cb.start_deg < cb.evo_deg) {
+        return Err(c.err("operating.combustion.start_deg", "must lie between 180 deg and evo_deg"));
+    }
+    let wiebe = crate::piston::pressure::Wiebe {
+        compression_ratio: cb.compression_ratio,
+        intake_pa: cb.intake_bar * 1e5,
+        exhaust_over_intake_pa: nonneg("operating.combustion.exhaust_over_intake_bar", cb.exhaust_over_intake_bar)? * 1e5,
+        start_deg: cb.start_deg,
+        duration_deg: c.positive("operating.combustion.duration_deg", cb.duration_deg)?,
+        a: c.positive("operating.combustion.wiebe_a", cb.wiebe_a)?,
+        m: nonneg("operating.combustion.wiebe_m", cb.wiebe_m)?,
+        heat_j: nonneg("operating.combustion.heat_release_j", cb.heat_release_j)?,
+        polytropic: cb.polytropic,
+        evo_deg: cb.evo_deg,
+        load: o.load,
+    };
+    let operating = Operating {
+        load: o.load,
+        pressure: match &o.pressure_file {
+            Some(f) => PressureSource::File(base.join(f)),
+            None => PressureSource::Wiebe(wiebe),
+        },
+        crankcase_pa: c.positive("operating.crankcase_pressure_bar", o.crankcase_pressure_bar)? * 1e5,
+    };
+    let scheme = match t.scheme.as_str() {
+        "newmark" => crate::transient::scheme::Scheme::average_acceleration(),
+        "hht" => {
+            if !(t.hht_alpha.is_finite() && (-1.0 / 3.0..=0.0).contains(&t.hht_alpha)) {
+                return Err(c.err(
+                    "transient.hht_alpha",
+                    format!("must lie in [-1/3, 0], got {}", t.hht_alpha),
+                ));
+            }
+            crate::transient::scheme::Scheme::hht(t.hht_alpha)
+        }
+        other => {
+            return Err(c.err(
+                "transient.scheme",
+                format!("expected \"newmark\" or \"hht\", got \"{other}\""),
+            ))
+        }
+    };
+    let step = c.positive("transient.step_deg", t.step_deg)?;
+    let n = 720.0 / step;
+    if (n - n.round()).abs() > 1e-9 * n || n.round() < 36.0 {
+        return Err(c.err(
+            "transient.step_deg",
+            format!("720 must be a whole multiple of the step, with at least 36 steps, got {step}"),
+        ));
+    }
+    if t.cycles == 0 {
+        return Err(c.err("transient.cycles", "must be at least 1"));
+    }
+    if !(t.damping_ratio.is_finite() && (0.0..1.0).contains(&t.damping_ratio)) {
+        return Err(c.err(
+            "transient.damping_ratio",
+            format!("must lie in [0, 1), got {}", t.damping_ratio),
+        ));
+    }
+    let transient = TransientSpec {
+        scheme,
+        step_deg: step,
+        cycles: t.cycles,
+        adaptive: t.adaptive,
+        damping_ratio: t.damping_ratio,
+        max_penetration: c.positive("transient.max_penetration_um", t.max_penetration_um)? * 1e-6,
+        mode_cutoff_hz: match t.mode_cutoff_hz {
+            Some(f) => Some(c.positive("transient.mode_cutoff_hz", f)?),
+            None => None,
+        },
+    };
+    Ok(Some(Simulation {
+        piston,
+        operating,
+        transient,
+    }))
 }
 
 fn validate_crankcase(

@@ -24,6 +24,15 @@ pub struct RawScene {
     /// Engine reduced-order model settings.
     #[serde(default)]
     pub rom: RawRom,
+    /// Piston, skirt and contact (needed by `simulate`).
+    #[serde(default)]
+    pub piston: Option<RawPiston>,
+    /// Operating point: load and cylinder pressure (needed by `simulate`).
+    #[serde(default)]
+    pub operating: Option<RawOperating>,
+    /// Time integration (needed by `simulate`).
+    #[serde(default)]
+    pub transient: Option<RawTransient>,
 }
 
 /// The crankcase: parametric (dimensions below) or a Gmsh mesh with the same named sets.
@@ -240,4 +249,156 @@ fn default_shift_hz() -> f64 {
 }
 fn default_guard() -> usize {
     4
+}
+
+/// The piston, its skirt and contact (needed by `simulate`, `sweep`, `report`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawPiston {
+    /// Piston with rings, without the pin [kg], > 0.
+    pub mass_kg: f64,
+    /// Pin plus the rod small-end share [kg], >= 0.
+    pub pin_mass_kg: f64,
+    /// Tilt inertia of the piston about the pin axis [kg m^2], > mass x cg_above_pin^2.
+    pub tilt_inertia_kg_m2: f64,
+    /// Centre of gravity above the pin axis [mm] (negative: below).
+    #[serde(default)]
+    pub cg_above_pin_mm: f64,
+    /// Centre of gravity beside the pin toward thrust [mm].
+    #[serde(default)]
+    pub cg_offset_mm: f64,
+    /// Pin offset from the piston axis toward the thrust side [mm] (paper sweeps -1..+1).
+    #[serde(default)]
+    pub pin_offset_mm: f64,
+    /// Crankshaft axis offset from the bore axis toward thrust [mm].
+    #[serde(default)]
+    pub crank_offset_mm: f64,
+    /// Pin axis to crown top [mm].
+    pub compression_height_mm: f64,
+    /// Crown below the liner top at top dead centre [mm], >= 0.
+    pub crown_depth_at_tdc_mm: f64,
+    /// Skirt length [mm] and skirt top above the pin axis [mm].
+    pub skirt_length_mm: f64,
+    pub pin_below_skirt_top_mm: f64,
+    /// Cold diametral clearance at the widest skirt height [um], >= 0.
+    pub clearance_um: f64,
+    /// Radial barrel drop at the farther skirt end [um], >= 0, and the widest height below the
+    /// pin [mm].
+    #[serde(default)]
+    pub barrel_um: f64,
+    #[serde(default)]
+    pub barrel_max_below_pin_mm: f64,
+    /// Ovality: thrust-axis minus pin-axis skirt diameter [um], >= 0.
+    #[serde(default)]
+    pub ovality_um: f64,
+    /// Skirt slices per side, >= 10.
+    pub slices: usize,
+    /// Penalty stiffness per slice [N/m] (full-arc contact), > 0.
+    pub contact_stiffness_n_per_m: f64,
+    /// Contact damping per slice [N s/m], >= 0.
+    pub contact_damping_n_s_per_m: f64,
+    /// Coulomb friction coefficient of the skirt, >= 0 (0: no friction).
+    #[serde(default)]
+    pub friction: f64,
+    pub thermal: RawThermal,
+}
+
+/// Temperatures and expansion coefficients giving the hot clearance.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawThermal {
+    /// Linear expansion of the piston skirt [1/K].
+    pub piston_expansion_per_k: f64,
+    /// Skirt temperature at its top and bottom [deg C] (linear in between).
+    pub skirt_top_temp_c: f64,
+    pub skirt_bottom_temp_c: f64,
+    /// Linear expansion of the liner [1/K] and its bore temperature [deg C].
+    pub liner_expansion_per_k: f64,
+    pub liner_temp_c: f64,
+    /// Temperature at which the clearance is given [deg C].
+    #[serde(default = "default_ref_temp")]
+    pub reference_temp_c: f64,
+}
+fn default_ref_temp() -> f64 {
+    20.0
+}
+
+/// Operating point besides the speed (`engine.speed_rpm`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawOperating {
+    /// Load as a fraction of rated, in [0, 1] (scales heat release and boost of the built-in curve).
+    pub load: f64,
+    /// Measured cylinder pressure, CSV `crank_angle_deg,pressure_bar` (absolute; path relative
+    /// to the scene); replaces the built-in curve.
+    #[serde(default)]
+    pub pressure_file: Option<String>,
+    /// Crankcase pressure under the piston [bar absolute].
+    #[serde(default = "default_cc_bar")]
+    pub crankcase_pressure_bar: f64,
+    pub combustion: RawCombustion,
+}
+fn default_cc_bar() -> f64 {
+    1.0
+}
+
+/// Built-in Wiebe pressure curve at full load.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCombustion {
+    /// Geometric compression ratio, > 1.
+    pub compression_ratio: f64,
+    /// Intake (boost) pressure at full load [bar absolute], >= 1.
+    pub intake_bar: f64,
+    /// Exhaust back-pressure above intake [bar].
+    pub exhaust_over_intake_bar: f64,
+    /// Start of combustion [deg crank angle; firing TDC = 360] and duration [deg].
+    pub start_deg: f64,
+    pub duration_deg: f64,
+    /// Wiebe parameters a (> 0) and m (>= 0).
+    pub wiebe_a: f64,
+    pub wiebe_m: f64,
+    /// Net heat released per cycle at full load [J].
+    pub heat_release_j: f64,
+    /// Polytropic exponent of the closed cycle, in (1, 1.67).
+    pub polytropic: f64,
+    /// Exhaust valve opening [deg], between 450 and 700.
+    pub evo_deg: f64,
+}
+
+/// Time integration of the slap transient.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawTransient {
+    /// "newmark" (average acceleration) or "hht".
+    #[serde(default = "default_scheme")]
+    pub scheme: String,
+    /// HHT alpha in [-1/3, 0] (scheme = "hht").
+    #[serde(default = "default_alpha")]
+    pub hht_alpha: f64,
+    /// Crank-angle step [deg]; 720 must be a whole multiple of it.
+    pub step_deg: f64,
+    /// Engine cycles run from rest; the last is reported, >= 1.
+    pub cycles: usize,
+    /// Halve steps whose contact iteration fails or that penetrate too deep.
+    #[serde(default = "yes")]
+    pub adaptive: bool,
+    /// Modal damping ratio of the engine's system modes, in [0, 1).
+    pub damping_ratio: f64,
+    /// Largest acceptable skirt penetration [um]; deeper stops the run.
+    pub max_penetration_um: f64,
+    /// Integrate system modes up to this frequency [Hz] only; the static part of the modes
+    /// above joins the residual flexibility. Default: every mode of the ROM (up to the
+    /// ROM cut-off).
+    #[serde(default)]
+    pub mode_cutoff_hz: Option<f64>,
+}
+fn default_scheme() -> String {
+    "newmark".into()
+}
+fn default_alpha() -> f64 {
+    -0.05
+}
+fn yes() -> bool {
+    true
 }

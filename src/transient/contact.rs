@@ -25,14 +25,37 @@ pub struct Location {
     pub weights: [f64; 2],
 }
 
-/// The linear structure as the contact sees it during one step.
+/// The linear structure as the contact sees it during one step. [`Structure::prepare`] gets
+/// the step's slice locations (after the structure's own predictor); the other methods refer
+/// to them by index.
 pub trait Structure {
-    /// Predicted displacement and velocity at a location (no new contact force).
-    fn predicted(&self, at: &Location) -> (f64, f64);
-    /// Compliances G (displacement per force) and G_v (velocity per force) among `locs`.
-    fn compliance(&self, locs: &[Location]) -> (DMatrix<f64>, DMatrix<f64>);
-    /// Displacement at `at` caused by the forces `forces` at `loaded`: (G F)_at.
-    fn response(&self, loaded: &[Location], forces: &[f64], at: &[Location]) -> Vec<f64>;
+    /// Sets the locations of this step.
+    fn prepare(&mut self, locs: &[Location]);
+    /// Predicted displacement and velocity at location `i` (no new contact force).
+    fn predicted(&self, i: usize) -> (f64, f64);
+    /// Compliances G (displacement per force) and G_v (velocity per force) among `active`.
+    fn compliance(&mut self, active: &[usize]) -> (DMatrix<f64>, DMatrix<f64>);
+    /// Displacement at every location caused by the forces `forces` at `active`: G F.
+    fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64>;
+}
+
+/// Dot product with four partial sums (vectorises; the order differs from a plain sum only
+/// by roundoff).
+pub fn dot4(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut s = [0.0; 4];
+    for (x, y) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        for k in 0..4 {
+            s[k] += x[k] * y[k];
+        }
+    }
+    let tail = n - n % 4;
+    let mut t = 0.0;
+    for k in tail..n {
+        t += a[k] * b[k];
+    }
+    (s[0] + s[1]) + (s[2] + s[3]) + t
 }
 
 /// A slice that may touch during the step.
@@ -47,7 +70,9 @@ pub struct Slice<'a> {
     pub law: &'a crate::piston::skirt::SliceLaw,
     pub damping: f64,
     pub at: Location,
-    /// Penetration rate at the previous step (not used by the law; kept for output).
+    /// Penetration at the previous step: the damper acts during this step when it was > 0
+    /// (keeps the law continuous within the step, so the implicit step always has a solution;
+    /// the damper engages at most one step late).
     pub prev_penetration: f64,
 }
 
@@ -83,7 +108,7 @@ pub enum StepFailure {
 pub fn step(
     bodies: &[Body],
     slices: &[Slice<'_>],
-    structure: &dyn Structure,
+    structure: &mut dyn Structure,
     dt: f64,
     beta: f64,
     gamma: f64,
@@ -108,7 +133,9 @@ pub fn step(
             [f(0), f(1)]
         })
         .collect();
-    let pred: Vec<(f64, f64)> = slices.iter().map(|s| structure.predicted(&s.at)).collect();
+    let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
+    structure.prepare(&locs);
+    let pred: Vec<(f64, f64)> = (0..slices.len()).map(|i| structure.predicted(i)).collect();
     // penetration of each slice without new contact forces: first guess of the pieces
     let dot = |r: [f64; 2], q: [f64; 2]| r[0] * q[0] + r[1] * q[1];
     let mut pen: Vec<f64> = slices
@@ -119,18 +146,27 @@ pub fn step(
     let mut pieces: Vec<(u8, bool)> = slices
         .iter()
         .zip(&pen)
-        .map(|(s, &p)| (s.law.piece(p).mask, p > 0.0))
+        .map(|(s, &p)| {
+            // start from the previous step's piece (usually still right in sustained
+            // contact); a slice the predictor finds penetrating starts in contact
+            let prev = s.law.piece(s.prev_penetration).mask;
+            let mask = if prev != 0 { prev } else { s.law.piece(p).mask };
+            (mask, s.prev_penetration > 0.0)
+        })
         .collect();
     let mut g_cache: Option<(Vec<usize>, DMatrix<f64>, DMatrix<f64>)> = None;
     for it in 1..=max_iterations {
         let active: Vec<usize> = (0..slices.len())
             .filter(|&i| pieces[i].0 != 0 || pieces[i].1)
             .collect();
+        // (a slice with only its damper active carries F = c_d p' this step)
         let na = active.len();
         // compliance of the active set (reused while the set is unchanged)
         if g_cache.as_ref().is_none_or(|(a, _, _)| *a != active) {
-            let locs: Vec<Location> = active.iter().map(|&i| slices[i].at).collect();
-            let (g, gv) = structure.compliance(&locs);
+            if std::env::var_os("LINERCAV_DEBUG_SIZES").is_some() {
+                eprintln!("compliance {} of {}", active.len(), slices.len());
+            }
+            let (g, gv) = structure.compliance(&active);
             g_cache = Some((active.clone(), g, gv));
         }
         let (_, g, gv) = g_cache.as_ref().expect("set above");
@@ -140,12 +176,7 @@ pub fn step(
         let mut cd = vec![0.0; na];
         for (r, &i) in active.iter().enumerate() {
             let s = &slices[i];
-            let piece = s.law.piece(if pieces[i].0 != 0 {
-                // a point inside the assumed piece: reuse the current penetration
-                pen[i]
-            } else {
-                f64::NEG_INFINITY
-            });
+            let piece = s.law.piece_of(pieces[i].0);
             kt[r] = piece.kt;
             av[r] = piece.a;
             cd[r] = if pieces[i].1 { s.damping } else { 0.0 };
@@ -205,22 +236,41 @@ pub fn step(
         }
         // displacement at every slice includes the compliance to the active forces
         let extra = if na > 0 {
-            let loaded: Vec<Location> = active.iter().map(|&i| slices[i].at).collect();
-            let all: Vec<Location> = slices.iter().map(|s| s.at).collect();
-            structure.response(&loaded, &fa, &all)
+            structure.response(&active, &fa)
         } else {
             vec![0.0; slices.len()]
         };
-        let mut changed = false;
+        // new pieces; after many iterations change only the most violated slice per
+        // iteration (guards against cycling of the piecewise-linear Newton)
+        let mut worst: Option<(usize, f64)> = None;
+        let mut changes = Vec::new();
         for i in 0..slices.len() {
             let s = &slices[i];
             let qb = [q[2 * s.body], q[2 * s.body + 1]];
             pen[i] = dot(s.row, qb) - s.gap - pred[i].0 - extra[i];
-            let np = (s.law.piece(pen[i]).mask, pen[i] > 0.0);
-            if np != pieces[i] {
-                changed = true;
-                pieces[i] = np;
+            let mask = s.law.piece(pen[i]).mask;
+            if mask != pieces[i].0 {
+                let v = pen[i].abs();
+                changes.push((i, mask));
+                if worst.is_none_or(|(_, w)| v > w) {
+                    worst = Some((i, v));
+                }
             }
+        }
+        let changed = !changes.is_empty();
+        if it <= max_iterations / 3 {
+            for (i, mask) in changes {
+                pieces[i].0 = mask;
+            }
+        } else if let Some((i, _)) = worst {
+            pieces[i].0 = slices[i].law.piece(pen[i]).mask;
+        }
+        if std::env::var_os("LINERCAV_DEBUG_CONTACT").is_some() {
+            let act: Vec<(usize, u8, f64)> = (0..slices.len())
+                .filter(|&i| pieces[i].0 != 0 || pen[i] > -1e-6)
+                .map(|i| (i, pieces[i].0, pen[i] * 1e6))
+                .collect();
+            eprintln!("it {it}: q {:?} active {:?}", q.as_slice(), act);
         }
         if !changed {
             let mut out = Vec::with_capacity(nb);

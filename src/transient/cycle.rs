@@ -16,6 +16,8 @@
 //! small fraction of the energy scale stops the run (a numerical instability).
 
 use super::contact::{self, Body, Location, Slice, StepFailure};
+#[allow(unused_imports)]
+use super::contact::Structure;
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
 use crate::piston::Piston;
@@ -187,8 +189,10 @@ pub struct EngineRun<'a> {
     energy_damped: f64,
     energy_scale: f64,
     pub stats: Stats,
-    /// Contact forces of the last step (per cylinder, thrust then anti, per slice).
+    /// Summed contact forces of the last step per cylinder (thrust, anti-thrust).
     pub last_forces: Vec<(f64, f64)>,
+    /// Penetration of every slice at the last step, (cylinder, side, slice) order.
+    prev_pen: Vec<f64>,
 }
 
 /// Modes kept and the contact-DOF rows/flexibility/preload of the ROM.
@@ -217,6 +221,31 @@ fn contact_data(rom: &EngineRom, nm: usize) -> (Dense, Vec<f64>) {
         }
     }
     (rows, pre)
+}
+
+/// Residual flexibility when only the first `nm` system modes are integrated: the ROM's R
+/// plus the static part of the ROM modes left out, sum_{j >= nm} phi_j phi_j^T / omega_j^2.
+fn truncated_flexibility(rom: &EngineRom, nm: usize) -> Dense {
+    let mut r = rom.residual_flexibility.clone();
+    let n = r.rows;
+    let all = rom.frequencies_hz.len();
+    if nm == all {
+        return r;
+    }
+    let (rows, _) = contact_data(rom, all);
+    for j in nm..all {
+        let w2 = (2.0 * std::f64::consts::PI * rom.frequencies_hz[j]).powi(2);
+        for a in 0..n {
+            let pa = rows.data[a * all + j] / w2;
+            if pa == 0.0 {
+                continue;
+            }
+            for b in 0..n {
+                r.data[a * n + b] += pa * rows.data[b * all + j];
+            }
+        }
+    }
+    r
 }
 
 /// Location of height `z` on a bore line with ascending node heights `zs`, DOFs from `first`.
@@ -248,8 +277,8 @@ impl<'a> EngineRun<'a> {
         let zeta = vec![settings.damping_ratio; nm];
         let integrator = ModalIntegrator::new(&omega, &zeta, settings.scheme);
         let (rows, pre) = contact_data(rom, nm);
-        let mut structure =
-            ModalStructure::new(integrator, rows, rom.residual_flexibility.clone(), pre);
+        let rflex = truncated_flexibility(rom, nm);
+        let mut structure = ModalStructure::new(integrator, rows, rflex, pre);
         structure.static_correction = settings.static_correction;
         let n = setup.firing_order.len();
         let cyls = rom
@@ -281,6 +310,8 @@ impl<'a> EngineRun<'a> {
                 }
             })
             .collect();
+        let nslices = setup.piston.skirt.heights.len();
+        let ncyl = rom.cylinders.len();
         let stats = Stats {
             modes: nm,
             ..Stats::default()
@@ -296,6 +327,7 @@ impl<'a> EngineRun<'a> {
             energy_scale: 0.0,
             stats,
             last_forces: Vec::new(),
+            prev_pen: vec![-1.0; 2 * nslices * ncyl],
         }
     }
 
@@ -336,6 +368,8 @@ impl<'a> EngineRun<'a> {
         let skirt = &piston.skirt;
         let mut slices: Vec<Slice<'_>> = Vec::with_capacity(self.cyls.len() * 2 * skirt.heights.len());
         let mut meta: Vec<(usize, bool, usize, f64)> = Vec::new();
+        let ns = skirt.heights.len();
+        let pen_index = |b: usize, side: bool, i: usize| (2 * b + usize::from(!side)) * ns + i;
         let mut bodies = Vec::with_capacity(self.cyls.len());
         for (b, cyl) in self.cyls.iter().enumerate() {
             let loads = piston.loads(theta - cyl.phase);
@@ -358,7 +392,7 @@ impl<'a> EngineRun<'a> {
                             law: &skirt.laws[i],
                             damping: piston.contact_damping,
                             at,
-                            prev_penetration: 0.0,
+                            prev_penetration: self.prev_pen[pen_index(b, side, i)],
                         });
                         meta.push((b, side, i, z));
                     }
@@ -369,7 +403,7 @@ impl<'a> EngineRun<'a> {
         let res = contact::step(
             &bodies,
             &slices,
-            &self.structure,
+            &mut self.structure,
             dt,
             s.beta,
             s.gamma,
@@ -408,8 +442,8 @@ impl<'a> EngineRun<'a> {
             return Err(Failure::NonFinite(self.cyls[b].rom.cylinder));
         }
         // commit
-        let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
-        let f = self.structure.modal_force(&locs, &res.forces);
+        let all: Vec<usize> = (0..slices.len()).collect();
+        let f = self.structure.modal_force(&all, &res.forces);
         let it = &self.structure.integrator;
         let (eta0, v0, f0) = (it.eta.clone(), it.deta.clone(), it.force.clone());
         self.structure.integrator.commit(&f);
@@ -437,6 +471,10 @@ impl<'a> EngineRun<'a> {
             }
         }
         self.last_forces = per;
+        self.prev_pen.fill(-1.0);
+        for (k, &(b, side, i, _)) in meta.iter().enumerate() {
+            self.prev_pen[pen_index(b, side, i)] = res.penetrations[k];
+        }
         self.time = t1;
         self.stats.steps += 1;
         self.stats.newton_iterations += res.iterations;

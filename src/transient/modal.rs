@@ -5,9 +5,10 @@
 //! At a location x (two bore-line DOFs with weights w), phi_x = sum w phi_dof, and
 //!   u(x) = u0(x) + phi_x . eta + sum_k R(x, x_k) F_k,
 //!   G(x, y) = sum_j phi_xj D_j phi_yj + R(x, y),  G_v(x, y) = gamma / (beta dt) sum_j phi_xj D_j phi_yj.
-//! The residual flexibility responds quasi-statically (no velocity).
+//! The residual flexibility responds quasi-statically (no velocity). Per step the rows of the
+//! step's locations are formed once; G of an active set is one matrix product.
 
-use super::contact::{Location, Structure};
+use super::contact::{dot4, Location, Structure};
 use super::scheme::ModalIntegrator;
 use crate::reduce::engine::Dense;
 use nalgebra::DMatrix;
@@ -21,22 +22,27 @@ pub struct ModalStructure {
     preload: Vec<f64>,
     /// Whether the residual flexibility is used.
     pub static_correction: bool,
+    // per-step data: locations, their mode rows, rows scaled by sqrt(D)
+    locs: Vec<Location>,
+    phi: Vec<f64>,
+    psi: Vec<f64>,
+    /// R between the step's locations, filled when first needed (NaN: not yet).
+    rmemo: std::cell::RefCell<Vec<f64>>,
 }
 
 impl ModalStructure {
     /// `rows`: contact DOFs x modes; `rflex`: contact DOFs squared; `preload` per contact DOF.
-    pub fn new(
-        integrator: ModalIntegrator,
-        rows: Dense,
-        rflex: Dense,
-        preload: Vec<f64>,
-    ) -> Self {
+    pub fn new(integrator: ModalIntegrator, rows: Dense, rflex: Dense, preload: Vec<f64>) -> Self {
         Self {
             integrator,
             rows,
             rflex,
             preload,
             static_correction: true,
+            locs: Vec::new(),
+            phi: Vec::new(),
+            psi: Vec::new(),
+            rmemo: std::cell::RefCell::new(Vec::new()),
         }
     }
 
@@ -64,103 +70,126 @@ impl ModalStructure {
         s
     }
 
-    /// Modal force sum_k phi_k F_k of forces at locations.
-    pub fn modal_force(&self, locs: &[Location], forces: &[f64]) -> Vec<f64> {
+    /// R between prepared locations `i` and `k` (memoised per step).
+    fn r_of(&self, i: usize, k: usize) -> f64 {
+        if !self.static_correction {
+            return 0.0;
+        }
+        let m = self.locs.len();
+        let mut memo = self.rmemo.borrow_mut();
+        let v = memo[i * m + k];
+        if !v.is_nan() {
+            return v;
+        }
+        let r = self.rflex_at(&self.locs[i], &self.locs[k]);
+        memo[i * m + k] = r;
+        memo[k * m + i] = r;
+        r
+    }
+
+    fn phi_of(&self, i: usize) -> &[f64] {
+        let n = self.integrator.len();
+        &self.phi[i * n..(i + 1) * n]
+    }
+
+    /// Modal force sum_k phi_k F_k of forces at the prepared locations `idx`.
+    pub fn modal_force(&self, idx: &[usize], forces: &[f64]) -> Vec<f64> {
         let n = self.integrator.len();
         let mut f = vec![0.0; n];
-        let mut row = vec![0.0; n];
-        for (at, &fk) in locs.iter().zip(forces) {
+        for (&i, &fk) in idx.iter().zip(forces) {
             if fk == 0.0 {
                 continue;
             }
-            self.row_into(at, &mut row);
-            for j in 0..n {
-                f[j] += row[j] * fk;
+            for (fj, pj) in f.iter_mut().zip(self.phi_of(i)) {
+                *fj += pj * fk;
             }
         }
         f
     }
 
-    /// Preload plus modal displacement (no residual part) at a location.
+    /// Mode rows of the point outputs times accelerations etc. use the rows directly; this is
+    /// the preload plus modal displacement (no residual part) at a location.
     pub fn displacement(&self, at: &Location) -> f64 {
-        let mut u = 0.0;
-        for i in 0..2 {
-            u += at.weights[i] * self.preload[at.dofs[i]];
-        }
-        let r0 = self.rows.row(at.dofs[0]);
-        let r1 = self.rows.row(at.dofs[1]);
-        let eta = &self.integrator.eta;
-        for j in 0..eta.len() {
-            u += (at.weights[0] * r0[j] + at.weights[1] * r1[j]) * eta[j];
-        }
-        u
+        let n = self.integrator.len();
+        let mut row = vec![0.0; n];
+        self.row_into(at, &mut row);
+        let pre: f64 = (0..2).map(|i| at.weights[i] * self.preload[at.dofs[i]]).sum();
+        pre + dot4(&row, &self.integrator.eta)
     }
 }
 
 impl Structure for ModalStructure {
-    fn predicted(&self, at: &Location) -> (f64, f64) {
-        let it = &self.integrator;
-        let r0 = self.rows.row(at.dofs[0]);
-        let r1 = self.rows.row(at.dofs[1]);
-        let (w0, w1) = (at.weights[0], at.weights[1]);
-        let mut u = w0 * self.preload[at.dofs[0]] + w1 * self.preload[at.dofs[1]];
-        let mut v = 0.0;
-        for j in 0..it.len() {
-            let p = w0 * r0[j] + w1 * r1[j];
-            u += p * it.pred[j];
-            v += p * it.dpred[j];
-        }
-        (u, v)
-    }
-
-    fn compliance(&self, locs: &[Location]) -> (DMatrix<f64>, DMatrix<f64>) {
+    fn prepare(&mut self, locs: &[Location]) {
         let n = self.integrator.len();
-        let na = locs.len();
-        let d = &self.integrator.compliance;
-        // scaled rows psi = phi sqrt(D)
-        let mut psi = vec![0.0; na * n];
-        for (r, at) in locs.iter().enumerate() {
-            let out = &mut psi[r * n..(r + 1) * n];
-            self.row_into(at, out);
+        let m = locs.len();
+        self.locs = locs.to_vec();
+        {
+            let mut memo = self.rmemo.borrow_mut();
+            memo.clear();
+            memo.resize(m * m, f64::NAN);
+        }
+        self.phi.resize(m * n, 0.0);
+        self.psi.resize(m * n, 0.0);
+        let mut row = vec![0.0; n];
+        for (i, at) in locs.iter().enumerate() {
+            self.row_into(at, &mut row);
+            self.phi[i * n..(i + 1) * n].copy_from_slice(&row);
+            let d = &self.integrator.compliance;
             for j in 0..n {
-                out[j] *= d[j].sqrt();
+                self.psi[i * n + j] = row[j] * d[j].sqrt();
             }
         }
+    }
+
+    fn predicted(&self, i: usize) -> (f64, f64) {
+        let at = &self.locs[i];
+        let it = &self.integrator;
+        let phi = self.phi_of(i);
+        let pre = at.weights[0] * self.preload[at.dofs[0]] + at.weights[1] * self.preload[at.dofs[1]];
+        (pre + dot4(phi, &it.pred), dot4(phi, &it.dpred))
+    }
+
+    fn compliance(&mut self, active: &[usize]) -> (DMatrix<f64>, DMatrix<f64>) {
+        let n = self.integrator.len();
+        let na = active.len();
         let kv = self.integrator.velocity_factor();
-        let mut g = DMatrix::zeros(na, na);
-        let mut gv = DMatrix::zeros(na, na);
-        for a in 0..na {
-            let pa = &psi[a * n..(a + 1) * n];
-            for b in a..na {
-                let pb = &psi[b * n..(b + 1) * n];
-                let s: f64 = pa.iter().zip(pb).map(|(x, y)| x * y).sum();
-                let r = self.rflex_at(&locs[a], &locs[b]);
-                g[(a, b)] = s + r;
-                g[(b, a)] = s + r;
-                gv[(a, b)] = kv * s;
-                gv[(b, a)] = kv * s;
+        // Psi_A (modes x active, one column per slice), S = Psi_A^T Psi_A (faer gemm)
+        let psi = faer::Mat::<f64>::from_fn(n, na, |j, a| self.psi[active[a] * n + j]);
+        let mut prod = faer::Mat::<f64>::zeros(na, na);
+        faer::linalg::matmul::matmul(
+            prod.as_mut(),
+            faer::Accum::Replace,
+            psi.transpose(),
+            psi.as_ref(),
+            1.0,
+            faer::Par::Seq,
+        );
+        let s = DMatrix::<f64>::from_fn(na, na, |a, b| prod[(a, b)]);
+        let gv = &s * kv;
+        let mut g = s;
+        if self.static_correction {
+            for (a, &i) in active.iter().enumerate() {
+                for (b, &k) in active.iter().enumerate() {
+                    g[(a, b)] += self.r_of(i, k);
+                }
             }
         }
         (g, gv)
     }
 
-    fn response(&self, loaded: &[Location], forces: &[f64], at: &[Location]) -> Vec<f64> {
-        let n = self.integrator.len();
-        let mut f = self.modal_force(loaded, forces);
-        for j in 0..n {
-            f[j] *= self.integrator.compliance[j];
+    fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
+        let mut f = self.modal_force(active, forces);
+        for (fj, d) in f.iter_mut().zip(&self.integrator.compliance) {
+            *fj *= d;
         }
-        let mut row = vec![0.0; n];
-        at.iter()
-            .map(|x| {
-                self.row_into(x, &mut row);
-                let m: f64 = row.iter().zip(&f).map(|(a, b)| a * b).sum();
-                let r: f64 = loaded
+        (0..self.locs.len())
+            .map(|i| {
+                let r: f64 = active
                     .iter()
                     .zip(forces)
-                    .map(|(y, &fk)| self.rflex_at(x, y) * fk)
+                    .map(|(&k, &fk)| self.r_of(i, k) * fk)
                     .sum();
-                m + r
+                dot4(self.phi_of(i), &f) + r
             })
             .collect()
     }

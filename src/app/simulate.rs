@@ -1,0 +1,343 @@
+//! `simulate`: the piston-slap transient of the whole engine on the cached ROM; peaks per
+//! cylinder and analysis point, time series CSV, solver statistics.
+
+use super::progress::Progress;
+use super::rom::{get_rom, CacheOptions};
+use crate::error::{Error, Result};
+use crate::piston::kinematics::CrankSlider;
+use crate::piston::pressure::PressureCurve;
+use crate::piston::skirt::Skirt;
+use crate::piston::Piston;
+use crate::reduce::rom::EngineRom;
+use crate::report::atomic::write_atomic;
+use crate::scene::{PressureSource, Scene, Simulation};
+use crate::transient::cycle::{CycleResult, CycleSettings, EngineRun, EngineSetup, Stats};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The scene's simulation sections, or an error naming what is missing.
+pub fn simulation(scene: &Scene) -> Result<&Simulation> {
+    scene.simulation.as_ref().ok_or_else(|| {
+        Error::Input(format!(
+            "{}: simulate needs the [piston], [operating] and [transient] sections (see models/engine.toml)",
+            scene.path.display()
+        ))
+    })
+}
+
+/// The piston model of a scene (reads the pressure file when one is given).
+pub fn piston_of(scene: &Scene) -> Result<Piston> {
+    let sim = simulation(scene)?;
+    let p = &sim.piston;
+    let e = &scene.engine;
+    let kinematics = CrankSlider {
+        radius: e.stroke / 2.0,
+        rod: e.rod_length,
+        offset: p.pin_offset - p.crank_offset,
+        omega: e.speed_rpm * std::f64::consts::PI / 30.0,
+    };
+    let area = std::f64::consts::PI * e.bore * e.bore / 4.0;
+    let pressure = match &sim.operating.pressure {
+        PressureSource::File(f) => {
+            PressureCurve::from_csv(f).map_err(|err| Error::Input(err.to_string()))?
+        }
+        PressureSource::Wiebe(w) => PressureCurve::wiebe(w, &kinematics, area),
+    };
+    let skirt = Skirt::new(&p.skirt);
+    let hot = skirt.hot_clearance();
+    if hot < -sim.transient.max_penetration {
+        return Err(Error::Input(format!(
+            "{}: the hot skirt is {:.1} um (diametral) larger than the bore: piston.clearance_um is too small for the temperatures in [piston.thermal] (the piston would seize)",
+            scene.path.display(),
+            -hot * 1e6
+        )));
+    }
+    Ok(Piston {
+        kinematics,
+        pressure,
+        crankcase_pa: sim.operating.crankcase_pa,
+        area,
+        mass: p.mass,
+        pin_mass: p.pin_mass,
+        tilt_inertia: p.tilt_inertia,
+        cg_above_pin: p.cg_above_pin,
+        cg_lateral: p.cg_lateral,
+        pin_offset: p.pin_offset,
+        pin_depth_at_tdc: p.crown_depth_at_tdc + p.compression_height,
+        skirt,
+        contact_damping: p.contact_damping,
+        friction: p.friction,
+    })
+}
+
+/// Transient settings of the scene.
+pub fn settings_of(sim: &Simulation) -> CycleSettings {
+    let t = &sim.transient;
+    CycleSettings {
+        scheme: t.scheme,
+        step_deg: t.step_deg,
+        cycles: t.cycles,
+        adaptive: t.adaptive,
+        max_halvings: 6,
+        damping_ratio: t.damping_ratio,
+        max_penetration: t.max_penetration,
+        max_newton: 50,
+        modes_below_hz: t.mode_cutoff_hz,
+        static_correction: true,
+    }
+}
+
+/// Runs the engine cycle of `scene` on `rom`.
+pub fn run_cycle(
+    scene: &Scene,
+    rom: &EngineRom,
+    piston: &Piston,
+    settings: CycleSettings,
+    progress: Option<&Progress>,
+) -> Result<CycleResult> {
+    let setup = EngineSetup {
+        rom,
+        piston,
+        firing_order: &scene.engine.firing_order,
+        omega: piston.kinematics.omega,
+        liner_top: scene.liner_geometry.length,
+    };
+    let run = EngineRun::new(&setup, settings);
+    run.run(|k, n| {
+        if let Some(p) = progress {
+            if k % 200 == 0 {
+                p.phase(&format!("transient: step {k} of {n}"));
+            }
+        }
+    })
+    .map_err(|e| Error::Failure(format!("{}: {e}", scene.path.display())))
+}
+
+/// One analysis point's peaks.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PointPeaks {
+    pub point: usize,
+    /// Largest negative acceleration (toward the crankcase... away from the coolant), as a
+    /// positive magnitude [m/s^2], and the cylinder's crank angle of it [deg].
+    pub peak_negative_m_s2: f64,
+    pub crank_angle_deg: f64,
+    pub peak_positive_m_s2: f64,
+    pub positive_crank_angle_deg: f64,
+}
+
+/// One cylinder's results.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CylinderReport {
+    pub cylinder: usize,
+    pub points: Vec<PointPeaks>,
+    pub peak_slap_force_n: f64,
+    pub slap_crank_angle_deg: f64,
+    pub peak_side_force_n: f64,
+    pub side_force_crank_angle_deg: f64,
+}
+
+/// What `simulate` prints.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SimulateReport {
+    pub scene: String,
+    pub speed_rpm: f64,
+    pub cylinders: Vec<CylinderReport>,
+    pub seconds: f64,
+    /// Wall time of the transient alone [s].
+    pub transient_seconds: f64,
+    pub stats: Stats,
+    pub cache: &'static str,
+    pub hot_clearance_um: f64,
+    pub peak_pressure_bar: f64,
+    pub peak_pressure_deg: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_series_csv: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rom_error_peak_negative: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speedup: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub full_order: Option<super::full_order::WindowReport>,
+}
+
+impl SimulateReport {
+    /// Per-cylinder summary of a result.
+    pub fn cylinders_of(res: &CycleResult) -> Vec<CylinderReport> {
+        res.peaks
+            .iter()
+            .map(|c| CylinderReport {
+                cylinder: c.cylinder,
+                points: c
+                    .peak_negative
+                    .iter()
+                    .zip(&c.peak_positive)
+                    .enumerate()
+                    .map(|(k, (n, p))| PointPeaks {
+                        point: k + 1,
+                        peak_negative_m_s2: n.value,
+                        crank_angle_deg: n.crank_angle_deg,
+                        peak_positive_m_s2: p.value,
+                        positive_crank_angle_deg: p.crank_angle_deg,
+                    })
+                    .collect(),
+                peak_slap_force_n: c.slap_force.value,
+                slap_crank_angle_deg: c.slap_force.crank_angle_deg,
+                peak_side_force_n: c.side_force.value,
+                side_force_crank_angle_deg: c.side_force.crank_angle_deg,
+            })
+            .collect()
+    }
+
+    pub fn to_text(&self) -> String {
+        let mut s = format!(
+            "{} at {:.0} rpm: peak pressure {:.1} bar at {:.1} deg, hot clearance {:.1} um\n",
+            self.scene, self.speed_rpm, self.peak_pressure_bar, self.peak_pressure_deg, self.hot_clearance_um
+        );
+        s += "cyl  point  peak neg [m/s^2] @deg   peak pos [m/s^2] @deg\n";
+        for c in &self.cylinders {
+            for p in &c.points {
+                s += &format!(
+                    "{:>3}  {:>5}  {:>16.0} {:>6.1}   {:>16.0} {:>6.1}\n",
+                    c.cylinder,
+                    p.point,
+                    p.peak_negative_m_s2,
+                    p.crank_angle_deg,
+                    p.peak_positive_m_s2,
+                    p.positive_crank_angle_deg
+                );
+            }
+        }
+        s += "cyl  side force peak [N] @deg   dynamic slap force [N] @deg\n";
+        for c in &self.cylinders {
+            s += &format!(
+                "{:>3}  {:>19.0} {:>6.1}   {:>22.0} {:>6.1}\n",
+                c.cylinder,
+                c.peak_side_force_n,
+                c.side_force_crank_angle_deg,
+                c.peak_slap_force_n,
+                c.slap_crank_angle_deg
+            );
+        }
+        let st = &self.stats;
+        s += &format!(
+            "solver: {} steps (dt {:.2} us), {} Newton iterations (max {} per step), {} rejected, {} modes, energy balance {:.1e}, max penetration {:.2} um, last-cycle change {:.1e}\n",
+            st.steps, st.dt_s * 1e6, st.newton_iterations, st.max_newton_per_step, st.rejected_steps, st.modes, st.energy_error, st.max_penetration_m * 1e6, st.cycle_change
+        );
+        if let (Some(e), Some(x)) = (self.rom_error_peak_negative, self.speedup) {
+            s += &format!(
+                "full-order window: ROM error of the peak negative acceleration {:.2} %, speed-up {:.0}x\n",
+                e * 100.0,
+                x
+            );
+        }
+        s += &format!("ROM cache: {}; {:.2} s (transient {:.3} s)\n", self.cache, self.seconds, self.transient_seconds);
+        if let Some(f) = &self.time_series_csv {
+            s += &format!("time series: {f}\n");
+        }
+        s
+    }
+}
+
+/// Request of `simulate`.
+pub struct SimulateRequest {
+    pub scene: PathBuf,
+    pub sets: Vec<String>,
+    pub out: Option<PathBuf>,
+    pub full_order: bool,
+    pub cache: CacheOptions,
+}
+
+/// Runs `simulate`.
+pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
+    let scene = Scene::load(&req.scene, &req.sets)?;
+    let sim = simulation(&scene)?;
+    let piston = piston_of(&scene)?;
+    let progress = Progress::new();
+    progress.phase("engine ROM");
+    let loaded = get_rom(&scene, &req.cache)?;
+    progress.phase("transient");
+    let t = Instant::now();
+    let res = run_cycle(&scene, &loaded.rom, &piston, settings_of(sim), Some(&progress))?;
+    let transient_seconds = t.elapsed().as_secs_f64();
+    let (pp, pdeg) = piston.pressure.peak();
+    let mut report = SimulateReport {
+        scene: scene.path.display().to_string(),
+        speed_rpm: scene.engine.speed_rpm,
+        cylinders: SimulateReport::cylinders_of(&res),
+        seconds: 0.0,
+        transient_seconds,
+        stats: res.stats.clone(),
+        cache: loaded.cache,
+        hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
+        peak_pressure_bar: pp / 1e5,
+        peak_pressure_deg: pdeg,
+        time_series_csv: None,
+        rom_error_peak_negative: None,
+        speedup: None,
+        full_order: None,
+    };
+    if req.full_order {
+        progress.phase("full-order reference window");
+        let w = super::full_order::compare(&scene, &loaded.rom, &piston, sim, &res, &progress)?;
+        report.rom_error_peak_negative = Some(w.rom_error_peak_negative);
+        report.speedup = Some(w.speedup);
+        report.full_order = Some(w);
+    }
+    if let Some(dir) = &req.out {
+        std::fs::create_dir_all(dir).map_err(|source| {
+            crate::report::atomic::WriteError {
+                path: dir.clone(),
+                source,
+            }
+        })?;
+        let path = dir.join("time_series.csv");
+        write_series(&path, &res)?;
+        report.time_series_csv = Some(path.display().to_string());
+        let json = dir.join("simulate.json");
+        report.seconds = started.elapsed().as_secs_f64();
+        let text = serde_json::to_string_pretty(&report).expect("serialisable");
+        write_atomic(&json, |w| w.write_all(text.as_bytes()))?;
+    }
+    report.seconds = started.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// Writes the last cycle's time series (one row per step).
+pub fn write_series(path: &Path, res: &CycleResult) -> Result<()> {
+    let s = &res.series;
+    write_atomic(path, |w| {
+        write!(w, "crank_angle_deg,time_s")?;
+        for c in &s.cylinders {
+            let k = c.cylinder;
+            for p in 0..c.acceleration.len() {
+                write!(w, ",c{k}_p{}_acc_m_s2", p + 1)?;
+            }
+            write!(
+                w,
+                ",c{k}_lateral_um,c{k}_tilt_mrad,c{k}_thrust_force_n,c{k}_antithrust_force_n,c{k}_side_force_n,c{k}_pressure_bar"
+            )?;
+        }
+        writeln!(w)?;
+        for i in 0..s.time_s.len() {
+            write!(w, "{:.4},{:.8}", s.crank_angle_deg[i], s.time_s[i])?;
+            for c in &s.cylinders {
+                for a in &c.acceleration {
+                    write!(w, ",{:.3}", a[i])?;
+                }
+                write!(
+                    w,
+                    ",{:.4},{:.5},{:.2},{:.2},{:.2},{:.3}",
+                    c.lateral_m[i] * 1e6,
+                    c.tilt_rad[i] * 1e3,
+                    c.thrust_force_n[i],
+                    c.antithrust_force_n[i],
+                    c.side_force_n[i],
+                    c.pressure_pa[i] / 1e5
+                )?;
+            }
+            writeln!(w)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
