@@ -166,10 +166,6 @@ enum Command {
         /// Write time_series.csv and simulate.json into this directory.
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
-        /// Also run the full-order FE reference on a window around firing TDC of the first
-        /// cylinder and report the ROM's error and speed-up.
-        #[arg(long)]
-        full_order: bool,
         #[command(flatten)]
         cache: CacheArgs,
     },
@@ -329,14 +325,12 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             sets,
             json,
             out,
-            full_order,
             cache,
         } => {
             let req = simulate::SimulateRequest {
                 scene,
                 sets,
                 out,
-                full_order,
                 cache: cache.options(),
             };
             let report = simulate::run(&req, started)?;

@@ -2,7 +2,6 @@
 //! serialisable report, and writes its files atomically.
 
 pub mod export;
-pub mod full_order;
 pub mod modes;
 pub mod progress;
 pub mod rom;

@@ -71,7 +71,7 @@ pub fn piston_of(scene: &Scene) -> Result<Piston> {
 }
 
 /// Transient settings of the scene.
-pub fn settings_of(sim: &Simulation) -> CycleSettings {
+pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
     let t = &sim.transient;
     CycleSettings {
         scheme: t.scheme,
@@ -84,6 +84,8 @@ pub fn settings_of(sim: &Simulation) -> CycleSettings {
         max_newton: 50,
         modes_below_hz: t.mode_cutoff_hz,
         static_correction: true,
+        coupling: crate::transient::cycle::Coupling::PerCylinder,
+        output_band_hz: Some(band_hz),
     }
 }
 
@@ -152,12 +154,6 @@ pub struct SimulateReport {
     pub peak_pressure_deg: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_series_csv: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rom_error_peak_negative: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub speedup: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub full_order: Option<super::full_order::WindowReport>,
 }
 
 impl SimulateReport {
@@ -220,16 +216,9 @@ impl SimulateReport {
         }
         let st = &self.stats;
         s += &format!(
-            "solver: {} steps (dt {:.2} us), {} Newton iterations (max {} per step), {} rejected, {} modes, energy balance {:.1e}, max penetration {:.2} um, last-cycle change {:.1e}\n",
-            st.steps, st.dt_s * 1e6, st.newton_iterations, st.max_newton_per_step, st.rejected_steps, st.modes, st.energy_error, st.max_penetration_m * 1e6, st.cycle_change
+            "solver: {} steps (dt {:.2} us), {} Newton iterations (max {} per step), {} rejected, {} modes, energy balance {:.1e}, max penetration {:.2} um, last-cycle change {:.1e}, coupling lag {:.3} um\n",
+            st.steps, st.dt_s * 1e6, st.newton_iterations, st.max_newton_per_step, st.rejected_steps, st.modes, st.energy_error, st.max_penetration_m * 1e6, st.cycle_change, st.coupling_lag_m * 1e6
         );
-        if let (Some(e), Some(x)) = (self.rom_error_peak_negative, self.speedup) {
-            s += &format!(
-                "full-order window: ROM error of the peak negative acceleration {:.2} %, speed-up {:.0}x\n",
-                e * 100.0,
-                x
-            );
-        }
         s += &format!("ROM cache: {}; {:.2} s (transient {:.3} s)\n", self.cache, self.seconds, self.transient_seconds);
         if let Some(f) = &self.time_series_csv {
             s += &format!("time series: {f}\n");
@@ -243,7 +232,6 @@ pub struct SimulateRequest {
     pub scene: PathBuf,
     pub sets: Vec<String>,
     pub out: Option<PathBuf>,
-    pub full_order: bool,
     pub cache: CacheOptions,
 }
 
@@ -257,7 +245,7 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     let loaded = get_rom(&scene, &req.cache)?;
     progress.phase("transient");
     let t = Instant::now();
-    let res = run_cycle(&scene, &loaded.rom, &piston, settings_of(sim), Some(&progress))?;
+    let res = run_cycle(&scene, &loaded.rom, &piston, settings_of(sim, scene.rom.band_hz), Some(&progress))?;
     let transient_seconds = t.elapsed().as_secs_f64();
     let (pp, pdeg) = piston.pressure.peak();
     let mut report = SimulateReport {
@@ -272,17 +260,7 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         peak_pressure_bar: pp / 1e5,
         peak_pressure_deg: pdeg,
         time_series_csv: None,
-        rom_error_peak_negative: None,
-        speedup: None,
-        full_order: None,
     };
-    if req.full_order {
-        progress.phase("full-order reference window");
-        let w = super::full_order::compare(&scene, &loaded.rom, &piston, sim, &res, &progress)?;
-        report.rom_error_peak_negative = Some(w.rom_error_peak_negative);
-        report.speedup = Some(w.speedup);
-        report.full_order = Some(w);
-    }
     if let Some(dir) = &req.out {
         std::fs::create_dir_all(dir).map_err(|source| {
             crate::report::atomic::WriteError {

@@ -57,7 +57,8 @@ impl ModalStructure {
         }
     }
 
-    fn rflex_at(&self, a: &Location, b: &Location) -> f64 {
+    /// Residual flexibility R(a, b) between two locations [m/N].
+    pub fn rflex_at(&self, a: &Location, b: &Location) -> f64 {
         if !self.static_correction {
             return 0.0;
         }
@@ -102,6 +103,23 @@ impl ModalStructure {
             }
             for (fj, pj) in f.iter_mut().zip(self.phi_of(i)) {
                 *fj += pj * fk;
+            }
+        }
+        f
+    }
+
+    /// Modal force sum_k phi_k F_k of forces at arbitrary locations.
+    pub fn modal_force_at(&self, locs: &[Location], forces: &[f64]) -> Vec<f64> {
+        let n = self.integrator.len();
+        let mut f = vec![0.0; n];
+        for (at, &fk) in locs.iter().zip(forces) {
+            if fk == 0.0 {
+                continue;
+            }
+            let r0 = self.rows.row(at.dofs[0]);
+            let r1 = self.rows.row(at.dofs[1]);
+            for j in 0..n {
+                f[j] += (at.weights[0] * r0[j] + at.weights[1] * r1[j]) * fk;
             }
         }
         f
