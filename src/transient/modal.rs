@@ -22,10 +22,10 @@ pub struct ModalStructure {
     preload: Vec<f64>,
     /// Whether the residual flexibility is used.
     pub static_correction: bool,
-    // per-step data: locations, their mode rows, rows scaled by sqrt(D)
+    // per-step data: locations, their mode rows, sqrt(D)
     locs: Vec<Location>,
     phi: Vec<f64>,
-    psi: Vec<f64>,
+    sqrt_d: Vec<f64>,
     /// R between the step's locations, filled when first needed (NaN: not yet).
     rmemo: std::cell::RefCell<Vec<f64>>,
 }
@@ -41,7 +41,7 @@ impl ModalStructure {
             static_correction: true,
             locs: Vec::new(),
             phi: Vec::new(),
-            psi: Vec::new(),
+            sqrt_d: Vec::new(),
             rmemo: std::cell::RefCell::new(Vec::new()),
         }
     }
@@ -147,16 +147,14 @@ impl Structure for ModalStructure {
             memo.resize(m * m, f64::NAN);
         }
         self.phi.resize(m * n, 0.0);
-        self.psi.resize(m * n, 0.0);
-        let mut row = vec![0.0; n];
+        let mut phi = std::mem::take(&mut self.phi);
         for (i, at) in locs.iter().enumerate() {
-            self.row_into(at, &mut row);
-            self.phi[i * n..(i + 1) * n].copy_from_slice(&row);
-            let d = &self.integrator.compliance;
-            for j in 0..n {
-                self.psi[i * n + j] = row[j] * d[j].sqrt();
-            }
+            self.row_into(at, &mut phi[i * n..(i + 1) * n]);
         }
+        self.phi = phi;
+        self.sqrt_d.clear();
+        self.sqrt_d
+            .extend(self.integrator.compliance.iter().map(|d| d.sqrt()));
     }
 
     fn predicted(&self, i: usize) -> (f64, f64) {
@@ -172,7 +170,8 @@ impl Structure for ModalStructure {
         let na = active.len();
         let kv = self.integrator.velocity_factor();
         // Psi_A (modes x active, one column per slice), S = Psi_A^T Psi_A (faer gemm)
-        let psi = faer::Mat::<f64>::from_fn(n, na, |j, a| self.psi[active[a] * n + j]);
+        let psi =
+            faer::Mat::<f64>::from_fn(n, na, |j, a| self.phi[active[a] * n + j] * self.sqrt_d[j]);
         let mut prod = faer::Mat::<f64>::zeros(na, na);
         faer::linalg::matmul::matmul(
             prod.as_mut(),
