@@ -41,14 +41,32 @@ fn default_engine_peaks_match_the_baseline() {
         .zip(base["cylinders"].as_array().unwrap())
     {
         let cyl = &c["cylinder"];
-        for key in ["peak_slap_force_n", "peak_side_force_n", "slap_crank_angle_deg", "side_force_crank_angle_deg"] {
+        for key in [
+            "peak_slap_force_n",
+            "peak_side_force_n",
+            "slap_crank_angle_deg",
+            "side_force_crank_angle_deg",
+        ] {
             let (x, y) = (c[key].as_f64().unwrap(), b[key].as_f64().unwrap());
             assert!(close(x, y), "cylinder {cyl}: {key} {x} vs baseline {y}");
         }
-        for (p, q) in c["points"].as_array().unwrap().iter().zip(b["points"].as_array().unwrap()) {
-            for key in ["peak_negative_m_s2", "peak_positive_m_s2", "crank_angle_deg"] {
+        for (p, q) in c["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(b["points"].as_array().unwrap())
+        {
+            for key in [
+                "peak_negative_m_s2",
+                "peak_positive_m_s2",
+                "crank_angle_deg",
+            ] {
                 let (x, y) = (p[key].as_f64().unwrap(), q[key].as_f64().unwrap());
-                assert!(close(x, y), "cylinder {cyl} point {}: {key} {x} vs baseline {y}", p["point"]);
+                assert!(
+                    close(x, y),
+                    "cylinder {cyl} point {}: {key} {x} vs baseline {y}",
+                    p["point"]
+                );
             }
         }
     }

@@ -20,7 +20,10 @@ const SMALL: &str = "tests/fixtures/engine_small.toml";
 fn undamped_newmark_conserves_energy() {
     // Average acceleration on eta'' + omega^2 eta = 0 conserves 1/2 (eta'^2 + omega^2 eta^2)
     // exactly; over 10^4 steps only roundoff (~1e-13) may accumulate.
-    let omega = [2.0 * std::f64::consts::PI * 1850.0, 2.0 * std::f64::consts::PI * 7000.0];
+    let omega = [
+        2.0 * std::f64::consts::PI * 1850.0,
+        2.0 * std::f64::consts::PI * 7000.0,
+    ];
     let mut m = ModalIntegrator::new(&omega, &[0.0, 0.0], Scheme::average_acceleration());
     m.eta = vec![1e-6, 2e-7];
     m.ddeta = vec![-omega[0].powi(2) * 1e-6, -omega[1].powi(2) * 2e-7];
@@ -71,7 +74,9 @@ fn newmark_period_error_matches_formula() {
         let period = (crossings[400] - crossings[0]) / 200.0;
         let measured = period * f - 1.0;
         let formula = Scheme::average_acceleration_period_error(omega * dt);
-        println!("{steps_per_period} steps/period: period error {measured:.6e}, formula {formula:.6e}");
+        println!(
+            "{steps_per_period} steps/period: period error {measured:.6e}, formula {formula:.6e}"
+        );
         assert!((measured - formula).abs() < 1e-5, "{measured} vs {formula}");
     }
 }
@@ -179,7 +184,10 @@ fn small_rom() -> &'static EngineRom {
     })
 }
 
-fn simulate(sets: &[&str], tweak: impl Fn(&mut CycleSettings)) -> Result<linercav::transient::cycle::CycleResult, String> {
+fn simulate(
+    sets: &[&str],
+    tweak: impl Fn(&mut CycleSettings),
+) -> Result<linercav::transient::cycle::CycleResult, String> {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
     let scene = Scene::load(Path::new(SMALL), &sets).map_err(|e| e.to_string())?;
     let piston = piston_of(&scene).map_err(|e| e.to_string())?;
@@ -214,12 +222,20 @@ fn per_cylinder_coupling_matches_the_monolithic_step() {
         s.coupling = linercav::transient::cycle::Coupling::Monolithic
     })
     .unwrap();
-    println!("coupling lag {:.3e} m, max penetration {:.3e} m", fast.stats.coupling_lag_m, fast.stats.max_penetration_m);
+    println!(
+        "coupling lag {:.3e} m, max penetration {:.3e} m",
+        fast.stats.coupling_lag_m, fast.stats.max_penetration_m
+    );
     assert!(fast.stats.coupling_lag_m < 0.01 * fast.stats.max_penetration_m);
     for (a, b) in fast.peaks.iter().zip(&exact.peaks) {
         for (x, y) in a.peak_negative.iter().zip(&b.peak_negative) {
             println!("{} vs {}", x.value, y.value);
-            assert!((x.value - y.value).abs() < 0.02 * y.value, "{} vs {}", x.value, y.value);
+            assert!(
+                (x.value - y.value).abs() < 0.02 * y.value,
+                "{} vs {}",
+                x.value,
+                y.value
+            );
         }
     }
 }
@@ -231,16 +247,25 @@ fn hard_cases_run_stably_or_stop_clearly() {
     assert!(r.stats.energy_error.abs() < 1e-9);
     // zero cold clearance: the hot skirt is pressed into the bore (a preloaded contact within
     // the penetration limit): runs
-    let zero = simulate(&["piston.clearance_um=0"], |_| {}).map_err(|e| e).expect("zero clearance runs");
+    let zero = simulate(&["piston.clearance_um=0"], |_| {}).expect("zero clearance runs");
     assert!(zero.stats.energy_error.abs() < 1e-9);
     // a hot interference beyond the penetration limit is refused before running
-    let e = simulate(&["piston.clearance_um=0", "piston.thermal.skirt_top_temp_c=300"], |_| {})
-        .err()
-        .expect("refused");
+    let Err(e) = simulate(
+        &[
+            "piston.clearance_um=0",
+            "piston.thermal.skirt_top_temp_c=300",
+        ],
+        |_| {},
+    ) else {
+        panic!("refused")
+    };
     assert!(e.contains("clearance_um") && e.contains("seize"), "{e}");
     // 200 um: runs, slaps harder than at 80 um
     let wide = simulate(&["piston.clearance_um=200"], |_| {}).unwrap();
-    assert!(wide.peaks.iter().all(|c| c.peak_negative.iter().all(|p| p.value.is_finite())));
+    assert!(wide
+        .peaks
+        .iter()
+        .all(|c| c.peak_negative.iter().all(|p| p.value.is_finite())));
     // 3000 rpm
     let fast = simulate(&["engine.speed_rpm=3000"], |_| {}).unwrap();
     assert!(fast.stats.energy_error.abs() < 1e-9);
@@ -250,34 +275,48 @@ fn hard_cases_run_stably_or_stop_clearly() {
         Err(e) => assert!(e.contains("crank angle"), "{e}"),
     }
     // soft contact overloaded: deep penetration named with cylinder, side and crank angle
-    let e = simulate(&["piston.contact_stiffness_n_per_m=1e6"], |s| s.adaptive = false)
-        .err()
-        .expect("deep penetration stops the run");
-    assert!(e.contains("deep penetration") && e.contains("cylinder") && e.contains("crank angle"), "{e}");
+    let Err(e) = simulate(&["piston.contact_stiffness_n_per_m=1e6"], |s| {
+        s.adaptive = false
+    }) else {
+        panic!("deep penetration stops the run")
+    };
+    assert!(
+        e.contains("deep penetration") && e.contains("cylinder") && e.contains("crank angle"),
+        "{e}"
+    );
 }
 
 #[test]
 fn unstable_scheme_is_caught_as_energy_growth() {
     // gamma < 1/2 gives Newmark negative numerical damping: energy grows until the balance
     // check stops the run, naming the crank angle.
-    let e = simulate(&["transient.damping_ratio=0"], |s| {
+    let Err(e) = simulate(&["transient.damping_ratio=0"], |s| {
         s.scheme = Scheme {
             beta: 0.25,
             gamma: 0.3,
             alpha: 0.0,
         };
-    })
-    .err()
-    .expect("energy growth stops the run");
-    assert!(e.contains("energy growth") && e.contains("crank angle"), "{e}");
+    }) else {
+        panic!("energy growth stops the run")
+    };
+    assert!(
+        e.contains("energy growth") && e.contains("crank angle"),
+        "{e}"
+    );
 }
 
 #[test]
 fn pressure_file_with_nan_is_refused_with_its_line() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("p.csv");
-    std::fs::write(&csv, "crank_angle_deg,pressure_bar\n0,1.0\n360,150\n361,nan\n").unwrap();
+    std::fs::write(
+        &csv,
+        "crank_angle_deg,pressure_bar\n0,1.0\n360,150\n361,nan\n",
+    )
+    .unwrap();
     let set = format!("operating.pressure_file={:?}", csv.display().to_string());
-    let e = simulate(&[set.as_str()], |_| {}).err().expect("refused");
+    let Err(e) = simulate(&[set.as_str()], |_| {}) else {
+        panic!("refused")
+    };
     assert!(e.contains("line 4") && e.contains("not finite"), "{e}");
 }

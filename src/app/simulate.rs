@@ -187,7 +187,11 @@ impl SimulateReport {
     pub fn to_text(&self) -> String {
         let mut s = format!(
             "{} at {:.0} rpm: peak pressure {:.1} bar at {:.1} deg, hot clearance {:.1} um\n",
-            self.scene, self.speed_rpm, self.peak_pressure_bar, self.peak_pressure_deg, self.hot_clearance_um
+            self.scene,
+            self.speed_rpm,
+            self.peak_pressure_bar,
+            self.peak_pressure_deg,
+            self.hot_clearance_um
         );
         s += "cyl  point  peak neg [m/s^2] @deg   peak pos [m/s^2] @deg\n";
         for c in &self.cylinders {
@@ -219,7 +223,10 @@ impl SimulateReport {
             "solver: {} steps (dt {:.2} us), {} Newton iterations (max {} per step), {} rejected, {} modes, energy balance {:.1e}, max penetration {:.2} um, last-cycle change {:.1e}, coupling lag {:.3} um\n",
             st.steps, st.dt_s * 1e6, st.newton_iterations, st.max_newton_per_step, st.rejected_steps, st.modes, st.energy_error, st.max_penetration_m * 1e6, st.cycle_change, st.coupling_lag_m * 1e6
         );
-        s += &format!("ROM cache: {}; {:.2} s (transient {:.3} s)\n", self.cache, self.seconds, self.transient_seconds);
+        s += &format!(
+            "ROM cache: {}; {:.2} s (transient {:.3} s)\n",
+            self.cache, self.seconds, self.transient_seconds
+        );
         if let Some(f) = &self.time_series_csv {
             s += &format!("time series: {f}\n");
         }
@@ -245,7 +252,13 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     let loaded = get_rom(&scene, &req.cache)?;
     progress.phase("transient");
     let t = Instant::now();
-    let res = run_cycle(&scene, &loaded.rom, &piston, settings_of(sim, scene.rom.band_hz), Some(&progress))?;
+    let res = run_cycle(
+        &scene,
+        &loaded.rom,
+        &piston,
+        settings_of(sim, scene.rom.band_hz),
+        Some(&progress),
+    )?;
     let transient_seconds = t.elapsed().as_secs_f64();
     let (pp, pdeg) = piston.pressure.peak();
     let mut report = SimulateReport {
@@ -262,11 +275,9 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         time_series_csv: None,
     };
     if let Some(dir) = &req.out {
-        std::fs::create_dir_all(dir).map_err(|source| {
-            crate::report::atomic::WriteError {
-                path: dir.clone(),
-                source,
-            }
+        std::fs::create_dir_all(dir).map_err(|source| crate::report::atomic::WriteError {
+            path: dir.clone(),
+            source,
         })?;
         let path = dir.join("time_series.csv");
         write_series(&path, &res)?;

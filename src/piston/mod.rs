@@ -75,10 +75,7 @@ impl Piston {
     /// The 2 x 2 mass matrix of (y, phi), row-major.
     pub fn mass_matrix(&self) -> [[f64; 2]; 2] {
         let ma = self.mass * self.cg_above_pin;
-        [
-            [self.mass + self.pin_mass, ma],
-            [ma, self.tilt_inertia],
-        ]
+        [[self.mass + self.pin_mass, ma], [ma, self.tilt_inertia]]
     }
 
     /// Loads at the cylinder's own crank angle `deg` (firing TDC at 360).

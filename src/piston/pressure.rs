@@ -84,7 +84,10 @@ impl PressureCurve {
             line,
             msg,
         };
-        let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty());
         let (hl, header) = lines.next().ok_or_else(|| PressureError::Table {
             path: path.into(),
             msg: "is empty; expected the header 'crank_angle_deg,pressure_bar'".into(),
@@ -102,7 +105,9 @@ impl PressureCurve {
         for (i, l) in lines {
             let f: Vec<&str> = l.split(',').map(str::trim).collect();
             let get = |k: usize, name: &str| -> Result<f64, PressureError> {
-                let s = f.get(k).ok_or_else(|| line_err(i + 1, format!("missing column '{name}'")))?;
+                let s = f
+                    .get(k)
+                    .ok_or_else(|| line_err(i + 1, format!("missing column '{name}'")))?;
                 let v: f64 = s
                     .parse()
                     .map_err(|_| line_err(i + 1, format!("'{name}' is not a number: '{s}'")))?;
@@ -114,13 +119,22 @@ impl PressureCurve {
             let a = get(ia, "crank_angle_deg")?;
             let p = get(ip, "pressure_bar")?;
             if !(0.0..=720.0).contains(&a) {
-                return Err(line_err(i + 1, format!("crank angle {a} deg outside [0, 720]")));
+                return Err(line_err(
+                    i + 1,
+                    format!("crank angle {a} deg outside [0, 720]"),
+                ));
             }
             if angles_deg.last().is_some_and(|&last| a <= last) {
-                return Err(line_err(i + 1, format!("crank angle {a} deg does not increase")));
+                return Err(line_err(
+                    i + 1,
+                    format!("crank angle {a} deg does not increase"),
+                ));
             }
             if p <= 0.0 {
-                return Err(line_err(i + 1, format!("pressure {p} bar must be positive (absolute)")));
+                return Err(line_err(
+                    i + 1,
+                    format!("pressure {p} bar must be positive (absolute)"),
+                ));
             }
             angles_deg.push(a);
             pa.push(p * 1e5);
@@ -265,7 +279,11 @@ mod tests {
         let area = std::f64::consts::PI * 0.115f64.powi(2) / 4.0;
         let c = PressureCurve::wiebe(&wiebe(1.0, 0.0), &k, area);
         let expect = 2.6e5 * 17f64.powf(1.35);
-        assert!((c.at(360.0) / expect - 1.0).abs() < 1e-6, "{} vs {expect}", c.at(360.0));
+        assert!(
+            (c.at(360.0) / expect - 1.0).abs() < 1e-6,
+            "{} vs {expect}",
+            c.at(360.0)
+        );
         // symmetric about TDC on the closed part
         assert!((c.at(300.0) / c.at(420.0) - 1.0).abs() < 1e-6);
     }
@@ -273,8 +291,8 @@ mod tests {
     #[test]
     fn csv_table_interpolates_periodically_and_names_bad_lines() {
         let p = Path::new("p.csv");
-        let c = PressureCurve::parse(p, "crank_angle_deg,pressure_bar\n0,1\n360,101\n540,3\n")
-            .unwrap();
+        let c =
+            PressureCurve::parse(p, "crank_angle_deg,pressure_bar\n0,1\n360,101\n540,3\n").unwrap();
         assert!((c.at(180.0) - 51e5).abs() < 1e-6);
         assert!((c.at(630.0) - 2e5).abs() < 1e-6); // 540 -> 720(=0): 3 -> 1 bar
         assert!((c.at(1080.0) - 101e5).abs() < 1e-6);
@@ -285,8 +303,13 @@ mod tests {
         let e = PressureCurve::parse(p, "crank_angle_deg,pressure_bar\n10,1\n5,2\n")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("line 3") && e.contains("does not increase"), "{e}");
-        let e = PressureCurve::parse(p, "angle,p\n0,1\n").unwrap_err().to_string();
+        assert!(
+            e.contains("line 3") && e.contains("does not increase"),
+            "{e}"
+        );
+        let e = PressureCurve::parse(p, "angle,p\n0,1\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("line 1"), "{e}");
     }
 }

@@ -185,7 +185,11 @@ mod tests {
         assert_eq!(law.force(-1e-6), 0.0);
         // with a gap or ovality only the thrust line engages first: F = k w_0 p, w_0 = 1/sum c^2
         let oval = SliceLaw::new(1e8, 0.0, 40e-6);
-        let w0 = 1.0 / PSI_DEG.iter().map(|d| d.to_radians().cos().powi(2)).sum::<f64>();
+        let w0 = 1.0
+            / PSI_DEG
+                .iter()
+                .map(|d| d.to_radians().cos().powi(2))
+                .sum::<f64>();
         assert!((oval.force(1e-7) - 1e8 * w0 * 1e-7).abs() < 1e-9);
         // convex: the tangent grows with p
         assert!(oval.piece(5e-5).kt > oval.piece(1e-6).kt);

@@ -511,7 +511,8 @@ fn validate_simulation(
     let compression_height = c.mm("piston.compression_height_mm", p.compression_height_mm)?;
     let skirt_length = c.mm("piston.skirt_length_mm", p.skirt_length_mm)?;
     let top_above_pin = finite("piston.pin_below_skirt_top_mm", p.pin_below_skirt_top_mm)? * 1e-3;
-    if top_above_pin >= compression_height || top_above_pin <= 0.0 || top_above_pin >= skirt_length {
+    if top_above_pin >= compression_height || top_above_pin <= 0.0 || top_above_pin >= skirt_length
+    {
         return Err(c.err(
             "piston.pin_below_skirt_top_mm",
             "the pin must lie within the skirt, and the skirt top below the crown",
@@ -525,14 +526,20 @@ fn validate_simulation(
         ));
     }
     if p.slices < 10 {
-        return Err(c.err("piston.slices", format!("must be at least 10, got {}", p.slices)));
+        return Err(c.err(
+            "piston.slices",
+            format!("must be at least 10, got {}", p.slices),
+        ));
     }
     let th = &p.thermal;
     let temp = |key: &str, v: f64| -> Result<f64, SceneError> {
         if v.is_finite() && (-50.0..=400.0).contains(&v) {
             Ok(v)
         } else {
-            Err(c.err(key, format!("must be a temperature in [-50, 400] deg C, got {v}")))
+            Err(c.err(
+                key,
+                format!("must be a temperature in [-50, 400] deg C, got {v}"),
+            ))
         }
     };
     let expansion = |key: &str, v: f64| -> Result<f64, SceneError> {
@@ -549,15 +556,25 @@ fn validate_simulation(
         slices: p.slices,
         clearance: nonneg("piston.clearance_um", p.clearance_um)? * 1e-6,
         barrel: nonneg("piston.barrel_um", p.barrel_um)? * 1e-6,
-        barrel_max_below_pin: finite("piston.barrel_max_below_pin_mm", p.barrel_max_below_pin_mm)? * 1e-3,
+        barrel_max_below_pin: finite("piston.barrel_max_below_pin_mm", p.barrel_max_below_pin_mm)?
+            * 1e-3,
         ovality: nonneg("piston.ovality_um", p.ovality_um)? * 1e-6,
-        piston_expansion: expansion("piston.thermal.piston_expansion_per_k", th.piston_expansion_per_k)?,
+        piston_expansion: expansion(
+            "piston.thermal.piston_expansion_per_k",
+            th.piston_expansion_per_k,
+        )?,
         skirt_top_temp_c: temp("piston.thermal.skirt_top_temp_c", th.skirt_top_temp_c)?,
         skirt_bottom_temp_c: temp("piston.thermal.skirt_bottom_temp_c", th.skirt_bottom_temp_c)?,
-        liner_expansion: expansion("piston.thermal.liner_expansion_per_k", th.liner_expansion_per_k)?,
+        liner_expansion: expansion(
+            "piston.thermal.liner_expansion_per_k",
+            th.liner_expansion_per_k,
+        )?,
         liner_temp_c: temp("piston.thermal.liner_temp_c", th.liner_temp_c)?,
         reference_temp_c: temp("piston.thermal.reference_temp_c", th.reference_temp_c)?,
-        stiffness: c.positive("piston.contact_stiffness_n_per_m", p.contact_stiffness_n_per_m)?,
+        stiffness: c.positive(
+            "piston.contact_stiffness_n_per_m",
+            p.contact_stiffness_n_per_m,
+        )?,
     };
     let piston = PistonSpec {
         mass,
@@ -570,22 +587,34 @@ fn validate_simulation(
         compression_height,
         crown_depth_at_tdc: crown_depth,
         skirt,
-        contact_damping: nonneg("piston.contact_damping_n_s_per_m", p.contact_damping_n_s_per_m)?,
+        contact_damping: nonneg(
+            "piston.contact_damping_n_s_per_m",
+            p.contact_damping_n_s_per_m,
+        )?,
         friction: nonneg("piston.friction", p.friction)?,
     };
     let offset = (piston.pin_offset - piston.crank_offset).abs();
     if offset + engine.stroke / 2.0 >= engine.rod_length {
-        return Err(c.err("piston.pin_offset_mm", "the offset is too large for the rod"));
+        return Err(c.err(
+            "piston.pin_offset_mm",
+            "the offset is too large for the rod",
+        ));
     }
     if !(o.load.is_finite() && (0.0..=1.0).contains(&o.load)) {
-        return Err(c.err("operating.load", format!("must be in [0, 1], got {}", o.load)));
+        return Err(c.err(
+            "operating.load",
+            format!("must be in [0, 1], got {}", o.load),
+        ));
     }
     let cb = &o.combustion;
     if !(cb.compression_ratio.is_finite() && cb.compression_ratio > 1.0) {
         return Err(c.err("operating.combustion.compression_ratio", "must exceed 1"));
     }
     if !(cb.intake_bar.is_finite() && cb.intake_bar >= 1.0) {
-        return Err(c.err("operating.combustion.intake_bar", "must be at least 1 bar (absolute)"));
+        return Err(c.err(
+            "operating.combustion.intake_bar",
+            "must be at least 1 bar (absolute)",
+        ));
     }
     if !(cb.polytropic > 1.0 && cb.polytropic < 1.67) {
         return Err(c.err("operating.combustion.polytropic", "must lie in (1, 1.67)"));
@@ -594,12 +623,18 @@ fn validate_simulation(
         return Err(c.err("operating.combustion.evo_deg", "must lie in (450, 700) deg"));
     }
     if !(cb.start_deg > 180.0 && cb.start_deg < cb.evo_deg) {
-        return Err(c.err("operating.combustion.start_deg", "must lie between 180 deg and evo_deg"));
+        return Err(c.err(
+            "operating.combustion.start_deg",
+            "must lie between 180 deg and evo_deg",
+        ));
     }
     let wiebe = crate::piston::pressure::Wiebe {
         compression_ratio: cb.compression_ratio,
         intake_pa: cb.intake_bar * 1e5,
-        exhaust_over_intake_pa: nonneg("operating.combustion.exhaust_over_intake_bar", cb.exhaust_over_intake_bar)? * 1e5,
+        exhaust_over_intake_pa: nonneg(
+            "operating.combustion.exhaust_over_intake_bar",
+            cb.exhaust_over_intake_bar,
+        )? * 1e5,
         start_deg: cb.start_deg,
         duration_deg: c.positive("operating.combustion.duration_deg", cb.duration_deg)?,
         a: c.positive("operating.combustion.wiebe_a", cb.wiebe_a)?,
@@ -615,7 +650,8 @@ fn validate_simulation(
             Some(f) => PressureSource::File(base.join(f)),
             None => PressureSource::Wiebe(wiebe),
         },
-        crankcase_pa: c.positive("operating.crankcase_pressure_bar", o.crankcase_pressure_bar)? * 1e5,
+        crankcase_pa: c.positive("operating.crankcase_pressure_bar", o.crankcase_pressure_bar)?
+            * 1e5,
     };
     let scheme = match t.scheme.as_str() {
         "newmark" => crate::transient::scheme::Scheme::average_acceleration(),

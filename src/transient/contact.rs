@@ -297,4 +297,3 @@ pub fn step(
         iterations: max_iterations,
     })
 }
-

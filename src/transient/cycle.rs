@@ -15,9 +15,9 @@
 //! average-acceleration rule; the accumulated difference is reported, and growth beyond a
 //! small fraction of the energy scale stops the run (a numerical instability).
 
-use super::contact::{self, Body, Location, Slice, StepFailure};
 #[allow(unused_imports)]
 use super::contact::Structure;
+use super::contact::{self, Body, Location, Slice, StepFailure};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
 use crate::piston::Piston;
@@ -400,7 +400,8 @@ impl<'a> EngineRun<'a> {
         self.structure.integrator.predict(dt);
         let piston = self.setup.piston;
         let skirt = &piston.skirt;
-        let mut slices: Vec<Slice<'_>> = Vec::with_capacity(self.cyls.len() * 2 * skirt.heights.len());
+        let mut slices: Vec<Slice<'_>> =
+            Vec::with_capacity(self.cyls.len() * 2 * skirt.heights.len());
         let mut meta: Vec<(usize, bool, usize, f64)> = Vec::new();
         let ns = skirt.heights.len();
         let pen_index = |b: usize, side: bool, i: usize| (2 * b + usize::from(!side)) * ns + i;
@@ -453,7 +454,8 @@ impl<'a> EngineRun<'a> {
                     iterations: 0,
                 };
                 for b in 0..bodies.len() {
-                    let idx: Vec<usize> = (0..slices.len()).filter(|&k| slices[k].body == b).collect();
+                    let idx: Vec<usize> =
+                        (0..slices.len()).filter(|&k| slices[k].body == b).collect();
                     let sub: Vec<Slice<'_>> = idx
                         .iter()
                         .map(|&k| {
@@ -620,7 +622,10 @@ impl<'a> EngineRun<'a> {
     }
 
     /// Runs `settings.cycles` cycles and returns the peaks and series of the last one.
-    pub fn run(mut self, mut on_step: impl FnMut(usize, usize)) -> Result<CycleResult, TransientError> {
+    pub fn run(
+        mut self,
+        mut on_step: impl FnMut(usize, usize),
+    ) -> Result<CycleResult, TransientError> {
         let steps_per_cycle = (720.0 / self.settings.step_deg).round() as usize;
         let dt = self.base_dt();
         self.stats.dt_s = dt;
@@ -638,7 +643,10 @@ impl<'a> EngineRun<'a> {
                     .iter()
                     .map(|c| CylinderSeries {
                         cylinder: c.rom.cylinder,
-                        acceleration: vec![Vec::with_capacity(steps_per_cycle); c.rom.point_modes.rows],
+                        acceleration: vec![
+                            Vec::with_capacity(steps_per_cycle);
+                            c.rom.point_modes.rows
+                        ],
                         crankcase_acceleration: vec![
                             Vec::with_capacity(steps_per_cycle);
                             c.rom.crankcase_point_modes.rows

@@ -131,7 +131,9 @@ impl ModalStructure {
         let n = self.integrator.len();
         let mut row = vec![0.0; n];
         self.row_into(at, &mut row);
-        let pre: f64 = (0..2).map(|i| at.weights[i] * self.preload[at.dofs[i]]).sum();
+        let pre: f64 = (0..2)
+            .map(|i| at.weights[i] * self.preload[at.dofs[i]])
+            .sum();
         pre + dot4(&row, &self.integrator.eta)
     }
 }
@@ -161,7 +163,8 @@ impl Structure for ModalStructure {
         let at = &self.locs[i];
         let it = &self.integrator;
         let phi = self.phi_of(i);
-        let pre = at.weights[0] * self.preload[at.dofs[0]] + at.weights[1] * self.preload[at.dofs[1]];
+        let pre =
+            at.weights[0] * self.preload[at.dofs[0]] + at.weights[1] * self.preload[at.dofs[1]];
         (pre + dot4(phi, &it.pred), dot4(phi, &it.dpred))
     }
 
