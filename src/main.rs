@@ -228,14 +228,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                     &cache.options(),
                     started,
                 )?;
-                if json {
-                    println!(
-                        "{}",
-                        serde_json::to_string_pretty(&report).expect("serialisable")
-                    );
-                } else {
-                    print!("{}", report.to_text());
-                }
+                print_report(json, &report, || report.to_text());
                 return Ok(());
             }
             let req = modes::ModesRequest {
@@ -250,14 +243,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 shift_hz,
             };
             let report = modes::run(&req, started)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&report).expect("serialisable")
-                );
-            } else {
-                print!("{}", report.to_text());
-            }
+            print_report(json, &report, || report.to_text());
         }
         Command::ExportMatrices { model, out } => {
             let r = export::export_matrices(&model.input()?, &model.fix, &out)?;
@@ -289,14 +275,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             let loaded = rom::get_rom(&sc, &cache.options())?;
             let mut report = rom::RomReport::new(&loaded);
             report.seconds = started.elapsed().as_secs_f64();
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&report).expect("serialisable")
-                );
-            } else {
-                print!("{}", report.to_text());
-            }
+            print_report(json, &report, || report.to_text());
         }
         Command::Shapes {
             scene,
@@ -311,14 +290,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 cylinders: loaded.rom.cylinders.iter().map(|c| c.cylinder).collect(),
                 cache: loaded.cache,
             };
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&report).expect("serialisable")
-                );
-            } else {
-                print!("{}", report.to_text());
-            }
+            print_report(json, &report, || report.to_text());
         }
         Command::Simulate {
             scene,
@@ -334,14 +306,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 cache: cache.options(),
             };
             let report = simulate::run(&req, started)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&report).expect("serialisable")
-                );
-            } else {
-                print!("{}", report.to_text());
-            }
+            print_report(json, &report, || report.to_text());
         }
         Command::ExportMesh { model, out } => {
             let n = export::export_mesh(&model.input()?, &out)?;
@@ -349,6 +314,18 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
         }
     }
     Ok(())
+}
+
+/// Prints a report as JSON (`--json`) or as text.
+fn print_report<T: serde::Serialize>(json: bool, report: &T, text: impl FnOnce() -> String) {
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(report).expect("serialisable")
+        );
+    } else {
+        print!("{}", text());
+    }
 }
 
 fn main() {
