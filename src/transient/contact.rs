@@ -163,9 +163,6 @@ pub fn step(
         let na = active.len();
         // compliance of the active set (reused while the set is unchanged)
         if g_cache.as_ref().is_none_or(|(a, _, _)| *a != active) {
-            if std::env::var_os("LINERCAV_DEBUG_SIZES").is_some() {
-                eprintln!("compliance {} of {}", active.len(), slices.len());
-            }
             let (g, gv) = structure.compliance(&active);
             g_cache = Some((active.clone(), g, gv));
         }
@@ -264,13 +261,6 @@ pub fn step(
             }
         } else if let Some((i, _)) = worst {
             pieces[i].0 = slices[i].law.piece(pen[i]).mask;
-        }
-        if std::env::var_os("LINERCAV_DEBUG_CONTACT").is_some() {
-            let act: Vec<(usize, u8, f64)> = (0..slices.len())
-                .filter(|&i| pieces[i].0 != 0 || pen[i] > -1e-6)
-                .map(|i| (i, pieces[i].0, pen[i] * 1e6))
-                .collect();
-            eprintln!("it {it}: q {:?} active {:?}", q.as_slice(), act);
         }
         if !changed {
             let mut out = Vec::with_capacity(nb);

@@ -15,8 +15,6 @@
 //! average-acceleration rule; the accumulated difference is reported, and growth beyond a
 //! small fraction of the energy scale stops the run (a numerical instability).
 
-#[allow(unused_imports)]
-use super::contact::Structure;
 use super::contact::{self, Body, Location, Slice, StepFailure};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
