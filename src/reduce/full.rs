@@ -13,7 +13,8 @@
 //! DOFs next to their interface); it is ordered part by part (METIS on each part's interior
 //! node graph) with q last, factorised once and solved by the certified ARPACK driver.
 
-use super::rom::RomBuild;
+use super::craig_bampton::Load;
+use super::rom::{RomBuild, RomInputs};
 use crate::app::rom::{load_meshes, rom_inputs};
 use crate::error::{Error, Result};
 use crate::fem::assembly::NodeGraph;
@@ -147,98 +148,127 @@ fn prepare(
     })
 }
 
-/// Builds and solves the full coupled model of a scene for `count` modes.
-pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullModes> {
-    let (lm, cm) = load_meshes(scene)?;
-    let inp = rom_inputs(scene, &lm, &cm, false);
-    let (liner_blocks, cc_blocks) = super::rom::interface_blocks(&inp).map_err(Error::from)?;
-    let liner = prepare(&lm, &inp.liner_material, &[], &liner_blocks)?;
-    let cc = prepare(&cm, &inp.crankcase_material, &inp.crankcase_fix, &cc_blocks)?;
-    // instances: liners then crankcase
-    let ncyl = inp.axis_x.len();
-    let cc_cols: Vec<std::ops::Range<usize>> = {
-        let mut v = Vec::new();
-        let mut c0 = 0;
-        for b in &cc_blocks {
-            v.push(c0..c0 + b.psi.ncols());
-            c0 += b.psi.ncols();
-        }
-        v
-    };
-    let liner_cols: Vec<std::ops::Range<usize>> = {
-        let mut v = Vec::new();
-        let mut c0 = 0;
-        for b in &liner_blocks {
-            v.push(c0..c0 + b.psi.ncols());
-            c0 += b.psi.ncols();
-        }
-        v
-    };
-    let _ = ncyl;
-    let nl = inp.cylinders.len();
-    let n_int_total = nl * liner.n_int + cc.n_int;
-    let mut nq_total = cc.nq;
-    let mut qmaps: Vec<Vec<usize>> = Vec::new();
-    for &cyl in &inp.cylinders {
-        let c = cyl - 1;
-        let mut map = vec![usize::MAX; liner.nq];
-        for (lb, cb) in [(0usize, 3 * c), (1, 3 * c + 1)] {
-            for (lj, gj) in liner_cols[lb].clone().zip(cc_cols[cb].clone()) {
-                map[lj] = gj;
+/// The assembled full-order coupled engine model (see the module docs), ordered and analysed.
+pub struct FullSystem {
+    pub km: StiffnessMass,
+    pub analysis: Analysis,
+    /// Modelled cylinders (1-based); liner instance i is cylinder `cylinders[i]`.
+    pub cylinders: Vec<usize>,
+    liner: PartData,
+    crankcase: PartData,
+    /// First unknown of each instance's interior (liners, then the crankcase).
+    offsets: Vec<usize>,
+    n_int_total: usize,
+    /// Per instance: the part's interface column -> global interface coordinate.
+    qmaps: Vec<Vec<usize>>,
+}
+
+impl FullSystem {
+    /// Assembles the full coupled model of the scene's meshes (the same interface fields as
+    /// the ROM) and analyses its pattern.
+    pub fn build(inp: &RomInputs<'_>) -> Result<Self> {
+        let (liner_blocks, cc_blocks) = super::rom::interface_blocks(inp).map_err(Error::from)?;
+        let liner = prepare(inp.liner, &inp.liner_material, &[], &liner_blocks)?;
+        let cc = prepare(
+            inp.crankcase,
+            &inp.crankcase_material,
+            &inp.crankcase_fix,
+            &cc_blocks,
+        )?;
+        let cols = |blocks: &[super::craig_bampton::InterfaceBlock]| {
+            let mut v = Vec::new();
+            let mut c0 = 0;
+            for b in blocks {
+                v.push(c0..c0 + b.psi.ncols());
+                c0 += b.psi.ncols();
             }
-        }
-        for slot in map.iter_mut() {
-            if *slot == usize::MAX {
-                *slot = nq_total;
-                nq_total += 1;
-            }
-        }
-        qmaps.push(map);
-    }
-    qmaps.push((0..cc.nq).collect());
-    let n = n_int_total + nq_total;
-    let offsets: Vec<usize> = (0..=nl).map(|i| i * liner.n_int).collect();
-    let parts: Vec<&PartData> = (0..nl)
-        .map(|_| &liner)
-        .chain(std::iter::once(&cc))
-        .collect();
-    // columns
-    let mut col_ptr = vec![0usize; n + 1];
-    let mut row_idx: Vec<usize> = Vec::new();
-    let mut kv: Vec<f64> = Vec::new();
-    let mut mv: Vec<f64> = Vec::new();
-    let mut qcols: Vec<BTreeMap<usize, (f64, f64)>> = vec![BTreeMap::new(); nq_total];
-    let mut col = 0;
-    for (inst, part) in parts.iter().enumerate() {
-        let off = offsets[inst];
-        let qmap = &qmaps[inst];
-        let p = &part.model.km.pattern;
-        let mut b_to_a = vec![0; part.n_int];
-        for (a, &b) in part.a_to_b.iter().enumerate() {
-            if b != FIXED {
-                b_to_a[b] = a;
-            }
-        }
-        for (b, &a) in b_to_a.iter().enumerate() {
-            debug_assert_eq!(col, off + b);
-            let mut entries: Vec<(usize, f64, f64)> = Vec::new();
-            for q in p.col_ptr[a]..p.col_ptr[a + 1] {
-                let r = part.a_to_b[p.row_idx[q]];
-                if r != FIXED {
-                    entries.push((off + r, part.model.km.k[q], part.model.km.m[q]));
+            v
+        };
+        let cc_cols = cols(&cc_blocks);
+        let liner_cols = cols(&liner_blocks);
+        let nl = inp.cylinders.len();
+        let n_int_total = nl * liner.n_int + cc.n_int;
+        let mut nq_total = cc.nq;
+        let mut qmaps: Vec<Vec<usize>> = Vec::new();
+        for &cyl in &inp.cylinders {
+            let c = cyl - 1;
+            let mut map = vec![usize::MAX; liner.nq];
+            for (lb, cb) in [(0usize, 3 * c), (1, 3 * c + 1)] {
+                for (lj, gj) in liner_cols[lb].clone().zip(cc_cols[cb].clone()) {
+                    map[lj] = gj;
                 }
             }
-            if let Some((kr, mr)) = part.kg.get(&a) {
+            for slot in map.iter_mut() {
+                if *slot == usize::MAX {
+                    *slot = nq_total;
+                    nq_total += 1;
+                }
+            }
+            qmaps.push(map);
+        }
+        qmaps.push((0..cc.nq).collect());
+        let n = n_int_total + nq_total;
+        let offsets: Vec<usize> = (0..=nl).map(|i| i * liner.n_int).collect();
+        let parts: Vec<&PartData> = (0..nl)
+            .map(|_| &liner)
+            .chain(std::iter::once(&cc))
+            .collect();
+        // columns
+        let mut col_ptr = vec![0usize; n + 1];
+        let mut row_idx: Vec<usize> = Vec::new();
+        let mut kv: Vec<f64> = Vec::new();
+        let mut mv: Vec<f64> = Vec::new();
+        let mut qcols: Vec<BTreeMap<usize, (f64, f64)>> = vec![BTreeMap::new(); nq_total];
+        let mut col = 0;
+        for (inst, part) in parts.iter().enumerate() {
+            let off = offsets[inst];
+            let qmap = &qmaps[inst];
+            let p = &part.model.km.pattern;
+            let mut b_to_a = vec![0; part.n_int];
+            for (a, &b) in part.a_to_b.iter().enumerate() {
+                if b != FIXED {
+                    b_to_a[b] = a;
+                }
+            }
+            for (b, &a) in b_to_a.iter().enumerate() {
+                debug_assert_eq!(col, off + b);
+                let mut entries: Vec<(usize, f64, f64)> = Vec::new();
+                for q in p.col_ptr[a]..p.col_ptr[a + 1] {
+                    let r = part.a_to_b[p.row_idx[q]];
+                    if r != FIXED {
+                        entries.push((off + r, part.model.km.k[q], part.model.km.m[q]));
+                    }
+                }
+                if let Some((kr, mr)) = part.kg.get(&a) {
+                    for j in 0..part.nq {
+                        let gq = n_int_total + qmap[j];
+                        entries.push((gq, kr[j], mr[j]));
+                        let e = qcols[qmap[j]].entry(off + b).or_insert((0.0, 0.0));
+                        e.0 += kr[j];
+                        e.1 += mr[j];
+                    }
+                }
+                entries.sort_by_key(|e| e.0);
+                for (r, k, m) in entries {
+                    row_idx.push(r);
+                    kv.push(k);
+                    mv.push(m);
+                }
+                col += 1;
+                col_ptr[col] = row_idx.len();
+            }
+            for i in 0..part.nq {
                 for j in 0..part.nq {
-                    let gq = n_int_total + qmap[j];
-                    entries.push((gq, kr[j], mr[j]));
-                    let e = qcols[qmap[j]].entry(off + b).or_insert((0.0, 0.0));
-                    e.0 += kr[j];
-                    e.1 += mr[j];
+                    let e = qcols[qmap[j]]
+                        .entry(n_int_total + qmap[i])
+                        .or_insert((0.0, 0.0));
+                    e.0 += part.qq_k[i * part.nq + j];
+                    e.1 += part.qq_m[i * part.nq + j];
                 }
             }
-            entries.sort_by_key(|e| e.0);
-            for (r, k, m) in entries {
+        }
+        for qc in &qcols {
+            for (&r, &(k, m)) in qc {
                 row_idx.push(r);
                 kv.push(k);
                 mv.push(m);
@@ -246,90 +276,152 @@ pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullM
             col += 1;
             col_ptr[col] = row_idx.len();
         }
-        for i in 0..part.nq {
-            for j in 0..part.nq {
-                let e = qcols[qmap[j]]
-                    .entry(n_int_total + qmap[i])
-                    .or_insert((0.0, 0.0));
-                e.0 += part.qq_k[i * part.nq + j];
-                e.1 += part.qq_m[i * part.nq + j];
-            }
-        }
-    }
-    for qc in &qcols {
-        for (&r, &(k, m)) in qc {
-            row_idx.push(r);
-            kv.push(k);
-            mv.push(m);
-        }
-        col += 1;
-        col_ptr[col] = row_idx.len();
-    }
-    drop(qcols);
-    let pattern = Pattern {
-        n,
-        col_ptr,
-        row_idx,
-    };
-    let km = StiffnessMass {
-        pattern,
-        k: kv,
-        m: mv,
-    };
-    let mut fwd: Vec<usize> = Vec::with_capacity(n);
-    for (inst, part) in parts.iter().enumerate() {
-        fwd.extend(part.order.iter().map(|&b| offsets[inst] + b));
-    }
-    fwd.extend(n_int_total..n);
-    let mut inv = vec![0; n];
-    for (new, &old) in fwd.iter().enumerate() {
-        inv[old] = new;
-    }
-    let analysis =
-        Analysis::new(&km.pattern, &fwd, &inv).map_err(crate::fem::model::ModelError::from)?;
-    let sigma = scene.solver.sigma();
-    let (sol, _) = certified_modes(&km, &analysis, count, sigma, scene.solver.guard_modes)?;
-    // recover part shapes
-    let mut shapes = Vec::new();
-    for j in 0..sol.modes.count() {
-        let v = sol.modes.vector(j);
-        let mut per = Vec::new();
+        drop(qcols);
+        let pattern = Pattern {
+            n,
+            col_ptr,
+            row_idx,
+        };
+        let km = StiffnessMass {
+            pattern,
+            k: kv,
+            m: mv,
+        };
+        let mut fwd: Vec<usize> = Vec::with_capacity(n);
         for (inst, part) in parts.iter().enumerate() {
-            let na = part.model.n_free();
-            let mut u = vec![0.0; na];
-            for (a, &b) in part.a_to_b.iter().enumerate() {
-                if b != FIXED {
-                    u[a] = v[offsets[inst] + b];
+            fwd.extend(part.order.iter().map(|&b| offsets[inst] + b));
+        }
+        fwd.extend(n_int_total..n);
+        let mut inv = vec![0; n];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old] = new;
+        }
+        let analysis =
+            Analysis::new(&km.pattern, &fwd, &inv).map_err(crate::fem::model::ModelError::from)?;
+        Ok(Self {
+            km,
+            analysis,
+            cylinders: inp.cylinders.clone(),
+            liner,
+            crankcase: cc,
+            offsets,
+            n_int_total,
+            qmaps,
+        })
+    }
+
+    /// Unknowns of the coupled model.
+    pub fn dofs(&self) -> usize {
+        self.km.pattern.n
+    }
+
+    /// Part instances: one liner per modelled cylinder, then the crankcase.
+    pub fn instances(&self) -> usize {
+        self.cylinders.len() + 1
+    }
+
+    fn part(&self, inst: usize) -> &PartData {
+        if inst < self.cylinders.len() {
+            &self.liner
+        } else {
+            &self.crankcase
+        }
+    }
+
+    /// The displacement of `node` of instance `inst` along `dir` as a sparse row over the
+    /// unknowns: u . dir = sum_k row_k x_k (interior DOFs directly, interface DOFs through
+    /// their interface shapes G). Constrained DOFs contribute nothing.
+    pub fn node_row(&self, inst: usize, node: usize, dir: [f64; 3]) -> Vec<(usize, f64)> {
+        let part = self.part(inst);
+        let mut row = Vec::new();
+        for (i, &d) in dir.iter().enumerate() {
+            let a = part.model.dofs.dof[3 * node + i];
+            if a == FIXED || d == 0.0 {
+                continue;
+            }
+            let b = part.a_to_b[a];
+            if b != FIXED {
+                row.push((self.offsets[inst] + b, d));
+            } else if let Some(g) = part.g.get(&a) {
+                for &(c, v) in g {
+                    row.push((self.n_int_total + self.qmaps[inst][c], d * v));
                 }
             }
-            for (&a, row) in &part.g {
-                u[a] = row
-                    .iter()
-                    .map(|&(c, val)| val * v[n_int_total + qmaps[inst][c]])
-                    .sum();
-            }
-            per.push(u);
         }
-        shapes.push(per);
+        row
     }
+
+    /// Adds the generalised force of `load` (nodal forces on instance `inst`) to `f`:
+    /// f += T^T f_part, T the map from unknowns to the part's nodal displacements.
+    pub fn add_load(&self, inst: usize, load: &Load, f: &mut [f64]) {
+        for &(node, force) in &load.entries {
+            for (i, &fi) in force.iter().enumerate() {
+                let mut e = [0.0; 3];
+                e[i] = 1.0;
+                for (k, v) in self.node_row(inst, node, e) {
+                    f[k] += v * fi;
+                }
+            }
+        }
+    }
+
+    /// A solution vector split into each instance's free-DOF displacement (part numbering).
+    pub fn part_displacements(&self, v: &[f64]) -> Vec<Vec<f64>> {
+        (0..self.instances())
+            .map(|inst| {
+                let part = self.part(inst);
+                let mut u = vec![0.0; part.model.n_free()];
+                for (a, &b) in part.a_to_b.iter().enumerate() {
+                    if b != FIXED {
+                        u[a] = v[self.offsets[inst] + b];
+                    }
+                }
+                for (&a, row) in &part.g {
+                    u[a] = row
+                        .iter()
+                        .map(|&(c, val)| val * v[self.n_int_total + self.qmaps[inst][c]])
+                        .sum();
+                }
+                u
+            })
+            .collect()
+    }
+
+    /// Each instance's DOF map (for writing shapes on the meshes).
+    pub fn dof_maps(&self) -> Vec<&DofMap> {
+        (0..self.instances())
+            .map(|i| &self.part(i).model.dofs)
+            .collect()
+    }
+}
+
+/// Builds and solves the full coupled model of a scene for `count` modes.
+pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullModes> {
+    let (lm, cm) = load_meshes(scene)?;
+    let inp = rom_inputs(scene, &lm, &cm, false);
+    let sys = FullSystem::build(&inp)?;
+    let sigma = scene.solver.sigma();
+    let (sol, _) = certified_modes(&sys.km, &sys.analysis, count, sigma, scene.solver.guard_modes)?;
+    let shapes: Vec<Vec<Vec<f64>>> = (0..sol.modes.count())
+        .map(|j| sys.part_displacements(&sol.modes.vector(j)))
+        .collect();
     let out = FullModes {
         frequencies_hz: (0..sol.modes.count())
             .map(|j| sol.modes.frequency_hz(j))
             .collect(),
         residuals: sol.residuals.clone(),
         sturm_ok: sol.sturm.as_ref().map(|s| s.ok).unwrap_or(false),
-        dofs: n,
+        dofs: sys.dofs(),
         shapes,
     };
     if let Some(path) = vtu_path {
-        let parts_dofs: Vec<&DofMap> = parts.iter().map(|p| &p.model.dofs).collect();
         write_engine_vtu(
             path,
             &inp.cylinders,
             &inp.axis_x,
             &lm,
             &cm,
-            &parts_dofs,
+            &sys.dof_maps(),
             &out.shapes,
             &out.frequencies_hz,
         )?;

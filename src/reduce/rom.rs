@@ -138,7 +138,7 @@ impl RomError {
     }
 }
 
-fn set<'m>(mesh: &'m Mesh, part: &str, name: &str) -> Result<&'m [usize], RomError> {
+pub(crate) fn set<'m>(mesh: &'m Mesh, part: &str, name: &str) -> Result<&'m [usize], RomError> {
     match mesh.node_set(name) {
         Some(s) if !s.is_empty() => Ok(s),
         Some(_) => Err(RomError::Set {
@@ -323,6 +323,49 @@ pub fn interface_blocks(
     Ok((liner, cc))
 }
 
+/// The head-bolt preload as loads: the clamp force pressing each liner's flange top down
+/// (spread evenly over the `flange_top` nodes) and its reaction pulling the deck up around each
+/// bore (the `deck_top` nodes outside the flange within half a pitch of the bore axis, one load
+/// per cylinder; none when the crankcase mesh has no `deck_top` set).
+pub struct PreloadLoads {
+    pub liner: Load,
+    pub crankcase: Vec<Load>,
+}
+
+/// Builds [`PreloadLoads`] from the meshes' sets.
+pub fn preload_loads(inp: &RomInputs<'_>) -> Result<PreloadLoads, RomError> {
+    let top = set(inp.liner, "liner", "flange_top")?;
+    let fz = -inp.clamp_force / top.len() as f64;
+    let liner = Load {
+        name: "clamp".into(),
+        entries: top.iter().map(|&n| (n, [0.0, 0.0, fz])).collect(),
+    };
+    let cm = inp.crankcase;
+    let mut crankcase = Vec::new();
+    if let Some(deck) = cm.node_set("deck_top") {
+        let tol = 1e-6 * inp.pitch;
+        for (c, &xc) in inp.axis_x.iter().enumerate() {
+            let bolts: Vec<usize> = deck
+                .iter()
+                .copied()
+                .filter(|&n| {
+                    let p = cm.nodes[n];
+                    let r = ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
+                    (p[0] - xc).abs() < inp.pitch / 2.0 - tol && r > inp.flange_radius + tol
+                })
+                .collect();
+            if !bolts.is_empty() {
+                let f = inp.clamp_force / bolts.len() as f64;
+                crankcase.push(Load {
+                    name: format!("bolts_{}", c + 1),
+                    entries: bolts.iter().map(|&n| (n, [0.0, 0.0, f])).collect(),
+                });
+            }
+        }
+    }
+    Ok(PreloadLoads { liner, crankcase })
+}
+
 /// Builds the engine ROM.
 pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, RomError> {
     let t0 = Instant::now();
@@ -337,7 +380,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     for k in 1..=inp.analysis_points {
         points.push(set(lm, "liner", &format!("point_{k}"))?[0]);
     }
-    let top = set(lm, "liner", "flange_top")?;
+    let preload = preload_loads(inp)?;
     let mut loads: Vec<Load> = Vec::new();
     for (name, nodes, dir) in [
         ("thrust", &thrust, [0.0, 1.0, 0.0]),
@@ -350,11 +393,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
             });
         }
     }
-    let fz = -inp.clamp_force / top.len() as f64;
-    loads.push(Load {
-        name: "clamp".into(),
-        entries: top.iter().map(|&n| (n, [0.0, 0.0, fz])).collect(),
-    });
+    loads.push(preload.liner);
     let clamp_load = loads.len() - 1;
     let mut outputs: Vec<Output> = Vec::new();
     outputs.extend(thrust.iter().map(|&n| Output {
@@ -389,9 +428,8 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     let cm = inp.crankcase;
     let ncyl = inp.axis_x.len();
     let mut cc_outputs = Vec::new();
-    let mut cc_loads = Vec::new();
     let deck = cm.node_set("deck_top");
-    for (c, &xc) in inp.axis_x.iter().enumerate() {
+    for c in 0..inp.axis_x.len() {
         let k = c + 1;
         for p in 1..=inp.analysis_points {
             let n = set(cm, "crankcase", &format!("point_{k}_{p}"))?[0];
@@ -400,26 +438,8 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
                 dir: [0.0, 1.0, 0.0],
             });
         }
-        if let Some(deck) = deck {
-            let tol = 1e-6 * inp.pitch;
-            let bolts: Vec<usize> = deck
-                .iter()
-                .copied()
-                .filter(|&n| {
-                    let p = cm.nodes[n];
-                    let r = ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
-                    (p[0] - xc).abs() < inp.pitch / 2.0 - tol && r > inp.flange_radius + tol
-                })
-                .collect();
-            if !bolts.is_empty() {
-                let f = inp.clamp_force / bolts.len() as f64;
-                cc_loads.push(Load {
-                    name: format!("bolts_{k}"),
-                    entries: bolts.iter().map(|&n| (n, [0.0, 0.0, f])).collect(),
-                });
-            }
-        }
     }
+    let cc_loads = preload.crankcase;
     let crankcase = reduce(
         "crankcase",
         cm,
