@@ -166,6 +166,10 @@ enum Command {
         /// Write time_series.csv and simulate.json into this directory.
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
+        /// Also run the full-order FE model on a window around firing TDC of the first
+        /// cylinder (330-420 deg) and report the ROM's error and speed-up there.
+        #[arg(long)]
+        full_order: bool,
         #[command(flatten)]
         cache: CacheArgs,
     },
@@ -297,6 +301,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             sets,
             json,
             out,
+            full_order,
             cache,
         } => {
             let req = simulate::SimulateRequest {
@@ -304,6 +309,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 sets,
                 out,
                 cache: cache.options(),
+                full_order,
             };
             let report = simulate::run(&req, started)?;
             print_report(json, &report, || report.to_text());

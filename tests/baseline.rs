@@ -22,6 +22,7 @@ fn default_engine_peaks_match_the_baseline() {
         sets: vec![],
         out: None,
         cache: CacheOptions::default(),
+        full_order: false,
     };
     let report = run(&req, Instant::now()).unwrap();
     let now = serde_json::json!({

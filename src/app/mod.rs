@@ -2,6 +2,7 @@
 //! serialisable report, and writes its files atomically.
 
 pub mod export;
+pub mod full_order;
 pub mod modes;
 pub mod progress;
 pub mod rom;

@@ -113,6 +113,7 @@ pub fn key_description(scene: &Scene) -> Result<String> {
         "band_hz": scene.rom.band_hz,
         "cutoff_hz": scene.rom.cutoff_hz,
         "harmonics": scene.rom.harmonics,
+        "residual_vector_spacing": scene.rom.residual_vector_spacing,
         "cylinders": scene.rom.cylinders,
     });
     Ok(d.to_string())
@@ -162,6 +163,7 @@ pub fn rom_inputs<'a>(
         band_hz: scene.rom.band_hz,
         cutoff_hz: scene.rom.cutoff_hz,
         harmonics: scene.rom.harmonics,
+        residual_vector_spacing: scene.rom.residual_vector_spacing,
         keep_bases,
     }
 }

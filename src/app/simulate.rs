@@ -1,6 +1,7 @@
 //! `simulate`: the piston-slap transient of the whole engine on the cached ROM; peaks per
 //! cylinder and analysis point, time series CSV, solver statistics.
 
+use super::full_order::{compare, FullOrderReport};
 use super::progress::Progress;
 use super::rom::{get_rom, CacheOptions};
 use crate::error::{Error, Result};
@@ -154,6 +155,13 @@ pub struct SimulateReport {
     pub peak_pressure_deg: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_series_csv: Option<String>,
+    /// With `--full-order`: the comparison on the window, and its two headline figures.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub full_order: Option<FullOrderReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rom_error_peak_negative: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speedup: Option<f64>,
 }
 
 impl SimulateReport {
@@ -227,6 +235,28 @@ impl SimulateReport {
             "ROM cache: {}; {:.2} s (transient {:.3} s)\n",
             self.cache, self.seconds, self.transient_seconds
         );
+        if let Some(c) = &self.full_order {
+            s += &format!(
+                "full-order check, cylinder {} from {:.0} to {:.0} deg ({} steps, both low-passed to {:.0} Hz): {} DOFs vs {} ROM modes\n",
+                c.cylinder, c.window_start_deg, c.window_end_deg, c.steps, c.filter_band_hz, c.full_dofs, c.rom_modes
+            );
+            s += "  point  peak neg full [m/s^2] @deg   ROM [m/s^2] @deg   error\n";
+            for p in &c.points {
+                s += &format!(
+                    "  {:>5}  {:>20.1} {:>6.2}   {:>11.1} {:>6.2}   {:.2e}\n",
+                    p.point,
+                    p.peak_negative_full_m_s2,
+                    p.crank_angle_full_deg,
+                    p.peak_negative_rom_m_s2,
+                    p.crank_angle_rom_deg,
+                    p.relative_error
+                );
+            }
+            s += &format!(
+                "  ROM error (peak negative) {:.2e}, contact force {:.2e}, preload {:.2e}; speed-up {:.0}x ({:.1} s vs {:.4} s; stepping alone {:.0}x)\n",
+                c.rom_error_peak_negative, c.contact_force_error, c.preload_error, c.speedup, c.full_seconds, c.rom_seconds, c.speedup_stepping
+            );
+        }
         if let Some(f) = &self.time_series_csv {
             s += &format!("time series: {f}\n");
         }
@@ -240,6 +270,8 @@ pub struct SimulateRequest {
     pub sets: Vec<String>,
     pub out: Option<PathBuf>,
     pub cache: CacheOptions,
+    /// Compare with the full-order model on a window ([`super::full_order`]).
+    pub full_order: bool,
 }
 
 /// Runs `simulate`.
@@ -273,7 +305,17 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         peak_pressure_bar: pp / 1e5,
         peak_pressure_deg: pdeg,
         time_series_csv: None,
+        full_order: None,
+        rom_error_peak_negative: None,
+        speedup: None,
     };
+    if req.full_order {
+        let settings = settings_of(sim, scene.rom.band_hz);
+        let cmp = compare(&scene, &loaded.rom, &piston, &settings, &|m| progress.phase(m))?;
+        report.rom_error_peak_negative = Some(cmp.rom_error_peak_negative);
+        report.speedup = Some(cmp.speedup);
+        report.full_order = Some(cmp);
+    }
     if let Some(dir) = &req.out {
         std::fs::create_dir_all(dir).map_err(|source| crate::report::atomic::WriteError {
             path: dir.clone(),

@@ -201,3 +201,63 @@ pub fn static_solve(sys: &SystemModes, f: &Mat<f64>) -> Result<Mat<f64>, SystemE
         .map_err(|_| SystemError::StiffnessSingular)?;
     Ok(chol.solve(f))
 }
+
+/// Residual vectors (modal truncation augmentation) for loads `g^T P` (`g`: output rows x
+/// global, `patterns`: rows x load patterns): with the dropped modes Y_d, Lambda_d and
+/// B = Y_d^T g^T P, the vectors X = Y_d Lambda_d^-1 B span the dropped modes' static response
+/// to the patterns. Projected on X, K_a = B^T Lambda_d^-1 B and M_a = B^T Lambda_d^-2 B; their
+/// eigenvectors Z (M_a-normalised, directions with M_a ~ 0 dropped) give pseudo-modes
+/// Y_a = X Z, mass-normalised and orthogonal to the kept modes (they lie in span Y_d), with
+/// frequencies above the cut-off. Added to the kept modes they represent the patterns' static
+/// response exactly (sum Y_a Y_a^T / mu = X K_a^-1 X^T) and the first inertia of the dropped
+/// modes: a fast contact load sees the local liner mass, not only its static flexibility.
+/// Returns Y_a (global x m) and mu (ascending).
+pub fn residual_vectors(
+    sys: &SystemModes,
+    kept: usize,
+    g: &Mat<f64>,
+    patterns: &Mat<f64>,
+) -> Result<(Mat<f64>, Vec<f64>), SystemError> {
+    let n = sys.lambdas.len();
+    let nd = n - kept;
+    if nd == 0 || patterns.ncols() == 0 {
+        return Ok((Mat::zeros(n, 0), Vec::new()));
+    }
+    let yd = sys.vectors.as_ref().subcols(kept, nd);
+    let loads = g.transpose() * patterns; // global x patterns
+    let mut c = yd.transpose() * &loads; // nd x patterns: B, then Lambda^-1 B
+    for i in 0..nd {
+        let s = 1.0 / sys.lambdas[kept + i];
+        for j in 0..c.ncols() {
+            c[(i, j)] *= s;
+        }
+    }
+    let mut lc = c.clone(); // Lambda C
+    for i in 0..nd {
+        for j in 0..c.ncols() {
+            lc[(i, j)] *= sys.lambdas[kept + i];
+        }
+    }
+    let ka = c.transpose() * &lc;
+    let ma = c.transpose() * &c;
+    let evd = ma
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| SystemError::Eigen)?;
+    let s = evd.S().column_vector();
+    let smax = (0..s.nrows()).map(|i| s[i]).fold(0.0f64, f64::max);
+    let keep: Vec<usize> = (0..s.nrows()).filter(|&i| s[i] > 1e-12 * smax).collect();
+    let q = evd.U();
+    let t = Mat::from_fn(ma.nrows(), keep.len(), |i, k| {
+        q[(i, keep[k])] / s[keep[k]].sqrt()
+    });
+    let kt = t.transpose() * (&ka * &t);
+    let evd2 = kt
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| SystemError::Eigen)?;
+    let mu: Vec<f64> = (0..keep.len())
+        .map(|i| evd2.S().column_vector()[i])
+        .collect();
+    let z = &t * evd2.U();
+    let ya = yd * (&c * &z);
+    Ok((ya, mu))
+}

@@ -15,7 +15,7 @@ use faer::Mat;
 use std::time::Instant;
 
 /// Version of the ROM layout; part of the cache key.
-pub const ROM_FORMAT: u32 = 1;
+pub const ROM_FORMAT: u32 = 2;
 
 /// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
 /// system modes along the stated direction.
@@ -38,6 +38,10 @@ pub struct CylinderRom {
     pub preload_thrust: Vec<f64>,
     pub preload_antithrust: Vec<f64>,
     pub preload_points: Vec<f64>,
+    /// Residual flexibility of the dropped system modes between the analysis points and this
+    /// cylinder's contact DOFs (points x (thrust, anti-thrust nodes)) [m/N]: the quasi-static
+    /// part of a point's response to a contact force near it, u_p = phi_p . eta + R_pc F.
+    pub point_residual: Dense,
     /// Offset of this cylinder's contact DOFs (thrust, then anti-thrust) in the residual
     /// flexibility matrix.
     pub contact_offset: usize,
@@ -58,6 +62,9 @@ pub struct RomInfo {
     pub full_dofs: usize,
     pub reduced_dofs: usize,
     pub system_modes: usize,
+    /// Residual vectors (pseudo-modes above the cut-off) of the contact load patterns,
+    /// appended to the system modes ([`engine::residual_vectors`]).
+    pub residual_vectors: usize,
     pub band_hz: f64,
     pub cutoff_hz: f64,
     pub interface_harmonics: usize,
@@ -72,7 +79,8 @@ pub struct RomInfo {
 /// The cached engine reduced-order model.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct EngineRom {
-    /// System modes kept (below the cut-off), ascending [Hz].
+    /// System modes kept (below the cut-off), ascending, then the residual vectors' pseudo-modes
+    /// (above the cut-off, ascending) [Hz].
     pub frequencies_hz: Vec<f64>,
     pub cylinders: Vec<CylinderRom>,
     /// Residual flexibility of the dropped modes at all contact DOFs [m/N].
@@ -102,6 +110,9 @@ pub struct RomInputs<'a> {
     pub band_hz: f64,
     pub cutoff_hz: f64,
     pub harmonics: usize,
+    /// Residual-vector load patterns: a hat function every this many bore-line nodes on each
+    /// side (1: every node; 0: none, static correction only).
+    pub residual_vector_spacing: usize,
     /// Keep full bases for recovery (mode shapes on the meshes).
     pub keep_bases: bool,
 }
@@ -366,6 +377,43 @@ pub fn preload_loads(inp: &RomInputs<'_>) -> Result<PreloadLoads, RomError> {
     Ok(PreloadLoads { liner, crankcase })
 }
 
+/// Contact load patterns for the residual vectors: on each bore line (sides of `sides` nodes,
+/// repeated for `cylinders`), hat functions w_i = max(0, 1 - |i - c| / e) centred every e =
+/// `spacing` nodes and at the last node; e = 1 gives one unit load per node, e = 0 none.
+pub fn hat_patterns(sides: &[usize], cylinders: usize, spacing: usize) -> Mat<f64> {
+    let per: usize = sides.iter().sum();
+    let rows = per * cylinders;
+    let mut cols: Vec<Vec<(usize, f64)>> = Vec::new();
+    if spacing > 0 {
+        for c in 0..cylinders {
+            let mut r0 = c * per;
+            for &nn in sides {
+                let mut centres: Vec<usize> = (0..nn).step_by(spacing).collect();
+                if nn > 0 && centres.last() != Some(&(nn - 1)) {
+                    centres.push(nn - 1);
+                }
+                for &cn in &centres {
+                    let col = (0..nn)
+                        .filter_map(|i| {
+                            let w = 1.0 - (i as f64 - cn as f64).abs() / spacing as f64;
+                            (w > 0.0).then_some((r0 + i, w))
+                        })
+                        .collect();
+                    cols.push(col);
+                }
+                r0 += nn;
+            }
+        }
+    }
+    let mut p = Mat::<f64>::zeros(rows, cols.len());
+    for (j, col) in cols.iter().enumerate() {
+        for &(i, w) in col {
+            p[(i, j)] = w;
+        }
+    }
+    p
+}
+
 /// Builds the engine ROM.
 pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, RomError> {
     let t0 = Instant::now();
@@ -504,7 +552,31 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         }
         g
     };
-    let ymodes = sys.vectors.as_ref().subcols(0, kept).to_owned();
+    // contact rows of every modelled cylinder, stacked (thrust, then anti-thrust nodes)
+    let g_rows: Vec<Mat<f64>> = liner_maps
+        .iter()
+        .map(|map| scatter_rows(&liner.outputs, map, 0, n_lout))
+        .collect();
+    let ncon = nt + na;
+    let mut gc = Mat::<f64>::zeros(ncon * g_rows.len(), n_g);
+    for (i, g) in g_rows.iter().enumerate() {
+        gc.as_mut()
+            .subrows_mut(i * ncon, ncon)
+            .copy_from(g.as_ref().subrows(0, ncon));
+    }
+    // residual vectors of the contact load patterns: pseudo-modes above the cut-off
+    progress("residual vectors");
+    let patterns = hat_patterns(&[nt, na], g_rows.len(), inp.residual_vector_spacing);
+    let (ya, mu) = engine::residual_vectors(&sys, kept, &gc, &patterns)?;
+    let nmodes = kept + mu.len();
+    let mut ymodes = Mat::<f64>::zeros(n_g, nmodes);
+    ymodes
+        .as_mut()
+        .subcols_mut(0, kept)
+        .copy_from(sys.vectors.as_ref().subcols(0, kept));
+    ymodes.as_mut().subcols_mut(kept, mu.len()).copy_from(&ya);
+    // the residual vectors scaled by mu^-1/2: their static flexibility is (G Ys)(G Ys)^T
+    let ys = Mat::from_fn(n_g, mu.len(), |i, j| ya[(i, j)] / mu[j].sqrt());
     // preload: liner clamp + bolt reactions
     let mut f = Mat::<f64>::zeros(n_g, 1);
     for map in &liner_maps {
@@ -519,13 +591,11 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     }
     let u0 = static_solve(&sys, &f)?;
     let mut cylinders = Vec::new();
-    let mut contact_rows: Vec<Mat<f64>> = Vec::new();
     let mut offset = 0;
     for (idx, &cyl) in inp.cylinders.iter().enumerate() {
-        let map = &liner_maps[idx];
-        let g_all = scatter_rows(&liner.outputs, map, 0, n_lout);
-        let modes_rows = &g_all * &ymodes;
-        let pre = &g_all * &u0;
+        let g_all = &g_rows[idx];
+        let modes_rows = g_all * &ymodes;
+        let pre = g_all * &u0;
         let c = cyl - 1;
         let g_cc = scatter_rows(
             &crankcase.outputs,
@@ -534,6 +604,24 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
             inp.analysis_points,
         );
         let cc_modes = &g_cc * &ymodes;
+        // residual cross flexibility points x contact not carried by the modes:
+        // (G_p Y_d L^-1/2)(G_c Y_d L^-1/2)^T - (G_p Ys)(G_c Ys)^T
+        let point_residual = {
+            let nd = sys.lambdas.len() - kept;
+            let mut gy = g_all * sys.vectors.as_ref().subcols(kept, nd);
+            for j in 0..nd {
+                let sc = 1.0 / sys.lambdas[kept + j].sqrt();
+                for i in 0..gy.nrows() {
+                    gy[(i, j)] *= sc;
+                }
+            }
+            let gys = g_all * &ys;
+            let gp = gy.as_ref().subrows(nt + na, np);
+            let gcy = gy.as_ref().subrows(0, nt + na);
+            let r = gp * gcy.transpose()
+                - gys.as_ref().subrows(nt + na, np) * gys.as_ref().subrows(0, nt + na).transpose();
+            Dense::from_mat(&r)
+        };
         let sub =
             |r0: usize, nr: usize| Dense::from_mat(&modes_rows.as_ref().subrows(r0, nr).to_owned());
         let zs = |nodes: &[usize]| nodes.iter().map(|&n| lm.nodes[n][2]).collect::<Vec<_>>();
@@ -549,18 +637,13 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
             preload_thrust: (0..nt).map(|i| pre[(i, 0)]).collect(),
             preload_antithrust: (0..na).map(|i| pre[(nt + i, 0)]).collect(),
             preload_points: (0..np).map(|i| pre[(nt + na + i, 0)]).collect(),
+            point_residual,
             contact_offset: offset,
         });
         offset += nt + na;
-        contact_rows.push(g_all.as_ref().subrows(0, nt + na).to_owned());
     }
-    let mut gc = Mat::<f64>::zeros(offset, n_g);
-    let mut r0 = 0;
-    for g in &contact_rows {
-        gc.as_mut().subrows_mut(r0, g.nrows()).copy_from(g);
-        r0 += g.nrows();
-    }
-    let rflex = residual_flexibility(&gc, &sys, kept);
+    let gcs = &gc * &ys;
+    let rflex = residual_flexibility(&gc, &sys, kept) - &gcs * gcs.transpose();
     // error estimate: lower the part-mode cut-off to 2/3 and compare frequencies in the band
     progress("error estimate");
     let estimated_error = {
@@ -621,6 +704,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         full_dofs,
         reduced_dofs: n_g,
         system_modes: kept,
+        residual_vectors: mu.len(),
         band_hz: inp.band_hz,
         cutoff_hz: inp.cutoff_hz,
         interface_harmonics: nh,
@@ -641,7 +725,11 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         left_out,
     };
     let rom = EngineRom {
-        frequencies_hz: sys.lambdas[..kept].iter().map(|&l| hz(l)).collect(),
+        frequencies_hz: sys.lambdas[..kept]
+            .iter()
+            .chain(&mu)
+            .map(|&l| hz(l))
+            .collect(),
         cylinders,
         residual_flexibility: Dense::from_mat(&rflex),
         info,

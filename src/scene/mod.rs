@@ -105,6 +105,8 @@ pub struct Rom {
     /// Cut-off of part and system modes [Hz] (band x cutoff factor).
     pub cutoff_hz: f64,
     pub harmonics: usize,
+    /// Residual-vector pattern spacing in bore-line nodes (0: none).
+    pub residual_vector_spacing: usize,
     /// Modelled cylinders, 1-based, ascending.
     pub cylinders: Vec<usize>,
     pub cache_dir: PathBuf,
@@ -448,6 +450,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         band_hz,
         cutoff_hz: band_hz * r.cutoff_factor,
         harmonics: r.interface_harmonics,
+        residual_vector_spacing: r.residual_vector_spacing,
         cylinders,
         cache_dir: base.join(&r.cache_dir),
     };

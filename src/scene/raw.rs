@@ -99,6 +99,10 @@ pub struct RawRom {
     /// Highest circumferential harmonic N of the interface fields, >= 1.
     #[serde(default = "default_harmonics")]
     pub interface_harmonics: usize,
+    /// Residual vectors of the contact loads: a hat-shaped load pattern every this many
+    /// bore-line nodes per side (1: every node; 0: none, static correction only). Default 1.
+    #[serde(default = "default_residual_spacing")]
+    pub residual_vector_spacing: usize,
     /// Cylinders whose liners are modelled (1-based); empty = all.
     #[serde(default)]
     pub cylinders: Vec<usize>,
@@ -113,6 +117,7 @@ impl Default for RawRom {
             band_hz: default_band(),
             cutoff_factor: default_cutoff_factor(),
             interface_harmonics: default_harmonics(),
+            residual_vector_spacing: default_residual_spacing(),
             cylinders: Vec::new(),
             cache_dir: default_cache_dir(),
         }
@@ -123,6 +128,9 @@ fn default_band() -> f64 {
 }
 fn default_cutoff_factor() -> f64 {
     2.5
+}
+fn default_residual_spacing() -> usize {
+    1
 }
 fn default_harmonics() -> usize {
     6

@@ -18,6 +18,7 @@
 use super::contact::{self, Body, Location, Slice, StepFailure};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
+use super::window::{low_pass, second_difference};
 use crate::piston::Piston;
 use crate::reduce::engine::Dense;
 use crate::reduce::rom::{CylinderRom, EngineRom};
@@ -44,10 +45,12 @@ pub struct CycleSettings {
     pub static_correction: bool,
     /// How the cylinders' contacts are coupled within a step.
     pub coupling: Coupling,
-    /// Accelerations at the analysis points are reported in the band of the ROM: the sum
-    /// runs over the system modes up to this frequency [Hz] (a modal low-pass; the ROM is
-    /// accurate up to about half its cut-off, and the modes above the band are kept for the
-    /// convergence of the contact response, not as outputs). None: every integrated mode.
+    /// Accelerations at the analysis points are reported in the band of the ROM [Hz]: the sum
+    /// over every integrated mode plus the quasi-static (residual) response to the contact
+    /// forces, low-passed by a zero-phase FIR over the cycle
+    /// ([`super::window::low_pass`]; the ROM is accurate up to about half its cut-off, and
+    /// the modes above the band are kept for the contact response, not as outputs). None: the
+    /// unfiltered sum.
     pub output_band_hz: Option<f64>,
 }
 
@@ -215,8 +218,6 @@ pub struct EngineRun<'a> {
     pub last_forces: Vec<(f64, f64)>,
     /// Penetration of every slice at the last step, (cylinder, side, slice) order.
     prev_pen: Vec<f64>,
-    /// Modes summed in the point outputs.
-    output_modes: usize,
     /// Loaded locations of the last step (cylinder index, location, force).
     prev_loaded: Vec<(usize, Location, f64)>,
 }
@@ -288,6 +289,53 @@ fn locate(zs: &[f64], z: f64, first: usize) -> Option<Location> {
     })
 }
 
+/// A cylinder's two bore lines: node heights (ascending) and the first contact DOF (thrust
+/// nodes from `first`, then the anti-thrust nodes).
+pub(crate) struct BoreLines<'a> {
+    pub thrust_z: &'a [f64],
+    pub antithrust_z: &'a [f64],
+    pub first: usize,
+}
+
+/// Appends the slices of piston `body` that lie on the bore lines at this step's pin depth, and
+/// their (body, thrust side, slice, height) to `meta`. A slice at height
+/// z = liner_top - pin_depth + h_i outside the bore line's node range has no liner to touch.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn push_slices<'p>(
+    piston: &'p Piston,
+    loads: &crate::piston::PistonLoads,
+    liner_top: f64,
+    bore: &BoreLines<'_>,
+    body: usize,
+    prev_penetration: &dyn Fn(bool, usize) -> f64,
+    slices: &mut Vec<Slice<'p>>,
+    meta: &mut Vec<(usize, bool, usize, f64)>,
+) {
+    let skirt = &piston.skirt;
+    let nt = bore.thrust_z.len();
+    for (side, zs, first) in [
+        (true, bore.thrust_z, bore.first),
+        (false, bore.antithrust_z, bore.first + nt),
+    ] {
+        for i in 0..skirt.heights.len() {
+            let z = liner_top - loads.pin_depth + skirt.heights[i];
+            if let Some(at) = locate(zs, z, first) {
+                slices.push(Slice {
+                    body,
+                    row: piston.slice_row(i, side),
+                    force_row: piston.slice_force_row(i, side, loads),
+                    gap: skirt.gaps[i],
+                    law: &skirt.laws[i],
+                    damping: piston.contact_damping,
+                    at,
+                    prev_penetration: prev_penetration(side, i),
+                });
+                meta.push((body, side, i, z));
+            }
+        }
+    }
+}
+
 impl<'a> EngineRun<'a> {
     /// A run at rest at global crank angle 0.
     pub fn new(setup: &'a EngineSetup<'a>, settings: CycleSettings) -> Self {
@@ -336,7 +384,6 @@ impl<'a> EngineRun<'a> {
                 }
             })
             .collect();
-        let settings_band = settings.output_band_hz;
         let nslices = setup.piston.skirt.heights.len();
         let ncyl = rom.cylinders.len();
         let stats = Stats {
@@ -356,10 +403,6 @@ impl<'a> EngineRun<'a> {
             last_forces: Vec::new(),
             prev_pen: vec![-1.0; 2 * nslices * ncyl],
             prev_loaded: Vec::new(),
-            output_modes: match settings_band {
-                Some(f) => rom.frequencies_hz.iter().take_while(|&&x| x <= f).count(),
-                None => nm,
-            },
         }
     }
 
@@ -409,28 +452,21 @@ impl<'a> EngineRun<'a> {
             let mut body = cyl.body;
             body.force = loads.force;
             bodies.push(body);
-            let nt = cyl.rom.thrust_z.len();
-            for (side, zs, first) in [
-                (true, &cyl.rom.thrust_z, cyl.rom.contact_offset),
-                (false, &cyl.rom.antithrust_z, cyl.rom.contact_offset + nt),
-            ] {
-                for i in 0..skirt.heights.len() {
-                    let z = self.setup.liner_top - loads.pin_depth + skirt.heights[i];
-                    if let Some(at) = locate(zs, z, first) {
-                        slices.push(Slice {
-                            body: b,
-                            row: piston.slice_row(i, side),
-                            force_row: piston.slice_force_row(i, side, &loads),
-                            gap: skirt.gaps[i],
-                            law: &skirt.laws[i],
-                            damping: piston.contact_damping,
-                            at,
-                            prev_penetration: self.prev_pen[pen_index(b, side, i)],
-                        });
-                        meta.push((b, side, i, z));
-                    }
-                }
-            }
+            let bore = BoreLines {
+                thrust_z: &cyl.rom.thrust_z,
+                antithrust_z: &cyl.rom.antithrust_z,
+                first: cyl.rom.contact_offset,
+            };
+            push_slices(
+                piston,
+                &loads,
+                self.setup.liner_top,
+                &bore,
+                b,
+                &|side, i| self.prev_pen[pen_index(b, side, i)],
+                &mut slices,
+                &mut meta,
+            );
         }
         let s = self.settings.scheme;
         let res = match self.settings.coupling {
@@ -613,10 +649,32 @@ impl<'a> EngineRun<'a> {
             &rom.point_modes
         };
         let a = &self.structure.integrator.ddeta;
-        let nb = self.output_modes.min(a.len());
+        let nb = a.len();
         (0..m.rows)
             .map(|p| contact::dot4(&m.row(p)[..nb], &a[..nb]))
             .collect()
+    }
+
+    /// Residual (quasi-static) displacement of cylinder index `c`'s analysis points under its
+    /// contact forces of the last step, R_pc F.
+    fn point_residual(&self, c: usize) -> Vec<f64> {
+        let rom = self.cyls[c].rom;
+        let off = rom.contact_offset;
+        let (locs, forces): (Vec<Location>, Vec<f64>) = self
+            .prev_loaded
+            .iter()
+            .filter(|(b, _, _)| *b == c)
+            .map(|(_, at, f)| {
+                (
+                    Location {
+                        dofs: [at.dofs[0] - off, at.dofs[1] - off],
+                        weights: at.weights,
+                    },
+                    *f,
+                )
+            })
+            .unzip();
+        super::window::residual_displacement(&rom.point_residual, &locs, &forces)
     }
 
     /// Runs `settings.cycles` cycles and returns the peaks and series of the last one.
@@ -653,6 +711,11 @@ impl<'a> EngineRun<'a> {
                     })
                     .collect(),
             };
+            let mut residual: Vec<Vec<Vec<f64>>> = self
+                .cyls
+                .iter()
+                .map(|c| vec![Vec::with_capacity(steps_per_cycle); c.rom.point_modes.rows])
+                .collect();
             for s in 0..steps_per_cycle {
                 let target = ((cycle * steps_per_cycle + s + 1) as f64) * dt;
                 let h = target - self.time;
@@ -673,6 +736,9 @@ impl<'a> EngineRun<'a> {
                     for (p, a) in self.point_accelerations(c, false).into_iter().enumerate() {
                         cs.acceleration[p].push(a);
                     }
+                    for (p, r) in self.point_residual(c).into_iter().enumerate() {
+                        residual[c][p].push(r);
+                    }
                     for (p, a) in self.point_accelerations(c, true).into_iter().enumerate() {
                         cs.crankcase_acceleration[p].push(a);
                     }
@@ -687,6 +753,23 @@ impl<'a> EngineRun<'a> {
                     cs.pressure_pa.push(loads.pressure);
                 }
                 on_step(cycle * steps_per_cycle + s + 1, total);
+            }
+            // residual accelerations, then the output band (one cycle: cyclic)
+            for (cs, res) in series.cylinders.iter_mut().zip(&residual) {
+                for (acc, r) in cs.acceleration.iter_mut().zip(res) {
+                    for (a, d) in acc.iter_mut().zip(second_difference(r, dt, true)) {
+                        *a += d;
+                    }
+                }
+                if let Some(band) = self.settings.output_band_hz {
+                    for acc in cs
+                        .acceleration
+                        .iter_mut()
+                        .chain(cs.crankcase_acceleration.iter_mut())
+                    {
+                        *acc = low_pass(acc, dt, band, true).0;
+                    }
+                }
             }
             let peaks = self.peaks(&series);
             if let Some(prev) = &prev_peaks {

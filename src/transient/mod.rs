@@ -5,3 +5,5 @@ pub mod contact;
 pub mod cycle;
 pub mod modal;
 pub mod scheme;
+pub mod full_order;
+pub mod window;

@@ -1,0 +1,366 @@
+//! One piston slapping one liner over a short crank-angle window, on any structure that can
+//! step itself: the ROM (modal coordinates) or the full-order FE model. The two share the
+//! piston, the slices, the contact law and the step solver ([`super::contact::step`]), so the
+//! difference of their results is the difference of the structural models.
+//!
+//! The window starts with the structure at rest in its preload state and the piston centred
+//! with zero velocity (its acceleration from the loads at the start); the step is fixed.
+
+use super::contact::{self, dot4, Body, Location, Structure};
+use super::cycle::{push_slices, BoreLines, TransientError};
+use super::modal::ModalStructure;
+use super::scheme::Scheme;
+use crate::piston::Piston;
+use crate::reduce::engine::Dense;
+use nalgebra::DMatrix;
+
+/// A structure that integrates itself: the contact's view ([`Structure`]) plus the step.
+pub trait Liner: Structure {
+    /// Starts a step of `dt`: the predictor without new contact forces.
+    fn predict(&mut self, dt: f64);
+    /// Completes the step with the contact `forces` (outward radial on the liner, N) at `locs`.
+    fn commit(&mut self, locs: &[Location], forces: &[f64]);
+    /// Radial accelerations of the analysis points [m/s^2], + toward the coolant.
+    fn point_accelerations(&self) -> Vec<f64>;
+    /// Quasi-static point displacement of the contact forces not in
+    /// [`Liner::point_accelerations`] (a ROM's residual flexibility R_pc F); its acceleration
+    /// is added by differencing the series. Empty when the structure has none.
+    fn point_residual(&self, _locs: &[Location], _forces: &[f64]) -> Vec<f64> {
+        Vec::new()
+    }
+}
+
+/// The crank-angle window and the piston's bore.
+#[derive(Clone, Debug)]
+pub struct Window {
+    /// The cylinder's own crank angles [deg] (firing TDC at 360).
+    pub start_deg: f64,
+    pub end_deg: f64,
+    pub step_deg: f64,
+    /// Crank speed [rad/s].
+    pub omega: f64,
+    pub scheme: Scheme,
+    pub liner_top: f64,
+    /// Bore-line node heights (ascending); contact DOFs are the thrust nodes then the
+    /// anti-thrust nodes, from 0.
+    pub thrust_z: Vec<f64>,
+    pub antithrust_z: Vec<f64>,
+    pub max_newton: usize,
+    pub max_penetration: f64,
+}
+
+/// What the window produced, one entry per step.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct WindowResult {
+    pub crank_angle_deg: Vec<f64>,
+    /// Analysis-point accelerations (points x steps) [m/s^2].
+    pub acceleration: Vec<Vec<f64>>,
+    pub lateral_m: Vec<f64>,
+    pub tilt_rad: Vec<f64>,
+    /// Net contact force toward thrust (thrust minus anti-thrust side) [N].
+    pub contact_force_n: Vec<f64>,
+    pub newton_iterations: usize,
+    /// Wall time of the stepping [s].
+    pub seconds: f64,
+}
+
+/// The piston at rest, centred, at its own crank angle `deg`: acceleration from the loads.
+pub fn body_at_rest(piston: &Piston, deg: f64) -> Body {
+    let mass = piston.mass_matrix();
+    let f = piston.loads(deg).force;
+    let det = mass[0][0] * mass[1][1] - mass[0][1] * mass[1][0];
+    Body {
+        mass,
+        a: [
+            (mass[1][1] * f[0] - mass[0][1] * f[1]) / det,
+            (mass[0][0] * f[1] - mass[1][0] * f[0]) / det,
+        ],
+        ..Body::default()
+    }
+}
+
+/// Integrates the window with fixed steps.
+pub fn run(
+    window: &Window,
+    piston: &Piston,
+    liner: &mut dyn Liner,
+) -> Result<WindowResult, TransientError> {
+    let t0 = std::time::Instant::now();
+    let steps = ((window.end_deg - window.start_deg) / window.step_deg).round() as usize;
+    let dt = window.step_deg.to_radians() / window.omega;
+    let ns = piston.skirt.heights.len();
+    let mut body = body_at_rest(piston, window.start_deg);
+    let mut prev_pen = vec![-1.0; 2 * ns];
+    let bore = BoreLines {
+        thrust_z: &window.thrust_z,
+        antithrust_z: &window.antithrust_z,
+        first: 0,
+    };
+    let npoints = liner.point_accelerations().len();
+    let mut out = WindowResult {
+        acceleration: vec![Vec::with_capacity(steps); npoints],
+        ..WindowResult::default()
+    };
+    let mut residual: Vec<Vec<f64>> = Vec::new();
+    for s in 1..=steps {
+        let deg = window.start_deg + s as f64 * window.step_deg;
+        let time_s = (deg - window.start_deg).to_radians() / window.omega;
+        liner.predict(dt);
+        let loads = piston.loads(deg);
+        body.force = loads.force;
+        let mut slices = Vec::with_capacity(2 * ns);
+        let mut meta = Vec::with_capacity(2 * ns);
+        let pen_of = |side: bool, i: usize| prev_pen[usize::from(!side) * ns + i];
+        push_slices(
+            piston,
+            &loads,
+            window.liner_top,
+            &bore,
+            0,
+            &pen_of,
+            &mut slices,
+            &mut meta,
+        );
+        let Scheme { beta, gamma, .. } = window.scheme;
+        let res = contact::step(
+            &[body],
+            &slices,
+            liner,
+            dt,
+            beta,
+            gamma,
+            window.max_newton,
+        )
+        .map_err(|f| match f {
+            contact::StepFailure::NoConvergence { iterations } => TransientError::NoConvergence {
+                crank_angle_deg: deg,
+                time_s,
+                iterations,
+                halvings: 0,
+            },
+            contact::StepFailure::Singular => TransientError::Singular {
+                crank_angle_deg: deg,
+                time_s,
+            },
+        })?;
+        if let Some((k, &p)) = res
+            .penetrations
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+        {
+            if p > window.max_penetration {
+                let (_, side, i, z) = meta[k];
+                return Err(TransientError::DeepPenetration {
+                    cylinder: 0,
+                    side: if side { "thrust" } else { "anti-thrust" },
+                    slice: i + 1,
+                    height_mm: z * 1e3,
+                    penetration_um: p * 1e6,
+                    limit_um: window.max_penetration * 1e6,
+                    crank_angle_deg: deg,
+                    time_s,
+                });
+            }
+        }
+        let b = res.bodies[0];
+        if !b.q.iter().chain(&b.v).chain(&b.a).all(|x| x.is_finite()) {
+            return Err(TransientError::NonFinite {
+                crank_angle_deg: deg,
+                time_s,
+                cylinder: 0,
+            });
+        }
+        let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
+        liner.commit(&locs, &res.forces);
+        for (p, r) in liner.point_residual(&locs, &res.forces).into_iter().enumerate() {
+            residual.resize(npoints, Vec::new());
+            residual[p].push(r);
+        }
+        body = b;
+        prev_pen.fill(-1.0);
+        let mut net = 0.0;
+        for (k, &(_, side, i, _)) in meta.iter().enumerate() {
+            prev_pen[usize::from(!side) * ns + i] = res.penetrations[k];
+            net += if side { res.forces[k] } else { -res.forces[k] };
+        }
+        out.newton_iterations += res.iterations;
+        out.crank_angle_deg.push(deg);
+        for (p, a) in liner.point_accelerations().into_iter().enumerate() {
+            out.acceleration[p].push(a);
+        }
+        out.lateral_m.push(b.q[0]);
+        out.tilt_rad.push(b.q[1]);
+        out.contact_force_n.push(net);
+    }
+    for (acc, r) in out.acceleration.iter_mut().zip(&residual) {
+        for (a, d) in acc.iter_mut().zip(second_difference(r, dt, false)) {
+            *a += d;
+        }
+    }
+    out.seconds = t0.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+/// The ROM as a [`Liner`]: a [`ModalStructure`], the mode rows of the analysis points and
+/// their residual flexibility to the contact DOFs.
+pub struct ModalLiner {
+    pub structure: ModalStructure,
+    /// Analysis points x modes.
+    pub points: Dense,
+    /// Analysis points x contact DOFs (None: modal outputs only).
+    pub point_residual: Option<Dense>,
+}
+
+/// Residual point displacement R_pc F of `forces` at `locs` (contact DOFs interpolated).
+pub fn residual_displacement(r: &Dense, locs: &[Location], forces: &[f64]) -> Vec<f64> {
+    (0..r.rows)
+        .map(|p| {
+            let row = r.row(p);
+            locs.iter()
+                .zip(forces)
+                .filter(|(_, &f)| f != 0.0)
+                .map(|(at, &f)| (at.weights[0] * row[at.dofs[0]] + at.weights[1] * row[at.dofs[1]]) * f)
+                .sum()
+        })
+        .collect()
+}
+
+/// Second difference (r_{k+1} - 2 r_k + r_{k-1}) / dt^2 of a sampled series: the acceleration of
+/// a quasi-static displacement. `cyclic`: the series is one period; otherwise it is extended
+/// by its end values.
+pub fn second_difference(r: &[f64], dt: f64, cyclic: bool) -> Vec<f64> {
+    let n = r.len();
+    if n < 3 {
+        return vec![0.0; n];
+    }
+    let at = |k: isize| -> f64 {
+        if cyclic {
+            r[k.rem_euclid(n as isize) as usize]
+        } else {
+            r[k.clamp(0, n as isize - 1) as usize]
+        }
+    };
+    (0..n as isize)
+        .map(|k| (at(k + 1) - 2.0 * at(k) + at(k - 1)) / (dt * dt))
+        .collect()
+}
+
+impl Structure for ModalLiner {
+    fn prepare(&mut self, locs: &[Location]) {
+        self.structure.prepare(locs)
+    }
+    fn predicted(&self, i: usize) -> (f64, f64) {
+        self.structure.predicted(i)
+    }
+    fn compliance(&mut self, active: &[usize]) -> (DMatrix<f64>, DMatrix<f64>) {
+        self.structure.compliance(active)
+    }
+    fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
+        self.structure.response(active, forces)
+    }
+}
+
+impl Liner for ModalLiner {
+    fn predict(&mut self, dt: f64) {
+        self.structure.integrator.predict(dt)
+    }
+    fn commit(&mut self, locs: &[Location], forces: &[f64]) {
+        let f = self.structure.modal_force_at(locs, forces);
+        self.structure.integrator.commit(&f)
+    }
+    fn point_accelerations(&self) -> Vec<f64> {
+        let a = &self.structure.integrator.ddeta;
+        let n = a.len().min(self.points.cols);
+        (0..self.points.rows)
+            .map(|p| dot4(&self.points.row(p)[..n], &a[..n]))
+            .collect()
+    }
+    fn point_residual(&self, locs: &[Location], forces: &[f64]) -> Vec<f64> {
+        match &self.point_residual {
+            Some(r) => residual_displacement(r, locs, forces),
+            None => Vec::new(),
+        }
+    }
+}
+
+/// Rayleigh damping C = a M + b K with damping ratio `zeta` at the angular frequencies `w1`
+/// and `w2`: zeta(w) = a / (2 w) + b w / 2, so a = 2 zeta w1 w2 / (w1 + w2), b = 2 zeta / (w1 + w2).
+pub fn rayleigh(zeta: f64, w1: f64, w2: f64) -> (f64, f64) {
+    (2.0 * zeta * w1 * w2 / (w1 + w2), 2.0 * zeta / (w1 + w2))
+}
+
+/// Zero-phase low-pass: a symmetric windowed-sinc FIR (Blackman window), h_k =
+/// w_k sin(2 pi f_c (k - L/2) T) / (pi (k - L/2)) normalised to unit DC gain, with the cut-off
+/// f_c = 1.25 `band_hz` and L = 5.5 / (0.5 band T) + 1 taps (Blackman transition width 5.5/L
+/// of the sampling rate): flat (< 0.1 % ripple) up to `band_hz`, > 70 dB down above 1.5
+/// `band_hz`. `cyclic`: the series is one period (circular convolution, no ends); otherwise
+/// samples beyond the ends count as zero. Returns the filtered series and how many samples at
+/// each end the ends affect (L/2; 0 when cyclic).
+pub fn low_pass(x: &[f64], dt: f64, band_hz: f64, cyclic: bool) -> (Vec<f64>, usize) {
+    let half = ((5.5 / (0.5 * band_hz * dt)) / 2.0).ceil() as usize;
+    let fc = 1.25 * band_hz * dt; // cycles per sample
+    let len = 2 * half + 1;
+    let mut h: Vec<f64> = (0..len)
+        .map(|k| {
+            let m = k as f64 - half as f64;
+            let sinc = if m == 0.0 {
+                2.0 * fc
+            } else {
+                (2.0 * std::f64::consts::PI * fc * m).sin() / (std::f64::consts::PI * m)
+            };
+            let t = 2.0 * std::f64::consts::PI * k as f64 / (len - 1) as f64;
+            let w = 0.42 - 0.5 * t.cos() + 0.08 * (2.0 * t).cos();
+            sinc * w
+        })
+        .collect();
+    let sum: f64 = h.iter().sum();
+    h.iter_mut().for_each(|v| *v /= sum);
+    let n = x.len();
+    let y = (0..n)
+        .map(|i| {
+            let mut s = 0.0;
+            for (k, hk) in h.iter().enumerate() {
+                let j = i as isize + k as isize - half as isize;
+                if cyclic {
+                    s += hk * x[j.rem_euclid(n as isize) as usize];
+                } else if j >= 0 && (j as usize) < n {
+                    s += hk * x[j as usize];
+                }
+            }
+            s
+        })
+        .collect();
+    (y, if cyclic { 0 } else { half })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rayleigh_hits_both_frequencies() {
+        let (a, b) = rayleigh(0.02, 1000.0, 20000.0);
+        for w in [1000.0, 20000.0] {
+            assert!((a / (2.0 * w) + b * w / 2.0 - 0.02).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn low_pass_keeps_the_band_and_stops_above() {
+        let dt = 2e-5;
+        let n = 4000;
+        let wave = |f: f64| -> Vec<f64> {
+            (0..n)
+                .map(|i| (2.0 * std::f64::consts::PI * f * i as f64 * dt).sin())
+                .collect()
+        };
+        let amp = |y: &[f64], e: usize| y[e..n - e].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        // in band: gain 1 within the Blackman ripple (~2e-4) plus sampling of the peak
+        let (y, e) = low_pass(&wave(1500.0), dt, 3000.0, false);
+        assert!((amp(&y, e) - 1.0).abs() < 2e-3, "{}", amp(&y, e));
+        // stop band (>= 1.5 band): Blackman side lobes are below -74 dB
+        let (y, e) = low_pass(&wave(5000.0), dt, 3000.0, false);
+        assert!(amp(&y, e) < 1e-3, "{}", amp(&y, e));
+    }
+}

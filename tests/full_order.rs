@@ -1,0 +1,56 @@
+//! The ROM against the full-order FE model on the window around firing TDC (two-cylinder coarse
+//! test engine): same piston, contact law, scheme and step; Newmark on the full coupled model
+//! (23.8k unknowns, no modal truncation) is the reference.
+
+use linercav::app::full_order::compare;
+use linercav::app::rom::{get_rom, CacheOptions};
+use linercav::app::simulate::{piston_of, settings_of};
+use linercav::scene::Scene;
+use std::path::Path;
+
+const SMALL: &str = "tests/fixtures/engine_small.toml";
+
+fn comparison(sets: &[&str]) -> linercav::app::full_order::FullOrderReport {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let scene = Scene::load(Path::new(SMALL), &sets).unwrap();
+    let rom = get_rom(
+        &scene,
+        &CacheOptions {
+            no_cache: true,
+            dir: None,
+        },
+    )
+    .unwrap()
+    .rom;
+    let piston = piston_of(&scene).unwrap();
+    let sim = scene.simulation.as_ref().unwrap();
+    compare(
+        &scene,
+        &rom,
+        &piston,
+        &settings_of(sim, scene.rom.band_hz),
+        &|_| {},
+    )
+    .unwrap()
+}
+
+#[test]
+fn rom_matches_the_full_order_model_on_the_window() {
+    let c = comparison(&[]);
+    // The preload is one static solve in both models (the ROM's is exact for its loads through
+    // the attachment modes): equal to solver roundoff.
+    assert!(c.preload_error < 1e-9, "preload error {:e}", c.preload_error);
+    // Peak negative acceleration in the band, every analysis point: the 2 % floor.
+    for p in &c.points {
+        eprintln!(
+            "point {}: full {:.1} rom {:.1} ({:.2e})",
+            p.point, p.peak_negative_full_m_s2, p.peak_negative_rom_m_s2, p.relative_error
+        );
+    }
+    assert!(
+        c.rom_error_peak_negative < 0.02,
+        "ROM error {:.3e}",
+        c.rom_error_peak_negative
+    );
+    assert!(c.steps > 300);
+}
