@@ -39,7 +39,11 @@ fn rom_matches_the_full_order_model_on_the_window() {
     let c = comparison(&["rom.residual_vector_spacing=1"]);
     // The preload is one static solve in both models (the ROM's is exact for its loads through
     // the attachment modes): equal to solver roundoff.
-    assert!(c.preload_error < 1e-9, "preload error {:e}", c.preload_error);
+    assert!(
+        c.preload_error < 1e-9,
+        "preload error {:e}",
+        c.preload_error
+    );
     // Peak negative acceleration in the band, every analysis point: the 2 % floor
     // (measured 0.14 % with residual vectors at every bore-line node; without them, static
     // correction only, 11 %: the slap's contact frequency, ~5 kHz, sits at this ROM's cut-off).

@@ -311,7 +311,9 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     };
     if req.full_order {
         let settings = settings_of(sim, scene.rom.band_hz);
-        let cmp = compare(&scene, &loaded.rom, &piston, &settings, &|m| progress.phase(m))?;
+        let cmp = compare(&scene, &loaded.rom, &piston, &settings, &|m| {
+            progress.phase(m)
+        })?;
         report.rom_error_peak_negative = Some(cmp.rom_error_peak_negative);
         report.speedup = Some(cmp.speedup);
         report.full_order = Some(cmp);

@@ -401,9 +401,15 @@ pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullM
     let inp = rom_inputs(scene, &lm, &cm, false);
     let sys = FullSystem::build(&inp)?;
     let sigma = scene.solver.sigma();
-    let (sol, _) = certified_modes(&sys.km, &sys.analysis, count, sigma, scene.solver.guard_modes)?;
+    let (sol, _) = certified_modes(
+        &sys.km,
+        &sys.analysis,
+        count,
+        sigma,
+        scene.solver.guard_modes,
+    )?;
     let shapes: Vec<Vec<Vec<f64>>> = (0..sol.modes.count())
-        .map(|j| sys.part_displacements(&sol.modes.vector(j)))
+        .map(|j| sys.part_displacements(sol.modes.vector(j)))
         .collect();
     let out = FullModes {
         frequencies_hz: (0..sol.modes.count())

@@ -689,10 +689,15 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         ));
     }
     left_out.push(format!(
-        "system modes above the cut-off {:.0} Hz ({} of {}), represented statically at the contact DOFs",
+        "system modes above the cut-off {:.0} Hz ({} of {}), represented {} at the contact DOFs",
         inp.cutoff_hz,
         n_g - kept,
-        n_g
+        n_g,
+        if mu.is_empty() {
+            "statically".to_string()
+        } else {
+            format!("by {} residual vectors (static part exact)", mu.len())
+        }
     ));
     if deck.is_none() {
         left_out.push(

@@ -3,7 +3,7 @@
 
 pub mod contact;
 pub mod cycle;
+pub mod full_order;
 pub mod modal;
 pub mod scheme;
-pub mod full_order;
 pub mod window;

@@ -122,27 +122,21 @@ pub fn run(
             &mut meta,
         );
         let Scheme { beta, gamma, .. } = window.scheme;
-        let res = contact::step(
-            &[body],
-            &slices,
-            liner,
-            dt,
-            beta,
-            gamma,
-            window.max_newton,
-        )
-        .map_err(|f| match f {
-            contact::StepFailure::NoConvergence { iterations } => TransientError::NoConvergence {
-                crank_angle_deg: deg,
-                time_s,
-                iterations,
-                halvings: 0,
-            },
-            contact::StepFailure::Singular => TransientError::Singular {
-                crank_angle_deg: deg,
-                time_s,
-            },
-        })?;
+        let res = contact::step(&[body], &slices, liner, dt, beta, gamma, window.max_newton)
+            .map_err(|f| match f {
+                contact::StepFailure::NoConvergence { iterations } => {
+                    TransientError::NoConvergence {
+                        crank_angle_deg: deg,
+                        time_s,
+                        iterations,
+                        halvings: 0,
+                    }
+                }
+                contact::StepFailure::Singular => TransientError::Singular {
+                    crank_angle_deg: deg,
+                    time_s,
+                },
+            })?;
         if let Some((k, &p)) = res
             .penetrations
             .iter()
@@ -173,7 +167,11 @@ pub fn run(
         }
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
         liner.commit(&locs, &res.forces);
-        for (p, r) in liner.point_residual(&locs, &res.forces).into_iter().enumerate() {
+        for (p, r) in liner
+            .point_residual(&locs, &res.forces)
+            .into_iter()
+            .enumerate()
+        {
             residual.resize(npoints, Vec::new());
             residual[p].push(r);
         }
@@ -220,7 +218,9 @@ pub fn residual_displacement(r: &Dense, locs: &[Location], forces: &[f64]) -> Ve
             locs.iter()
                 .zip(forces)
                 .filter(|(_, &f)| f != 0.0)
-                .map(|(at, &f)| (at.weights[0] * row[at.dofs[0]] + at.weights[1] * row[at.dofs[1]]) * f)
+                .map(|(at, &f)| {
+                    (at.weights[0] * row[at.dofs[0]] + at.weights[1] * row[at.dofs[1]]) * f
+                })
                 .sum()
         })
         .collect()
