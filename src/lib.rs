@@ -4,7 +4,9 @@
 //! -> reduced engine model -> slap transient -> analysis -> cavitation risk -> reports.
 //! This crate is the library; `src/main.rs` is a thin command-line front end.
 
+pub mod analysis;
 pub mod app;
+pub mod cavitation;
 pub mod eigen;
 pub mod error;
 pub mod fem;

@@ -1,0 +1,95 @@
+//! Windowed amplitude spectra (rustfft) and their dominant peak.
+
+use rustfft::{num_complex::Complex, FftPlanner};
+
+/// One-sided amplitude spectrum.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Spectrum {
+    pub frequency_hz: Vec<f64>,
+    /// Amplitude of a sinusoid at each bin (window-corrected) [unit of the signal].
+    pub amplitude: Vec<f64>,
+}
+
+/// Hann-windowed amplitude spectrum of `x` sampled at `dt` [s]:
+/// w_n = 0.5 (1 - cos(2 pi n / N)), X_k = sum w_n x_n e^{-2 pi i k n / N},
+/// A_k = 2 |X_k| / sum w_n (a sinusoid of amplitude A on a bin reads A), k = 0..N/2.
+/// The mean is removed first.
+pub fn amplitude_spectrum(x: &[f64], dt: f64) -> Spectrum {
+    let n = x.len();
+    if n < 2 {
+        return Spectrum {
+            frequency_hz: vec![],
+            amplitude: vec![],
+        };
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let w: Vec<f64> = (0..n)
+        .map(|k| 0.5 * (1.0 - (2.0 * std::f64::consts::PI * k as f64 / n as f64).cos()))
+        .collect();
+    let sw: f64 = w.iter().sum();
+    let mut buf: Vec<Complex<f64>> = x
+        .iter()
+        .zip(&w)
+        .map(|(v, w)| Complex::new((v - mean) * w, 0.0))
+        .collect();
+    FftPlanner::new().plan_fft_forward(n).process(&mut buf);
+    let half = n / 2;
+    let df = 1.0 / (n as f64 * dt);
+    Spectrum {
+        frequency_hz: (0..=half).map(|k| k as f64 * df).collect(),
+        amplitude: (0..=half)
+            .map(|k| {
+                let s = if k == 0 || (n % 2 == 0 && k == half) { 1.0 } else { 2.0 };
+                s * buf[k].norm() / sw
+            })
+            .collect(),
+    }
+}
+
+impl Spectrum {
+    /// The largest bin within [lo, hi] Hz, refined by a parabola through the bin and its two
+    /// neighbours (log amplitude; exact for a Gaussian-like peak, < 0.1 bin error for Hann):
+    /// (frequency [Hz], amplitude).
+    pub fn dominant(&self, lo: f64, hi: f64) -> Option<(f64, f64)> {
+        let k = (1..self.amplitude.len().saturating_sub(1))
+            .filter(|&k| self.frequency_hz[k] >= lo && self.frequency_hz[k] <= hi)
+            .max_by(|&a, &b| self.amplitude[a].total_cmp(&self.amplitude[b]))?;
+        let (a, b, c) = (
+            self.amplitude[k - 1].max(1e-300).ln(),
+            self.amplitude[k].max(1e-300).ln(),
+            self.amplitude[k + 1].max(1e-300).ln(),
+        );
+        let den = a - 2.0 * b + c;
+        let p = if den < 0.0 { 0.5 * (a - c) / den } else { 0.0 };
+        let df = self.frequency_hz[1] - self.frequency_hz[0];
+        Some((self.frequency_hz[k] + p.clamp(-0.5, 0.5) * df, self.amplitude[k]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A sinusoid of amplitude 3 at 1850 Hz: the refined peak within a tenth of a bin, the
+    /// amplitude within the Hann scalloping loss (< 15 % off-bin).
+    #[test]
+    fn sinusoid_peak_and_amplitude() {
+        let dt = 1.0 / 45_600.0;
+        let n = 2880;
+        let x: Vec<f64> = (0..n)
+            .map(|k| 3.0 * (2.0 * std::f64::consts::PI * 1850.0 * k as f64 * dt).sin() + 0.5)
+            .collect();
+        let s = amplitude_spectrum(&x, dt);
+        let df = s.frequency_hz[1];
+        let (f, a) = s.dominant(100.0, 5000.0).unwrap();
+        assert!((f - 1850.0).abs() < 0.1 * df, "{f} (bin {df})");
+        assert!(a > 3.0 * 0.85 && a <= 3.0 * 1.0001, "{a}");
+        // on a bin centre the amplitude is exact
+        let f0 = 117.0 * df;
+        let x: Vec<f64> = (0..n)
+            .map(|k| 2.0 * (2.0 * std::f64::consts::PI * f0 * k as f64 * dt).cos())
+            .collect();
+        let s = amplitude_spectrum(&x, dt);
+        assert!((s.amplitude[117] - 2.0).abs() < 1e-9);
+    }
+}
