@@ -2,7 +2,7 @@
 //! maps errors to exit codes (0 ok, 2 bad input, 1 failure), printing the whole cause chain.
 
 use clap::{Args, Parser, Subcommand};
-use linercav::app::{export, modes, rom, simulate, ModelInput};
+use linercav::app::{cavitation, export, modes, rom, simulate, ModelInput};
 use linercav::error::Error;
 use linercav::fem::material::Elastic;
 use linercav::scene::Scene;
@@ -195,6 +195,53 @@ enum Command {
         #[arg(long, default_value_t = 16)]
         count: usize,
     },
+    /// Coolant properties at a state: vapour pressure, density, speed of sound, Vccv and (with
+    /// a gap) the acceleration thresholds.
+    Coolant {
+        /// Coolant temperature [C].
+        #[arg(long, value_name = "T", allow_negative_numbers = true)]
+        temp_c: f64,
+        /// Static pressure [kPa absolute].
+        #[arg(long, value_name = "P", allow_negative_numbers = true)]
+        static_kpa: f64,
+        /// Ethylene glycol mass fraction.
+        #[arg(long, value_name = "F", default_value_t = 0.0, allow_negative_numbers = true)]
+        glycol: f64,
+        /// Coolant gap [mm].
+        #[arg(long, value_name = "H", allow_negative_numbers = true)]
+        gap_mm: Option<f64>,
+        /// Print JSON on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Calibrate the acceleration criterion from rig data (CSV: time_s, acceleration_m_s2,
+    /// pressure_kpa): events, k_p, onset and high-risk thresholds.
+    Calibrate {
+        /// Rig data CSV.
+        #[arg(long, value_name = "FILE.csv")]
+        data: PathBuf,
+        /// Coolant gap [mm].
+        #[arg(long, value_name = "H", allow_negative_numbers = true)]
+        gap_mm: f64,
+        /// Static coolant pressure [kPa absolute].
+        #[arg(long, value_name = "P", allow_negative_numbers = true)]
+        static_kpa: f64,
+        /// Coolant temperature [C].
+        #[arg(long, value_name = "T", allow_negative_numbers = true)]
+        temp_c: f64,
+        /// Ethylene glycol mass fraction.
+        #[arg(long, value_name = "FRACTION", default_value_t = 0.0, allow_negative_numbers = true)]
+        glycol: f64,
+        /// Quiet time that separates events [ms].
+        #[arg(long, value_name = "MS", default_value_t = 2.0)]
+        quiet_ms: f64,
+        /// Print JSON on stdout (loadable as cavitation.calibration_file in a scene).
+        #[arg(long)]
+        json: bool,
+        /// Draw the peak scatter with the fit and Ca against |a| into this PNG.
+        #[arg(long, value_name = "FILE")]
+        png: Option<PathBuf>,
+    },
     /// Write the part's mesh as Gmsh MSH 4.1 ASCII, node sets as physical groups.
     ExportMesh {
         #[command(flatten)]
@@ -313,6 +360,38 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             };
             let report = simulate::run(&req, started)?;
             print_report(json, &report, || report.to_text());
+        }
+        Command::Coolant {
+            temp_c,
+            static_kpa,
+            glycol,
+            gap_mm,
+            json,
+        } => {
+            let r = cavitation::coolant(temp_c, static_kpa, glycol, gap_mm)?;
+            print_report(json, &r, || r.to_text());
+        }
+        Command::Calibrate {
+            data,
+            gap_mm,
+            static_kpa,
+            temp_c,
+            glycol,
+            quiet_ms,
+            json,
+            png,
+        } => {
+            let req = cavitation::CalibrateRequest {
+                data,
+                gap_mm,
+                static_kpa,
+                temp_c,
+                glycol,
+                quiet_ms,
+                png,
+            };
+            let r = cavitation::calibrate(&req)?;
+            print_report(json, &r, || cavitation::calibration_text(&r));
         }
         Command::ExportMesh { model, out } => {
             let n = export::export_mesh(&model.input()?, &out)?;

@@ -1,6 +1,7 @@
 //! Commands of the command-line tool as library functions: each takes a request, returns a
 //! serialisable report, and writes its files atomically.
 
+pub mod cavitation;
 pub mod export;
 pub mod full_order;
 pub mod modes;

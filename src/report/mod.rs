@@ -2,4 +2,5 @@
 
 pub mod atomic;
 pub mod mtx;
+pub mod png;
 pub mod vtu;

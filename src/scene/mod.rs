@@ -164,6 +164,14 @@ pub struct Simulation {
     pub transient: TransientSpec,
 }
 
+/// Coolant state, gap and risk thresholds, SI.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CavitationSpec {
+    pub coolant: crate::cavitation::coolant::Coolant,
+    pub gap: f64,
+    pub thresholds: crate::cavitation::criteria::Thresholds,
+}
+
 /// A validated scene, SI units.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -179,6 +187,7 @@ pub struct Scene {
     pub rom: Rom,
     /// Piston, operating point and transient settings, when the scene has all three sections.
     pub simulation: Option<Simulation>,
+    pub cavitation: CavitationSpec,
 }
 
 /// Part names a scene knows.
@@ -455,6 +464,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         cache_dir: base.join(&r.cache_dir),
     };
     let simulation = validate_simulation(&c, base, &raw, &engine, &liner_geometry)?;
+    let cavitation = validate_cavitation(&c, base, &raw.cavitation)?;
     Ok(Scene {
         path: path.to_path_buf(),
         title: raw.title,
@@ -465,6 +475,100 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         solver,
         rom,
         simulation,
+        cavitation,
+    })
+}
+
+/// Thresholds written by `linercav calibrate --json`.
+#[derive(serde::Deserialize)]
+struct CalibrationThresholds {
+    onset_m_s2: f64,
+    high_risk_m_s2: f64,
+    k_p_pa_per_m_s2: f64,
+}
+
+fn validate_cavitation(
+    c: &Checker<'_>,
+    base: &Path,
+    r: &raw::RawCavitation,
+) -> Result<CavitationSpec, SceneError> {
+    use crate::cavitation::coolant::Coolant;
+    use crate::cavitation::criteria::{self, Thresholds};
+    let coolant = Coolant::new(r.coolant_temp_c, r.glycol, r.static_pressure_kpa * 1e3)
+        .map_err(|e| c.err("cavitation", e.to_string()))?;
+    let gap = c.mm("cavitation.gap_mm", r.gap_mm)?;
+    let thresholds = if let Some(f) = &r.calibration_file {
+        if r.k_p_pa_per_m_s2.is_some() || r.onset_m_s2.is_some() || r.high_risk_m_s2.is_some() {
+            return Err(c.err(
+                "cavitation.calibration_file",
+                "give either a calibration file or k_p_pa_per_m_s2/onset_m_s2/high_risk_m_s2, not both",
+            ));
+        }
+        let path = base.join(f);
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            c.err(
+                "cavitation.calibration_file",
+                format!("cannot read {}: {e}", path.display()),
+            )
+        })?;
+        let t: CalibrationThresholds = serde_json::from_str(&text).map_err(|e| {
+            c.err(
+                "cavitation.calibration_file",
+                format!(
+                    "{}: not a calibration JSON (need onset_m_s2, high_risk_m_s2, k_p_pa_per_m_s2): {e}",
+                    path.display()
+                ),
+            )
+        })?;
+        Thresholds {
+            onset_m_s2: t.onset_m_s2,
+            high_risk_m_s2: t.high_risk_m_s2,
+            k_p_pa_per_m_s2: t.k_p_pa_per_m_s2,
+            source: "calibration file",
+        }
+    } else {
+        let k_p = match r.k_p_pa_per_m_s2 {
+            Some(k) if k.is_finite() && k >= 0.0 => k,
+            Some(k) => {
+                return Err(c.err(
+                    "cavitation.k_p_pa_per_m_s2",
+                    format!("must be a finite number >= 0, got {k}"),
+                ))
+            }
+            None => criteria::reference_k_p().expect("reference coolant state is valid"),
+        };
+        let high = match r.high_risk_m_s2 {
+            Some(v) => c.positive("cavitation.high_risk_m_s2", v)?,
+            None => criteria::threshold(&coolant, k_p, gap),
+        };
+        let onset = match r.onset_m_s2 {
+            Some(v) => c.positive("cavitation.onset_m_s2", v)?,
+            None => high * criteria::REFERENCE_ONSET / criteria::REFERENCE_HIGH_RISK,
+        };
+        Thresholds {
+            onset_m_s2: onset,
+            high_risk_m_s2: high,
+            k_p_pa_per_m_s2: k_p,
+            source: "scene",
+        }
+    };
+    let t = &thresholds;
+    if !(t.onset_m_s2.is_finite() && t.high_risk_m_s2.is_finite() && t.k_p_pa_per_m_s2.is_finite())
+        || t.onset_m_s2 <= 0.0
+        || t.onset_m_s2 > t.high_risk_m_s2
+    {
+        return Err(c.err(
+            "cavitation",
+            format!(
+                "need 0 < onset ({}) <= high risk ({}) m/s^2",
+                t.onset_m_s2, t.high_risk_m_s2
+            ),
+        ));
+    }
+    Ok(CavitationSpec {
+        coolant,
+        gap,
+        thresholds,
     })
 }
 

@@ -33,6 +33,66 @@ pub struct RawScene {
     /// Time integration (needed by `simulate`).
     #[serde(default)]
     pub transient: Option<RawTransient>,
+    /// Coolant state and cavitation criteria (risk classes in `simulate`, `sweep`, `report`).
+    #[serde(default)]
+    pub cavitation: RawCavitation,
+}
+
+/// Coolant and cavitation thresholds. Defaults: the reference study's coolant (water at 90 C,
+/// 240 kPa, 4.7 mm gap); k_p derived from its 1189 m/s^2 high-risk threshold
+/// (`cavitation::criteria`); high risk where Ca = 1; onset at 917/1189 of it (the study's
+/// transition band).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCavitation {
+    /// Coolant temperature [C], 0-150.
+    #[serde(default = "default_coolant_temp")]
+    pub coolant_temp_c: f64,
+    /// Static coolant pressure at the liner [kPa absolute], above the vapour pressure.
+    #[serde(default = "default_static_kpa")]
+    pub static_pressure_kpa: f64,
+    /// Ethylene glycol mass fraction, 0-0.8.
+    #[serde(default)]
+    pub glycol: f64,
+    /// Coolant gap between liner and crankcase wall [mm].
+    #[serde(default = "default_gap_mm")]
+    pub gap_mm: f64,
+    /// Wall-pressure transfer p_r = p_s + k_p a [Pa per m/s^2]; default derived (see above).
+    #[serde(default)]
+    pub k_p_pa_per_m_s2: Option<f64>,
+    /// Risk thresholds on the peak negative acceleration [m/s^2]; defaults derived (see above).
+    #[serde(default)]
+    pub onset_m_s2: Option<f64>,
+    #[serde(default)]
+    pub high_risk_m_s2: Option<f64>,
+    /// JSON written by `linercav calibrate --json` (path relative to the scene): its onset,
+    /// high-risk and k_p replace the defaults; not allowed together with the three keys above.
+    #[serde(default)]
+    pub calibration_file: Option<String>,
+}
+
+impl Default for RawCavitation {
+    fn default() -> Self {
+        Self {
+            coolant_temp_c: default_coolant_temp(),
+            static_pressure_kpa: default_static_kpa(),
+            glycol: 0.0,
+            gap_mm: default_gap_mm(),
+            k_p_pa_per_m_s2: None,
+            onset_m_s2: None,
+            high_risk_m_s2: None,
+            calibration_file: None,
+        }
+    }
+}
+fn default_coolant_temp() -> f64 {
+    90.0
+}
+fn default_static_kpa() -> f64 {
+    240.0
+}
+fn default_gap_mm() -> f64 {
+    4.7
 }
 
 /// The crankcase: parametric (dimensions below) or a Gmsh mesh with the same named sets.

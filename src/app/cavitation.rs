@@ -1,0 +1,200 @@
+//! `coolant` and `calibrate`: coolant properties with the critical velocity and thresholds, and
+//! the calibration of the acceleration criterion from rig data.
+
+use crate::cavitation::calibration::{self, Calibration, RigData};
+use crate::cavitation::coolant::Coolant;
+use crate::cavitation::criteria;
+use crate::error::{Error, Result};
+use crate::report::png::{write_png, Chart, Mark, Rule, Series};
+use std::path::PathBuf;
+
+/// What `coolant` prints.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CoolantReport {
+    pub temp_c: f64,
+    pub static_kpa: f64,
+    pub glycol: f64,
+    pub vapour_pressure_kpa: f64,
+    pub density_kg_m3: f64,
+    pub speed_of_sound_m_s: f64,
+    /// Critical velocity of the cavitation safety factor, (p_s - p_v) / (rho c).
+    pub vccv_m_s: f64,
+    /// With a gap: the static threshold (p_s - p_v)/(rho h) (no wall-pressure swing) and the
+    /// threshold with the reference k_p, (p_s - p_v)/(k_p + rho h).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gap_mm: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub static_threshold_m_s2: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub threshold_m_s2: Option<f64>,
+    pub k_p_pa_per_m_s2: f64,
+}
+
+/// Coolant state from command-line values, errors naming the option.
+pub fn coolant_of(temp_c: f64, static_kpa: f64, glycol: f64) -> Result<Coolant> {
+    Coolant::new(temp_c, glycol, static_kpa * 1e3).map_err(|e| {
+        Error::Input(format!(
+            "--temp-c {temp_c} --static-kpa {static_kpa} --glycol {glycol}: {e}"
+        ))
+    })
+}
+
+fn gap_of(gap_mm: f64) -> Result<f64> {
+    if gap_mm.is_finite() && gap_mm > 0.0 {
+        Ok(gap_mm * 1e-3)
+    } else {
+        Err(Error::Input(format!(
+            "--gap-mm {gap_mm}: must be a positive number of millimetres"
+        )))
+    }
+}
+
+/// Runs `coolant`.
+pub fn coolant(temp_c: f64, static_kpa: f64, glycol: f64, gap_mm: Option<f64>) -> Result<CoolantReport> {
+    let c = coolant_of(temp_c, static_kpa, glycol)?;
+    let k_p = criteria::reference_k_p().expect("reference state valid");
+    let gap = gap_mm.map(gap_of).transpose()?;
+    Ok(CoolantReport {
+        temp_c,
+        static_kpa,
+        glycol,
+        vapour_pressure_kpa: c.vapour_pressure_pa / 1e3,
+        density_kg_m3: c.density_kg_m3,
+        speed_of_sound_m_s: c.speed_of_sound_m_s,
+        vccv_m_s: c.vccv(),
+        gap_mm,
+        static_threshold_m_s2: gap.map(|h| c.static_threshold(h)),
+        threshold_m_s2: gap.map(|h| criteria::threshold(&c, k_p, h)),
+        k_p_pa_per_m_s2: k_p,
+    })
+}
+
+impl CoolantReport {
+    pub fn to_text(&self) -> String {
+        let mut s = format!(
+            "coolant at {:.1} C, {:.1} kPa, glycol mass fraction {:.2}\n  vapour pressure   {:.3} kPa\n  density           {:.2} kg/m^3\n  speed of sound    {:.1} m/s\n  Vccv              {:.4} m/s   (p_s - p_v = rho c Vccv)\n",
+            self.temp_c,
+            self.static_kpa,
+            self.glycol,
+            self.vapour_pressure_kpa,
+            self.density_kg_m3,
+            self.speed_of_sound_m_s,
+            self.vccv_m_s
+        );
+        if let (Some(h), Some(st), Some(t)) = (self.gap_mm, self.static_threshold_m_s2, self.threshold_m_s2) {
+            s += &format!(
+                "  gap {h} mm: static threshold (p_s - p_v)/(rho h) = {st:.0} m/s^2\n  with the wall-pressure swing k_p = {:.1} Pa/(m/s^2): Ca = 1 at {t:.0} m/s^2\n",
+                self.k_p_pa_per_m_s2
+            );
+        }
+        s
+    }
+}
+
+/// `calibrate` options.
+pub struct CalibrateRequest {
+    pub data: PathBuf,
+    pub gap_mm: f64,
+    pub static_kpa: f64,
+    pub temp_c: f64,
+    pub glycol: f64,
+    pub quiet_ms: f64,
+    pub png: Option<PathBuf>,
+}
+
+/// Runs `calibrate`; bad data is an input error (exit 2) and nothing is written.
+pub fn calibrate(req: &CalibrateRequest) -> Result<Calibration> {
+    let coolant = coolant_of(req.temp_c, req.static_kpa, req.glycol)?;
+    let gap = gap_of(req.gap_mm)?;
+    if !(req.quiet_ms.is_finite() && req.quiet_ms > 0.0) {
+        return Err(Error::Input(format!("--quiet-ms {}: must be positive", req.quiet_ms)));
+    }
+    let d = RigData::read(&req.data).map_err(|e| Error::Input(e.to_string()))?;
+    let file = req.data.display().to_string();
+    let cal = calibration::calibrate(
+        &file,
+        &d,
+        &calibration::Settings {
+            coolant,
+            gap,
+            quiet: req.quiet_ms * 1e-3,
+        },
+    )
+    .map_err(|e| Error::Input(e.to_string()))?;
+    if let Some(png) = &req.png {
+        draw_calibration(png, &cal)?;
+    }
+    Ok(cal)
+}
+
+/// Two panels: peak wall pressure against peak acceleration with the fitted line (positive
+/// side linear, negative side saturating near p_v), and Ca against |a| with Ca = 1 and the
+/// thresholds.
+pub fn draw_calibration(path: &std::path::Path, cal: &Calibration) -> Result<()> {
+    let ps = cal.coolant.static_pa / 1e3;
+    let pv = cal.coolant.vapour_pressure_pa / 1e3;
+    let amax = cal
+        .event_list
+        .iter()
+        .map(|e| e.peak_positive_m_s2.max(e.peak_negative_m_s2))
+        .fold(0.0f64, f64::max);
+    let k = cal.k_p_pa_per_m_s2 / 1e3;
+    let pos: Vec<(f64, f64)> = cal.event_list.iter().map(|e| (e.peak_positive_m_s2, e.peak_pressure_kpa)).collect();
+    let neg: Vec<(f64, f64)> = cal.event_list.iter().map(|e| (-e.peak_negative_m_s2, e.min_pressure_kpa)).collect();
+    let left = Chart {
+        title: "Peak wall pressure against peak liner acceleration",
+        x_label: "peak acceleration [m/s^2] (+ toward the coolant)",
+        y_label: "peak pressure [kPa]",
+        series: vec![
+            Series { name: "positive peaks".into(), points: pos, mark: Mark::Dots, color: 0 },
+            Series { name: "negative peaks".into(), points: neg, mark: Mark::Dots, color: 1 },
+            Series {
+                name: format!("p_s + k_p a, k_p = {:.1} Pa/(m/s^2)", cal.k_p_pa_per_m_s2),
+                points: vec![(-amax, ps - k * amax), (amax, ps + k * amax)],
+                mark: Mark::Line,
+                color: 7,
+            },
+        ],
+        rules: vec![Rule { name: "vapour pressure".into(), value: pv, vertical: false, color: 2 }],
+        x_range: None,
+        y_range: None,
+    };
+    let ca: Vec<(f64, f64)> = cal.event_list.iter().map(|e| (e.peak_negative_m_s2, e.ca)).collect();
+    let ca_max = ca.iter().map(|p| p.1).fold(1.0f64, f64::max).min(10.0);
+    let right = Chart {
+        title: "Acceleration cavitation number per event",
+        x_label: "peak negative acceleration |a| [m/s^2]",
+        y_label: "Ca = (p_r - p_v) / (rho |a| h)",
+        series: vec![Series { name: "events".into(), points: ca, mark: Mark::Dots, color: 0 }],
+        rules: vec![
+            Rule { name: "Ca = 1".into(), value: 1.0, vertical: false, color: 7 },
+            Rule { name: format!("onset {:.0} m/s^2", cal.onset_m_s2), value: cal.onset_m_s2, vertical: true, color: 4 },
+            Rule { name: format!("high risk {:.0} m/s^2", cal.high_risk_m_s2), value: cal.high_risk_m_s2, vertical: true, color: 1 },
+        ],
+        x_range: None,
+        y_range: Some((-0.05 * ca_max, ca_max * 1.05)),
+    };
+    write_png(path, (1500, 620), |root| {
+        let (a, b) = root.split_horizontally(750);
+        left.draw(&a)?;
+        right.draw(&b)
+    })?;
+    Ok(())
+}
+
+/// Text summary of a calibration.
+pub fn calibration_text(c: &Calibration) -> String {
+    format!(
+        "{} events ({} cavitating, Ca < 1); noise {:.3} m/s^2, detection level {:.3} m/s^2\n  k_p = {:.2} Pa/(m/s^2) (positive-peak fit, R^2 = {:.4})\n  onset threshold      {:.1} m/s^2 (below it every event has Ca >= 1)\n  high-risk threshold  {:.1} m/s^2 (above it every event has Ca < 1){}\n  model threshold with the fitted k_p: {:.1} m/s^2\n",
+        c.events,
+        c.cavitating_events,
+        c.noise_m_s2,
+        c.detection_m_s2,
+        c.k_p_pa_per_m_s2,
+        c.fit_r2,
+        c.onset_m_s2,
+        c.high_risk_m_s2,
+        if c.transition_band_observed { "" } else { "\n  (no overlap of safe and cavitating events: the thresholds bracket the gap between them)" },
+        c.model_threshold_m_s2
+    )
+}
