@@ -2,7 +2,7 @@
 //! maps errors to exit codes (0 ok, 2 bad input, 1 failure), printing the whole cause chain.
 
 use clap::{Args, Parser, Subcommand};
-use linercav::app::{cavitation, export, modes, rom, simulate, ModelInput};
+use linercav::app::{cavitation, export, modes, rom, simulate, sweep, ModelInput};
 use linercav::error::Error;
 use linercav::fem::material::Elastic;
 use linercav::scene::Scene;
@@ -181,7 +181,9 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
-    /// Write the report of a scene (liner modes so far) into a directory.
+    /// Design-review report of a scene: slap transient, cavitation verdict, spectra and modal
+    /// correlation, clearance and pin-offset sweeps, speed against error (PNGs, summary.md,
+    /// summary.json).
     Report {
         /// Scene file (TOML).
         scene: PathBuf,
@@ -191,9 +193,28 @@ enum Command {
         /// Output directory.
         #[arg(long, default_value = "reports")]
         out: PathBuf,
-        /// Number of liner modes in the report.
-        #[arg(long, default_value_t = 16)]
-        count: usize,
+        #[command(flatten)]
+        cache: CacheArgs,
+    },
+    /// What-if sweep: the Cartesian product of the varied keys, run in parallel on the cached
+    /// ROM; sweep.csv (tidy), sweep.json and a PNG per numeric key in DIR.
+    Sweep {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// A varied key and its values: --vary piston.clearance_um=40,80,120 (repeatable).
+        #[arg(long = "vary", value_name = "KEY=V1,V2,...", required = true)]
+        vary: Vec<String>,
+        /// Fixed overrides for every run (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Output directory (sweep.csv, sweep.json, PNGs); without it only the summary prints.
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Print JSON on stdout.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        cache: CacheArgs,
     },
     /// Coolant properties at a state: vapour pressure, density, speed of sound, Vccv and (with
     /// a gap) the acceleration thresholds.
@@ -310,9 +331,9 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             scene,
             sets,
             out,
-            count,
+            cache,
         } => {
-            let r = linercav::app::summary::run(&scene, &sets, &out, count)?;
+            let r = linercav::app::summary::run(&scene, &sets, &out, &cache.options())?;
             print!("{}", r.to_text());
             println!("report written to {}", out.display());
         }
@@ -360,6 +381,24 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             };
             let report = simulate::run(&req, started)?;
             print_report(json, &report, || report.to_text());
+        }
+        Command::Sweep {
+            scene,
+            vary,
+            sets,
+            out,
+            json,
+            cache,
+        } => {
+            let req = sweep::SweepRequest {
+                scene,
+                sets,
+                vary,
+                out,
+                cache: cache.options(),
+            };
+            let r = sweep::run(&req, started)?;
+            print_report(json, &r, || r.to_text());
         }
         Command::Coolant {
             temp_c,

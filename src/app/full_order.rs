@@ -79,95 +79,29 @@ pub fn compare(
     settings: &CycleSettings,
     progress: &dyn Fn(&str),
 ) -> Result<FullOrderReport> {
-    let cylinder = scene
-        .engine
-        .firing_order
-        .iter()
-        .copied()
-        .find(|c| rom.cylinders.iter().any(|r| r.cylinder == *c))
-        .ok_or_else(|| Error::Input("no modelled cylinder for the full-order window".into()))?;
-    let idx = rom
-        .cylinders
-        .iter()
-        .position(|r| r.cylinder == cylinder)
-        .expect("found above");
+    progress("full-order window: ROM run");
+    let rw = rom_window(scene, rom, piston, settings, None, None)?;
+    let RomWindow {
+        cylinder,
+        index: idx,
+        res: rom_res,
+        win,
+        dt,
+        band,
+        rayleigh: (ra, rb),
+        preload: rom_preload,
+        modes: nm,
+    } = rw;
     let crom = &rom.cylinders[idx];
-    // Newmark with the scene's beta, gamma (HHT's alpha is not used in the window)
-    let scheme = Scheme {
-        alpha: 0.0,
-        ..settings.scheme
-    };
-    let omega = piston.kinematics.omega;
-    let dt = settings.step_deg.to_radians() / omega;
-    let band = rom.info.band_hz;
-    let two_pi = 2.0 * std::f64::consts::PI;
-    let (ra, rb) = window::rayleigh(
-        settings.damping_ratio,
-        two_pi * rom.frequencies_hz[0],
-        two_pi * band,
-    );
-    let win = Window {
-        start_deg: WINDOW_DEG.0,
-        end_deg: WINDOW_DEG.1,
-        step_deg: settings.step_deg,
-        omega,
-        scheme,
-        liner_top: scene.liner_geometry.length,
-        thrust_z: crom.thrust_z.clone(),
-        antithrust_z: crom.antithrust_z.clone(),
-        max_newton: settings.max_newton,
-        max_penetration: settings.max_penetration,
-    };
+    let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
+    let nc = nt + na;
+    let scheme = win.scheme;
     let fail = |e: crate::transient::cycle::TransientError, what: &str| {
         Error::Failure(format!(
             "{}: {what} window, cylinder {cylinder}: {e}",
             scene.path.display()
         ))
     };
-    // --- ROM window
-    let nm = rom.frequencies_hz.len();
-    let w: Vec<f64> = rom.frequencies_hz.iter().map(|f| two_pi * f).collect();
-    let zeta: Vec<f64> = w.iter().map(|w| ra / (2.0 * w) + rb * w / 2.0).collect();
-    let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
-    let nc = nt + na;
-    let mut rows = crate::reduce::engine::Dense {
-        rows: nc,
-        cols: nm,
-        data: Vec::with_capacity(nc * nm),
-    };
-    for i in 0..nt {
-        rows.data.extend_from_slice(crom.thrust_modes.row(i));
-    }
-    for i in 0..na {
-        rows.data.extend_from_slice(crom.antithrust_modes.row(i));
-    }
-    let r = &rom.residual_flexibility;
-    let off = crom.contact_offset;
-    let rflex = crate::reduce::engine::Dense {
-        rows: nc,
-        cols: nc,
-        data: (0..nc * nc)
-            .map(|k| r.at(off + k / nc, off + k % nc))
-            .collect(),
-    };
-    let rom_preload: Vec<f64> = crom
-        .preload_thrust
-        .iter()
-        .chain(&crom.preload_antithrust)
-        .copied()
-        .collect();
-    let mut modal = ModalLiner {
-        structure: ModalStructure::new(
-            ModalIntegrator::new(&w, &zeta, scheme),
-            rows,
-            rflex,
-            rom_preload.clone(),
-        ),
-        points: crom.point_modes.clone(),
-        point_residual: Some(crom.point_residual.clone()),
-    };
-    progress("full-order window: ROM run");
-    let rom_res = window::run(&win, piston, &mut modal).map_err(|e| fail(e, "ROM"))?;
     // --- full-order window
     let t_full = Instant::now();
     progress("full-order window: assembling the full model");
@@ -240,17 +174,7 @@ pub fn compare(
     let full_res = window::run(&win, piston, &mut full).map_err(|e| fail(e, "full-order"))?;
     let full_seconds = t_full.elapsed().as_secs_f64();
     // --- compare
-    let peak = |res: &WindowResult, p: usize| -> (f64, f64) {
-        let (y, edge) = low_pass(&res.acceleration[p], dt, band, false);
-        let n = y.len();
-        let mut best = (f64::NEG_INFINITY, 0.0);
-        for k in edge.min(n)..n.saturating_sub(edge) {
-            if -y[k] > best.0 {
-                best = (-y[k], res.crank_angle_deg[k]);
-            }
-        }
-        best
-    };
+    let peak = |res: &WindowResult, p: usize| peak_negative(res, p, dt, band);
     let mut cmp = Vec::new();
     for p in 0..full_res.acceleration.len() {
         let (pf, af) = peak(&full_res, p);
@@ -295,5 +219,179 @@ pub fn compare(
         rom_seconds: rom_res.seconds,
         speedup: full_seconds / rom_res.seconds.max(1e-9),
         speedup_stepping: full_res.seconds / rom_res.seconds.max(1e-9),
+    })
+}
+
+/// Peak negative acceleration (magnitude) of point `p` of a window run after the band's
+/// low-pass, and its crank angle; the filter's edge samples are skipped.
+pub fn peak_negative(res: &WindowResult, p: usize, dt: f64, band: f64) -> (f64, f64) {
+    let (y, edge) = low_pass(&res.acceleration[p], dt, band, false);
+    let n = y.len();
+    let mut best = (f64::NEG_INFINITY, 0.0);
+    for k in edge.min(n)..n.saturating_sub(edge) {
+        if -y[k] > best.0 {
+            best = (-y[k], res.crank_angle_deg[k]);
+        }
+    }
+    best
+}
+
+/// The ROM's run on the window of the first modelled cylinder in the firing order.
+pub struct RomWindow {
+    pub cylinder: usize,
+    /// Index of the cylinder in the ROM.
+    pub index: usize,
+    pub res: WindowResult,
+    pub win: Window,
+    pub dt: f64,
+    pub band: f64,
+    pub rayleigh: (f64, f64),
+    /// Preload displacement at the contact DOFs.
+    pub preload: Vec<f64>,
+    /// Modes integrated.
+    pub modes: usize,
+}
+
+/// Runs the ROM alone on the window: system modes up to `keep_below_hz` (all when None; the
+/// dropped ones join the static correction) at `step_deg` (the scene's when None).
+pub fn rom_window(
+    scene: &Scene,
+    rom: &EngineRom,
+    piston: &Piston,
+    settings: &CycleSettings,
+    keep_below_hz: Option<f64>,
+    step_deg: Option<f64>,
+) -> Result<RomWindow> {
+    let cylinder = scene
+        .engine
+        .firing_order
+        .iter()
+        .copied()
+        .find(|c| rom.cylinders.iter().any(|r| r.cylinder == *c))
+        .ok_or_else(|| Error::Input("no modelled cylinder for the full-order window".into()))?;
+    let idx = rom
+        .cylinders
+        .iter()
+        .position(|r| r.cylinder == cylinder)
+        .expect("found above");
+    let crom = &rom.cylinders[idx];
+    // Newmark with the scene's beta, gamma (HHT's alpha is not used in the window)
+    let scheme = Scheme {
+        alpha: 0.0,
+        ..settings.scheme
+    };
+    let omega = piston.kinematics.omega;
+    let step_deg = step_deg.unwrap_or(settings.step_deg);
+    let dt = step_deg.to_radians() / omega;
+    let band = rom.info.band_hz;
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let (ra, rb) = window::rayleigh(
+        settings.damping_ratio,
+        two_pi * rom.frequencies_hz[0],
+        two_pi * band,
+    );
+    let win = Window {
+        start_deg: WINDOW_DEG.0,
+        end_deg: WINDOW_DEG.1,
+        step_deg,
+        omega,
+        scheme,
+        liner_top: scene.liner_geometry.length,
+        thrust_z: crom.thrust_z.clone(),
+        antithrust_z: crom.antithrust_z.clone(),
+        max_newton: settings.max_newton,
+        max_penetration: settings.max_penetration,
+    };
+    let fail = |e: crate::transient::cycle::TransientError, what: &str| {
+        Error::Failure(format!(
+            "{}: {what} window, cylinder {cylinder}: {e}",
+            scene.path.display()
+        ))
+    };
+    // --- ROM window
+    let all = rom.frequencies_hz.len();
+    let nm = match keep_below_hz {
+        Some(f) => rom.frequencies_hz.iter().take_while(|&&x| x <= f).count().max(1),
+        None => all,
+    };
+    let w: Vec<f64> = rom.frequencies_hz[..nm].iter().map(|f| two_pi * f).collect();
+    let zeta: Vec<f64> = w.iter().map(|w| ra / (2.0 * w) + rb * w / 2.0).collect();
+    let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
+    let nc = nt + na;
+    let mut rows = crate::reduce::engine::Dense {
+        rows: nc,
+        cols: nm,
+        data: Vec::with_capacity(nc * nm),
+    };
+    for i in 0..nt {
+        rows.data.extend_from_slice(&crom.thrust_modes.row(i)[..nm]);
+    }
+    for i in 0..na {
+        rows.data.extend_from_slice(&crom.antithrust_modes.row(i)[..nm]);
+    }
+    let r = &rom.residual_flexibility;
+    let off = crom.contact_offset;
+    let mut rflex = crate::reduce::engine::Dense {
+        rows: nc,
+        cols: nc,
+        data: (0..nc * nc)
+            .map(|k| r.at(off + k / nc, off + k % nc))
+            .collect(),
+    };
+    let np = crom.point_modes.rows;
+    let points = crate::reduce::engine::Dense {
+        rows: np,
+        cols: nm,
+        data: (0..np).flat_map(|i| crom.point_modes.row(i)[..nm].to_vec()).collect(),
+    };
+    let mut point_residual = crom.point_residual.clone();
+    // dropped modes join the static correction: R += phi phi^T / w^2 (contact x contact and
+    // points x contact), as the cycle does for `mode_cutoff_hz`
+    let contact_row = |i: usize, j: usize| {
+        if i < nt {
+            crom.thrust_modes.at(i, j)
+        } else {
+            crom.antithrust_modes.at(i - nt, j)
+        }
+    };
+    for j in nm..all {
+        let w2 = (two_pi * rom.frequencies_hz[j]).powi(2);
+        for a in 0..nc {
+            let ra_ = contact_row(a, j) / w2;
+            for b in 0..nc {
+                rflex.data[a * nc + b] += ra_ * contact_row(b, j);
+            }
+            for p in 0..np {
+                point_residual.data[p * nc + a] += crom.point_modes.at(p, j) * ra_;
+            }
+        }
+    }
+    let rom_preload: Vec<f64> = crom
+        .preload_thrust
+        .iter()
+        .chain(&crom.preload_antithrust)
+        .copied()
+        .collect();
+    let mut modal = ModalLiner {
+        structure: ModalStructure::new(
+            ModalIntegrator::new(&w, &zeta, scheme),
+            rows,
+            rflex,
+            rom_preload.clone(),
+        ),
+        points,
+        point_residual: Some(point_residual),
+    };
+    let res = window::run(&win, piston, &mut modal).map_err(|e| fail(e, "ROM"))?;
+    Ok(RomWindow {
+        cylinder,
+        index: idx,
+        res,
+        win,
+        dt,
+        band,
+        rayleigh: (ra, rb),
+        preload: rom_preload,
+        modes: nm,
     })
 }

@@ -2,6 +2,7 @@
 //! serialisable report, and writes its files atomically.
 
 pub mod cavitation;
+pub mod evaluate;
 pub mod export;
 pub mod full_order;
 pub mod modes;
@@ -9,6 +10,7 @@ pub mod progress;
 pub mod rom;
 pub mod simulate;
 pub mod summary;
+pub mod sweep;
 
 use crate::error::{Error, Result};
 use crate::fem::material::Elastic;

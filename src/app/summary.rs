@@ -1,52 +1,447 @@
-//! `linercav report`: the report of a scene. At this stage of the project it holds the
-//! certified liner modes (`liner_modes.json`) and a `summary.md`; the engine ROM, slap
-//! transient, spectra and cavitation sections join it as those stages land.
+//! `linercav report`: the design-review report of a scene. One slap transient of the engine,
+//! its cavitation verdict and explanation, clearance and pin-offset sweeps, and the
+//! speed-against-error curve of the fast path, as PNGs plus `summary.md` and `summary.json`.
+//!
+//! Figures: `pressure.png` (cylinder pressure, side force), `acceleration.png` (liner
+//! acceleration per cylinder around firing, with the thresholds), `spectra.png`, `peaks.png`
+//! (per cylinder and point, with the thresholds), `modes_risk.png` (coefficients of the mode
+//! nearest the dominant response beside the per-cylinder peaks), `sweep_clearance.png`,
+//! `sweep_pin_offset.png`, `criteria.png` (CSF against Ca), `speed_error.png`.
 
-use super::modes::{self, ModesReport, ModesRequest};
-use super::ModelInput;
+use super::evaluate::{evaluate, spectra, Evaluation};
+use super::full_order::{peak_negative, rom_window};
+use super::rom::{get_rom, CacheOptions};
+use super::simulate::{piston_of, run_cycle, settings_of, simulation, SimulateReport};
 use crate::error::{Error, Result};
-use crate::report::atomic;
-use std::path::Path;
+use crate::piston::Piston;
+use crate::reduce::rom::EngineRom;
+use crate::report::atomic::write_all_atomic;
+use crate::report::png::{bars, write_png, Chart, Mark, Rule, Series};
+use crate::scene::Scene;
+use crate::transient::cycle::CycleResult;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Writes the report of `scene` into `out`; returns the liner modal result.
-pub fn run(scene: &Path, sets: &[String], out: &Path, count: usize) -> Result<ModesReport> {
-    let started = Instant::now();
-    let req = ModesRequest {
-        input: ModelInput::Scene {
-            scene: scene.to_path_buf(),
-            part: "liner".into(),
-            sets: sets.to_vec(),
-        },
-        count,
-        extra_fix: vec![],
-        vtu: None,
-        shift_hz: None,
+/// Values of the report's sweeps (the scene's own value is added when missing).
+pub const CLEARANCES_UM: [f64; 3] = [40.0, 80.0, 120.0];
+pub const PIN_OFFSETS_MM: [f64; 3] = [-1.0, 0.0, 1.0];
+
+/// One point of the speed-against-error curve.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TradeoffPoint {
+    pub setting: String,
+    pub modes: usize,
+    pub step_deg: f64,
+    /// Largest relative error of the window's peak negative accelerations against the finest
+    /// setting (all modes, smallest step).
+    pub error: f64,
+    pub seconds: f64,
+}
+
+/// What the report holds (summary.json).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Report {
+    pub scene: String,
+    pub title: String,
+    pub speed_rpm: f64,
+    pub simulate: SimulateReport,
+    pub evaluation: Evaluation,
+    pub clearance_sweep: Vec<SweepPoint>,
+    pub pin_offset_sweep: Vec<SweepPoint>,
+    pub tradeoff: Vec<TradeoffPoint>,
+    pub files: Vec<String>,
+    pub seconds: f64,
+}
+
+/// One run of a report sweep, condensed.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SweepPoint {
+    pub value: f64,
+    /// Per cylinder: largest peak negative acceleration over the points, slap force, side
+    /// force and its crank angle, peak |tilt|.
+    pub peak_negative_m_s2: Vec<f64>,
+    pub peak_slap_force_n: Vec<f64>,
+    pub peak_side_force_n: Vec<f64>,
+    pub side_force_crank_angle_deg: Vec<f64>,
+    pub peak_tilt_rad: Vec<f64>,
+    /// Per cylinder and point.
+    pub points_m_s2: Vec<Vec<f64>>,
+}
+
+fn condense(value: f64, r: &CycleResult) -> SweepPoint {
+    let cyl = SimulateReport::cylinders_of(r);
+    SweepPoint {
+        value,
+        peak_negative_m_s2: cyl
+            .iter()
+            .map(|c| c.points.iter().fold(0.0f64, |m, p| m.max(p.peak_negative_m_s2)))
+            .collect(),
+        peak_slap_force_n: cyl.iter().map(|c| c.peak_slap_force_n).collect(),
+        peak_side_force_n: cyl.iter().map(|c| c.peak_side_force_n).collect(),
+        side_force_crank_angle_deg: cyl.iter().map(|c| c.side_force_crank_angle_deg).collect(),
+        peak_tilt_rad: r
+            .series
+            .cylinders
+            .iter()
+            .map(|c| c.tilt_rad.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+            .collect(),
+        points_m_s2: cyl
+            .iter()
+            .map(|c| c.points.iter().map(|p| p.peak_negative_m_s2).collect())
+            .collect(),
+    }
+}
+
+/// Runs the scene with `sets` on `rom` (same reduction inputs: only piston/operating keys).
+fn run_with(path: &Path, base_sets: &[String], extra: &str, rom: &EngineRom) -> Result<CycleResult> {
+    let mut sets = base_sets.to_vec();
+    sets.push(extra.to_string());
+    let sc = Scene::load(path, &sets)?;
+    let sim = simulation(&sc)?;
+    let piston = piston_of(&sc)?;
+    run_cycle(&sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None)
+        .map_err(|e| Error::Failure(format!("{extra}: {e}")))
+}
+
+/// Speed against error on the reference window: mode cut-off and step, each against the
+/// finest setting.
+pub fn tradeoff(scene: &Scene, rom: &EngineRom, piston: &Piston) -> Result<Vec<TradeoffPoint>> {
+    let sim = simulation(scene)?;
+    let settings = settings_of(sim, scene.rom.band_hz);
+    let base = settings.step_deg;
+    let run = |keep: Option<f64>, step: f64| -> Result<(Vec<f64>, usize, f64)> {
+        let rw = rom_window(scene, rom, piston, &settings, keep, Some(step))?;
+        let peaks = (0..rw.res.acceleration.len())
+            .map(|p| peak_negative(&rw.res, p, rw.dt, rw.band).0)
+            .collect();
+        Ok((peaks, rw.modes, rw.res.seconds))
     };
-    let r = modes::run(&req, started)?;
+    let fine = base / 8.0;
+    let (reference, _, _) = run(None, fine)?;
+    let err = |p: &[f64]| {
+        p.iter()
+            .zip(&reference)
+            .map(|(a, b)| (a - b).abs() / b.abs().max(1e-30))
+            .fold(0.0, f64::max)
+    };
+    let mut out = Vec::new();
+    let band = scene.rom.band_hz;
+    for f in [band, 1.5 * band, 2.0 * band] {
+        let (p, m, s) = run(Some(f), fine)?;
+        out.push(TradeoffPoint {
+            setting: format!("modes <= {f:.0} Hz, step {fine} deg"),
+            modes: m,
+            step_deg: fine,
+            error: err(&p),
+            seconds: s,
+        });
+    }
+    for k in [4.0, 2.0, 1.0, 0.5] {
+        let step = base * k;
+        let (p, m, s) = run(None, step)?;
+        out.push(TradeoffPoint {
+            setting: format!("all modes, step {step} deg"),
+            modes: m,
+            step_deg: step,
+            error: err(&p),
+            seconds: s,
+        });
+    }
+    Ok(out)
+}
+
+/// Writes the report of `scene` into `out`.
+pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions) -> Result<Report> {
+    let started = Instant::now();
+    let scene = Scene::load(scene_path, sets)?;
+    let sim = simulation(&scene)?;
+    let piston = piston_of(&scene)?;
+    let progress = super::progress::Progress::new();
+    progress.phase("engine ROM");
+    let loaded = get_rom(&scene, cache)?;
+    let rom = &loaded.rom;
+    progress.phase("transients: the scene, clearance and pin-offset sweeps");
+    let cur_c = sim.piston.skirt.clearance * 1e6;
+    let cur_o = sim.piston.pin_offset * 1e3;
+    let mut jobs: Vec<(u8, f64, String)> = vec![(0, 0.0, String::new())];
+    for c in CLEARANCES_UM {
+        if (c - cur_c).abs() > 1e-9 {
+            jobs.push((1, c, format!("piston.clearance_um={c}")));
+        }
+    }
+    for o in PIN_OFFSETS_MM {
+        if (o - cur_o).abs() > 1e-9 {
+            jobs.push((2, o, format!("piston.pin_offset_mm={o}")));
+        }
+    }
+    let results: Vec<(u8, f64, CycleResult)> = jobs
+        .par_iter()
+        .map(|(kind, v, set)| {
+            let r = if set.is_empty() {
+                run_cycle(&scene, rom, &piston, settings_of(sim, scene.rom.band_hz), None)
+                    .map_err(|e| Error::Failure(format!("{}: {e}", scene.path.display())))?
+            } else {
+                run_with(scene_path, sets, set, rom)?
+            };
+            Ok((*kind, *v, r))
+        })
+        .collect::<Result<_>>()?;
+    let base = &results[0].2;
+    let mut clearance: Vec<SweepPoint> = vec![condense(cur_c, base)];
+    let mut offset: Vec<SweepPoint> = vec![condense(cur_o, base)];
+    for (kind, v, r) in &results[1..] {
+        match kind {
+            1 => clearance.push(condense(*v, r)),
+            _ => offset.push(condense(*v, r)),
+        }
+    }
+    clearance.sort_by(|a, b| a.value.total_cmp(&b.value));
+    offset.sort_by(|a, b| a.value.total_cmp(&b.value));
+    progress.phase("speed against error (window runs)");
+    let trade = tradeoff(&scene, rom, &piston)?;
+    let ev = evaluate(base, rom, &scene.cavitation, &scene.engine.firing_order, scene.rom.band_hz);
+    let (pp, pdeg) = piston.pressure.peak();
+    let mut simulate = SimulateReport {
+        scene: scene.path.display().to_string(),
+        speed_rpm: scene.engine.speed_rpm,
+        cylinders: SimulateReport::cylinders_of(base),
+        seconds: 0.0,
+        transient_seconds: 0.0,
+        stats: base.stats.clone(),
+        cache: loaded.cache,
+        hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
+        peak_pressure_bar: pp / 1e5,
+        peak_pressure_deg: pdeg,
+        time_series_csv: None,
+        full_order: None,
+        rom_error_peak_negative: None,
+        speedup: None,
+    };
+    simulate.seconds = started.elapsed().as_secs_f64();
     std::fs::create_dir_all(out).map_err(|e| {
-        Error::Input(format!(
-            "{}: cannot create the output directory: {e}",
-            out.display()
-        ))
+        Error::Input(format!("{}: cannot create the output directory: {e}", out.display()))
     })?;
-    let json = serde_json::to_string_pretty(&r).expect("serialisable");
-    let md = format!(
-        "# linercav report: {}\n\n## Liner modes (free-free)\n\n```\n{}```\n\nReproduce: `linercav report {} --out {}`\n",
-        scene.display(),
-        r.to_text().replace(&format!("{:.2} s", r.seconds), "(see liner_modes.json) s"),
-        scene.display(),
-        out.display()
-    );
-    atomic::write_all_atomic(vec![
-        (
-            out.join("liner_modes.json"),
-            Box::new(move |w: &mut dyn std::io::Write| w.write_all(json.as_bytes())),
-        ),
-        (
-            out.join("summary.md"),
-            Box::new(move |w: &mut dyn std::io::Write| w.write_all(md.as_bytes())),
-        ),
+    progress.phase("figures");
+    let figs = figures(out, &scene, &piston, base, &ev, &clearance, &offset, &trade, rom)?;
+    let mut report = Report {
+        scene: scene.path.display().to_string(),
+        title: scene.title.clone(),
+        speed_rpm: scene.engine.speed_rpm,
+        simulate,
+        evaluation: ev,
+        clearance_sweep: clearance,
+        pin_offset_sweep: offset,
+        tradeoff: trade,
+        files: figs.iter().map(|p| p.display().to_string()).collect(),
+        seconds: 0.0,
+    };
+    report.seconds = started.elapsed().as_secs_f64();
+    let md = markdown(&report, scene_path, out);
+    let json = serde_json::to_string_pretty(&report).expect("serialisable");
+    write_all_atomic(vec![
+        (out.join("summary.json"), Box::new(move |w: &mut dyn std::io::Write| w.write_all(json.as_bytes()))),
+        (out.join("summary.md"), Box::new(move |w: &mut dyn std::io::Write| w.write_all(md.as_bytes()))),
     ])?;
-    Ok(r)
+    Ok(report)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn figures(
+    out: &Path,
+    scene: &Scene,
+    piston: &Piston,
+    base: &CycleResult,
+    ev: &Evaluation,
+    clearance: &[SweepPoint],
+    offset: &[SweepPoint],
+    trade: &[crate::app::summary::TradeoffPoint],
+    rom: &EngineRom,
+) -> Result<Vec<PathBuf>> {
+    let t = ev.thresholds;
+    let mut files = Vec::new();
+    let s = &base.series;
+    let fo = &scene.engine.firing_order;
+    let n = s.time_s.len();
+    let own = |ci: usize| -> Vec<f64> {
+        let cyl = s.cylinders[ci].cylinder;
+        let k = fo.iter().position(|&x| x == cyl).unwrap_or(0);
+        let phase = 720.0 * k as f64 / fo.len() as f64;
+        s.crank_angle_deg.iter().map(|a| (a - phase).rem_euclid(720.0)).collect()
+    };
+    // pressure and side force
+    let p = out.join("pressure.png");
+    let pressure: Vec<(f64, f64)> = (0..=1440).map(|k| {
+        let d = k as f64 * 0.5;
+        (d, piston.pressure.at(d) / 1e5)
+    }).collect();
+    let side: Vec<(f64, f64)> = (0..=1440).map(|k| {
+        let d = k as f64 * 0.5;
+        (d, piston.loads(d).side_force / 1e3)
+    }).collect();
+    write_png(&p, (1500, 560), |root| {
+        let (a, b) = root.split_horizontally(750);
+        Chart { title: "Cylinder pressure", x_label: "crank angle [deg] (firing TDC 360)", y_label: "pressure [bar]", series: vec![Series { name: String::new(), points: pressure.clone(), mark: Mark::Line, color: 0 }], rules: vec![Rule { name: "firing TDC".into(), value: 360.0, vertical: true, color: 6 }], x_range: None, y_range: None }.draw(&a)?;
+        Chart { title: "Quasi-static side force (+ toward thrust)", x_label: "crank angle [deg]", y_label: "side force [kN]", series: vec![Series { name: String::new(), points: side.clone(), mark: Mark::Line, color: 1 }], rules: vec![Rule { name: "firing TDC".into(), value: 360.0, vertical: true, color: 6 }], x_range: None, y_range: None }.draw(&b)
+    })?;
+    files.push(p);
+    // acceleration time series per cylinder, around firing
+    let p = out.join("acceleration.png");
+    let nc = s.cylinders.len();
+    write_png(&p, (1500, 340 * nc.div_ceil(2).max(1) as u32), |root| {
+        let areas = root.split_evenly((nc.div_ceil(2).max(1), 2));
+        for (ci, area) in areas.iter().enumerate().take(nc) {
+            let ang = own(ci);
+            let c = &s.cylinders[ci];
+            let series = c.acceleration.iter().enumerate().map(|(pi, a)| {
+                let mut pts: Vec<(f64, f64)> = (0..n).filter(|&k| ang[k] >= 330.0 && ang[k] <= 450.0).map(|k| (ang[k], a[k])).collect();
+                pts.sort_by(|x, y| x.0.total_cmp(&y.0));
+                Series { name: format!("point {}", pi + 1), points: pts, mark: Mark::Line, color: pi }
+            }).collect();
+            let title = format!("Cylinder {}: liner acceleration (+ toward the coolant)", c.cylinder);
+            Chart { title: &title, x_label: "crank angle of the cylinder [deg]", y_label: "acceleration [m/s^2]", series, rules: vec![
+                Rule { name: "-onset".into(), value: -t.onset_m_s2, vertical: false, color: 4 },
+                Rule { name: "-high risk".into(), value: -t.high_risk_m_s2, vertical: false, color: 1 },
+            ], x_range: Some((330.0, 450.0)), y_range: None }.draw(area)?;
+        }
+        Ok(())
+    })?;
+    files.push(p);
+    // spectra of each cylinder's worst point
+    let p = out.join("spectra.png");
+    let sp = spectra(s, fo);
+    let band = scene.rom.band_hz;
+    write_png(&p, (1500, 600), |root| {
+        let series = ev.cylinders.iter().enumerate().filter_map(|(ci, c)| {
+            let spc = sp.get(ci)?.get(c.worst_point.checked_sub(1)?)?;
+            Some(Series { name: format!("cylinder {} point {}", c.cylinder, c.worst_point), points: spc.frequency_hz.iter().zip(&spc.amplitude).filter(|(f, _)| **f <= band).map(|(f, a)| (*f, *a)).collect(), mark: Mark::Line, color: ci })
+        }).collect();
+        let rules = ev.nearest_modes.iter().take(2).enumerate().map(|(k, m)| Rule { name: format!("system mode {:.0} Hz", m.frequency_hz), value: m.frequency_hz, vertical: true, color: 6 + k }).collect();
+        let title = format!("Amplitude spectra (Hann, window centred on firing); dominant {:.0} Hz", ev.dominant_hz);
+        Chart { title: &title, x_label: "frequency [Hz]", y_label: "amplitude [m/s^2]", series, rules, x_range: Some((0.0, band)), y_range: None }.draw(root)
+    })?;
+    files.push(p);
+    // peaks per cylinder and point with thresholds
+    let p = out.join("peaks.png");
+    let names: Vec<String> = ev.cylinders.iter().map(|c| format!("cyl {} ({})", c.cylinder, c.worst.label())).collect();
+    let np = ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0);
+    let bar_names: Vec<String> = (1..=np).map(|k| format!("point {k}")).collect();
+    let groups: Vec<Vec<f64>> = ev.cylinders.iter().map(|c| c.points.iter().map(|p| p.peak_negative_m_s2).collect()).collect();
+    write_png(&p, (1500, 620), |root| {
+        bars(root, "Peak negative liner acceleration per cylinder and point (top to bottom)", "peak negative acceleration [m/s^2]", &names, &bar_names, &groups, &[
+            Rule { name: format!("onset {:.0}", t.onset_m_s2), value: t.onset_m_s2, vertical: false, color: 4 },
+            Rule { name: format!("high risk {:.0}", t.high_risk_m_s2), value: t.high_risk_m_s2, vertical: false, color: 1 },
+        ])
+    })?;
+    files.push(p);
+    // mode-shape coefficients beside risk
+    let p = out.join("modes_risk.png");
+    let cyl_names: Vec<String> = ev.cylinders.iter().map(|c| format!("cyl {}", c.cylinder)).collect();
+    let shapes = super::rom::shapes(rom);
+    write_png(&p, (1500, 600), |root| {
+        let (a, b) = root.split_horizontally(750);
+        if let Some(m) = ev.nearest_modes.first() {
+            let j = shapes.iter().position(|s| s.frequency_hz == m.frequency_hz).unwrap_or(0);
+            let g: Vec<Vec<f64>> = shapes[j].coefficients.iter().map(|r| r.iter().map(|v| v.abs()).collect()).collect();
+            let title = format!("|Mode-shape coefficient|, system mode {:.0} Hz (r = {})", m.frequency_hz, m.pearson.map(|v| format!("{v:.2}")).unwrap_or("-".into()));
+            bars(&a, &title, "normalised radial amplitude", &cyl_names, &bar_names, &g, &[])?;
+        }
+        let g: Vec<Vec<f64>> = ev.cylinders.iter().map(|c| vec![c.peak_negative_m_s2]).collect();
+        bars(&b, "Per-cylinder peak negative acceleration", "m/s^2", &cyl_names, &["largest over the points".to_string()], &g, &[
+            Rule { name: "high risk".into(), value: t.high_risk_m_s2, vertical: false, color: 1 },
+        ])
+    })?;
+    files.push(p);
+    // sweeps
+    for (name, key, pts, unit) in [("sweep_clearance.png", "cold clearance [um]", clearance, "clearance"), ("sweep_pin_offset.png", "pin offset [mm] (+ toward thrust)", offset, "pin offset")] {
+        let p = out.join(name);
+        let per_cyl = |f: &dyn Fn(&SweepPoint, usize) -> f64| -> Vec<Series> {
+            (0..ev.cylinders.len()).map(|c| Series { name: format!("cylinder {}", ev.cylinders[c].cylinder), points: pts.iter().map(|s| (s.value, f(s, c))).collect(), mark: Mark::LineDots, color: c }).collect()
+        };
+        let t1 = format!("Slap force against {unit}");
+        let t2 = format!("Piston tilt against {unit}");
+        let t3 = format!("Liner acceleration against {unit}");
+        write_png(&p, (1800, 560), |root| {
+            let areas = root.split_evenly((1, 3));
+            Chart { title: &t1, x_label: key, y_label: "peak slap force [kN]", series: per_cyl(&|s, c| s.peak_slap_force_n[c] / 1e3), rules: vec![], x_range: None, y_range: None }.draw(&areas[0])?;
+            Chart { title: &t2, x_label: key, y_label: "peak |tilt| [mrad]", series: per_cyl(&|s, c| s.peak_tilt_rad[c] * 1e3), rules: vec![], x_range: None, y_range: None }.draw(&areas[1])?;
+            Chart { title: &t3, x_label: key, y_label: "peak negative acceleration [m/s^2]", series: per_cyl(&|s, c| s.peak_negative_m_s2[c]), rules: vec![
+                Rule { name: "onset".into(), value: t.onset_m_s2, vertical: false, color: 4 },
+                Rule { name: "high risk".into(), value: t.high_risk_m_s2, vertical: false, color: 7 },
+            ], x_range: None, y_range: None }.draw(&areas[2])
+        })?;
+        files.push(p);
+    }
+    // CSF against Ca
+    let p = out.join("criteria.png");
+    let pts: Vec<(f64, f64)> = ev.cylinders.iter().flat_map(|c| c.points.iter().map(|p| (p.ca, p.csf))).collect();
+    write_png(&p, (900, 700), |root| {
+        Chart { title: "Velocity criterion (CSF) against acceleration criterion (Ca)", x_label: "Ca = (p_r - p_v)/(rho |a| h)  (< 1: cavitation)", y_label: "CSF = Vccv / Vmax  (< 1: cavitation)", series: vec![Series { name: "analysis points".into(), points: pts.clone(), mark: Mark::Dots, color: 0 }], rules: vec![
+            Rule { name: "Ca = 1".into(), value: 1.0, vertical: true, color: 1 },
+            Rule { name: "CSF = 1".into(), value: 1.0, vertical: false, color: 2 },
+        ], x_range: None, y_range: None }.draw(root)
+    })?;
+    files.push(p);
+    // speed against error
+    let p = out.join("speed_error.png");
+    write_png(&p, (1100, 650), |root| {
+        let modes: Vec<(f64, f64)> = trade.iter().filter(|x| x.setting.starts_with("modes")).map(|x| (x.seconds * 1e3, x.error.max(1e-6))).collect();
+        let steps: Vec<(f64, f64)> = trade.iter().filter(|x| x.setting.starts_with("all")).map(|x| (x.seconds * 1e3, x.error.max(1e-6))).collect();
+        Chart { title: "Fast path: error against wall time (window 330-420 deg, one cylinder)", x_label: "wall time of the window [ms]", y_label: "error of peak negative acceleration (relative)", series: vec![
+            Series { name: "mode cut-off (band, 1.5x, 2x band)".into(), points: modes, mark: Mark::LineDots, color: 0 },
+            Series { name: "step (4x, 2x, 1x, 0.5x the scene's)".into(), points: steps, mark: Mark::LineDots, color: 1 },
+        ], rules: vec![Rule { name: "2 %".into(), value: 0.02, vertical: false, color: 6 }], x_range: None, y_range: None }.draw(root)
+    })?;
+    files.push(p);
+    Ok(files)
+}
+
+fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
+    use std::fmt::Write;
+    let ev = &r.evaluation;
+    let t = &ev.thresholds;
+    let mut s = format!("# linercav report: {}\n\n{} at {:.0} rpm; peak cylinder pressure {:.1} bar at {:.1} deg; hot clearance {:.1} um.\n\n", r.title, r.scene, r.speed_rpm, r.simulate.peak_pressure_bar, r.simulate.peak_pressure_deg, r.simulate.hot_clearance_um);
+    let _ = writeln!(s, "## Verdict\n");
+    let _ = writeln!(s, "Acceleration criterion ({}): onset {:.0} m/s^2, high risk {:.0} m/s^2 (k_p {:.1} Pa per m/s^2). Cylinders from the highest to the lowest peak negative acceleration: {:?}. The most active point along the liner: {} (of {}, top to bottom).\n", ev.threshold_source, t.onset_m_s2, t.high_risk_m_s2, t.k_p_pa_per_m_s2, ev.ranking, ev.most_active_point, ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0));
+    let _ = writeln!(s, "| cylinder | risk | peak negative per point [m/s^2] | Ca per point | CSF per point | slap force [kN] | side force [kN] at [deg] |\n|---|---|---|---|---|---|---|");
+    for (c, cr) in ev.cylinders.iter().zip(&r.simulate.cylinders) {
+        let f = |v: Vec<String>| v.join(" / ");
+        let _ = writeln!(s, "| {} | {} | {} | {} | {} | {:.2} | {:.1} at {:.1} |", c.cylinder, c.worst.label(),
+            f(c.points.iter().map(|p| format!("{:.0}", p.peak_negative_m_s2)).collect()),
+            f(c.points.iter().map(|p| format!("{:.2}", p.ca)).collect()),
+            f(c.points.iter().map(|p| format!("{:.2}", p.csf)).collect()),
+            cr.peak_slap_force_n / 1e3, cr.peak_side_force_n / 1e3, cr.side_force_crank_angle_deg);
+    }
+    let _ = writeln!(s, "\n## Why the cylinders differ\n\nDominant response {:.0} Hz. Nearest system modes, with each cylinder's largest normalised radial coefficient at its analysis points and the correlation of those with the per-cylinder peak:\n", ev.dominant_hz);
+    let _ = writeln!(s, "| mode [Hz] | coefficients (cylinders {:?}) | Pearson r | Spearman rho |\n|---|---|---|---|", ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>());
+    for m in &ev.nearest_modes {
+        let _ = writeln!(s, "| {:.0} | {} | {} | {} |", m.frequency_hz, m.cylinder_coefficients.iter().map(|v| format!("{v:.2}")).collect::<Vec<_>>().join(", "), m.pearson.map(|v| format!("{v:.2}")).unwrap_or("-".into()), m.spearman.map(|v| format!("{v:.2}")).unwrap_or("-".into()));
+    }
+    let _ = writeln!(s, "\n## What-if\n\n| clearance [um] | largest peak negative [m/s^2] | largest slap force [kN] |\n|---|---|---|");
+    for p in &r.clearance_sweep {
+        let _ = writeln!(s, "| {:.0} | {:.0} | {:.2} |", p.value, p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)), p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3);
+    }
+    let _ = writeln!(s, "\n| pin offset [mm] | largest peak negative [m/s^2] | largest slap force [kN] | side-force peak [kN] at [deg] |\n|---|---|---|---|");
+    for p in &r.pin_offset_sweep {
+        let _ = writeln!(s, "| {:+.1} | {:.0} | {:.2} | {:.1} at {:.1} |", p.value, p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)), p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3, p.peak_side_force_n.first().copied().unwrap_or(0.0) / 1e3, p.side_force_crank_angle_deg.first().copied().unwrap_or(0.0));
+    }
+    let _ = writeln!(s, "\n## Speed against error (fast path, window 330-420 deg)\n\n| setting | modes | error | wall time [ms] |\n|---|---|---|---|");
+    for x in &r.tradeoff {
+        let _ = writeln!(s, "| {} | {} | {:.2e} | {:.1} |", x.setting, x.modes, x.error, x.seconds * 1e3);
+    }
+    let _ = writeln!(s, "\n## Figures\n");
+    for f in &r.files {
+        let name = Path::new(f).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let _ = writeln!(s, "![{name}]({name})");
+    }
+    let _ = writeln!(s, "\nReproduce: `linercav report {} --out {}` (solver: {} steps, {} Newton iterations, {} rejected, energy balance {:.1e}, cycle change {:.1e}).", scene.display(), out.display(), r.simulate.stats.steps, r.simulate.stats.newton_iterations, r.simulate.stats.rejected_steps, r.simulate.stats.energy_error, r.simulate.stats.cycle_change);
+    s
+}
+
+impl Report {
+    pub fn to_text(&self) -> String {
+        let mut s = self.evaluation.to_text();
+        s += &format!("report written: {} files in {:.1} s\n", self.files.len() + 2, self.seconds);
+        s
+    }
 }
