@@ -226,7 +226,12 @@ enum Command {
         #[arg(long, value_name = "P", allow_negative_numbers = true)]
         static_kpa: f64,
         /// Ethylene glycol mass fraction.
-        #[arg(long, value_name = "F", default_value_t = 0.0, allow_negative_numbers = true)]
+        #[arg(
+            long,
+            value_name = "F",
+            default_value_t = 0.0,
+            allow_negative_numbers = true
+        )]
         glycol: f64,
         /// Coolant gap [mm].
         #[arg(long, value_name = "H", allow_negative_numbers = true)]
@@ -251,7 +256,12 @@ enum Command {
         #[arg(long, value_name = "T", allow_negative_numbers = true)]
         temp_c: f64,
         /// Ethylene glycol mass fraction.
-        #[arg(long, value_name = "FRACTION", default_value_t = 0.0, allow_negative_numbers = true)]
+        #[arg(
+            long,
+            value_name = "FRACTION",
+            default_value_t = 0.0,
+            allow_negative_numbers = true
+        )]
         glycol: f64,
         /// Quiet time that separates events [ms].
         #[arg(long, value_name = "MS", default_value_t = 2.0)]

@@ -21,7 +21,16 @@ fn linercav(args: &[&str]) -> (i32, String, String) {
 /// c = 1550.4 m/s; Vccv = (240 - 70.18) kPa / (965.3 x 1550.4) = 0.1135 m/s.
 #[test]
 fn coolant_json_matches_hand_values() {
-    let (code, out, err) = linercav(&["coolant", "--temp-c", "90", "--static-kpa", "240", "--gap-mm", "4.7", "--json"]);
+    let (code, out, err) = linercav(&[
+        "coolant",
+        "--temp-c",
+        "90",
+        "--static-kpa",
+        "240",
+        "--gap-mm",
+        "4.7",
+        "--json",
+    ]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let get = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} in {out}"));
@@ -51,7 +60,9 @@ fn synthetic(path: &Path, neg_lo: f64, neg_hi: f64, n: usize) -> (f64, f64, f64)
     let fs = 50_000.0;
     let mut seed: u64 = 12345;
     let mut noise = move |scale: f64| {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         scale * (((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0)
     };
     let mut s = String::from("time_s,acceleration_m_s2,pressure_kpa\n");
@@ -69,7 +80,13 @@ fn synthetic(path: &Path, neg_lo: f64, neg_hi: f64, n: usize) -> (f64, f64, f64)
             };
             let p = (ps + k * a).max(pv + 0.5e3);
             let time = (i * per + j) as f64 / fs;
-            writeln!(s, "{time:.7},{:.4},{:.4}", a + noise(2.0), p / 1e3 + noise(0.1)).unwrap();
+            writeln!(
+                s,
+                "{time:.7},{:.4},{:.4}",
+                a + noise(2.0),
+                p / 1e3 + noise(0.1)
+            )
+            .unwrap();
         }
     }
     std::fs::write(path, s).unwrap();
@@ -90,17 +107,39 @@ fn calibration_recovers_known_thresholds() {
     let png = dir.path().join("cal.png");
     let (onset, high, k_mean) = synthetic(&csv, 300.0, 2000.0, 350);
     let (code, out, err) = linercav(&[
-        "calibrate", "--data", csv.to_str().unwrap(), "--gap-mm", "4.7", "--static-kpa", "240",
-        "--temp-c", "90", "--json", "--png", png.to_str().unwrap(),
+        "calibrate",
+        "--data",
+        csv.to_str().unwrap(),
+        "--gap-mm",
+        "4.7",
+        "--static-kpa",
+        "240",
+        "--temp-c",
+        "90",
+        "--json",
+        "--png",
+        png.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let get = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} in output"));
     assert_eq!(v["events"].as_u64(), Some(350));
     let rel = |a: f64, b: f64| (a / b - 1.0).abs();
-    assert!(rel(get("onset_m_s2"), onset) < 0.05, "onset {} vs {onset}", get("onset_m_s2"));
-    assert!(rel(get("high_risk_m_s2"), high) < 0.05, "high {} vs {high}", get("high_risk_m_s2"));
-    assert!(rel(get("k_p_pa_per_m_s2"), k_mean) < 0.05, "k_p {} vs {k_mean}", get("k_p_pa_per_m_s2"));
+    assert!(
+        rel(get("onset_m_s2"), onset) < 0.05,
+        "onset {} vs {onset}",
+        get("onset_m_s2")
+    );
+    assert!(
+        rel(get("high_risk_m_s2"), high) < 0.05,
+        "high {} vs {high}",
+        get("high_risk_m_s2")
+    );
+    assert!(
+        rel(get("k_p_pa_per_m_s2"), k_mean) < 0.05,
+        "k_p {} vs {k_mean}",
+        get("k_p_pa_per_m_s2")
+    );
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");
 }
@@ -110,15 +149,32 @@ fn refused(dir: &Path, name: &str, text: &str, needle: &str) {
     std::fs::write(&csv, text).unwrap();
     let png = dir.join(format!("{name}.png"));
     let (code, out, err) = linercav(&[
-        "calibrate", "--data", csv.to_str().unwrap(), "--gap-mm", "4.7", "--static-kpa", "240",
-        "--temp-c", "90", "--json", "--png", png.to_str().unwrap(),
+        "calibrate",
+        "--data",
+        csv.to_str().unwrap(),
+        "--gap-mm",
+        "4.7",
+        "--static-kpa",
+        "240",
+        "--temp-c",
+        "90",
+        "--json",
+        "--png",
+        png.to_str().unwrap(),
     ]);
     assert_eq!(code, 2, "{name}: {err}");
     assert!(err.contains(needle), "{name}: '{err}' lacks '{needle}'");
-    assert!(err.contains(csv.to_str().unwrap()), "{name}: {err} does not name the file");
+    assert!(
+        err.contains(csv.to_str().unwrap()),
+        "{name}: {err} does not name the file"
+    );
     assert!(out.is_empty(), "{name}: printed {out}");
     assert!(!png.exists(), "{name}: wrote a PNG");
-    let stray = std::fs::read_dir(dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains(".tmp")).count();
+    let stray = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
+        .count();
     assert_eq!(stray, 0, "{name}: left a temporary file");
 }
 
@@ -126,14 +182,31 @@ fn refused(dir: &Path, name: &str, text: &str, needle: &str) {
 fn bad_rig_data_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    refused(d, "nocol.csv", "time_s,acceleration_m_s2\n0,1\n", "missing column 'pressure_kpa'");
+    refused(
+        d,
+        "nocol.csv",
+        "time_s,acceleration_m_s2\n0,1\n",
+        "missing column 'pressure_kpa'",
+    );
     let mut rows = String::from("time_s,acceleration_m_s2,pressure_kpa\n");
     for i in 0..40 {
-        writeln!(rows, "{},{},240", i as f64 * 1e-4, if i == 20 { "NaN".to_string() } else { "0".into() }).unwrap();
+        writeln!(
+            rows,
+            "{},{},240",
+            i as f64 * 1e-4,
+            if i == 20 {
+                "NaN".to_string()
+            } else {
+                "0".into()
+            }
+        )
+        .unwrap();
     }
     refused(d, "nan.csv", &rows, ":22:");
     let back = "time_s,acceleration_m_s2,pressure_kpa\n".to_string()
-        + &(0..40).map(|i| format!("{},0,240\n", if i == 30 { 0.0 } else { i as f64 })).collect::<String>();
+        + &(0..40)
+            .map(|i| format!("{},0,240\n", if i == 30 { 0.0 } else { i as f64 }))
+            .collect::<String>();
     refused(d, "time.csv", &back, "does not increase");
     let quiet = rows.replace("NaN", "0");
     refused(d, "quiet.csv", &quiet, "no events found");

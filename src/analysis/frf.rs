@@ -4,7 +4,13 @@
 /// shapes: A(w) = -w^2 sum_r phi_pr phi_qr / (w_r^2 - w^2 + 2 i zeta w_r w) [m/s^2/N],
 /// evaluated at each frequency of `freqs_hz`. `phi_p`, `phi_q` are the two rows (one value per
 /// mode), `modes_hz` the modal frequencies, `zeta` the modal damping ratio.
-pub fn inertance(phi_p: &[f64], phi_q: &[f64], modes_hz: &[f64], zeta: f64, freqs_hz: &[f64]) -> Vec<f64> {
+pub fn inertance(
+    phi_p: &[f64],
+    phi_q: &[f64],
+    modes_hz: &[f64],
+    zeta: f64,
+    freqs_hz: &[f64],
+) -> Vec<f64> {
     let tau = 2.0 * std::f64::consts::PI;
     freqs_hz
         .iter()

@@ -39,7 +39,11 @@ pub fn amplitude_spectrum(x: &[f64], dt: f64) -> Spectrum {
         frequency_hz: (0..=half).map(|k| k as f64 * df).collect(),
         amplitude: (0..=half)
             .map(|k| {
-                let s = if k == 0 || (n % 2 == 0 && k == half) { 1.0 } else { 2.0 };
+                let s = if k == 0 || (n % 2 == 0 && k == half) {
+                    1.0
+                } else {
+                    2.0
+                };
                 s * buf[k].norm() / sw
             })
             .collect(),
@@ -62,7 +66,10 @@ impl Spectrum {
         let den = a - 2.0 * b + c;
         let p = if den < 0.0 { 0.5 * (a - c) / den } else { 0.0 };
         let df = self.frequency_hz[1] - self.frequency_hz[0];
-        Some((self.frequency_hz[k] + p.clamp(-0.5, 0.5) * df, self.amplitude[k]))
+        Some((
+            self.frequency_hz[k] + p.clamp(-0.5, 0.5) * df,
+            self.amplitude[k],
+        ))
     }
 }
 

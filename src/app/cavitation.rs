@@ -50,7 +50,12 @@ fn gap_of(gap_mm: f64) -> Result<f64> {
 }
 
 /// Runs `coolant`.
-pub fn coolant(temp_c: f64, static_kpa: f64, glycol: f64, gap_mm: Option<f64>) -> Result<CoolantReport> {
+pub fn coolant(
+    temp_c: f64,
+    static_kpa: f64,
+    glycol: f64,
+    gap_mm: Option<f64>,
+) -> Result<CoolantReport> {
     let c = coolant_of(temp_c, static_kpa, glycol)?;
     let k_p = criteria::reference_k_p().expect("reference state valid");
     let gap = gap_mm.map(gap_of).transpose()?;
@@ -81,7 +86,9 @@ impl CoolantReport {
             self.speed_of_sound_m_s,
             self.vccv_m_s
         );
-        if let (Some(h), Some(st), Some(t)) = (self.gap_mm, self.static_threshold_m_s2, self.threshold_m_s2) {
+        if let (Some(h), Some(st), Some(t)) =
+            (self.gap_mm, self.static_threshold_m_s2, self.threshold_m_s2)
+        {
             s += &format!(
                 "  gap {h} mm: static threshold (p_s - p_v)/(rho h) = {st:.0} m/s^2\n  with the wall-pressure swing k_p = {:.1} Pa/(m/s^2): Ca = 1 at {t:.0} m/s^2\n",
                 self.k_p_pa_per_m_s2
@@ -107,7 +114,10 @@ pub fn calibrate(req: &CalibrateRequest) -> Result<Calibration> {
     let coolant = coolant_of(req.temp_c, req.static_kpa, req.glycol)?;
     let gap = gap_of(req.gap_mm)?;
     if !(req.quiet_ms.is_finite() && req.quiet_ms > 0.0) {
-        return Err(Error::Input(format!("--quiet-ms {}: must be positive", req.quiet_ms)));
+        return Err(Error::Input(format!(
+            "--quiet-ms {}: must be positive",
+            req.quiet_ms
+        )));
     }
     let d = RigData::read(&req.data).map_err(|e| Error::Input(e.to_string()))?;
     let file = req.data.display().to_string();
@@ -139,15 +149,33 @@ pub fn draw_calibration(path: &std::path::Path, cal: &Calibration) -> Result<()>
         .map(|e| e.peak_positive_m_s2.max(e.peak_negative_m_s2))
         .fold(0.0f64, f64::max);
     let k = cal.k_p_pa_per_m_s2 / 1e3;
-    let pos: Vec<(f64, f64)> = cal.event_list.iter().map(|e| (e.peak_positive_m_s2, e.peak_pressure_kpa)).collect();
-    let neg: Vec<(f64, f64)> = cal.event_list.iter().map(|e| (-e.peak_negative_m_s2, e.min_pressure_kpa)).collect();
+    let pos: Vec<(f64, f64)> = cal
+        .event_list
+        .iter()
+        .map(|e| (e.peak_positive_m_s2, e.peak_pressure_kpa))
+        .collect();
+    let neg: Vec<(f64, f64)> = cal
+        .event_list
+        .iter()
+        .map(|e| (-e.peak_negative_m_s2, e.min_pressure_kpa))
+        .collect();
     let left = Chart {
         title: "Peak wall pressure against peak liner acceleration",
         x_label: "peak acceleration [m/s^2] (+ toward the coolant)",
         y_label: "peak pressure [kPa]",
         series: vec![
-            Series { name: "positive peaks".into(), points: pos, mark: Mark::Dots, color: 0 },
-            Series { name: "negative peaks".into(), points: neg, mark: Mark::Dots, color: 1 },
+            Series {
+                name: "positive peaks".into(),
+                points: pos,
+                mark: Mark::Dots,
+                color: 0,
+            },
+            Series {
+                name: "negative peaks".into(),
+                points: neg,
+                mark: Mark::Dots,
+                color: 1,
+            },
             Series {
                 name: format!("p_s + k_p a, k_p = {:.1} Pa/(m/s^2)", cal.k_p_pa_per_m_s2),
                 points: vec![(-amax, ps - k * amax), (amax, ps + k * amax)],
@@ -155,21 +183,50 @@ pub fn draw_calibration(path: &std::path::Path, cal: &Calibration) -> Result<()>
                 color: 7,
             },
         ],
-        rules: vec![Rule { name: "vapour pressure".into(), value: pv, vertical: false, color: 2 }],
+        rules: vec![Rule {
+            name: "vapour pressure".into(),
+            value: pv,
+            vertical: false,
+            color: 2,
+        }],
         x_range: None,
         y_range: None,
     };
-    let ca: Vec<(f64, f64)> = cal.event_list.iter().map(|e| (e.peak_negative_m_s2, e.ca)).collect();
+    let ca: Vec<(f64, f64)> = cal
+        .event_list
+        .iter()
+        .map(|e| (e.peak_negative_m_s2, e.ca))
+        .collect();
     let ca_max = ca.iter().map(|p| p.1).fold(1.0f64, f64::max).min(10.0);
     let right = Chart {
         title: "Acceleration cavitation number per event",
         x_label: "peak negative acceleration |a| [m/s^2]",
         y_label: "Ca = (p_r - p_v) / (rho |a| h)",
-        series: vec![Series { name: "events".into(), points: ca, mark: Mark::Dots, color: 0 }],
+        series: vec![Series {
+            name: "events".into(),
+            points: ca,
+            mark: Mark::Dots,
+            color: 0,
+        }],
         rules: vec![
-            Rule { name: "Ca = 1".into(), value: 1.0, vertical: false, color: 7 },
-            Rule { name: format!("onset {:.0} m/s^2", cal.onset_m_s2), value: cal.onset_m_s2, vertical: true, color: 4 },
-            Rule { name: format!("high risk {:.0} m/s^2", cal.high_risk_m_s2), value: cal.high_risk_m_s2, vertical: true, color: 1 },
+            Rule {
+                name: "Ca = 1".into(),
+                value: 1.0,
+                vertical: false,
+                color: 7,
+            },
+            Rule {
+                name: format!("onset {:.0} m/s^2", cal.onset_m_s2),
+                value: cal.onset_m_s2,
+                vertical: true,
+                color: 4,
+            },
+            Rule {
+                name: format!("high risk {:.0} m/s^2", cal.high_risk_m_s2),
+                value: cal.high_risk_m_s2,
+                vertical: true,
+                color: 1,
+            },
         ],
         x_range: None,
         y_range: Some((-0.05 * ca_max, ca_max * 1.05)),

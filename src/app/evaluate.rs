@@ -87,7 +87,10 @@ pub fn spectra(series: &Series, firing_order: &[usize]) -> Vec<Vec<Spectrum>> {
         .cylinders
         .iter()
         .map(|c| {
-            let k = firing_order.iter().position(|&x| x == c.cylinder).unwrap_or(0);
+            let k = firing_order
+                .iter()
+                .position(|&x| x == c.cylinder)
+                .unwrap_or(0);
             let phase = 720.0 * k as f64 / cyls as f64;
             // sample whose own crank angle is 0 (firing TDC 360 then sits at the centre)
             let start = (0..n)
@@ -125,12 +128,22 @@ pub fn peak_velocity(a: &[f64], dt: f64) -> f64 {
 }
 
 /// Evaluates `res` (from `rom`) with the scene's cavitation data.
-pub fn evaluate(res: &CycleResult, rom: &EngineRom, cav: &CavitationSpec, firing_order: &[usize], band_hz: f64) -> Evaluation {
+pub fn evaluate(
+    res: &CycleResult,
+    rom: &EngineRom,
+    cav: &CavitationSpec,
+    firing_order: &[usize],
+    band_hz: f64,
+) -> Evaluation {
     let t = cav.thresholds;
     let c = &cav.coolant;
     let s = &res.series;
     let n = s.time_s.len();
-    let dt = if n > 1 { (s.time_s[n - 1] - s.time_s[0]) / (n - 1) as f64 } else { 1.0 };
+    let dt = if n > 1 {
+        (s.time_s[n - 1] - s.time_s[0]) / (n - 1) as f64
+    } else {
+        1.0
+    };
     let sp = spectra(s, firing_order);
     let mut cylinders = Vec::new();
     let mut best = (0.0f64, 0.0f64);
@@ -138,7 +151,11 @@ pub fn evaluate(res: &CycleResult, rom: &EngineRom, cav: &CavitationSpec, firing
         let mut pts = Vec::new();
         for (p, neg) in peaks.peak_negative.iter().enumerate() {
             let a = neg.value;
-            let v = s.cylinders.get(ci).map(|cs| peak_velocity(&cs.acceleration[p], dt)).unwrap_or(0.0);
+            let v = s
+                .cylinders
+                .get(ci)
+                .map(|cs| peak_velocity(&cs.acceleration[p], dt))
+                .unwrap_or(0.0);
             let (fd, amp) = sp
                 .get(ci)
                 .and_then(|x| x.get(p))
@@ -176,8 +193,14 @@ pub fn evaluate(res: &CycleResult, rom: &EngineRom, cav: &CavitationSpec, firing
     let ranking: Vec<usize> = ranking.iter().map(|c| c.cylinder).collect();
     let per_cyl: Vec<f64> = cylinders.iter().map(|c| c.peak_negative_m_s2).collect();
     let modes = shapes(rom);
-    let mut order: Vec<usize> = (0..modes.len()).filter(|&j| rom.frequencies_hz[j] <= band_hz * 1.5).collect();
-    order.sort_by(|&a, &b| (modes[a].frequency_hz - best.0).abs().total_cmp(&(modes[b].frequency_hz - best.0).abs()));
+    let mut order: Vec<usize> = (0..modes.len())
+        .filter(|&j| rom.frequencies_hz[j] <= band_hz * 1.5)
+        .collect();
+    order.sort_by(|&a, &b| {
+        (modes[a].frequency_hz - best.0)
+            .abs()
+            .total_cmp(&(modes[b].frequency_hz - best.0).abs())
+    });
     let nearest_modes = order
         .iter()
         .take(3)
@@ -202,7 +225,10 @@ pub fn evaluate(res: &CycleResult, rom: &EngineRom, cav: &CavitationSpec, firing
             count[c.worst_point - 1] += 1;
         }
     }
-    let most_active_point = (0..np).max_by_key(|&k| (count[k], std::cmp::Reverse(k))).map(|k| k + 1).unwrap_or(0);
+    let most_active_point = (0..np)
+        .max_by_key(|&k| (count[k], std::cmp::Reverse(k)))
+        .map(|k| k + 1)
+        .unwrap_or(0);
     Evaluation {
         thresholds: t,
         threshold_source: t.source,
@@ -228,7 +254,11 @@ impl Evaluation {
         for c in &self.cylinders {
             let _ = write!(s, "  cylinder {}: {:<12}", c.cylinder, c.worst.label());
             for p in &c.points {
-                let _ = write!(s, " p{} {:>6.0} (Ca {:>5.2}, CSF {:>5.2})", p.point, p.peak_negative_m_s2, p.ca, p.csf);
+                let _ = write!(
+                    s,
+                    " p{} {:>6.0} (Ca {:>5.2}, CSF {:>5.2})",
+                    p.point, p.peak_negative_m_s2, p.ca, p.csf
+                );
             }
             let _ = writeln!(s);
         }

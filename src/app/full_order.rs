@@ -311,10 +311,18 @@ pub fn rom_window(
     // --- ROM window
     let all = rom.frequencies_hz.len();
     let nm = match keep_below_hz {
-        Some(f) => rom.frequencies_hz.iter().take_while(|&&x| x <= f).count().max(1),
+        Some(f) => rom
+            .frequencies_hz
+            .iter()
+            .take_while(|&&x| x <= f)
+            .count()
+            .max(1),
         None => all,
     };
-    let w: Vec<f64> = rom.frequencies_hz[..nm].iter().map(|f| two_pi * f).collect();
+    let w: Vec<f64> = rom.frequencies_hz[..nm]
+        .iter()
+        .map(|f| two_pi * f)
+        .collect();
     let zeta: Vec<f64> = w.iter().map(|w| ra / (2.0 * w) + rb * w / 2.0).collect();
     let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
     let nc = nt + na;
@@ -327,7 +335,8 @@ pub fn rom_window(
         rows.data.extend_from_slice(&crom.thrust_modes.row(i)[..nm]);
     }
     for i in 0..na {
-        rows.data.extend_from_slice(&crom.antithrust_modes.row(i)[..nm]);
+        rows.data
+            .extend_from_slice(&crom.antithrust_modes.row(i)[..nm]);
     }
     let r = &rom.residual_flexibility;
     let off = crom.contact_offset;
@@ -342,7 +351,9 @@ pub fn rom_window(
     let points = crate::reduce::engine::Dense {
         rows: np,
         cols: nm,
-        data: (0..np).flat_map(|i| crom.point_modes.row(i)[..nm].to_vec()).collect(),
+        data: (0..np)
+            .flat_map(|i| crom.point_modes.row(i)[..nm].to_vec())
+            .collect(),
     };
     let mut point_residual = crom.point_residual.clone();
     // dropped modes join the static correction: R += phi phi^T / w^2 (contact x contact and

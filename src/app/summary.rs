@@ -75,7 +75,11 @@ fn condense(value: f64, r: &CycleResult) -> SweepPoint {
         value,
         peak_negative_m_s2: cyl
             .iter()
-            .map(|c| c.points.iter().fold(0.0f64, |m, p| m.max(p.peak_negative_m_s2)))
+            .map(|c| {
+                c.points
+                    .iter()
+                    .fold(0.0f64, |m, p| m.max(p.peak_negative_m_s2))
+            })
             .collect(),
         peak_slap_force_n: cyl.iter().map(|c| c.peak_slap_force_n).collect(),
         peak_side_force_n: cyl.iter().map(|c| c.peak_side_force_n).collect(),
@@ -94,7 +98,12 @@ fn condense(value: f64, r: &CycleResult) -> SweepPoint {
 }
 
 /// Runs the scene with `sets` on `rom` (same reduction inputs: only piston/operating keys).
-fn run_with(path: &Path, base_sets: &[String], extra: &str, rom: &EngineRom) -> Result<CycleResult> {
+fn run_with(
+    path: &Path,
+    base_sets: &[String],
+    extra: &str,
+    rom: &EngineRom,
+) -> Result<CycleResult> {
     let mut sets = base_sets.to_vec();
     sets.push(extra.to_string());
     let sc = Scene::load(path, &sets)?;
@@ -179,8 +188,14 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         .par_iter()
         .map(|(kind, v, set)| {
             let r = if set.is_empty() {
-                run_cycle(&scene, rom, &piston, settings_of(sim, scene.rom.band_hz), None)
-                    .map_err(|e| Error::Failure(format!("{}: {e}", scene.path.display())))?
+                run_cycle(
+                    &scene,
+                    rom,
+                    &piston,
+                    settings_of(sim, scene.rom.band_hz),
+                    None,
+                )
+                .map_err(|e| Error::Failure(format!("{}: {e}", scene.path.display())))?
             } else {
                 run_with(scene_path, sets, set, rom)?
             };
@@ -200,7 +215,13 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     offset.sort_by(|a, b| a.value.total_cmp(&b.value));
     progress.phase("speed against error (window runs)");
     let trade = tradeoff(&scene, rom, &piston)?;
-    let ev = evaluate(base, rom, &scene.cavitation, &scene.engine.firing_order, scene.rom.band_hz);
+    let ev = evaluate(
+        base,
+        rom,
+        &scene.cavitation,
+        &scene.engine.firing_order,
+        scene.rom.band_hz,
+    );
     let (pp, pdeg) = piston.pressure.peak();
     let mut simulate = SimulateReport {
         scene: scene.path.display().to_string(),
@@ -220,10 +241,15 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     };
     simulate.seconds = started.elapsed().as_secs_f64();
     std::fs::create_dir_all(out).map_err(|e| {
-        Error::Input(format!("{}: cannot create the output directory: {e}", out.display()))
+        Error::Input(format!(
+            "{}: cannot create the output directory: {e}",
+            out.display()
+        ))
     })?;
     progress.phase("figures");
-    let figs = figures(out, &scene, &piston, base, &ev, &clearance, &offset, &trade, rom)?;
+    let figs = figures(
+        out, &scene, &piston, base, &ev, &clearance, &offset, &trade, rom,
+    )?;
     let mut report = Report {
         scene: scene.path.display().to_string(),
         title: scene.title.clone(),
@@ -240,8 +266,14 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     let md = markdown(&report, scene_path, out);
     let json = serde_json::to_string_pretty(&report).expect("serialisable");
     write_all_atomic(vec![
-        (out.join("summary.json"), Box::new(move |w: &mut dyn std::io::Write| w.write_all(json.as_bytes()))),
-        (out.join("summary.md"), Box::new(move |w: &mut dyn std::io::Write| w.write_all(md.as_bytes()))),
+        (
+            out.join("summary.json"),
+            Box::new(move |w: &mut dyn std::io::Write| w.write_all(json.as_bytes())),
+        ),
+        (
+            out.join("summary.md"),
+            Box::new(move |w: &mut dyn std::io::Write| w.write_all(md.as_bytes())),
+        ),
     ])?;
     Ok(report)
 }
@@ -267,22 +299,67 @@ fn figures(
         let cyl = s.cylinders[ci].cylinder;
         let k = fo.iter().position(|&x| x == cyl).unwrap_or(0);
         let phase = 720.0 * k as f64 / fo.len() as f64;
-        s.crank_angle_deg.iter().map(|a| (a - phase).rem_euclid(720.0)).collect()
+        s.crank_angle_deg
+            .iter()
+            .map(|a| (a - phase).rem_euclid(720.0))
+            .collect()
     };
     // pressure and side force
     let p = out.join("pressure.png");
-    let pressure: Vec<(f64, f64)> = (0..=1440).map(|k| {
-        let d = k as f64 * 0.5;
-        (d, piston.pressure.at(d) / 1e5)
-    }).collect();
-    let side: Vec<(f64, f64)> = (0..=1440).map(|k| {
-        let d = k as f64 * 0.5;
-        (d, piston.loads(d).side_force / 1e3)
-    }).collect();
+    let pressure: Vec<(f64, f64)> = (0..=1440)
+        .map(|k| {
+            let d = k as f64 * 0.5;
+            (d, piston.pressure.at(d) / 1e5)
+        })
+        .collect();
+    let side: Vec<(f64, f64)> = (0..=1440)
+        .map(|k| {
+            let d = k as f64 * 0.5;
+            (d, piston.loads(d).side_force / 1e3)
+        })
+        .collect();
     write_png(&p, (1500, 560), |root| {
         let (a, b) = root.split_horizontally(750);
-        Chart { title: "Cylinder pressure", x_label: "crank angle [deg] (firing TDC 360)", y_label: "pressure [bar]", series: vec![Series { name: String::new(), points: pressure.clone(), mark: Mark::Line, color: 0 }], rules: vec![Rule { name: "firing TDC".into(), value: 360.0, vertical: true, color: 6 }], x_range: None, y_range: None }.draw(&a)?;
-        Chart { title: "Quasi-static side force (+ toward thrust)", x_label: "crank angle [deg]", y_label: "side force [kN]", series: vec![Series { name: String::new(), points: side.clone(), mark: Mark::Line, color: 1 }], rules: vec![Rule { name: "firing TDC".into(), value: 360.0, vertical: true, color: 6 }], x_range: None, y_range: None }.draw(&b)
+        Chart {
+            title: "Cylinder pressure",
+            x_label: "crank angle [deg] (firing TDC 360)",
+            y_label: "pressure [bar]",
+            series: vec![Series {
+                name: String::new(),
+                points: pressure.clone(),
+                mark: Mark::Line,
+                color: 0,
+            }],
+            rules: vec![Rule {
+                name: "firing TDC".into(),
+                value: 360.0,
+                vertical: true,
+                color: 6,
+            }],
+            x_range: None,
+            y_range: None,
+        }
+        .draw(&a)?;
+        Chart {
+            title: "Quasi-static side force (+ toward thrust)",
+            x_label: "crank angle [deg]",
+            y_label: "side force [kN]",
+            series: vec![Series {
+                name: String::new(),
+                points: side.clone(),
+                mark: Mark::Line,
+                color: 1,
+            }],
+            rules: vec![Rule {
+                name: "firing TDC".into(),
+                value: 360.0,
+                vertical: true,
+                color: 6,
+            }],
+            x_range: None,
+            y_range: None,
+        }
+        .draw(&b)
     })?;
     files.push(p);
     // acceleration time series per cylinder, around firing
@@ -293,16 +370,51 @@ fn figures(
         for (ci, area) in areas.iter().enumerate().take(nc) {
             let ang = own(ci);
             let c = &s.cylinders[ci];
-            let series = c.acceleration.iter().enumerate().map(|(pi, a)| {
-                let mut pts: Vec<(f64, f64)> = (0..n).filter(|&k| ang[k] >= 330.0 && ang[k] <= 450.0).map(|k| (ang[k], a[k])).collect();
-                pts.sort_by(|x, y| x.0.total_cmp(&y.0));
-                Series { name: format!("point {}", pi + 1), points: pts, mark: Mark::Line, color: pi }
-            }).collect();
-            let title = format!("Cylinder {}: liner acceleration (+ toward the coolant)", c.cylinder);
-            Chart { title: &title, x_label: "crank angle of the cylinder [deg]", y_label: "acceleration [m/s^2]", series, rules: vec![
-                Rule { name: "-onset".into(), value: -t.onset_m_s2, vertical: false, color: 4 },
-                Rule { name: "-high risk".into(), value: -t.high_risk_m_s2, vertical: false, color: 1 },
-            ], x_range: Some((330.0, 450.0)), y_range: None }.draw(area)?;
+            let series = c
+                .acceleration
+                .iter()
+                .enumerate()
+                .map(|(pi, a)| {
+                    let mut pts: Vec<(f64, f64)> = (0..n)
+                        .filter(|&k| ang[k] >= 330.0 && ang[k] <= 450.0)
+                        .map(|k| (ang[k], a[k]))
+                        .collect();
+                    pts.sort_by(|x, y| x.0.total_cmp(&y.0));
+                    Series {
+                        name: format!("point {}", pi + 1),
+                        points: pts,
+                        mark: Mark::Line,
+                        color: pi,
+                    }
+                })
+                .collect();
+            let title = format!(
+                "Cylinder {}: liner acceleration (+ toward the coolant)",
+                c.cylinder
+            );
+            Chart {
+                title: &title,
+                x_label: "crank angle of the cylinder [deg]",
+                y_label: "acceleration [m/s^2]",
+                series,
+                rules: vec![
+                    Rule {
+                        name: "-onset".into(),
+                        value: -t.onset_m_s2,
+                        vertical: false,
+                        color: 4,
+                    },
+                    Rule {
+                        name: "-high risk".into(),
+                        value: -t.high_risk_m_s2,
+                        vertical: false,
+                        color: 1,
+                    },
+                ],
+                x_range: Some((330.0, 450.0)),
+                y_range: None,
+            }
+            .draw(area)?;
         }
         Ok(())
     })?;
@@ -312,85 +424,305 @@ fn figures(
     let sp = spectra(s, fo);
     let band = scene.rom.band_hz;
     write_png(&p, (1500, 600), |root| {
-        let series = ev.cylinders.iter().enumerate().filter_map(|(ci, c)| {
-            let spc = sp.get(ci)?.get(c.worst_point.checked_sub(1)?)?;
-            Some(Series { name: format!("cylinder {} point {}", c.cylinder, c.worst_point), points: spc.frequency_hz.iter().zip(&spc.amplitude).filter(|(f, _)| **f <= band).map(|(f, a)| (*f, *a)).collect(), mark: Mark::Line, color: ci })
-        }).collect();
-        let rules = ev.nearest_modes.iter().take(2).enumerate().map(|(k, m)| Rule { name: format!("system mode {:.0} Hz", m.frequency_hz), value: m.frequency_hz, vertical: true, color: 6 + k }).collect();
-        let title = format!("Amplitude spectra (Hann, window centred on firing); dominant {:.0} Hz", ev.dominant_hz);
-        Chart { title: &title, x_label: "frequency [Hz]", y_label: "amplitude [m/s^2]", series, rules, x_range: Some((0.0, band)), y_range: None }.draw(root)
+        let series = ev
+            .cylinders
+            .iter()
+            .enumerate()
+            .filter_map(|(ci, c)| {
+                let spc = sp.get(ci)?.get(c.worst_point.checked_sub(1)?)?;
+                Some(Series {
+                    name: format!("cylinder {} point {}", c.cylinder, c.worst_point),
+                    points: spc
+                        .frequency_hz
+                        .iter()
+                        .zip(&spc.amplitude)
+                        .filter(|(f, _)| **f <= band)
+                        .map(|(f, a)| (*f, *a))
+                        .collect(),
+                    mark: Mark::Line,
+                    color: ci,
+                })
+            })
+            .collect();
+        let rules = ev
+            .nearest_modes
+            .iter()
+            .take(2)
+            .enumerate()
+            .map(|(k, m)| Rule {
+                name: format!("system mode {:.0} Hz", m.frequency_hz),
+                value: m.frequency_hz,
+                vertical: true,
+                color: 6 + k,
+            })
+            .collect();
+        let title = format!(
+            "Amplitude spectra (Hann, window centred on firing); dominant {:.0} Hz",
+            ev.dominant_hz
+        );
+        Chart {
+            title: &title,
+            x_label: "frequency [Hz]",
+            y_label: "amplitude [m/s^2]",
+            series,
+            rules,
+            x_range: Some((0.0, band)),
+            y_range: None,
+        }
+        .draw(root)
     })?;
     files.push(p);
     // peaks per cylinder and point with thresholds
     let p = out.join("peaks.png");
-    let names: Vec<String> = ev.cylinders.iter().map(|c| format!("cyl {} ({})", c.cylinder, c.worst.label())).collect();
+    let names: Vec<String> = ev
+        .cylinders
+        .iter()
+        .map(|c| format!("cyl {} ({})", c.cylinder, c.worst.label()))
+        .collect();
     let np = ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0);
     let bar_names: Vec<String> = (1..=np).map(|k| format!("point {k}")).collect();
-    let groups: Vec<Vec<f64>> = ev.cylinders.iter().map(|c| c.points.iter().map(|p| p.peak_negative_m_s2).collect()).collect();
+    let groups: Vec<Vec<f64>> = ev
+        .cylinders
+        .iter()
+        .map(|c| c.points.iter().map(|p| p.peak_negative_m_s2).collect())
+        .collect();
     write_png(&p, (1500, 620), |root| {
-        bars(root, "Peak negative liner acceleration per cylinder and point (top to bottom)", "peak negative acceleration [m/s^2]", &names, &bar_names, &groups, &[
-            Rule { name: format!("onset {:.0}", t.onset_m_s2), value: t.onset_m_s2, vertical: false, color: 4 },
-            Rule { name: format!("high risk {:.0}", t.high_risk_m_s2), value: t.high_risk_m_s2, vertical: false, color: 1 },
-        ])
+        bars(
+            root,
+            "Peak negative liner acceleration per cylinder and point (top to bottom)",
+            "peak negative acceleration [m/s^2]",
+            &names,
+            &bar_names,
+            &groups,
+            &[
+                Rule {
+                    name: format!("onset {:.0}", t.onset_m_s2),
+                    value: t.onset_m_s2,
+                    vertical: false,
+                    color: 4,
+                },
+                Rule {
+                    name: format!("high risk {:.0}", t.high_risk_m_s2),
+                    value: t.high_risk_m_s2,
+                    vertical: false,
+                    color: 1,
+                },
+            ],
+        )
     })?;
     files.push(p);
     // mode-shape coefficients beside risk
     let p = out.join("modes_risk.png");
-    let cyl_names: Vec<String> = ev.cylinders.iter().map(|c| format!("cyl {}", c.cylinder)).collect();
+    let cyl_names: Vec<String> = ev
+        .cylinders
+        .iter()
+        .map(|c| format!("cyl {}", c.cylinder))
+        .collect();
     let shapes = super::rom::shapes(rom);
     write_png(&p, (1500, 600), |root| {
         let (a, b) = root.split_horizontally(750);
         if let Some(m) = ev.nearest_modes.first() {
-            let j = shapes.iter().position(|s| s.frequency_hz == m.frequency_hz).unwrap_or(0);
-            let g: Vec<Vec<f64>> = shapes[j].coefficients.iter().map(|r| r.iter().map(|v| v.abs()).collect()).collect();
-            let title = format!("|Mode-shape coefficient|, system mode {:.0} Hz (r = {})", m.frequency_hz, m.pearson.map(|v| format!("{v:.2}")).unwrap_or("-".into()));
-            bars(&a, &title, "normalised radial amplitude", &cyl_names, &bar_names, &g, &[])?;
+            let j = shapes
+                .iter()
+                .position(|s| s.frequency_hz == m.frequency_hz)
+                .unwrap_or(0);
+            let g: Vec<Vec<f64>> = shapes[j]
+                .coefficients
+                .iter()
+                .map(|r| r.iter().map(|v| v.abs()).collect())
+                .collect();
+            let title = format!(
+                "|Mode-shape coefficient|, system mode {:.0} Hz (r = {})",
+                m.frequency_hz,
+                m.pearson.map(|v| format!("{v:.2}")).unwrap_or("-".into())
+            );
+            bars(
+                &a,
+                &title,
+                "normalised radial amplitude",
+                &cyl_names,
+                &bar_names,
+                &g,
+                &[],
+            )?;
         }
-        let g: Vec<Vec<f64>> = ev.cylinders.iter().map(|c| vec![c.peak_negative_m_s2]).collect();
-        bars(&b, "Per-cylinder peak negative acceleration", "m/s^2", &cyl_names, &["largest over the points".to_string()], &g, &[
-            Rule { name: "high risk".into(), value: t.high_risk_m_s2, vertical: false, color: 1 },
-        ])
+        let g: Vec<Vec<f64>> = ev
+            .cylinders
+            .iter()
+            .map(|c| vec![c.peak_negative_m_s2])
+            .collect();
+        bars(
+            &b,
+            "Per-cylinder peak negative acceleration",
+            "m/s^2",
+            &cyl_names,
+            &["largest over the points".to_string()],
+            &g,
+            &[Rule {
+                name: "high risk".into(),
+                value: t.high_risk_m_s2,
+                vertical: false,
+                color: 1,
+            }],
+        )
     })?;
     files.push(p);
     // sweeps
-    for (name, key, pts, unit) in [("sweep_clearance.png", "cold clearance [um]", clearance, "clearance"), ("sweep_pin_offset.png", "pin offset [mm] (+ toward thrust)", offset, "pin offset")] {
+    for (name, key, pts, unit) in [
+        (
+            "sweep_clearance.png",
+            "cold clearance [um]",
+            clearance,
+            "clearance",
+        ),
+        (
+            "sweep_pin_offset.png",
+            "pin offset [mm] (+ toward thrust)",
+            offset,
+            "pin offset",
+        ),
+    ] {
         let p = out.join(name);
         let per_cyl = |f: &dyn Fn(&SweepPoint, usize) -> f64| -> Vec<Series> {
-            (0..ev.cylinders.len()).map(|c| Series { name: format!("cylinder {}", ev.cylinders[c].cylinder), points: pts.iter().map(|s| (s.value, f(s, c))).collect(), mark: Mark::LineDots, color: c }).collect()
+            (0..ev.cylinders.len())
+                .map(|c| Series {
+                    name: format!("cylinder {}", ev.cylinders[c].cylinder),
+                    points: pts.iter().map(|s| (s.value, f(s, c))).collect(),
+                    mark: Mark::LineDots,
+                    color: c,
+                })
+                .collect()
         };
         let t1 = format!("Slap force against {unit}");
         let t2 = format!("Piston tilt against {unit}");
         let t3 = format!("Liner acceleration against {unit}");
         write_png(&p, (1800, 560), |root| {
             let areas = root.split_evenly((1, 3));
-            Chart { title: &t1, x_label: key, y_label: "peak slap force [kN]", series: per_cyl(&|s, c| s.peak_slap_force_n[c] / 1e3), rules: vec![], x_range: None, y_range: None }.draw(&areas[0])?;
-            Chart { title: &t2, x_label: key, y_label: "peak |tilt| [mrad]", series: per_cyl(&|s, c| s.peak_tilt_rad[c] * 1e3), rules: vec![], x_range: None, y_range: None }.draw(&areas[1])?;
-            Chart { title: &t3, x_label: key, y_label: "peak negative acceleration [m/s^2]", series: per_cyl(&|s, c| s.peak_negative_m_s2[c]), rules: vec![
-                Rule { name: "onset".into(), value: t.onset_m_s2, vertical: false, color: 4 },
-                Rule { name: "high risk".into(), value: t.high_risk_m_s2, vertical: false, color: 7 },
-            ], x_range: None, y_range: None }.draw(&areas[2])
+            Chart {
+                title: &t1,
+                x_label: key,
+                y_label: "peak slap force [kN]",
+                series: per_cyl(&|s, c| s.peak_slap_force_n[c] / 1e3),
+                rules: vec![],
+                x_range: None,
+                y_range: None,
+            }
+            .draw(&areas[0])?;
+            Chart {
+                title: &t2,
+                x_label: key,
+                y_label: "peak |tilt| [mrad]",
+                series: per_cyl(&|s, c| s.peak_tilt_rad[c] * 1e3),
+                rules: vec![],
+                x_range: None,
+                y_range: None,
+            }
+            .draw(&areas[1])?;
+            Chart {
+                title: &t3,
+                x_label: key,
+                y_label: "peak negative acceleration [m/s^2]",
+                series: per_cyl(&|s, c| s.peak_negative_m_s2[c]),
+                rules: vec![
+                    Rule {
+                        name: "onset".into(),
+                        value: t.onset_m_s2,
+                        vertical: false,
+                        color: 4,
+                    },
+                    Rule {
+                        name: "high risk".into(),
+                        value: t.high_risk_m_s2,
+                        vertical: false,
+                        color: 7,
+                    },
+                ],
+                x_range: None,
+                y_range: None,
+            }
+            .draw(&areas[2])
         })?;
         files.push(p);
     }
     // CSF against Ca
     let p = out.join("criteria.png");
-    let pts: Vec<(f64, f64)> = ev.cylinders.iter().flat_map(|c| c.points.iter().map(|p| (p.ca, p.csf))).collect();
+    let pts: Vec<(f64, f64)> = ev
+        .cylinders
+        .iter()
+        .flat_map(|c| c.points.iter().map(|p| (p.ca, p.csf)))
+        .collect();
     write_png(&p, (900, 700), |root| {
-        Chart { title: "Velocity criterion (CSF) against acceleration criterion (Ca)", x_label: "Ca = (p_r - p_v)/(rho |a| h)  (< 1: cavitation)", y_label: "CSF = Vccv / Vmax  (< 1: cavitation)", series: vec![Series { name: "analysis points".into(), points: pts.clone(), mark: Mark::Dots, color: 0 }], rules: vec![
-            Rule { name: "Ca = 1".into(), value: 1.0, vertical: true, color: 1 },
-            Rule { name: "CSF = 1".into(), value: 1.0, vertical: false, color: 2 },
-        ], x_range: None, y_range: None }.draw(root)
+        Chart {
+            title: "Velocity criterion (CSF) against acceleration criterion (Ca)",
+            x_label: "Ca = (p_r - p_v)/(rho |a| h)  (< 1: cavitation)",
+            y_label: "CSF = Vccv / Vmax  (< 1: cavitation)",
+            series: vec![Series {
+                name: "analysis points".into(),
+                points: pts.clone(),
+                mark: Mark::Dots,
+                color: 0,
+            }],
+            rules: vec![
+                Rule {
+                    name: "Ca = 1".into(),
+                    value: 1.0,
+                    vertical: true,
+                    color: 1,
+                },
+                Rule {
+                    name: "CSF = 1".into(),
+                    value: 1.0,
+                    vertical: false,
+                    color: 2,
+                },
+            ],
+            x_range: None,
+            y_range: None,
+        }
+        .draw(root)
     })?;
     files.push(p);
     // speed against error
     let p = out.join("speed_error.png");
     write_png(&p, (1100, 650), |root| {
-        let modes: Vec<(f64, f64)> = trade.iter().filter(|x| x.setting.starts_with("modes")).map(|x| (x.seconds * 1e3, x.error.max(1e-6))).collect();
-        let steps: Vec<(f64, f64)> = trade.iter().filter(|x| x.setting.starts_with("all")).map(|x| (x.seconds * 1e3, x.error.max(1e-6))).collect();
-        Chart { title: "Fast path: error against wall time (window 330-420 deg, one cylinder)", x_label: "wall time of the window [ms]", y_label: "error of peak negative acceleration (relative)", series: vec![
-            Series { name: "mode cut-off (band, 1.5x, 2x band)".into(), points: modes, mark: Mark::LineDots, color: 0 },
-            Series { name: "step (4x, 2x, 1x, 0.5x the scene's)".into(), points: steps, mark: Mark::LineDots, color: 1 },
-        ], rules: vec![Rule { name: "2 %".into(), value: 0.02, vertical: false, color: 6 }], x_range: None, y_range: None }.draw(root)
+        let modes: Vec<(f64, f64)> = trade
+            .iter()
+            .filter(|x| x.setting.starts_with("modes"))
+            .map(|x| (x.seconds * 1e3, x.error.max(1e-6)))
+            .collect();
+        let steps: Vec<(f64, f64)> = trade
+            .iter()
+            .filter(|x| x.setting.starts_with("all"))
+            .map(|x| (x.seconds * 1e3, x.error.max(1e-6)))
+            .collect();
+        Chart {
+            title: "Fast path: error against wall time (window 330-420 deg, one cylinder)",
+            x_label: "wall time of the window [ms]",
+            y_label: "error of peak negative acceleration (relative)",
+            series: vec![
+                Series {
+                    name: "mode cut-off (band, 1.5x, 2x band)".into(),
+                    points: modes,
+                    mark: Mark::LineDots,
+                    color: 0,
+                },
+                Series {
+                    name: "step (4x, 2x, 1x, 0.5x the scene's)".into(),
+                    points: steps,
+                    mark: Mark::LineDots,
+                    color: 1,
+                },
+            ],
+            rules: vec![Rule {
+                name: "2 %".into(),
+                value: 0.02,
+                vertical: false,
+                color: 6,
+            }],
+            x_range: None,
+            y_range: None,
+        }
+        .draw(root)
     })?;
     files.push(p);
     Ok(files)
@@ -406,32 +738,77 @@ fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     let _ = writeln!(s, "| cylinder | risk | peak negative per point [m/s^2] | Ca per point | CSF per point | slap force [kN] | side force [kN] at [deg] |\n|---|---|---|---|---|---|---|");
     for (c, cr) in ev.cylinders.iter().zip(&r.simulate.cylinders) {
         let f = |v: Vec<String>| v.join(" / ");
-        let _ = writeln!(s, "| {} | {} | {} | {} | {} | {:.2} | {:.1} at {:.1} |", c.cylinder, c.worst.label(),
-            f(c.points.iter().map(|p| format!("{:.0}", p.peak_negative_m_s2)).collect()),
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {:.2} | {:.1} at {:.1} |",
+            c.cylinder,
+            c.worst.label(),
+            f(c.points
+                .iter()
+                .map(|p| format!("{:.0}", p.peak_negative_m_s2))
+                .collect()),
             f(c.points.iter().map(|p| format!("{:.2}", p.ca)).collect()),
             f(c.points.iter().map(|p| format!("{:.2}", p.csf)).collect()),
-            cr.peak_slap_force_n / 1e3, cr.peak_side_force_n / 1e3, cr.side_force_crank_angle_deg);
+            cr.peak_slap_force_n / 1e3,
+            cr.peak_side_force_n / 1e3,
+            cr.side_force_crank_angle_deg
+        );
     }
     let _ = writeln!(s, "\n## Why the cylinders differ\n\nDominant response {:.0} Hz. Nearest system modes, with each cylinder's largest normalised radial coefficient at its analysis points and the correlation of those with the per-cylinder peak:\n", ev.dominant_hz);
     let _ = writeln!(s, "| mode [Hz] | coefficients (cylinders {:?}) | Pearson r | Spearman rho |\n|---|---|---|---|", ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>());
     for m in &ev.nearest_modes {
-        let _ = writeln!(s, "| {:.0} | {} | {} | {} |", m.frequency_hz, m.cylinder_coefficients.iter().map(|v| format!("{v:.2}")).collect::<Vec<_>>().join(", "), m.pearson.map(|v| format!("{v:.2}")).unwrap_or("-".into()), m.spearman.map(|v| format!("{v:.2}")).unwrap_or("-".into()));
+        let _ = writeln!(
+            s,
+            "| {:.0} | {} | {} | {} |",
+            m.frequency_hz,
+            m.cylinder_coefficients
+                .iter()
+                .map(|v| format!("{v:.2}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            m.pearson.map(|v| format!("{v:.2}")).unwrap_or("-".into()),
+            m.spearman.map(|v| format!("{v:.2}")).unwrap_or("-".into())
+        );
     }
     let _ = writeln!(s, "\n## What-if\n\n| clearance [um] | largest peak negative [m/s^2] | largest slap force [kN] |\n|---|---|---|");
     for p in &r.clearance_sweep {
-        let _ = writeln!(s, "| {:.0} | {:.0} | {:.2} |", p.value, p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)), p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3);
+        let _ = writeln!(
+            s,
+            "| {:.0} | {:.0} | {:.2} |",
+            p.value,
+            p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)),
+            p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3
+        );
     }
     let _ = writeln!(s, "\n| pin offset [mm] | largest peak negative [m/s^2] | largest slap force [kN] | side-force peak [kN] at [deg] |\n|---|---|---|---|");
     for p in &r.pin_offset_sweep {
-        let _ = writeln!(s, "| {:+.1} | {:.0} | {:.2} | {:.1} at {:.1} |", p.value, p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)), p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3, p.peak_side_force_n.first().copied().unwrap_or(0.0) / 1e3, p.side_force_crank_angle_deg.first().copied().unwrap_or(0.0));
+        let _ = writeln!(
+            s,
+            "| {:+.1} | {:.0} | {:.2} | {:.1} at {:.1} |",
+            p.value,
+            p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)),
+            p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3,
+            p.peak_side_force_n.first().copied().unwrap_or(0.0) / 1e3,
+            p.side_force_crank_angle_deg.first().copied().unwrap_or(0.0)
+        );
     }
     let _ = writeln!(s, "\n## Speed against error (fast path, window 330-420 deg)\n\n| setting | modes | error | wall time [ms] |\n|---|---|---|---|");
     for x in &r.tradeoff {
-        let _ = writeln!(s, "| {} | {} | {:.2e} | {:.1} |", x.setting, x.modes, x.error, x.seconds * 1e3);
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2e} | {:.1} |",
+            x.setting,
+            x.modes,
+            x.error,
+            x.seconds * 1e3
+        );
     }
     let _ = writeln!(s, "\n## Figures\n");
     for f in &r.files {
-        let name = Path::new(f).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = Path::new(f)
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let _ = writeln!(s, "![{name}]({name})");
     }
     let _ = writeln!(s, "\nReproduce: `linercav report {} --out {}` (solver: {} steps, {} Newton iterations, {} rejected, energy balance {:.1e}, cycle change {:.1e}).", scene.display(), out.display(), r.simulate.stats.steps, r.simulate.stats.newton_iterations, r.simulate.stats.rejected_steps, r.simulate.stats.energy_error, r.simulate.stats.cycle_change);
@@ -441,7 +818,11 @@ fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
 impl Report {
     pub fn to_text(&self) -> String {
         let mut s = self.evaluation.to_text();
-        s += &format!("report written: {} files in {:.1} s\n", self.files.len() + 2, self.seconds);
+        s += &format!(
+            "report written: {} files in {:.1} s\n",
+            self.files.len() + 2,
+            self.seconds
+        );
         s
     }
 }

@@ -4,7 +4,9 @@
 
 use super::evaluate::{evaluate, CylinderRisk};
 use super::rom::{get_rom, key_description, CacheOptions, LoadedRom};
-use super::simulate::{piston_of, run_cycle, settings_of, simulation, CylinderReport, SimulateReport};
+use super::simulate::{
+    piston_of, run_cycle, settings_of, simulation, CylinderReport, SimulateReport,
+};
 use crate::error::{Error, Result};
 use crate::report::atomic::{write_all_atomic, Filler};
 use crate::report::png::{write_png, Chart, Mark, Series};
@@ -75,9 +77,15 @@ pub struct SweepRequest {
 
 /// Runs the sweep.
 pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
-    let vary: Vec<Vary> = req.vary.iter().map(|v| parse_vary(v)).collect::<Result<_>>()?;
+    let vary: Vec<Vary> = req
+        .vary
+        .iter()
+        .map(|v| parse_vary(v))
+        .collect::<Result<_>>()?;
     if vary.is_empty() {
-        return Err(Error::Input("sweep: give at least one --vary KEY=V1,V2,...".into()));
+        return Err(Error::Input(
+            "sweep: give at least one --vary KEY=V1,V2,...".into(),
+        ));
     }
     let mut seen = std::collections::HashSet::new();
     if let Some(d) = vary.iter().find(|v| !seen.insert(v.key.clone())) {
@@ -127,8 +135,10 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     let bar = std::io::stderr().is_terminal().then(|| {
         let b = indicatif::ProgressBar::new(scenes.len() as u64);
         b.set_style(
-            indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} runs, {elapsed} (eta {eta})")
-                .expect("valid template"),
+            indicatif::ProgressStyle::with_template(
+                "{bar:30} {pos}/{len} runs, {elapsed} (eta {eta})",
+            )
+            .expect("valid template"),
         );
         b
     });
@@ -141,10 +151,15 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
             let sim = simulation(sc)?;
             let piston = piston_of(sc)?;
             let rom = &roms[ri].rom;
-            let res = run_cycle(sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None).map_err(|e| {
-                Error::Failure(format!("run {}: {e}", label(&vary, values)))
-            })?;
-            let ev = evaluate(&res, rom, &sc.cavitation, &sc.engine.firing_order, sc.rom.band_hz);
+            let res = run_cycle(sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None)
+                .map_err(|e| Error::Failure(format!("run {}: {e}", label(&vary, values))))?;
+            let ev = evaluate(
+                &res,
+                rom,
+                &sc.cavitation,
+                &sc.engine.firing_order,
+                sc.rom.band_hz,
+            );
             if let Some(b) = &bar {
                 b.inc(1);
             }
@@ -270,9 +285,33 @@ pub fn draw_key(path: &Path, report: &SweepReport, key: usize) -> Result<()> {
             .fold(0.0f64, |m, p| m.max(p.peak_negative_m_s2))
     });
     let charts = [
-        Chart { title: "Dynamic slap force", x_label: k, y_label: "peak slap force [kN]", series: slap, rules: vec![], x_range: None, y_range: None },
-        Chart { title: "Piston tilt", x_label: k, y_label: "peak |tilt| [mrad]", series: tilt, rules: vec![], x_range: None, y_range: None },
-        Chart { title: "Liner acceleration", x_label: k, y_label: "peak negative acceleration [m/s^2]", series: acc, rules: vec![], x_range: None, y_range: None },
+        Chart {
+            title: "Dynamic slap force",
+            x_label: k,
+            y_label: "peak slap force [kN]",
+            series: slap,
+            rules: vec![],
+            x_range: None,
+            y_range: None,
+        },
+        Chart {
+            title: "Piston tilt",
+            x_label: k,
+            y_label: "peak |tilt| [mrad]",
+            series: tilt,
+            rules: vec![],
+            x_range: None,
+            y_range: None,
+        },
+        Chart {
+            title: "Liner acceleration",
+            x_label: k,
+            y_label: "peak negative acceleration [m/s^2]",
+            series: acc,
+            rules: vec![],
+            x_range: None,
+            y_range: None,
+        },
     ];
     write_png(path, (1800, 560), |root| {
         let areas = root.split_evenly((1, 3));
@@ -292,8 +331,14 @@ fn write_outputs(dir: &Path, vary: &[Vary], report: &SweepReport) -> Result<Vec<
     let csv_text = csv(report);
     let json = serde_json::to_string_pretty(report).expect("serialisable");
     let mut files: Vec<(PathBuf, Filler<'_>)> = vec![
-        (dir.join("sweep.csv"), Box::new(move |w| w.write_all(csv_text.as_bytes()))),
-        (dir.join("sweep.json"), Box::new(move |w| w.write_all(json.as_bytes()))),
+        (
+            dir.join("sweep.csv"),
+            Box::new(move |w| w.write_all(csv_text.as_bytes())),
+        ),
+        (
+            dir.join("sweep.json"),
+            Box::new(move |w| w.write_all(json.as_bytes())),
+        ),
     ];
     let mut names: Vec<String> = files.iter().map(|f| f.0.display().to_string()).collect();
     // PNGs first (each atomic), then the tables: a failure leaves no table behind
@@ -322,10 +367,28 @@ impl SweepReport {
             self.roms
         );
         for r in &self.runs {
-            let _ = write!(s, "  {:<40}", self.keys.iter().zip(&r.values).map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" "));
+            let _ = write!(
+                s,
+                "  {:<40}",
+                self.keys
+                    .iter()
+                    .zip(&r.values)
+                    .map(|(k, v)| format!("{k}={v}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            );
             for c in &r.cylinders {
-                let a = c.points.iter().fold(0.0f64, |m, p| m.max(p.peak_negative_m_s2));
-                let _ = write!(s, " c{} {:>5.0}/{:>5.1}kN", c.cylinder, a, c.peak_slap_force_n / 1e3);
+                let a = c
+                    .points
+                    .iter()
+                    .fold(0.0f64, |m, p| m.max(p.peak_negative_m_s2));
+                let _ = write!(
+                    s,
+                    " c{} {:>5.0}/{:>5.1}kN",
+                    c.cylinder,
+                    a,
+                    c.peak_slap_force_n / 1e3
+                );
             }
             let _ = writeln!(s);
         }

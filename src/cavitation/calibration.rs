@@ -83,14 +83,15 @@ impl RigData {
         let names: Vec<&str> = header.split(',').map(|s| s.trim()).collect();
         let mut idx = [0usize; 3];
         for (k, col) in COLUMNS.iter().enumerate() {
-            idx[k] = names
-                .iter()
-                .position(|n| n == col)
-                .ok_or_else(|| CalibrationError::Column {
-                    file: file.into(),
-                    column: col,
-                    found: names.join(", "),
-                })?;
+            idx[k] =
+                names
+                    .iter()
+                    .position(|n| n == col)
+                    .ok_or_else(|| CalibrationError::Column {
+                        file: file.into(),
+                        column: col,
+                        found: names.join(", "),
+                    })?;
         }
         let mut d = RigData::default();
         for (ln, line) in lines {
@@ -136,7 +137,10 @@ impl RigData {
         if d.time.len() < 16 {
             return Err(CalibrationError::Data {
                 file: file.into(),
-                msg: format!("{} data rows; need a record with events (at least 16 rows)", d.time.len()),
+                msg: format!(
+                    "{} data rows; need a record with events (at least 16 rows)",
+                    d.time.len()
+                ),
             });
         }
         Ok(d)
@@ -219,7 +223,11 @@ pub fn find_events(d: &RigData, quiet: f64) -> (Vec<(usize, usize)>, f64, f64) {
     let mut out = Vec::with_capacity(groups.len());
     for (k, &(s, e)) in groups.iter().enumerate() {
         let lo_lim = if k > 0 { (groups[k - 1].1 + s) / 2 } else { 0 };
-        let hi_lim = if k + 1 < groups.len() { (e + groups[k + 1].0) / 2 } else { n - 1 };
+        let hi_lim = if k + 1 < groups.len() {
+            (e + groups[k + 1].0) / 2
+        } else {
+            n - 1
+        };
         let mut lo = s;
         while lo > lo_lim && d.time[s] - d.time[lo - 1] <= quiet {
             lo -= 1;
@@ -250,9 +258,15 @@ pub fn calibrate(file: &str, d: &RigData, s: &Settings) -> Result<Calibration, C
         .iter()
         .map(|&(lo, hi)| {
             let w = lo..=hi;
-            let amax = d.acceleration[w.clone()].iter().fold(f64::MIN, |m, &x| m.max(x));
-            let amin = d.acceleration[w.clone()].iter().fold(f64::MAX, |m, &x| m.min(x));
-            let pmax = d.pressure[w.clone()].iter().fold(f64::MIN, |m, &x| m.max(x));
+            let amax = d.acceleration[w.clone()]
+                .iter()
+                .fold(f64::MIN, |m, &x| m.max(x));
+            let amin = d.acceleration[w.clone()]
+                .iter()
+                .fold(f64::MAX, |m, &x| m.min(x));
+            let pmax = d.pressure[w.clone()]
+                .iter()
+                .fold(f64::MIN, |m, &x| m.max(x));
             let pmin = d.pressure[w].iter().fold(f64::MAX, |m, &x| m.min(x));
             let aneg = (-amin).max(0.0);
             Event {
@@ -332,7 +346,11 @@ pub fn calibrate(file: &str, d: &RigData, s: &Settings) -> Result<Calibration, C
         k_p_pa_per_m_s2: k_p,
         events: events.len(),
         cavitating_events: cav.len(),
-        fit_r2: if ss_tot > 0.0 { 1.0 - ss_res / ss_tot } else { 1.0 },
+        fit_r2: if ss_tot > 0.0 {
+            1.0 - ss_res / ss_tot
+        } else {
+            1.0
+        },
         noise_m_s2: sigma,
         detection_m_s2: level,
         transition_band_observed: overlap,
@@ -350,12 +368,21 @@ mod tests {
     #[test]
     fn bad_csv_is_named() {
         let e = RigData::parse("r.csv", "time_s,acceleration_m_s2\n0,1\n").unwrap_err();
-        assert!(e.to_string().contains("missing column 'pressure_kpa'"), "{e}");
-        let e = RigData::parse("r.csv", "time_s,acceleration_m_s2,pressure_kpa\n0,1,2\n1,x,2\n")
-            .unwrap_err();
+        assert!(
+            e.to_string().contains("missing column 'pressure_kpa'"),
+            "{e}"
+        );
+        let e = RigData::parse(
+            "r.csv",
+            "time_s,acceleration_m_s2,pressure_kpa\n0,1,2\n1,x,2\n",
+        )
+        .unwrap_err();
         assert!(e.to_string().starts_with("r.csv:3:"), "{e}");
-        let e = RigData::parse("r.csv", "time_s,acceleration_m_s2,pressure_kpa\n0,1,2\n0,1,2\n")
-            .unwrap_err();
+        let e = RigData::parse(
+            "r.csv",
+            "time_s,acceleration_m_s2,pressure_kpa\n0,1,2\n0,1,2\n",
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("does not increase"), "{e}");
         let e = RigData::parse("r.csv", "time_s,acceleration_m_s2,pressure_kpa\n0,NaN,2\n")
             .unwrap_err();
@@ -370,7 +397,9 @@ mod tests {
             let t = i as f64 * dt;
             let local = t % 0.02; // an event every 20 ms
             let a = if local < 0.004 {
-                1000.0 * (-local / 0.001).exp() * (2.0 * std::f64::consts::PI * 1850.0 * local).sin()
+                1000.0
+                    * (-local / 0.001).exp()
+                    * (2.0 * std::f64::consts::PI * 1850.0 * local).sin()
             } else {
                 0.0
             };

@@ -117,8 +117,10 @@ pub fn water_vapour_pressure(temp_c: f64) -> f64 {
 /// - 280.54253e-12 t^5) / (1 + 16.879850e-3 t), t in C.
 pub fn water_density(temp_c: f64) -> f64 {
     let t = temp_c;
-    let num = 999.839_52 + t * (16.945_176
-        + t * (-7.987_040_1e-3 + t * (-46.170_461e-6 + t * (105.563_02e-9 - t * 280.542_53e-12))));
+    let num = 999.839_52
+        + t * (16.945_176
+            + t * (-7.987_040_1e-3
+                + t * (-46.170_461e-6 + t * (105.563_02e-9 - t * 280.542_53e-12))));
     num / (1.0 + 16.879_850e-3 * t)
 }
 
@@ -180,7 +182,11 @@ mod tests {
     /// release: 300, 500, 600 K); the release states them to 9 significant digits.
     #[test]
     fn if97_saturation_pressure_matches_the_release_table() {
-        for (t, p_mpa) in [(300.0, 0.353_658_941e-2), (500.0, 0.263_889_776e1), (600.0, 0.123_443_146e2)] {
+        for (t, p_mpa) in [
+            (300.0, 0.353_658_941e-2),
+            (500.0, 0.263_889_776e1),
+            (600.0, 0.123_443_146e2),
+        ] {
             let p = water_vapour_pressure(t - 273.15) / 1e6;
             assert!((p / p_mpa - 1.0).abs() < 1e-8, "{t} K: {p} vs {p_mpa}");
         }
@@ -204,7 +210,11 @@ mod tests {
     #[test]
     fn vccv_of_the_reference_coolant() {
         let c = Coolant::new(90.0, 0.0, 240e3).unwrap();
-        assert!((c.vapour_pressure_pa - 70_182.0).abs() < 5.0, "{}", c.vapour_pressure_pa);
+        assert!(
+            (c.vapour_pressure_pa - 70_182.0).abs() < 5.0,
+            "{}",
+            c.vapour_pressure_pa
+        );
         assert!((c.vccv() - 0.1135).abs() < 2e-4, "{}", c.vccv());
     }
 
@@ -225,9 +235,21 @@ mod tests {
 
     #[test]
     fn bad_states_are_refused() {
-        assert!(matches!(Coolant::new(200.0, 0.0, 1e5), Err(CoolantError::Temperature(_))));
-        assert!(matches!(Coolant::new(90.0, 0.9, 1e5), Err(CoolantError::Glycol(_))));
-        assert!(matches!(Coolant::new(120.0, 0.0, 1e5), Err(CoolantError::Boiling { .. })));
-        assert!(matches!(Coolant::new(90.0, 0.0, f64::NAN), Err(CoolantError::Pressure(_))));
+        assert!(matches!(
+            Coolant::new(200.0, 0.0, 1e5),
+            Err(CoolantError::Temperature(_))
+        ));
+        assert!(matches!(
+            Coolant::new(90.0, 0.9, 1e5),
+            Err(CoolantError::Glycol(_))
+        ));
+        assert!(matches!(
+            Coolant::new(120.0, 0.0, 1e5),
+            Err(CoolantError::Boiling { .. })
+        ));
+        assert!(matches!(
+            Coolant::new(90.0, 0.0, f64::NAN),
+            Err(CoolantError::Pressure(_))
+        ));
     }
 }

@@ -42,10 +42,12 @@ pub fn safety_factor(coolant: &Coolant, v_max: f64) -> f64 {
 }
 
 /// Acceleration-based cavitation number on a negative peak of magnitude `a_neg`:
-/// Ca = (p_s - k_p |a| - p_v) / (rho |a| h).
+/// Ca = (p_r - p_v) / (rho |a| h) with p_r = max(p_s - k_p |a|, p_v): the wall pressure
+/// cannot fall below the vapour pressure (it saturates there, as measured), so Ca >= 0.
 pub fn acceleration_number(coolant: &Coolant, k_p: f64, gap: f64, a_neg: f64) -> f64 {
     let a = a_neg.abs();
-    (coolant.static_pa - k_p * a - coolant.vapour_pressure_pa) / (coolant.density_kg_m3 * a * gap)
+    let p_r = (coolant.static_pa - k_p * a).max(coolant.vapour_pressure_pa);
+    (p_r - coolant.vapour_pressure_pa) / (coolant.density_kg_m3 * a * gap)
 }
 
 /// |a|* where the acceleration number is 1: (p_s - p_v) / (k_p + rho h) [m/s^2].
@@ -135,6 +137,8 @@ mod tests {
         let ca = acceleration_number(&c, 138.3, 4.7e-3, -600.0);
         assert!((ca - 31.9).abs() < 0.05, "{ca}");
         assert!((c.static_threshold(4.7e-3) - 37_430.0).abs() < 20.0);
+        // beyond p_s - k_p |a| = p_v the wall pressure saturates: Ca = 0
+        assert_eq!(acceleration_number(&c, 138.3, 4.7e-3, 2000.0), 0.0);
     }
 
     /// Classic number and CSF by hand: v = 0.2 m/s: Ca = 169818 / (0.5 x 965.3 x 0.04) = 8796;

@@ -16,15 +16,26 @@ fn fonts() {
     static DONE: OnceLock<()> = OnceLock::new();
     DONE.get_or_init(|| {
         // DejaVu Sans is a valid TrueType font; registration cannot fail for it.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
         let _ = plotters::style::register_font("sans-serif", FontStyle::Bold, dejavu::sans::bold());
     });
 }
 
 /// Draws a `w` x `h` PNG at `path` through `draw`, atomically.
-pub fn write_png(path: &Path, size: (u32, u32), draw: impl FnOnce(&Area<'_>) -> DrawResult) -> Result<(), WriteError> {
+pub fn write_png(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&Area<'_>) -> DrawResult,
+) -> Result<(), WriteError> {
     fonts();
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
     let r = (|| -> DrawResult {
         let root = BitMapBackend::new(&tmp, size).into_drawing_area();
@@ -119,10 +130,16 @@ fn span(vals: impl Iterator<Item = f64>) -> (f64, f64) {
 impl Chart<'_> {
     /// Draws the chart into `area`.
     pub fn draw(&self, area: &Area<'_>) -> DrawResult {
-        let xs = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
+        let xs = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0));
         let xr = self.rules.iter().filter(|r| r.vertical).map(|r| r.value);
         let x = self.x_range.unwrap_or_else(|| span(xs.chain(xr)));
-        let ys = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
+        let ys = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1));
         let yr = self.rules.iter().filter(|r| !r.vertical).map(|r| r.value);
         let y = self.y_range.unwrap_or_else(|| span(ys.chain(yr)));
         let mut chart = ChartBuilder::on(area)
@@ -141,14 +158,17 @@ impl Chart<'_> {
         for s in &self.series {
             let c = color(s.color);
             if matches!(s.mark, Mark::Line | Mark::LineDots) {
-                let e = chart.draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))?;
+                let e = chart
+                    .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))?;
                 if !s.name.is_empty() {
-                    e.label(s.name.clone())
-                        .legend(move |(a, b)| PathElement::new(vec![(a, b), (a + 18, b)], c.stroke_width(2)));
+                    e.label(s.name.clone()).legend(move |(a, b)| {
+                        PathElement::new(vec![(a, b), (a + 18, b)], c.stroke_width(2))
+                    });
                 }
             }
             if matches!(s.mark, Mark::Dots | Mark::LineDots) {
-                let e = chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
+                let e =
+                    chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
                 if !s.name.is_empty() && s.mark == Mark::Dots {
                     e.label(s.name.clone())
                         .legend(move |(a, b)| Circle::new((a + 9, b), 3, c.filled()));
@@ -164,11 +184,14 @@ impl Chart<'_> {
             };
             let e = chart.draw_series(DashedLineSeries::new(pts, 6, 4, c.stroke_width(2)))?;
             if !r.name.is_empty() {
-                e.label(r.name.clone())
-                    .legend(move |(a, b)| PathElement::new(vec![(a, b), (a + 18, b)], c.stroke_width(2)));
+                e.label(r.name.clone()).legend(move |(a, b)| {
+                    PathElement::new(vec![(a, b), (a + 18, b)], c.stroke_width(2))
+                });
             }
         }
-        if self.series.iter().any(|s| !s.name.is_empty()) || self.rules.iter().any(|r| !r.name.is_empty()) {
+        if self.series.iter().any(|s| !s.name.is_empty())
+            || self.rules.iter().any(|r| !r.name.is_empty())
+        {
             chart
                 .configure_series_labels()
                 .background_style(WHITE.mix(0.85))
@@ -183,7 +206,15 @@ impl Chart<'_> {
 
 /// A bar chart of labelled groups: `groups[g][k]` is bar k of group g (e.g. cylinders x
 /// points), with optional horizontal rules (thresholds).
-pub fn bars(area: &Area<'_>, title: &str, y_label: &str, group_names: &[String], bar_names: &[String], groups: &[Vec<f64>], rules: &[Rule]) -> DrawResult {
+pub fn bars(
+    area: &Area<'_>,
+    title: &str,
+    y_label: &str,
+    group_names: &[String],
+    bar_names: &[String],
+    groups: &[Vec<f64>],
+    rules: &[Rule],
+) -> DrawResult {
     let nb = bar_names.len().max(1);
     let ymax = groups
         .iter()
@@ -231,7 +262,12 @@ pub fn bars(area: &Area<'_>, title: &str, y_label: &str, group_names: &[String],
     }
     for r in rules {
         let c = color(r.color);
-        let e = chart.draw_series(DashedLineSeries::new(vec![(0.0, r.value), (n as f64, r.value)], 6, 4, c.stroke_width(2)))?;
+        let e = chart.draw_series(DashedLineSeries::new(
+            vec![(0.0, r.value), (n as f64, r.value)],
+            6,
+            4,
+            c.stroke_width(2),
+        ))?;
         e.label(r.name.clone())
             .legend(move |(a, b)| PathElement::new(vec![(a, b), (a + 18, b)], c.stroke_width(2)));
     }
