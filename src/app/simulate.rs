@@ -165,6 +165,33 @@ pub struct SimulateReport {
 }
 
 impl SimulateReport {
+    /// The report of a cycle result (no full-order comparison, no files yet).
+    pub fn new(
+        scene: &Scene,
+        piston: &Piston,
+        res: &CycleResult,
+        cache: &'static str,
+        transient_seconds: f64,
+    ) -> Self {
+        let (pp, pdeg) = piston.pressure.peak();
+        SimulateReport {
+            scene: scene.path.display().to_string(),
+            speed_rpm: scene.engine.speed_rpm,
+            cylinders: Self::cylinders_of(res),
+            seconds: 0.0,
+            transient_seconds,
+            stats: res.stats.clone(),
+            cache,
+            hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
+            peak_pressure_bar: pp / 1e5,
+            peak_pressure_deg: pdeg,
+            time_series_csv: None,
+            full_order: None,
+            rom_error_peak_negative: None,
+            speedup: None,
+        }
+    }
+
     /// Per-cylinder summary of a result.
     pub fn cylinders_of(res: &CycleResult) -> Vec<CylinderReport> {
         res.peaks
@@ -292,23 +319,7 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         Some(&progress),
     )?;
     let transient_seconds = t.elapsed().as_secs_f64();
-    let (pp, pdeg) = piston.pressure.peak();
-    let mut report = SimulateReport {
-        scene: scene.path.display().to_string(),
-        speed_rpm: scene.engine.speed_rpm,
-        cylinders: SimulateReport::cylinders_of(&res),
-        seconds: 0.0,
-        transient_seconds,
-        stats: res.stats.clone(),
-        cache: loaded.cache,
-        hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
-        peak_pressure_bar: pp / 1e5,
-        peak_pressure_deg: pdeg,
-        time_series_csv: None,
-        full_order: None,
-        rom_error_peak_negative: None,
-        speedup: None,
-    };
+    let mut report = SimulateReport::new(&scene, &piston, &res, loaded.cache, transient_seconds);
     if req.full_order {
         let settings = settings_of(sim, scene.rom.band_hz);
         let cmp = compare(&scene, &loaded.rom, &piston, &settings, &|m| {

@@ -222,23 +222,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         &scene.engine.firing_order,
         scene.rom.band_hz,
     );
-    let (pp, pdeg) = piston.pressure.peak();
-    let mut simulate = SimulateReport {
-        scene: scene.path.display().to_string(),
-        speed_rpm: scene.engine.speed_rpm,
-        cylinders: SimulateReport::cylinders_of(base),
-        seconds: 0.0,
-        transient_seconds: 0.0,
-        stats: base.stats.clone(),
-        cache: loaded.cache,
-        hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
-        peak_pressure_bar: pp / 1e5,
-        peak_pressure_deg: pdeg,
-        time_series_csv: None,
-        full_order: None,
-        rom_error_peak_negative: None,
-        speedup: None,
-    };
+    let mut simulate = SimulateReport::new(&scene, &piston, base, loaded.cache, 0.0);
     simulate.seconds = started.elapsed().as_secs_f64();
     std::fs::create_dir_all(out).map_err(|e| {
         Error::Input(format!(
