@@ -2,11 +2,16 @@
 //! rows at the contact DOFs (bore-line nodes of every modelled liner, outward radial), their
 //! residual flexibility R and the head-bolt preload displacement u0.
 //!
-//! At a location x (two bore-line DOFs with weights w), phi_x = sum w phi_dof, and
+//! At a location x (two bore-line DOFs d with weights w), phi_x = sum_d w_d phi_d, and
 //!   u(x) = u0(x) + phi_x . eta + sum_k R(x, x_k) F_k,
 //!   G(x, y) = sum_j phi_xj D_j phi_yj + R(x, y),  G_v(x, y) = gamma / (beta dt) sum_j phi_xj D_j phi_yj.
-//! The residual flexibility responds quasi-statically (no velocity). Per step the rows of the
-//! step's locations are formed once; G of an active set is one matrix product.
+//! The residual flexibility responds quasi-statically (no velocity).
+//!
+//! D depends on the step size only, so the DOF-level step compliance S_de = phi_d D phi_e is
+//! formed once per step size (one matrix product over all contact DOFs) and every per-step
+//! quantity is an interpolation of it: G(x, y) = sum_{d,e} w_d w_e S_de + R(x, y). The only
+//! per-step products over the modes are the predictor at the touched DOFs, phi_d . eta~ and
+//! phi_d . eta'~ (each once per DOF, shared by the slices beside it).
 
 use super::contact::{dot4, Location, Structure};
 use super::scheme::ModalIntegrator;
@@ -22,10 +27,14 @@ pub struct ModalStructure {
     preload: Vec<f64>,
     /// Whether the residual flexibility is used.
     pub static_correction: bool,
-    // per-step data: locations, their mode rows, sqrt(D)
+    /// S = Phi D Phi^T over the contact DOFs, per step size (key: dt bits).
+    step_compliance: Vec<(u64, Dense)>,
+    /// Index into `step_compliance` of the current step.
+    current: usize,
+    // per-step data: locations, predictor (u, u') per DOF (NaN: not yet formed)
     locs: Vec<Location>,
-    phi: Vec<f64>,
-    sqrt_d: Vec<f64>,
+    dof_pred: std::cell::RefCell<Vec<(f64, f64)>>,
+    touched: std::cell::RefCell<Vec<usize>>,
     /// R between the step's locations, filled when first needed (NaN: not yet).
     rmemo: std::cell::RefCell<Vec<f64>>,
 }
@@ -33,17 +42,81 @@ pub struct ModalStructure {
 impl ModalStructure {
     /// `rows`: contact DOFs x modes; `rflex`: contact DOFs squared; `preload` per contact DOF.
     pub fn new(integrator: ModalIntegrator, rows: Dense, rflex: Dense, preload: Vec<f64>) -> Self {
+        let ndof = rows.rows;
         Self {
             integrator,
             rows,
             rflex,
             preload,
             static_correction: true,
+            step_compliance: Vec::new(),
+            current: 0,
             locs: Vec::new(),
-            phi: Vec::new(),
-            sqrt_d: Vec::new(),
+            dof_pred: std::cell::RefCell::new(vec![(f64::NAN, f64::NAN); ndof]),
+            touched: std::cell::RefCell::new(Vec::new()),
             rmemo: std::cell::RefCell::new(Vec::new()),
         }
+    }
+
+    /// Selects (forming on first use) S = Phi D Phi^T for the integrator's current step size.
+    fn select_step_compliance(&mut self) {
+        // steps of one size differ by roundoff (t_{n+1} - t_n); a relative 1e-9 difference in
+        // dt changes S by the same relative amount, far below every tolerance of the run
+        let dt = self.integrator.dt();
+        let key = dt.to_bits();
+        if let Some(k) = self
+            .step_compliance
+            .iter()
+            .position(|(b, _)| (f64::from_bits(*b) - dt).abs() <= 1e-9 * dt)
+        {
+            self.current = k;
+            return;
+        }
+        let n = self.integrator.len();
+        let ndof = self.rows.rows;
+        let d = &self.integrator.compliance;
+        let nm = self.rows.cols;
+        // Psi = Phi sqrt(D) (DOFs x modes), S = Psi Psi^T
+        let psi =
+            faer::Mat::<f64>::from_fn(ndof, n, |r, j| self.rows.data[r * nm + j] * d[j].sqrt());
+        let mut s = faer::Mat::<f64>::zeros(ndof, ndof);
+        faer::linalg::matmul::matmul(
+            s.as_mut(),
+            faer::Accum::Replace,
+            psi.as_ref(),
+            psi.transpose(),
+            1.0,
+            faer::Par::Seq,
+        );
+        // a handful of step sizes at most (the base step and its halvings)
+        if self.step_compliance.len() >= 8 {
+            self.step_compliance.remove(0);
+        }
+        self.step_compliance.push((key, Dense::from_mat(&s)));
+        self.current = self.step_compliance.len() - 1;
+    }
+
+    /// S between two locations, sum_{d,e} w_d w_e S_de.
+    fn s_at(&self, a: &Location, b: &Location) -> f64 {
+        let s = &self.step_compliance[self.current].1;
+        let mut v = 0.0;
+        for i in 0..2 {
+            let row = s.row(a.dofs[i]);
+            v += a.weights[i] * (b.weights[0] * row[b.dofs[0]] + b.weights[1] * row[b.dofs[1]]);
+        }
+        v
+    }
+
+    /// Predictor (phi_d . eta~, phi_d . eta'~) at contact DOF `d`, memoised per step.
+    fn dof_predicted(&self, d: usize) -> (f64, f64) {
+        let mut memo = self.dof_pred.borrow_mut();
+        if memo[d].0.is_nan() {
+            let it = &self.integrator;
+            let n = it.len();
+            memo[d] = dot4_pair(&self.rows.row(d)[..n], &it.pred, &it.dpred);
+            self.touched.borrow_mut().push(d);
+        }
+        memo[d]
     }
 
     /// phi_x (modes) into `out`.
@@ -88,24 +161,19 @@ impl ModalStructure {
         r
     }
 
-    fn phi_of(&self, i: usize) -> &[f64] {
-        let n = self.integrator.len();
-        &self.phi[i * n..(i + 1) * n]
+    /// Number of contact DOFs (bore-line nodes of every modelled liner).
+    pub fn contact_dofs(&self) -> usize {
+        self.rows.rows
     }
 
-    /// Modal force sum_k phi_k F_k of forces at the prepared locations `idx`.
-    pub fn modal_force(&self, idx: &[usize], forces: &[f64]) -> Vec<f64> {
-        let n = self.integrator.len();
-        let mut f = vec![0.0; n];
-        for (&i, &fk) in idx.iter().zip(forces) {
-            if fk == 0.0 {
-                continue;
-            }
-            for (fj, pj) in f.iter_mut().zip(self.phi_of(i)) {
-                *fj += pj * fk;
-            }
+    /// Residual flexibility between contact DOFs `d` and `e` [m/N] (0 without the static
+    /// correction).
+    pub fn rflex_dof(&self, d: usize, e: usize) -> f64 {
+        if self.static_correction {
+            self.rflex.at(d, e)
+        } else {
+            0.0
         }
-        f
     }
 
     /// Modal force sum_k phi_k F_k of forces at arbitrary locations.
@@ -140,77 +208,92 @@ impl ModalStructure {
 
 impl Structure for ModalStructure {
     fn prepare(&mut self, locs: &[Location]) {
-        let n = self.integrator.len();
         let m = locs.len();
-        self.locs = locs.to_vec();
+        self.select_step_compliance();
+        self.locs.clear();
+        self.locs.extend_from_slice(locs);
         {
             let mut memo = self.rmemo.borrow_mut();
             memo.clear();
             memo.resize(m * m, f64::NAN);
         }
-        self.phi.resize(m * n, 0.0);
-        let mut phi = std::mem::take(&mut self.phi);
-        for (i, at) in locs.iter().enumerate() {
-            self.row_into(at, &mut phi[i * n..(i + 1) * n]);
+        let mut memo = self.dof_pred.borrow_mut();
+        for d in self.touched.borrow_mut().drain(..) {
+            memo[d] = (f64::NAN, f64::NAN);
         }
-        self.phi = phi;
-        self.sqrt_d.clear();
-        self.sqrt_d
-            .extend(self.integrator.compliance.iter().map(|d| d.sqrt()));
     }
 
+    /// u~(x) = u0(x) + sum_d w_d phi_d . eta~, u~'(x) = sum_d w_d phi_d . eta'~.
     fn predicted(&self, i: usize) -> (f64, f64) {
         let at = &self.locs[i];
-        let it = &self.integrator;
-        let phi = self.phi_of(i);
-        let pre =
-            at.weights[0] * self.preload[at.dofs[0]] + at.weights[1] * self.preload[at.dofs[1]];
-        (pre + dot4(phi, &it.pred), dot4(phi, &it.dpred))
+        let (mut u, mut v) = (0.0, 0.0);
+        for k in 0..2 {
+            let (ud, vd) = self.dof_predicted(at.dofs[k]);
+            u += at.weights[k] * (self.preload[at.dofs[k]] + ud);
+            v += at.weights[k] * vd;
+        }
+        (u, v)
     }
 
+    /// G_AA = S_AA + R_AA, G_v,AA = gamma / (beta dt) S_AA (S interpolated from the DOFs).
     fn compliance(&mut self, active: &[usize]) -> (DMatrix<f64>, DMatrix<f64>) {
-        let n = self.integrator.len();
         let na = active.len();
         let kv = self.integrator.velocity_factor();
-        // Psi_A (modes x active, one column per slice), S = Psi_A^T Psi_A (faer gemm)
-        let psi =
-            faer::Mat::<f64>::from_fn(n, na, |j, a| self.phi[active[a] * n + j] * self.sqrt_d[j]);
-        let mut prod = faer::Mat::<f64>::zeros(na, na);
-        faer::linalg::matmul::matmul(
-            prod.as_mut(),
-            faer::Accum::Replace,
-            psi.transpose(),
-            psi.as_ref(),
-            1.0,
-            faer::Par::Seq,
-        );
-        let s = DMatrix::<f64>::from_fn(na, na, |a, b| prod[(a, b)]);
-        let gv = &s * kv;
-        let mut g = s;
-        if self.static_correction {
-            for (a, &i) in active.iter().enumerate() {
-                for (b, &k) in active.iter().enumerate() {
-                    g[(a, b)] += self.r_of(i, k);
-                }
+        let mut g = DMatrix::<f64>::zeros(na, na);
+        let mut gv = DMatrix::<f64>::zeros(na, na);
+        for a in 0..na {
+            for b in a..na {
+                let s = self.s_at(&self.locs[active[a]], &self.locs[active[b]]);
+                gv[(a, b)] = kv * s;
+                gv[(b, a)] = kv * s;
+                let r = self.r_of(active[a], active[b]);
+                g[(a, b)] = s + r;
+                g[(b, a)] = s + r;
             }
         }
         (g, gv)
     }
 
+    /// (G F)_i = sum_k (S(x_i, x_k) + R(x_i, x_k)) F_k.
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
-        let mut f = self.modal_force(active, forces);
-        for (fj, d) in f.iter_mut().zip(&self.integrator.compliance) {
-            *fj *= d;
-        }
         (0..self.locs.len())
             .map(|i| {
-                let r: f64 = active
+                active
                     .iter()
                     .zip(forces)
-                    .map(|(&k, &fk)| self.r_of(i, k) * fk)
-                    .sum();
-                dot4(self.phi_of(i), &f) + r
+                    .filter(|(_, &fk)| fk != 0.0)
+                    .map(|(&k, &fk)| {
+                        (self.s_at(&self.locs[i], &self.locs[k]) + self.r_of(i, k)) * fk
+                    })
+                    .sum()
             })
             .collect()
     }
+}
+
+/// (a . b, a . c) in one pass with four partial sums each.
+fn dot4_pair(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
+    let n = a.len().min(b.len()).min(c.len());
+    let (a, b, c) = (&a[..n], &b[..n], &c[..n]);
+    let mut s = [0.0; 4];
+    let mut t = [0.0; 4];
+    for ((x, y), z) in a
+        .chunks_exact(4)
+        .zip(b.chunks_exact(4))
+        .zip(c.chunks_exact(4))
+    {
+        for k in 0..4 {
+            s[k] += x[k] * y[k];
+            t[k] += x[k] * z[k];
+        }
+    }
+    let (mut ss, mut tt) = (0.0, 0.0);
+    for k in n - n % 4..n {
+        ss += a[k] * b[k];
+        tt += a[k] * c[k];
+    }
+    (
+        (s[0] + s[1]) + (s[2] + s[3]) + ss,
+        (t[0] + t[1]) + (t[2] + t[3]) + tt,
+    )
 }

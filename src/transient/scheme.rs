@@ -121,6 +121,11 @@ impl ModalIntegrator {
         }
     }
 
+    /// Size of the current step [s].
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
     /// gamma / (beta dt) of the current step (velocity per displacement of the new force).
     pub fn velocity_factor(&self) -> f64 {
         self.scheme.gamma / (self.scheme.beta * self.dt)

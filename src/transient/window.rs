@@ -316,20 +316,20 @@ pub fn low_pass(x: &[f64], dt: f64, band_hz: f64, cyclic: bool) -> (Vec<f64>, us
         .collect();
     let sum: f64 = h.iter().sum();
     h.iter_mut().for_each(|v| *v /= sum);
+    // x extended by `half` samples each side (wrapped when cyclic, zeros otherwise), so
+    // y_i = sum_k h_k x_ext[i + k] with no index arithmetic in the inner loop
     let n = x.len();
+    let mut ext = vec![0.0; n + 2 * half];
+    for (e, v) in ext.iter_mut().enumerate() {
+        let j = e as isize - half as isize;
+        if cyclic && n > 0 {
+            *v = x[j.rem_euclid(n as isize) as usize];
+        } else if j >= 0 && (j as usize) < n {
+            *v = x[j as usize];
+        }
+    }
     let y = (0..n)
-        .map(|i| {
-            let mut s = 0.0;
-            for (k, hk) in h.iter().enumerate() {
-                let j = i as isize + k as isize - half as isize;
-                if cyclic {
-                    s += hk * x[j.rem_euclid(n as isize) as usize];
-                } else if j >= 0 && (j as usize) < n {
-                    s += hk * x[j as usize];
-                }
-            }
-            s
-        })
+        .map(|i| super::contact::dot4(&h, &ext[i..i + len]))
         .collect();
     (y, if cyclic { 0 } else { half })
 }
