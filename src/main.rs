@@ -462,7 +462,28 @@ fn print_report<T: serde::Serialize>(json: bool, report: &T, text: impl FnOnce()
     }
 }
 
+/// OpenBLAS (ARPACK's BLAS) starts its worker threads when the library loads, before `main`,
+/// and they spin on `sched_yield` for a while: on a 2-core machine that halves the speed of
+/// the single-threaded transient. ARPACK's vector-sized BLAS calls gain nothing from them
+/// (rayon and faer do the parallel work), so unless the user chose a thread count, the
+/// process re-executes itself once with OPENBLAS_NUM_THREADS=1.
+fn single_threaded_blas() {
+    use std::os::unix::process::CommandExt;
+    if std::env::var_os("OPENBLAS_NUM_THREADS").is_some() {
+        return;
+    }
+    let Ok(exe) = std::env::current_exe() else {
+        return;
+    };
+    // exec only returns on failure; then run on as we are
+    let _ = std::process::Command::new(exe)
+        .args(std::env::args_os().skip(1))
+        .env("OPENBLAS_NUM_THREADS", "1")
+        .exec();
+}
+
 fn main() {
+    single_threaded_blas();
     let started = Instant::now();
     let cli = Cli::parse();
     if let Err(e) = run(cli, started) {
