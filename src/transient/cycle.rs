@@ -490,31 +490,34 @@ impl<'a> EngineRun<'a> {
                 // other cylinders' residual-flexibility displacement at a contact DOF, lagged:
                 // u_d = sum_{loaded k, other cylinder} R(d, x_k) F_k, memoised per DOF (one
                 // memo serves all cylinders: each contact DOF belongs to one cylinder's liner)
-                // (the loads are first gathered per DOF: F_e = sum_k w_ke F_k)
-                let mut u_dof = vec![f64::NAN; self.structure.contact_dofs()];
-                let mut dof_loads: Vec<(usize, usize, f64)> = Vec::new();
+                // (the loads are first gathered per DOF, F_e = sum_k w_ke F_k, then listed per
+                // cylinder; each DOF belongs to one cylinder's liner)
+                let ndof = self.structure.contact_dofs();
+                let mut u_dof = vec![f64::NAN; ndof];
+                let mut f_dof = vec![0.0; ndof];
+                let mut owner = vec![usize::MAX; ndof];
+                let mut touched = Vec::new();
                 for (c, at, f) in &self.prev_loaded {
                     for k in 0..2 {
                         let e = at.dofs[k];
-                        match dof_loads
-                            .iter_mut()
-                            .find(|(cc, ee, _)| *cc == *c && *ee == e)
-                        {
-                            Some(l) => l.2 += at.weights[k] * f,
-                            None => dof_loads.push((*c, e, at.weights[k] * f)),
+                        if owner[e] == usize::MAX {
+                            owner[e] = *c;
+                            touched.push(e);
                         }
+                        f_dof[e] += at.weights[k] * f;
                     }
                 }
                 for b in 0..bodies.len() {
                     let idx: Vec<usize> =
                         (0..slices.len()).filter(|&k| slices[k].body == b).collect();
+                    let others: Vec<(usize, f64)> = touched
+                        .iter()
+                        .filter(|&&e| owner[e] != b)
+                        .map(|&e| (e, f_dof[e]))
+                        .collect();
                     let mut lagged = |d: usize| {
                         if u_dof[d].is_nan() {
-                            u_dof[d] = dof_loads
-                                .iter()
-                                .filter(|(c, _, _)| *c != b)
-                                .map(|(_, e, f)| self.structure.rflex_dof(d, *e) * f)
-                                .sum::<f64>();
+                            u_dof[d] = self.structure.rflex_dot(d, &others);
                         }
                         u_dof[d]
                     };

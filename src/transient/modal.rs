@@ -27,16 +27,15 @@ pub struct ModalStructure {
     preload: Vec<f64>,
     /// Whether the residual flexibility is used.
     pub static_correction: bool,
-    /// S = Phi D Phi^T over the contact DOFs, per step size (key: dt bits).
-    step_compliance: Vec<(u64, Dense)>,
+    /// Per step size (key: dt bits): S = Phi D Phi^T over the contact DOFs and T = S + R
+    /// (T = S without the static correction).
+    step_compliance: Vec<(u64, Dense, Dense)>,
     /// Index into `step_compliance` of the current step.
     current: usize,
     // per-step data: locations, predictor (u, u') per DOF (NaN: not yet formed)
     locs: Vec<Location>,
     dof_pred: std::cell::RefCell<Vec<(f64, f64)>>,
     touched: std::cell::RefCell<Vec<usize>>,
-    /// R between the step's locations, filled when first needed (NaN: not yet).
-    rmemo: std::cell::RefCell<Vec<f64>>,
 }
 
 impl ModalStructure {
@@ -54,7 +53,6 @@ impl ModalStructure {
             locs: Vec::new(),
             dof_pred: std::cell::RefCell::new(vec![(f64::NAN, f64::NAN); ndof]),
             touched: std::cell::RefCell::new(Vec::new()),
-            rmemo: std::cell::RefCell::new(Vec::new()),
         }
     }
 
@@ -67,7 +65,7 @@ impl ModalStructure {
         if let Some(k) = self
             .step_compliance
             .iter()
-            .position(|(b, _)| (f64::from_bits(*b) - dt).abs() <= 1e-9 * dt)
+            .position(|(b, _, _)| (f64::from_bits(*b) - dt).abs() <= 1e-9 * dt)
         {
             self.current = k;
             return;
@@ -92,13 +90,19 @@ impl ModalStructure {
         if self.step_compliance.len() >= 8 {
             self.step_compliance.remove(0);
         }
-        self.step_compliance.push((key, Dense::from_mat(&s)));
+        let s = Dense::from_mat(&s);
+        let mut t = s.clone();
+        if self.static_correction {
+            for (tv, rv) in t.data.iter_mut().zip(&self.rflex.data) {
+                *tv += rv;
+            }
+        }
+        self.step_compliance.push((key, s, t));
         self.current = self.step_compliance.len() - 1;
     }
 
-    /// S between two locations, sum_{d,e} w_d w_e S_de.
-    fn s_at(&self, a: &Location, b: &Location) -> f64 {
-        let s = &self.step_compliance[self.current].1;
+    /// A DOF-level matrix `s` (S or T) between two locations, sum_{d,e} w_d w_e s_de.
+    fn interpolate(s: &Dense, a: &Location, b: &Location) -> f64 {
         let mut v = 0.0;
         for i in 0..2 {
             let row = s.row(a.dofs[i]);
@@ -144,36 +148,19 @@ impl ModalStructure {
         s
     }
 
-    /// R between prepared locations `i` and `k` (memoised per step).
-    fn r_of(&self, i: usize, k: usize) -> f64 {
-        if !self.static_correction {
-            return 0.0;
-        }
-        let m = self.locs.len();
-        let mut memo = self.rmemo.borrow_mut();
-        let v = memo[i * m + k];
-        if !v.is_nan() {
-            return v;
-        }
-        let r = self.rflex_at(&self.locs[i], &self.locs[k]);
-        memo[i * m + k] = r;
-        memo[k * m + i] = r;
-        r
-    }
-
     /// Number of contact DOFs (bore-line nodes of every modelled liner).
     pub fn contact_dofs(&self) -> usize {
         self.rows.rows
     }
 
-    /// Residual flexibility between contact DOFs `d` and `e` [m/N] (0 without the static
-    /// correction).
-    pub fn rflex_dof(&self, d: usize, e: usize) -> f64 {
-        if self.static_correction {
-            self.rflex.at(d, e)
-        } else {
-            0.0
+    /// Residual-flexibility displacement at contact DOF `d` of DOF forces `loads` (DOF, force),
+    /// sum_e R_de F_e [m] (0 without the static correction).
+    pub fn rflex_dot(&self, d: usize, loads: &[(usize, f64)]) -> f64 {
+        if !self.static_correction {
+            return 0.0;
         }
+        let row = self.rflex.row(d);
+        loads.iter().map(|&(e, f)| row[e] * f).sum()
     }
 
     /// Modal force sum_k phi_k F_k of forces at arbitrary locations.
@@ -208,15 +195,9 @@ impl ModalStructure {
 
 impl Structure for ModalStructure {
     fn prepare(&mut self, locs: &[Location]) {
-        let m = locs.len();
         self.select_step_compliance();
         self.locs.clear();
         self.locs.extend_from_slice(locs);
-        {
-            let mut memo = self.rmemo.borrow_mut();
-            memo.clear();
-            memo.resize(m * m, f64::NAN);
-        }
         let mut memo = self.dof_pred.borrow_mut();
         for d in self.touched.borrow_mut().drain(..) {
             memo[d] = (f64::NAN, f64::NAN);
@@ -235,37 +216,55 @@ impl Structure for ModalStructure {
         (u, v)
     }
 
-    /// G_AA = S_AA + R_AA, G_v,AA = gamma / (beta dt) S_AA (S interpolated from the DOFs).
+    /// G_AA = T_AA = S_AA + R_AA, G_v,AA = gamma / (beta dt) S_AA (interpolated from the DOFs).
     fn compliance(&mut self, active: &[usize]) -> (DMatrix<f64>, DMatrix<f64>) {
         let na = active.len();
         let kv = self.integrator.velocity_factor();
+        let (_, s, t) = &self.step_compliance[self.current];
         let mut g = DMatrix::<f64>::zeros(na, na);
         let mut gv = DMatrix::<f64>::zeros(na, na);
         for a in 0..na {
+            let la = &self.locs[active[a]];
             for b in a..na {
-                let s = self.s_at(&self.locs[active[a]], &self.locs[active[b]]);
-                gv[(a, b)] = kv * s;
-                gv[(b, a)] = kv * s;
-                let r = self.r_of(active[a], active[b]);
-                g[(a, b)] = s + r;
-                g[(b, a)] = s + r;
+                let lb = &self.locs[active[b]];
+                let sv = kv * Self::interpolate(s, la, lb);
+                gv[(a, b)] = sv;
+                gv[(b, a)] = sv;
+                let tv = Self::interpolate(t, la, lb);
+                g[(a, b)] = tv;
+                g[(b, a)] = tv;
             }
         }
         (g, gv)
     }
 
-    /// (G F)_i = sum_k (S(x_i, x_k) + R(x_i, x_k)) F_k.
+    /// (G F)_i = sum_d w_id sum_e T_de F_e with the forces gathered on the DOFs,
+    /// F_e = sum_k w_ke F_k.
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
-        (0..self.locs.len())
-            .map(|i| {
-                active
-                    .iter()
-                    .zip(forces)
-                    .filter(|(_, &fk)| fk != 0.0)
-                    .map(|(&k, &fk)| {
-                        (self.s_at(&self.locs[i], &self.locs[k]) + self.r_of(i, k)) * fk
-                    })
-                    .sum()
+        let t = &self.step_compliance[self.current].2;
+        let mut gathered: Vec<(usize, f64)> = Vec::with_capacity(2 * active.len());
+        for (&k, &fk) in active.iter().zip(forces) {
+            if fk == 0.0 {
+                continue;
+            }
+            let at = &self.locs[k];
+            for m in 0..2 {
+                let e = at.dofs[m];
+                match gathered.iter_mut().find(|(ee, _)| *ee == e) {
+                    Some(g) => g.1 += at.weights[m] * fk,
+                    None => gathered.push((e, at.weights[m] * fk)),
+                }
+            }
+        }
+        self.locs
+            .iter()
+            .map(|at| {
+                let mut u = 0.0;
+                for m in 0..2 {
+                    let row = t.row(at.dofs[m]);
+                    u += at.weights[m] * gathered.iter().map(|&(e, f)| row[e] * f).sum::<f64>();
+                }
+                u
             })
             .collect()
     }
