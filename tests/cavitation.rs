@@ -3,19 +3,8 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::process::Command;
-
-fn linercav(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_linercav"))
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::linercav;
 
 /// Reference coolant by hand (steam tables, 90 C): p_v = 70.18 kPa, rho = 965.3 kg/m^3,
 /// c = 1550.4 m/s; Vccv = (240 - 70.18) kPa / (965.3 x 1550.4) = 0.1135 m/s.

@@ -4,14 +4,10 @@
 
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn linercav(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_linercav"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
+mod common;
+use common::linercav_output as linercav;
 
 fn json(out: &Output) -> Value {
     assert!(

@@ -2,6 +2,8 @@
 //! reduction, the cache, and interface errors. Runs on the coarse two-cylinder scene
 //! tests/fixtures/engine_small.toml (a few seconds per build).
 
+mod common;
+use common::linercav_output as linercav;
 use linercav::app::rom::{
     build_rom, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
 };
@@ -10,7 +12,6 @@ use linercav::reduce::full;
 use linercav::reduce::interface::{self, Direction, InterfaceShape};
 use linercav::scene::Scene;
 use std::path::Path;
-use std::process::Command;
 
 const SMALL: &str = "tests/fixtures/engine_small.toml";
 
@@ -244,13 +245,6 @@ fn cache_hit_miss_and_corruption() {
             "rebuilt file valid"
         );
     }
-}
-
-fn linercav(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_linercav"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 #[test]

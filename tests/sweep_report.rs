@@ -3,21 +3,10 @@
 //! without output.
 
 use std::path::Path;
-use std::process::Command;
+mod common;
+use common::linercav;
 
 const SCENE: &str = "tests/fixtures/engine_small.toml";
-
-fn linercav(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_linercav"))
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 fn is_png(p: &Path) -> bool {
     std::fs::read(p)
@@ -133,6 +122,7 @@ fn report_writes_the_figure_set() {
         "sweep_pin_offset.png",
         "criteria.png",
         "speed_error.png",
+        "frf.png",
     ] {
         assert!(is_png(&out.join(f)), "{f}");
     }

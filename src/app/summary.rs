@@ -6,7 +6,8 @@
 //! acceleration per cylinder around firing, with the thresholds), `spectra.png`, `peaks.png`
 //! (per cylinder and point, with the thresholds), `modes_risk.png` (coefficients of the mode
 //! nearest the dominant response beside the per-cylinder peaks), `sweep_clearance.png`,
-//! `sweep_pin_offset.png`, `criteria.png` (CSF against Ca), `speed_error.png`.
+//! `sweep_pin_offset.png`, `criteria.png` (CSF against Ca), `speed_error.png`, `frf.png`
+//! (inertance from the slap location to each cylinder's worst point, from the modal model).
 
 use super::evaluate::{evaluate, spectra, Evaluation};
 use super::full_order::{peak_negative, rom_window};
@@ -456,6 +457,76 @@ fn figures(
         .draw(root)
     })?;
     files.push(p);
+    // FRFs of the liner points from the modal model: inertance from the thrust bore line at
+    // the skirt centre at firing TDC (where the slap lands) to each cylinder's worst point
+    let p = out.join("frf.png");
+    let zeta = scene
+        .simulation
+        .as_ref()
+        .map_or(0.02, |sim| sim.transient.damping_ratio);
+    let skirt = &piston.skirt.heights;
+    let skirt_mid = skirt.iter().sum::<f64>() / skirt.len().max(1) as f64;
+    let z_slap = scene.liner_geometry.length - piston.loads(360.0).pin_depth + skirt_mid;
+    let freqs: Vec<f64> = (1..=600).map(|k| band * k as f64 / 600.0).collect();
+    let frf_series: Vec<Series> = ev
+        .cylinders
+        .iter()
+        .enumerate()
+        .filter_map(|(ci, c)| {
+            let cr = rom.cylinders.iter().find(|r| r.cylinder == c.cylinder)?;
+            let node = (0..cr.thrust_z.len()).min_by(|&a, &b| {
+                (cr.thrust_z[a] - z_slap)
+                    .abs()
+                    .total_cmp(&(cr.thrust_z[b] - z_slap).abs())
+            })?;
+            let point = c.worst_point.checked_sub(1)?;
+            let a = crate::analysis::frf::inertance(
+                cr.thrust_modes.row(node),
+                cr.point_modes.row(point),
+                &rom.frequencies_hz,
+                zeta,
+                &freqs,
+            );
+            Some(Series {
+                name: format!("cylinder {} point {}", c.cylinder, c.worst_point),
+                points: freqs.iter().copied().zip(a).collect(),
+                mark: Mark::Line,
+                color: ci,
+            })
+        })
+        .collect();
+    if !frf_series.is_empty() {
+        write_png(&p, (1500, 600), |root| {
+            let title = format!(
+                "Liner FRF: inertance from the thrust contact at {:.0} mm (skirt centre at firing TDC) to the worst point, modal damping {:.1} %",
+                z_slap * 1e3,
+                zeta * 100.0
+            );
+            let rules = ev
+                .nearest_modes
+                .iter()
+                .take(2)
+                .enumerate()
+                .map(|(k, m)| Rule {
+                    name: format!("system mode {:.0} Hz", m.frequency_hz),
+                    value: m.frequency_hz,
+                    vertical: true,
+                    color: 6 + k,
+                })
+                .collect();
+            Chart {
+                title: &title,
+                x_label: "frequency [Hz]",
+                y_label: "inertance [m/s^2/N]",
+                series: frf_series,
+                rules,
+                x_range: Some((0.0, band)),
+                y_range: None,
+            }
+            .draw(root)
+        })?;
+        files.push(p);
+    }
     // peaks per cylinder and point with thresholds
     let p = out.join("peaks.png");
     let names: Vec<String> = ev

@@ -1,5 +1,24 @@
-//! Helpers shared by the integration tests: small structured meshes and dense oracles.
+//! Helpers shared by the integration tests: the binary as a process, small structured meshes
+//! and dense oracles.
 #![allow(dead_code)]
+
+/// Runs the `linercav` binary with `args` and returns its whole output.
+pub fn linercav_output(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_linercav"))
+        .args(args)
+        .output()
+        .expect("the linercav binary runs")
+}
+
+/// Runs the `linercav` binary: (exit code, stdout, stderr).
+pub fn linercav(args: &[&str]) -> (i32, String, String) {
+    let out = linercav_output(args);
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
 
 use linercav::fem::shape::ElementKind;
 use linercav::mesh::lattice::Lattice;
