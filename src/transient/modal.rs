@@ -286,7 +286,33 @@ fn dot4_pair(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn dot4_pair_avx2(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
-    dot4_pair_body(a, b, c)
+    use std::arch::x86_64::{
+        _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_setzero_pd, _mm256_storeu_pd,
+    };
+    let n = a.len().min(b.len()).min(c.len());
+    let m = n - n % 4;
+    // lane k holds the partial sum of the elements k mod 4, as in `dot4_pair_body`
+    let (mut s, mut t) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+    let mut i = 0;
+    while i < m {
+        // SAFETY: i + 4 <= m <= the length of each slice
+        let x = _mm256_loadu_pd(a.as_ptr().add(i));
+        s = _mm256_add_pd(s, _mm256_mul_pd(x, _mm256_loadu_pd(b.as_ptr().add(i))));
+        t = _mm256_add_pd(t, _mm256_mul_pd(x, _mm256_loadu_pd(c.as_ptr().add(i))));
+        i += 4;
+    }
+    let (mut sv, mut tv) = ([0.0; 4], [0.0; 4]);
+    _mm256_storeu_pd(sv.as_mut_ptr(), s);
+    _mm256_storeu_pd(tv.as_mut_ptr(), t);
+    let (mut ss, mut tt) = (0.0, 0.0);
+    for k in m..n {
+        ss += a[k] * b[k];
+        tt += a[k] * c[k];
+    }
+    (
+        (sv[0] + sv[1]) + (sv[2] + sv[3]) + ss,
+        (tv[0] + tv[1]) + (tv[2] + tv[3]) + tt,
+    )
 }
 
 #[inline(always)]
