@@ -27,9 +27,9 @@ pub struct ModalStructure {
     preload: Vec<f64>,
     /// Whether the residual flexibility is used.
     pub static_correction: bool,
-    /// Per step size (key: dt bits): S = Phi D Phi^T over the contact DOFs and T = S + R
-    /// (T = S without the static correction).
-    step_compliance: Vec<(u64, Dense, Dense)>,
+    /// Per step size and static-correction flag (key: dt bits, flag): S = Phi D Phi^T over
+    /// the contact DOFs and T = S + R (T = S without the static correction).
+    step_compliance: Vec<(u64, bool, Dense, Dense)>,
     /// Index into `step_compliance` of the current step.
     current: usize,
     // per-step data: locations, predictor (u, u') per DOF (NaN: not yet formed)
@@ -62,11 +62,9 @@ impl ModalStructure {
         // dt changes S by the same relative amount, far below every tolerance of the run
         let dt = self.integrator.dt();
         let key = dt.to_bits();
-        if let Some(k) = self
-            .step_compliance
-            .iter()
-            .position(|(b, _, _)| (f64::from_bits(*b) - dt).abs() <= 1e-9 * dt)
-        {
+        if let Some(k) = self.step_compliance.iter().position(|(b, sc, _, _)| {
+            *sc == self.static_correction && (f64::from_bits(*b) - dt).abs() <= 1e-9 * dt
+        }) {
             self.current = k;
             return;
         }
@@ -97,7 +95,8 @@ impl ModalStructure {
                 *tv += rv;
             }
         }
-        self.step_compliance.push((key, s, t));
+        self.step_compliance
+            .push((key, self.static_correction, s, t));
         self.current = self.step_compliance.len() - 1;
     }
 
@@ -220,7 +219,7 @@ impl Structure for ModalStructure {
     fn compliance(&mut self, active: &[usize]) -> (DMatrix<f64>, DMatrix<f64>) {
         let na = active.len();
         let kv = self.integrator.velocity_factor();
-        let (_, s, t) = &self.step_compliance[self.current];
+        let (_, _, s, t) = &self.step_compliance[self.current];
         let mut g = DMatrix::<f64>::zeros(na, na);
         let mut gv = DMatrix::<f64>::zeros(na, na);
         for a in 0..na {
@@ -241,7 +240,7 @@ impl Structure for ModalStructure {
     /// (G F)_i = sum_d w_id sum_e T_de F_e with the forces gathered on the DOFs,
     /// F_e = sum_k w_ke F_k.
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
-        let t = &self.step_compliance[self.current].2;
+        let t = &self.step_compliance[self.current].3;
         let mut gathered: Vec<(usize, f64)> = Vec::with_capacity(2 * active.len());
         for (&k, &fk) in active.iter().zip(forces) {
             if fk == 0.0 {
