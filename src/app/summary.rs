@@ -263,6 +263,21 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     Ok(report)
 }
 
+/// Vertical rules at the two system modes nearest the dominant response.
+fn mode_rules(ev: &Evaluation) -> Vec<Rule> {
+    ev.nearest_modes
+        .iter()
+        .take(2)
+        .enumerate()
+        .map(|(k, m)| Rule {
+            name: format!("system mode {:.0} Hz", m.frequency_hz),
+            value: m.frequency_hz,
+            vertical: true,
+            color: 6 + k,
+        })
+        .collect()
+}
+
 #[allow(clippy::too_many_arguments)]
 fn figures(
     out: &Path,
@@ -429,18 +444,7 @@ fn figures(
                 })
             })
             .collect();
-        let rules = ev
-            .nearest_modes
-            .iter()
-            .take(2)
-            .enumerate()
-            .map(|(k, m)| Rule {
-                name: format!("system mode {:.0} Hz", m.frequency_hz),
-                value: m.frequency_hz,
-                vertical: true,
-                color: 6 + k,
-            })
-            .collect();
+        let rules = mode_rules(ev);
         let title = format!(
             "Amplitude spectra (Hann, window centred on firing); dominant {:.0} Hz",
             ev.dominant_hz
@@ -502,18 +506,7 @@ fn figures(
                 z_slap * 1e3,
                 zeta * 100.0
             );
-            let rules = ev
-                .nearest_modes
-                .iter()
-                .take(2)
-                .enumerate()
-                .map(|(k, m)| Rule {
-                    name: format!("system mode {:.0} Hz", m.frequency_hz),
-                    value: m.frequency_hz,
-                    vertical: true,
-                    color: 6 + k,
-                })
-                .collect();
+            let rules = mode_rules(ev);
             Chart {
                 title: &title,
                 x_label: "frequency [Hz]",
