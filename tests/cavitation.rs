@@ -6,6 +6,25 @@ use std::path::Path;
 mod common;
 use common::linercav;
 
+/// `linercav calibrate` of `csv` for the reference coolant (4.7 mm, 240 kPa, 90 C) with JSON
+/// on stdout and the figure at `png`.
+fn calibrate_reference(csv: &Path, png: &Path) -> (i32, String, String) {
+    linercav(&[
+        "calibrate",
+        "--data",
+        csv.to_str().unwrap(),
+        "--gap-mm",
+        "4.7",
+        "--static-kpa",
+        "240",
+        "--temp-c",
+        "90",
+        "--json",
+        "--png",
+        png.to_str().unwrap(),
+    ])
+}
+
 /// Reference coolant by hand (steam tables, 90 C): p_v = 70.18 kPa, rho = 965.3 kg/m^3,
 /// c = 1550.4 m/s; Vccv = (240 - 70.18) kPa / (965.3 x 1550.4) = 0.1135 m/s.
 #[test]
@@ -95,20 +114,7 @@ fn calibration_recovers_known_thresholds() {
     let csv = dir.path().join("rig.csv");
     let png = dir.path().join("cal.png");
     let (onset, high, k_mean) = synthetic(&csv, 300.0, 2000.0, 350);
-    let (code, out, err) = linercav(&[
-        "calibrate",
-        "--data",
-        csv.to_str().unwrap(),
-        "--gap-mm",
-        "4.7",
-        "--static-kpa",
-        "240",
-        "--temp-c",
-        "90",
-        "--json",
-        "--png",
-        png.to_str().unwrap(),
-    ]);
+    let (code, out, err) = calibrate_reference(&csv, &png);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let get = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} in output"));
@@ -137,20 +143,7 @@ fn refused(dir: &Path, name: &str, text: &str, needle: &str) {
     let csv = dir.join(name);
     std::fs::write(&csv, text).unwrap();
     let png = dir.join(format!("{name}.png"));
-    let (code, out, err) = linercav(&[
-        "calibrate",
-        "--data",
-        csv.to_str().unwrap(),
-        "--gap-mm",
-        "4.7",
-        "--static-kpa",
-        "240",
-        "--temp-c",
-        "90",
-        "--json",
-        "--png",
-        png.to_str().unwrap(),
-    ]);
+    let (code, out, err) = calibrate_reference(&csv, &png);
     assert_eq!(code, 2, "{name}: {err}");
     assert!(err.contains(needle), "{name}: '{err}' lacks '{needle}'");
     assert!(
