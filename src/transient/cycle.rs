@@ -619,9 +619,10 @@ impl<'a> EngineRun<'a> {
             .filter(|(_, &f)| f != 0.0)
             .map(|(((b, _, _, _), sl), &f)| (*b, sl.at, f))
             .collect();
-        if self.settings.coupling == Coupling::PerCylinder && self.stats.steps % 4 == 0 {
+        if self.settings.coupling == Coupling::PerCylinder && self.stats.steps % 16 == 0 {
             // displacement the slice used vs the completed step's, at the loaded slices
-            // (sampled every 4th step: a diagnostic, not part of the solution)
+            // (sampled every 16th step, ~45 samples per slap: a diagnostic, not part of the
+            // solution)
             let mut lag: f64 = 0.0;
             for (k, sl) in slices.iter().enumerate() {
                 if res.forces[k] == 0.0 {

@@ -122,17 +122,6 @@ impl ModalStructure {
         memo[d]
     }
 
-    /// phi_x (modes) into `out`.
-    fn row_into(&self, at: &Location, out: &mut [f64]) {
-        let n = self.integrator.len();
-        let r0 = self.rows.row(at.dofs[0]);
-        let r1 = self.rows.row(at.dofs[1]);
-        let (w0, w1) = (at.weights[0], at.weights[1]);
-        for j in 0..n {
-            out[j] = w0 * r0[j] + w1 * r1[j];
-        }
-    }
-
     /// Residual flexibility R(a, b) between two locations [m/N].
     pub fn rflex_at(&self, a: &Location, b: &Location) -> f64 {
         if !self.static_correction {
@@ -165,30 +154,43 @@ impl ModalStructure {
     /// Modal force sum_k phi_k F_k of forces at arbitrary locations.
     pub fn modal_force_at(&self, locs: &[Location], forces: &[f64]) -> Vec<f64> {
         let n = self.integrator.len();
-        let mut f = vec![0.0; n];
+        // gather on the DOFs first (neighbouring slices share bore-line nodes): F_e = sum_k w_ke F_k
+        let mut gathered: Vec<(usize, f64)> = Vec::with_capacity(2 * locs.len());
         for (at, &fk) in locs.iter().zip(forces) {
             if fk == 0.0 {
                 continue;
             }
-            let r0 = self.rows.row(at.dofs[0]);
-            let r1 = self.rows.row(at.dofs[1]);
-            for j in 0..n {
-                f[j] += (at.weights[0] * r0[j] + at.weights[1] * r1[j]) * fk;
+            for m in 0..2 {
+                let e = at.dofs[m];
+                match gathered.iter_mut().find(|(ee, _)| *ee == e) {
+                    Some(g) => g.1 += at.weights[m] * fk,
+                    None => gathered.push((e, at.weights[m] * fk)),
+                }
+            }
+        }
+        let mut f = vec![0.0; n];
+        for &(e, fe) in &gathered {
+            if fe == 0.0 {
+                continue;
+            }
+            for (fj, &r) in f.iter_mut().zip(&self.rows.row(e)[..n]) {
+                *fj += r * fe;
             }
         }
         f
     }
 
-    /// Mode rows of the point outputs times accelerations etc. use the rows directly; this is
-    /// the preload plus modal displacement (no residual part) at a location.
+    /// Preload plus modal displacement (no residual part) at a location,
+    /// u0(x) + sum_d w_d phi_d . eta.
     pub fn displacement(&self, at: &Location) -> f64 {
         let n = self.integrator.len();
-        let mut row = vec![0.0; n];
-        self.row_into(at, &mut row);
-        let pre: f64 = (0..2)
-            .map(|i| at.weights[i] * self.preload[at.dofs[i]])
-            .sum();
-        pre + dot4(&row, &self.integrator.eta)
+        let eta = &self.integrator.eta;
+        (0..2)
+            .map(|i| {
+                let d = at.dofs[i];
+                at.weights[i] * (self.preload[d] + dot4(&self.rows.row(d)[..n], eta))
+            })
+            .sum()
     }
 }
 
