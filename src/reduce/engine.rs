@@ -93,7 +93,8 @@ pub fn assemble(n: usize, parts: &[Placement<'_>]) -> (Mat<f64>, Mat<f64>) {
     (k, m)
 }
 
-/// Solves K y = lambda M y densely (all modes), mass-normalised.
+/// Solves K y = lambda M y densely (all modes), mass-normalised; the lowest 400 modes are
+/// refined by subspace iteration (see the body).
 ///
 /// The coordinates are first scaled to unit modal mass (D = diag(M)^-1/2, K' = D K D,
 /// M' = D M D): constraint-mode columns carry metre-sized interface shapes next to
@@ -117,12 +118,12 @@ pub fn system_modes(k: Mat<f64>, m: &Mat<f64>) -> Result<SystemModes, SystemErro
         .llt(Side::Lower)
         .map_err(|_| SystemError::MassNotPositive)?;
     let c = chol.L();
-    let at = standard_form(c, ks);
+    let at = standard_form(c, ks.clone());
     let evd = at
         .self_adjoint_eigen(Side::Lower)
         .map_err(|_| SystemError::Eigen)?;
     let s = evd.S().column_vector();
-    let lambdas: Vec<f64> = (0..n).map(|i| s[i]).collect();
+    let mut lambdas: Vec<f64> = (0..n).map(|i| s[i]).collect();
     // y = C^-T z
     let mut y = evd.U().to_owned();
     faer::linalg::triangular_solve::solve_upper_triangular_in_place(
@@ -130,6 +131,54 @@ pub fn system_modes(k: Mat<f64>, m: &Mat<f64>) -> Result<SystemModes, SystemErro
         y.as_mut(),
         faer::Par::rayon(0),
     );
+    // The dense solve above has an absolute eigenvalue error of order eps times the largest
+    // eigenvalue of the standard form, which on the default engine moved low modes by up to
+    // 15 % (a spurious mode at 1094 Hz, others below the full FE model's, which a Ritz
+    // reduction cannot give). Refine the lowest p modes by subspace iteration with K'^-1 M'
+    // (Rayleigh-Ritz each pass, K' factorised once): W = K'^-1 M' Y, (W^T K' W) x =
+    // lambda (W^T M' W) x, Y = W X. The Ritz values are upper bounds of the exact ones and
+    // converge at (lambda_i / lambda_{p+1})^k; three passes bring the default engine within
+    // 1e-4 of the full FE model below half the cut-off (README, "ROM against the full model").
+    let p = n.min(400);
+    if p > 0 {
+        let kchol = ks
+            .llt(Side::Lower)
+            .map_err(|_| SystemError::StiffnessSingular)?;
+        let mut ys = y.as_ref().subcols(0, p).to_owned();
+        let before: Vec<f64> = lambdas[..p].to_vec();
+        for _ in 0..3 {
+            let w = kchol.solve(&ms * &ys);
+            let mut kp = w.transpose() * (&ks * &w);
+            let mut mp = w.transpose() * (&ms * &w);
+            symmetrise(&mut kp);
+            symmetrise(&mut mp);
+            let cp = mp
+                .llt(Side::Lower)
+                .map_err(|_| SystemError::MassNotPositive)?;
+            let ap = standard_form(cp.L(), kp);
+            let e = ap
+                .self_adjoint_eigen(Side::Lower)
+                .map_err(|_| SystemError::Eigen)?;
+            let mut q = e.U().to_owned();
+            faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+                cp.L().transpose(),
+                q.as_mut(),
+                faer::Par::rayon(0),
+            );
+            ys = &w * &q;
+            let sv = e.S().column_vector();
+            for i in 0..p {
+                lambdas[i] = sv[i];
+            }
+        }
+        y.as_mut().subcols_mut(0, p).copy_from(&ys);
+        let change = (0..p)
+            .map(|i| ((lambdas[i] - before[i]) / before[i]).abs())
+            .fold(0.0f64, f64::max);
+        if std::env::var_os("LINERCAV_VERBOSE").is_some() {
+            eprintln!("system: refined {p} modes, largest relative eigenvalue change {change:e}");
+        }
+    }
     for i in 0..n {
         for j in 0..n {
             y[(i, j)] *= d[i];

@@ -15,7 +15,7 @@ use faer::Mat;
 use std::time::Instant;
 
 /// Version of the ROM layout; part of the cache key.
-pub const ROM_FORMAT: u32 = 2;
+pub const ROM_FORMAT: u32 = 3;
 
 /// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
 /// system modes along the stated direction.
