@@ -172,10 +172,10 @@ pub fn system_modes(k: Mat<f64>, m: &Mat<f64>) -> Result<SystemModes, SystemErro
             }
         }
         y.as_mut().subcols_mut(0, p).copy_from(&ys);
-        let change = (0..p)
-            .map(|i| ((lambdas[i] - before[i]) / before[i]).abs())
-            .fold(0.0f64, f64::max);
         if std::env::var_os("LINERCAV_VERBOSE").is_some() {
+            let change = (0..p)
+                .map(|i| ((lambdas[i] - before[i]) / before[i]).abs())
+                .fold(0.0f64, f64::max);
             eprintln!("system: refined {p} modes, largest relative eigenvalue change {change:e}");
         }
     }

@@ -154,20 +154,8 @@ impl ModalStructure {
     /// Modal force sum_k phi_k F_k of forces at arbitrary locations.
     pub fn modal_force_at(&self, locs: &[Location], forces: &[f64]) -> Vec<f64> {
         let n = self.integrator.len();
-        // gather on the DOFs first (neighbouring slices share bore-line nodes): F_e = sum_k w_ke F_k
-        let mut gathered: Vec<(usize, f64)> = Vec::with_capacity(2 * locs.len());
-        for (at, &fk) in locs.iter().zip(forces) {
-            if fk == 0.0 {
-                continue;
-            }
-            for m in 0..2 {
-                let e = at.dofs[m];
-                match gathered.iter_mut().find(|(ee, _)| *ee == e) {
-                    Some(g) => g.1 += at.weights[m] * fk,
-                    None => gathered.push((e, at.weights[m] * fk)),
-                }
-            }
-        }
+        // neighbouring slices share bore-line nodes: gather on the DOFs first
+        let gathered = gather_on_dofs(locs.iter().zip(forces.iter().copied()));
         let mut f = vec![0.0; n];
         for &(e, fe) in &gathered {
             if fe == 0.0 {
@@ -243,20 +231,12 @@ impl Structure for ModalStructure {
     /// F_e = sum_k w_ke F_k.
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
         let t = &self.step_compliance[self.current].3;
-        let mut gathered: Vec<(usize, f64)> = Vec::with_capacity(2 * active.len());
-        for (&k, &fk) in active.iter().zip(forces) {
-            if fk == 0.0 {
-                continue;
-            }
-            let at = &self.locs[k];
-            for m in 0..2 {
-                let e = at.dofs[m];
-                match gathered.iter_mut().find(|(ee, _)| *ee == e) {
-                    Some(g) => g.1 += at.weights[m] * fk,
-                    None => gathered.push((e, at.weights[m] * fk)),
-                }
-            }
-        }
+        let gathered = gather_on_dofs(
+            active
+                .iter()
+                .map(|&k| &self.locs[k])
+                .zip(forces.iter().copied()),
+        );
         self.locs
             .iter()
             .map(|at| {
@@ -269,6 +249,25 @@ impl Structure for ModalStructure {
             })
             .collect()
     }
+}
+
+/// Forces at locations gathered on the contact DOFs, F_e = sum_k w_ke F_k (first-seen DOF
+/// order; zero forces skipped).
+fn gather_on_dofs<'a>(loads: impl Iterator<Item = (&'a Location, f64)>) -> Vec<(usize, f64)> {
+    let mut gathered: Vec<(usize, f64)> = Vec::new();
+    for (at, fk) in loads {
+        if fk == 0.0 {
+            continue;
+        }
+        for m in 0..2 {
+            let e = at.dofs[m];
+            match gathered.iter_mut().find(|(ee, _)| *ee == e) {
+                Some(g) => g.1 += at.weights[m] * fk,
+                None => gathered.push((e, at.weights[m] * fk)),
+            }
+        }
+    }
+    gathered
 }
 
 /// (a . b, a . c) in one pass with four partial sums each; the body compiled for AVX2 when the
