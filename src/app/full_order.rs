@@ -69,6 +69,14 @@ pub struct FullOrderReport {
     /// full_seconds / rom_seconds, and the stepping alone.
     pub speedup: f64,
     pub speedup_stepping: f64,
+    /// The two runs' series (written by `simulate --full-order --out DIR`).
+    #[serde(skip)]
+    pub full_series: WindowResult,
+    #[serde(skip)]
+    pub rom_series: WindowResult,
+    /// The window's step [s].
+    #[serde(skip)]
+    pub dt: f64,
 }
 
 /// Runs the comparison on the scene's meshes.
@@ -219,7 +227,58 @@ pub fn compare(
         rom_seconds: rom_res.seconds,
         speedup: full_seconds / rom_res.seconds.max(1e-9),
         speedup_stepping: full_res.seconds / rom_res.seconds.max(1e-9),
+        full_series: full_res,
+        rom_series: rom_res,
+        dt,
     })
+}
+
+/// Writes both runs of the window, one row per step: crank angle, then for the full model and
+/// the ROM the piston's lateral displacement [um] and tilt [mrad], the net contact force toward
+/// thrust [N], and each analysis point's acceleration raw and low-passed to the band [m/s^2].
+pub fn write_window_series(path: &std::path::Path, report: &FullOrderReport) -> Result<()> {
+    let runs = [("full", &report.full_series), ("rom", &report.rom_series)];
+    let filtered: Vec<Vec<Vec<f64>>> = runs
+        .iter()
+        .map(|(_, r)| {
+            r.acceleration
+                .iter()
+                .map(|a| low_pass(a, report.dt, report.filter_band_hz, false).0)
+                .collect()
+        })
+        .collect();
+    crate::report::atomic::write_atomic(path, |w| {
+        write!(w, "crank_angle_deg")?;
+        for (name, r) in &runs {
+            write!(
+                w,
+                ",{name}_lateral_um,{name}_tilt_mrad,{name}_contact_force_n"
+            )?;
+            for p in 1..=r.acceleration.len() {
+                write!(w, ",{name}_p{p}_acc_m_s2,{name}_p{p}_acc_band_m_s2")?;
+            }
+        }
+        writeln!(w)?;
+        let n = report.full_series.crank_angle_deg.len();
+        for i in 0..n {
+            write!(w, "{:.4}", report.full_series.crank_angle_deg[i])?;
+            for ((_, r), f) in runs.iter().zip(&filtered) {
+                write!(
+                    w,
+                    ",{:.4},{:.5},{:.3}",
+                    r.lateral_m[i] * 1e6,
+                    r.tilt_rad[i] * 1e3,
+                    r.contact_force_n[i]
+                )?;
+                for (a, af) in r.acceleration.iter().zip(f) {
+                    write!(w, ",{:.3},{:.3}", a[i], af[i])?;
+                }
+            }
+            writeln!(w)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
 }
 
 /// Peak negative acceleration (magnitude) of point `p` of a window run after the band's

@@ -337,6 +337,9 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         let path = dir.join("time_series.csv");
         write_series(&path, &res)?;
         report.time_series_csv = Some(path.display().to_string());
+        if let Some(cmp) = &report.full_order {
+            super::full_order::write_window_series(&dir.join("full_order_window.csv"), cmp)?;
+        }
         let json = dir.join("simulate.json");
         report.seconds = started.elapsed().as_secs_f64();
         let text = serde_json::to_string_pretty(&report).expect("serialisable");
