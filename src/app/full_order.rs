@@ -48,6 +48,8 @@ pub struct FullOrderReport {
     pub window_end_deg: f64,
     pub step_deg: f64,
     pub steps: usize,
+    /// The scheme both models ran on the window (the scene's).
+    pub scheme: Scheme,
     /// Upper edge of the band both series are low-passed to [Hz].
     pub filter_band_hz: f64,
     pub full_dofs: usize,
@@ -213,6 +215,7 @@ pub fn compare(
         window_end_deg: win.end_deg,
         step_deg: win.step_deg,
         steps: full_res.crank_angle_deg.len(),
+        scheme,
         filter_band_hz: band,
         full_dofs: sys.dofs(),
         rom_modes: nm,
@@ -311,8 +314,9 @@ pub struct RomWindow {
     pub modes: usize,
 }
 
-/// Runs the ROM alone on the window: system modes up to `keep_below_hz` (all when None; the
-/// dropped ones join the static correction) at `step_deg` (the scene's when None).
+/// Runs the ROM alone on the window with the scene's scheme (HHT-alpha included): system modes
+/// up to `keep_below_hz` (all when None; the dropped ones join the static correction) at
+/// `step_deg` (the scene's when None).
 pub fn rom_window(
     scene: &Scene,
     rom: &EngineRom,
@@ -334,11 +338,7 @@ pub fn rom_window(
         .position(|r| r.cylinder == cylinder)
         .expect("found above");
     let crom = &rom.cylinders[idx];
-    // Newmark with the scene's beta, gamma (HHT's alpha is not used in the window)
-    let scheme = Scheme {
-        alpha: 0.0,
-        ..settings.scheme
-    };
+    let scheme = settings.scheme;
     let omega = piston.kinematics.omega;
     let step_deg = step_deg.unwrap_or(settings.step_deg);
     let dt = step_deg.to_radians() / omega;

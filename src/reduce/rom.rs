@@ -537,8 +537,8 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     }
     let (kg, mg) = assemble(n_g, &placements);
     progress("system modes");
-    let sys = engine::system_modes(kg.clone(), &mg)?;
     let omega_c2 = (2.0 * std::f64::consts::PI * inp.cutoff_hz).powi(2);
+    let sys = engine::system_modes(kg.clone(), &mg, omega_c2)?;
     let kept = sys.lambdas.iter().take_while(|&&l| l <= omega_c2).count();
     // output rows in global coordinates
     let n_lout = liner.outputs.nrows();
@@ -663,16 +663,15 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         let idx: Vec<usize> = (0..n_g).filter(|&i| keep[i]).collect();
         let kk = Mat::from_fn(idx.len(), idx.len(), |i, j| kg[(idx[i], idx[j])]);
         let mm = Mat::from_fn(idx.len(), idx.len(), |i, j| mg[(idx[i], idx[j])]);
-        match engine::system_modes(kk, &mm) {
-            Ok(s2) => {
-                let band = (2.0 * std::f64::consts::PI * inp.band_hz).powi(2);
-                sys.lambdas
-                    .iter()
-                    .zip(&s2.lambdas)
-                    .take_while(|(l, _)| **l <= band)
-                    .map(|(a, b)| (hz(*b) - hz(*a)).abs() / hz(*a))
-                    .fold(0.0, f64::max)
-            }
+        let band = (2.0 * std::f64::consts::PI * inp.band_hz).powi(2);
+        match engine::system_modes(kk, &mm, band) {
+            Ok(s2) => sys
+                .lambdas
+                .iter()
+                .zip(&s2.lambdas)
+                .take_while(|(l, _)| **l <= band)
+                .map(|(a, b)| (hz(*b) - hz(*a)).abs() / hz(*a))
+                .fold(0.0, f64::max),
             Err(_) => f64::NAN,
         }
     };

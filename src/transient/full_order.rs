@@ -1,16 +1,21 @@
-//! The full-order reference structure: Newmark on the full coupled FE model (no modal
+//! The full-order reference structure: Newmark/HHT-alpha on the full coupled FE model (no modal
 //! truncation), condensed to the contact like the ROM.
 //!
-//! With Rayleigh damping C = a M + b K, a fixed step h and kappa = gamma / (beta h), the step's
-//! displacement about the preload state solves
-//!   K_eff u1 = f1 + M (u^ / (beta h^2) + a w) + K (b w),   w = kappa u^ - v^,
-//!   K_eff = (1 + kappa b) K + (1 / (beta h^2) + kappa a) M,
-//! with the predictors u^ = u + h v + h^2 (1/2 - beta) a_n, v^ = v + h (1 - gamma) a_n; then
-//! a1 = (u1 - u^) / (beta h^2), v1 = v^ + gamma h a1. K_eff is factorised once (sparse
-//! Cholesky on the model's analysis). The contact forces act along the bore-line rows B
-//! (outward radial), so u1 = u* + X F with u* the step without new contact force and
-//! X = K_eff^-1 B solved once for all contact DOFs: the contact sees G = B^T X and G_v = kappa G
-//! exactly, and each step costs one sparse solve.
+//! HHT-alpha (alpha = 0: average acceleration) enforces
+//!   M a1 + (1 + alpha)(C v1 + K u1) - alpha (C v0 + K u0) = (1 + alpha) F1 - alpha F0
+//! with the Newmark updates u1 = u^ + beta h^2 a1, v1 = v^ + gamma h a1, the predictors
+//! u^ = u0 + h v0 + h^2 (1/2 - beta) a0, v^ = v0 + h (1 - gamma) a0, and Rayleigh damping
+//! C = a M + b K. With kappa = gamma / (beta h) and w = kappa u^ - v^, the step's displacement
+//! about the preload state solves
+//!   K_eff u1 = (1 + alpha) F1 - alpha F0 + M (u^ / (beta h^2) + (1 + alpha) a w + alpha a v0)
+//!              + K ((1 + alpha) b w + alpha (b v0 + u0)),
+//!   K_eff = (1 + alpha)(1 + kappa b) K + (1 / (beta h^2) + (1 + alpha) kappa a) M,
+//! then a1 = (u1 - u^) / (beta h^2), v1 = v^ + kappa (u1 - u^). K_eff is factorised once
+//! (sparse Cholesky on the model's analysis). The contact forces act along the bore-line rows B
+//! (outward radial), so u1 = u* + (1 + alpha) X F1 with u* the step without new contact force
+//! (it holds the -alpha X F0 of the last step's forces) and X = K_eff^-1 B solved once for all
+//! contact DOFs: the contact sees G = (1 + alpha) B^T X and G_v = kappa G exactly, and each step
+//! costs one sparse solve.
 
 use super::contact::{Location, Structure};
 use super::scheme::Scheme;
@@ -33,6 +38,7 @@ pub struct FullLiner<'a> {
     llt: Llt<'a>,
     beta: f64,
     gamma: f64,
+    alpha: f64,
     dt: f64,
     rayleigh: (f64, f64),
     u: Vec<f64>,
@@ -51,6 +57,8 @@ pub struct FullLiner<'a> {
     uc: Vec<f64>,
     vc: Vec<f64>,
     locs: Vec<Location>,
+    /// Contact forces of the last step at the contact DOFs (the -alpha F0 term).
+    f_prev: Vec<f64>,
 }
 
 impl<'a> FullLiner<'a> {
@@ -66,10 +74,10 @@ impl<'a> FullLiner<'a> {
         dt: f64,
         rayleigh: (f64, f64),
     ) -> Result<Self, FactorError> {
-        let Scheme { beta, gamma, .. } = scheme;
+        let Scheme { beta, gamma, alpha } = scheme;
         let kappa = gamma / (beta * dt);
-        let ck = 1.0 + kappa * rayleigh.1;
-        let cm = 1.0 / (beta * dt * dt) + kappa * rayleigh.0;
+        let ck = (1.0 + alpha) * (1.0 + kappa * rayleigh.1);
+        let cm = 1.0 / (beta * dt * dt) + (1.0 + alpha) * kappa * rayleigh.0;
         let values: Vec<f64> = sys
             .km
             .k
@@ -91,7 +99,8 @@ impl<'a> FullLiner<'a> {
         let mut g = vec![0.0; nc * nc];
         for (i, row) in contact.iter().enumerate() {
             for j in 0..nc {
-                g[i * nc + j] = row.iter().map(|&(k, v)| v * x[(k, j)]).sum();
+                g[i * nc + j] =
+                    (1.0 + alpha) * row.iter().map(|&(k, v)| v * x[(k, j)]).sum::<f64>();
             }
         }
         Ok(Self {
@@ -99,6 +108,7 @@ impl<'a> FullLiner<'a> {
             llt,
             beta,
             gamma,
+            alpha,
             dt,
             rayleigh,
             u: vec![0.0; n],
@@ -115,6 +125,7 @@ impl<'a> FullLiner<'a> {
             uc: vec![0.0; nc],
             vc: vec![0.0; nc],
             locs: Vec::new(),
+            f_prev: vec![0.0; nc],
         })
     }
 
@@ -176,7 +187,7 @@ impl Structure for FullLiner<'_> {
 impl Liner for FullLiner<'_> {
     fn predict(&mut self, dt: f64) {
         debug_assert!((dt - self.dt).abs() <= 1e-12 * self.dt, "fixed step");
-        let (h, beta, gamma) = (self.dt, self.beta, self.gamma);
+        let (h, beta, gamma, alpha) = (self.dt, self.beta, self.gamma, self.alpha);
         let kappa = self.kappa();
         let (ra, rb) = self.rayleigh;
         let n = self.u.len();
@@ -188,8 +199,8 @@ impl Liner for FullLiner<'_> {
             self.u_hat[i] = uh;
             self.v_hat[i] = vh;
             let w = kappa * uh - vh;
-            ms[i] = uh / (beta * h * h) + ra * w;
-            kw[i] = rb * w;
+            ms[i] = uh / (beta * h * h) + (1.0 + alpha) * ra * w + alpha * ra * self.v[i];
+            kw[i] = (1.0 + alpha) * rb * w + alpha * (rb * self.v[i] + self.u[i]);
         }
         let p = &self.sys.km.pattern;
         let mut rhs = vec![0.0; n];
@@ -199,6 +210,17 @@ impl Liner for FullLiner<'_> {
             *r += k;
         }
         self.llt.solve_vec(&mut rhs);
+        if alpha != 0.0 {
+            // -alpha F0: the last step's contact forces through X = K_eff^-1 B
+            for (j, &f) in self.f_prev.iter().enumerate() {
+                if f != 0.0 {
+                    let col = self.x.col(j);
+                    for i in 0..n {
+                        rhs[i] -= alpha * col[i] * f;
+                    }
+                }
+            }
+        }
         self.u_star = rhs;
         for (d, row) in self.contact.iter().enumerate() {
             let us = dot(row, &self.u_star);
@@ -215,17 +237,18 @@ impl Liner for FullLiner<'_> {
                 fd[at.dofs[k]] += at.weights[k] * f;
             }
         }
-        let (h, beta, gamma) = (self.dt, self.beta, self.gamma);
+        let (h, beta, gamma, alpha) = (self.dt, self.beta, self.gamma, self.alpha);
         let n = self.u.len();
         let mut u = std::mem::take(&mut self.u_star);
         for (j, &f) in fd.iter().enumerate() {
             if f != 0.0 {
                 let col = self.x.col(j);
                 for i in 0..n {
-                    u[i] += col[i] * f;
+                    u[i] += (1.0 + alpha) * col[i] * f;
                 }
             }
         }
+        self.f_prev = fd;
         for i in 0..n {
             let a = (u[i] - self.u_hat[i]) / (beta * h * h);
             self.acc[i] = a;
