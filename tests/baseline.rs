@@ -135,9 +135,12 @@ fn trend_reference_thresholds() {
     assert!((t.k_p_pa_per_m_s2 - 138.3).abs() < 0.2);
 }
 
-/// Study: a larger clearance raises the liner acceleration strongly; at 120 um all four points
-/// exceed the threshold. Ours: the engine-wide peak grows monotonically 40 -> 80 -> 120 um and
-/// at 120 um every point of every cylinder is above the high-risk threshold.
+/// Study (section 4.3, run on cylinder 6): a larger clearance raises the liner acceleration
+/// strongly, and at 120 um all four thrust-side points of cylinder 6 are at risk. Ours, the
+/// same claim on the same cylinder: each of cylinder 6's points rises monotonically
+/// 40 -> 80 -> 120 um, the engine-wide peak rises by more than 30 % from 80 to 120 um, and at
+/// 120 um all four points of cylinder 6 exceed the high-risk threshold. (Over the whole engine
+/// 23 of 24 points exceed it; cylinder 5's top point stays 0.7 % under, reports/README.md.)
 #[test]
 fn trend_clearance_raises_acceleration() {
     let (_, r40) = run_scene(&["piston.clearance_um=40"]);
@@ -147,16 +150,30 @@ fn trend_clearance_raises_acceleration() {
     assert!(a40 < a80 && a80 < a120, "{a40} {a80} {a120}");
     assert!(a120 > 1.3 * a80, "not a strong rise: {a80} -> {a120}");
     let high = scene.cavitation.thresholds.high_risk_m_s2;
-    for c in &r120.peaks {
-        for (k, p) in c.peak_negative.iter().enumerate() {
-            assert!(
-                p.value > high,
-                "cylinder {} point {}: {} <= {high}",
-                c.cylinder,
-                k + 1,
-                p.value
-            );
-        }
+    let cyl6 = |r: &CycleResult| -> Vec<f64> {
+        let c = r
+            .peaks
+            .iter()
+            .find(|c| c.cylinder == 6)
+            .expect("cylinder 6");
+        c.peak_negative.iter().map(|p| p.value).collect()
+    };
+    let (p40, p80, p120) = (cyl6(&r40), cyl6(&r80), cyl6(&r120));
+    for k in 0..p120.len() {
+        assert!(
+            p40[k] < p80[k] && p80[k] < p120[k],
+            "cylinder 6 point {}: {} {} {}",
+            k + 1,
+            p40[k],
+            p80[k],
+            p120[k]
+        );
+        assert!(
+            p120[k] > high,
+            "cylinder 6 point {}: {} <= {high}",
+            k + 1,
+            p120[k]
+        );
     }
 }
 
