@@ -212,6 +212,51 @@ fn engine_cycle_runs_with_bounded_energy_and_finite_peaks() {
     assert_eq!(r.stats.steps, 2880);
 }
 
+/// The averaged peaks are the statistics of the per-cycle peaks: a run is deterministic, so
+/// the k-th cycle of a 3-cycle run is the last cycle of a k-cycle run. The mean, sample standard
+/// deviation and largest value of the three single-cycle peaks must come back (to roundoff of
+/// the summation: 1e-9 relative).
+#[test]
+fn averaged_cycles_are_the_statistics_of_the_single_cycles() {
+    let single: Vec<_> = (1..=3)
+        .map(|k| simulate(&[&format!("transient.cycles={k}")], |_| {}).unwrap())
+        .collect();
+    let avg = simulate(
+        &["transient.cycles=3", "transient.averaged_cycles=3"],
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(avg.stats.cycles_averaged, 3);
+    assert_eq!(single[2].stats.cycles_averaged, 1);
+    for (c, cp) in avg.peaks.iter().enumerate() {
+        for (p, peak) in cp.peak_negative.iter().enumerate() {
+            let v: Vec<f64> = single
+                .iter()
+                .map(|r| r.peaks[c].peak_negative[p].value)
+                .collect();
+            let mean = v.iter().sum::<f64>() / 3.0;
+            let std = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 2.0).sqrt();
+            let max = v.iter().cloned().fold(f64::MIN, f64::max);
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+            assert!(close(peak.value, mean), "{} vs {mean}", peak.value);
+            assert!(close(peak.std, std), "{} vs {std}", peak.std);
+            assert!(close(peak.max, max), "{} vs {max}", peak.max);
+        }
+    }
+    // the series are the last cycle's, as with one averaged cycle
+    assert_eq!(
+        avg.series.cylinders[0].acceleration[0],
+        single[2].series.cylinders[0].acceleration[0]
+    );
+    // averaged_cycles outside 1..=cycles is refused with the key
+    let e = simulate(
+        &["transient.cycles=2", "transient.averaged_cycles=3"],
+        |_| {},
+    )
+    .unwrap_err();
+    assert!(e.contains("transient.averaged_cycles"), "{e}");
+}
+
 #[test]
 fn step_convergence_of_peaks_and_side_force() {
     // The contact dashpot of a slice engages from the step after the contact starts, an

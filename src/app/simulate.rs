@@ -78,6 +78,7 @@ pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
         scheme: t.scheme,
         step_deg: t.step_deg,
         cycles: t.cycles,
+        averaged_cycles: t.averaged_cycles,
         adaptive: t.adaptive,
         max_halvings: 6,
         damping_ratio: t.damping_ratio,
@@ -126,6 +127,11 @@ pub struct PointPeaks {
     pub crank_angle_deg: f64,
     pub peak_positive_m_s2: f64,
     pub positive_crank_angle_deg: f64,
+    /// Over the averaged cycles (`stats.cycles_averaged`; the peaks above are their means):
+    /// sample standard deviation and largest per-cycle value of the peak negative
+    /// acceleration [m/s^2].
+    pub peak_negative_std_m_s2: f64,
+    pub peak_negative_max_m_s2: f64,
 }
 
 /// One cylinder's results.
@@ -135,6 +141,8 @@ pub struct CylinderReport {
     pub points: Vec<PointPeaks>,
     pub peak_slap_force_n: f64,
     pub slap_crank_angle_deg: f64,
+    /// Sample standard deviation of the per-cycle slap-force peak [N].
+    pub slap_force_std_n: f64,
     pub peak_side_force_n: f64,
     pub side_force_crank_angle_deg: f64,
 }
@@ -209,10 +217,13 @@ impl SimulateReport {
                         crank_angle_deg: n.crank_angle_deg,
                         peak_positive_m_s2: p.value,
                         positive_crank_angle_deg: p.crank_angle_deg,
+                        peak_negative_std_m_s2: n.std,
+                        peak_negative_max_m_s2: n.max,
                     })
                     .collect(),
                 peak_slap_force_n: c.slap_force.value,
                 slap_crank_angle_deg: c.slap_force.crank_angle_deg,
+                slap_force_std_n: c.slap_force.std,
                 peak_side_force_n: c.side_force.value,
                 side_force_crank_angle_deg: c.side_force.crank_angle_deg,
             })
@@ -228,14 +239,20 @@ impl SimulateReport {
             self.peak_pressure_deg,
             self.hot_clearance_um
         );
-        s += "cyl  point  peak neg [m/s^2] @deg   peak pos [m/s^2] @deg\n";
+        let n = self.stats.cycles_averaged;
+        s += &format!(
+            "peaks: mean over the last {n} cycle(s), +- sample standard deviation, largest\n"
+        );
+        s += "cyl  point  peak neg [m/s^2]    +-    max @deg   peak pos [m/s^2] @deg\n";
         for c in &self.cylinders {
             for p in &c.points {
                 s += &format!(
-                    "{:>3}  {:>5}  {:>16.0} {:>6.1}   {:>16.0} {:>6.1}\n",
+                    "{:>3}  {:>5}  {:>16.0} {:>5.0} {:>7.0} {:>6.1}   {:>16.0} {:>6.1}\n",
                     c.cylinder,
                     p.point,
                     p.peak_negative_m_s2,
+                    p.peak_negative_std_m_s2,
+                    p.peak_negative_max_m_s2,
                     p.crank_angle_deg,
                     p.peak_positive_m_s2,
                     p.positive_crank_angle_deg

@@ -150,6 +150,8 @@ pub struct TransientSpec {
     pub scheme: crate::transient::scheme::Scheme,
     pub step_deg: f64,
     pub cycles: usize,
+    /// The last this many cycles are averaged.
+    pub averaged_cycles: usize,
     pub adaptive: bool,
     pub damping_ratio: f64,
     pub max_penetration: f64,
@@ -789,6 +791,15 @@ fn validate_simulation(
     if t.cycles == 0 {
         return Err(c.err("transient.cycles", "must be at least 1"));
     }
+    if t.averaged_cycles == 0 || t.averaged_cycles > t.cycles {
+        return Err(c.err(
+            "transient.averaged_cycles",
+            format!(
+                "must lie in 1..=cycles ({}), got {}",
+                t.cycles, t.averaged_cycles
+            ),
+        ));
+    }
     if !(t.damping_ratio.is_finite() && (0.0..1.0).contains(&t.damping_ratio)) {
         return Err(c.err(
             "transient.damping_ratio",
@@ -799,6 +810,7 @@ fn validate_simulation(
         scheme,
         step_deg: step,
         cycles: t.cycles,
+        averaged_cycles: t.averaged_cycles,
         adaptive: t.adaptive,
         damping_ratio: t.damping_ratio,
         max_penetration: c.positive("transient.max_penetration_um", t.max_penetration_um)? * 1e-6,

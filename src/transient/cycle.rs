@@ -6,9 +6,13 @@
 //! Each base step (the scene's crank-angle step) is one implicit step of all pistons and the
 //! structure ([`super::contact::step`]); with `adaptive`, a step whose contact iteration fails
 //! or whose penetration exceeds the limit is halved (up to `max_halvings` times) and counted as
-//! rejected. Several cycles are run from rest (pistons centred, structure at the preload state);
-//! the last one is reported, and the change of its peaks against the cycle before shows how
-//! close to the periodic steady state it is.
+//! rejected. Several cycles are run from rest (pistons centred, structure at the preload state).
+//! Slap on a ringing liner is not periodic: which slice bounced how often decides the state the
+//! next slap starts from, so consecutive cycles differ (the default engine's by 20-40 %) and
+//! one cycle's peak is one draw. Each reported peak is therefore the mean over the last
+//! `averaged_cycles` cycles of the per-cycle peak P_k, with the sample standard deviation
+//! s = sqrt(sum (P_k - mean)^2 / (n - 1)) and the largest P_k; the series are the last cycle's.
+//! The change between the last two cycles is reported as well.
 //!
 //! Energy balance of the structure (mass-normalised modes): E = 1/2 sum (eta'^2 + omega^2 eta^2);
 //! per step dE = 1/2 (f_n + f_{n+1}) . (eta_{n+1} - eta_n) - dt sum c_j vbar_j^2, exactly for the
@@ -31,8 +35,10 @@ pub struct CycleSettings {
     pub scheme: Scheme,
     /// Base step [deg crank angle].
     pub step_deg: f64,
-    /// Cycles run; the last is reported.
+    /// Cycles run from rest.
     pub cycles: usize,
+    /// The last this many cycles are averaged (1: the last cycle alone).
+    pub averaged_cycles: usize,
     /// Halve failing steps.
     pub adaptive: bool,
     pub max_halvings: usize,
@@ -133,6 +139,8 @@ pub struct Stats {
     pub max_penetration_m: f64,
     /// Largest relative change of a peak negative acceleration between the last two cycles.
     pub cycle_change: f64,
+    /// Cycles whose peaks are averaged.
+    pub cycles_averaged: usize,
     pub dt_s: f64,
     /// Per-cylinder coupling: largest difference between the liner displacement a contact
     /// slice used and the one of the completed step [m].
@@ -167,14 +175,74 @@ pub struct CylinderSeries {
     pub pressure_pa: Vec<f64>,
 }
 
-/// A peak value and the cylinder's own crank angle where it occurs.
+/// A peak value and the cylinder's own crank angle where it occurs; over several cycles the
+/// mean of the per-cycle peaks, the mean crank angle (on the 720 deg circle), the sample
+/// standard deviation and the largest per-cycle peak.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Peak {
     pub value: f64,
     pub crank_angle_deg: f64,
+    /// Sample standard deviation of the per-cycle peaks (0 for one cycle).
+    pub std: f64,
+    /// Largest per-cycle peak.
+    pub max: f64,
 }
 
-/// Peaks of one cylinder over the reported cycle.
+impl Peak {
+    /// One cycle's peak.
+    pub fn single(value: f64, crank_angle_deg: f64) -> Self {
+        Peak {
+            value,
+            crank_angle_deg,
+            std: 0.0,
+            max: value,
+        }
+    }
+
+    /// Statistics of per-cycle peaks P_k (k = 1..n): mean, mean angle (deviations from the
+    /// first angle wrapped to (-360, 360]), s = sqrt(sum (P_k - mean)^2 / (n - 1)), max P_k.
+    pub fn over_cycles(per_cycle: &[Peak]) -> Self {
+        let n = per_cycle.len();
+        if n == 0 {
+            return Peak::default();
+        }
+        let mean = per_cycle.iter().map(|p| p.value).sum::<f64>() / n as f64;
+        let a0 = per_cycle[0].crank_angle_deg;
+        let dev = per_cycle
+            .iter()
+            .map(|p| {
+                let d = (p.crank_angle_deg - a0).rem_euclid(720.0);
+                if d > 360.0 {
+                    d - 720.0
+                } else {
+                    d
+                }
+            })
+            .sum::<f64>()
+            / n as f64;
+        let std = if n > 1 {
+            (per_cycle
+                .iter()
+                .map(|p| (p.value - mean).powi(2))
+                .sum::<f64>()
+                / (n - 1) as f64)
+                .sqrt()
+        } else {
+            0.0
+        };
+        Peak {
+            value: mean,
+            crank_angle_deg: (a0 + dev).rem_euclid(720.0),
+            std,
+            max: per_cycle
+                .iter()
+                .map(|p| p.value)
+                .fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
+}
+
+/// Peaks of one cylinder over the reported cycles.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct CylinderPeaks {
     pub cylinder: usize,
@@ -706,7 +774,8 @@ impl<'a> EngineRun<'a> {
         super::window::residual_displacement(&rom.point_residual, &locs, &forces)
     }
 
-    /// Runs `settings.cycles` cycles and returns the peaks and series of the last one.
+    /// Runs `settings.cycles` cycles and returns the peaks averaged over the last
+    /// `settings.averaged_cycles` ([`Peak::over_cycles`]) and the series of the last one.
     pub fn run(
         mut self,
         mut on_step: impl FnMut(usize, usize),
@@ -716,8 +785,10 @@ impl<'a> EngineRun<'a> {
         self.stats.dt_s = dt;
         let cycles = self.settings.cycles.max(1);
         let total = steps_per_cycle * cycles;
+        let averaged = self.settings.averaged_cycles.clamp(1, cycles);
         let mut prev_peaks: Option<Vec<CylinderPeaks>> = None;
-        let mut result = None;
+        let mut kept: Vec<Vec<CylinderPeaks>> = Vec::with_capacity(averaged);
+        let mut last_series = None;
         let piston = self.setup.piston;
         for cycle in 0..cycles {
             let mut series = Series {
@@ -812,12 +883,17 @@ impl<'a> EngineRun<'a> {
                 }
                 self.stats.cycle_change = change;
             }
-            prev_peaks = Some(peaks.clone());
-            result = Some((peaks, series));
+            if cycle + averaged >= cycles {
+                kept.push(peaks.clone());
+            }
+            prev_peaks = Some(peaks);
+            last_series = Some(series);
         }
         let (err, scale) = self.energy_balance();
         self.stats.energy_error = if scale > 0.0 { err / scale } else { 0.0 };
-        let (peaks, series) = result.expect("at least one cycle");
+        self.stats.cycles_averaged = kept.len();
+        let series = last_series.expect("at least one cycle");
+        let peaks = average_peaks(&kept);
         Ok(CycleResult {
             peaks,
             series,
@@ -833,16 +909,10 @@ impl<'a> EngineRun<'a> {
             .map(|(cs, cyl)| {
                 let local = |k: usize| (series.crank_angle_deg[k] - cyl.phase).rem_euclid(720.0);
                 let arg = |v: &[f64], f: &dyn Fn(f64) -> f64| -> Peak {
-                    let mut best = Peak {
-                        value: f64::NEG_INFINITY,
-                        crank_angle_deg: 0.0,
-                    };
+                    let mut best = Peak::single(f64::NEG_INFINITY, 0.0);
                     for (k, &x) in v.iter().enumerate() {
                         if f(x) > best.value {
-                            best = Peak {
-                                value: f(x),
-                                crank_angle_deg: local(k),
-                            };
+                            best = Peak::single(f(x), local(k));
                         }
                     }
                     best
@@ -860,6 +930,31 @@ impl<'a> EngineRun<'a> {
             })
             .collect()
     }
+}
+
+/// Per cylinder, the statistics of each peak over the cycles in `per_cycle` (all with the same
+/// cylinders and points, as one run gives them).
+fn average_peaks(per_cycle: &[Vec<CylinderPeaks>]) -> Vec<CylinderPeaks> {
+    let first = &per_cycle[0];
+    let over = |pick: &dyn Fn(&[CylinderPeaks]) -> Peak| -> Peak {
+        let v: Vec<Peak> = per_cycle.iter().map(|c| pick(c)).collect();
+        Peak::over_cycles(&v)
+    };
+    first
+        .iter()
+        .enumerate()
+        .map(|(c, cp)| CylinderPeaks {
+            cylinder: cp.cylinder,
+            peak_negative: (0..cp.peak_negative.len())
+                .map(|p| over(&|x| x[c].peak_negative[p]))
+                .collect(),
+            peak_positive: (0..cp.peak_positive.len())
+                .map(|p| over(&|x| x[c].peak_positive[p]))
+                .collect(),
+            slap_force: over(&|x| x[c].slap_force),
+            side_force: over(&|x| x[c].side_force),
+        })
+        .collect()
 }
 
 /// A failed step attempt.
@@ -914,5 +1009,36 @@ impl Failure {
                 cylinder,
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Peak;
+
+    #[test]
+    fn peak_statistics_over_cycles() {
+        // mean 2, sample std 1 (deviations -1, 0, 1 over n - 1 = 2), max 3; angles 719, 1 and
+        // 3 deg lie around 1 deg on the 720 deg circle (deviations 0, 2, 4 from the first, 719:
+        // mean 721 = 1 deg)
+        let p = Peak::over_cycles(&[
+            Peak::single(1.0, 719.0),
+            Peak::single(2.0, 1.0),
+            Peak::single(3.0, 3.0),
+        ]);
+        assert!((p.value - 2.0).abs() < 1e-12);
+        assert!((p.std - 1.0).abs() < 1e-12);
+        assert_eq!(p.max, 3.0);
+        assert!(
+            (p.crank_angle_deg - 1.0).abs() < 1e-9,
+            "{}",
+            p.crank_angle_deg
+        );
+        // one cycle: itself, no spread
+        let q = Peak::over_cycles(&[Peak::single(5.0, 367.0)]);
+        assert_eq!(
+            (q.value, q.std, q.max, q.crank_angle_deg),
+            (5.0, 0.0, 5.0, 367.0)
+        );
     }
 }
