@@ -248,12 +248,14 @@ fn averaged_cycles_are_the_statistics_of_the_single_cycles() {
         avg.series.cylinders[0].acceleration[0],
         single[2].series.cylinders[0].acceleration[0]
     );
-    // averaged_cycles outside 1..=cycles is refused with the key
-    let e = simulate(
-        &["transient.cycles=2", "transient.averaged_cycles=3"],
+    // more averaged cycles than run: all of them; zero is refused with the key
+    let all = simulate(
+        &["transient.cycles=3", "transient.averaged_cycles=9"],
         |_| {},
     )
-    .unwrap_err();
+    .unwrap();
+    assert_eq!(all.stats.cycles_averaged, 3);
+    let e = simulate(&["transient.averaged_cycles=0"], |_| {}).unwrap_err();
     assert!(e.contains("transient.averaged_cycles"), "{e}");
 }
 

@@ -17,7 +17,7 @@ use crate::error::{Error, Result};
 use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
 use crate::report::atomic::write_all_atomic;
-use crate::report::png::{bars, write_png, Chart, Mark, Rule, Series};
+use crate::report::png::{bars, write_png, BarData, Chart, Mark, Rule, Series};
 use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
 use rayon::prelude::*;
@@ -534,14 +534,35 @@ fn figures(
         .iter()
         .map(|c| c.points.iter().map(|p| p.peak_negative_m_s2).collect())
         .collect();
+    // whiskers: +- one sample standard deviation over the averaged cycles
+    let errors: Vec<Vec<f64>> = ev
+        .cylinders
+        .iter()
+        .map(|c| {
+            base.peaks
+                .iter()
+                .find(|b| b.cylinder == c.cylinder)
+                .map(|b| b.peak_negative.iter().map(|p| p.std).collect())
+                .unwrap_or_default()
+        })
+        .collect();
+    let n_avg = base.stats.cycles_averaged;
+    let peaks_title = if n_avg > 1 {
+        format!("Peak negative liner acceleration per cylinder and point (top to bottom): mean of {n_avg} cycles +- 1 std")
+    } else {
+        "Peak negative liner acceleration per cylinder and point (top to bottom)".to_string()
+    };
     write_png(&p, (1500, 620), |root| {
         bars(
             root,
-            "Peak negative liner acceleration per cylinder and point (top to bottom)",
+            &peaks_title,
             "peak negative acceleration [m/s^2]",
             &names,
             &bar_names,
-            &groups,
+            BarData {
+                groups: &groups,
+                errors: &errors,
+            },
             &[
                 Rule {
                     name: format!("onset {:.0}", t.onset_m_s2),
@@ -590,7 +611,10 @@ fn figures(
                 "normalised radial amplitude",
                 &cyl_names,
                 &bar_names,
-                &g,
+                BarData {
+                    groups: &g,
+                    errors: &[],
+                },
                 &[],
             )?;
         }
@@ -605,7 +629,10 @@ fn figures(
             "m/s^2",
             &cyl_names,
             &["largest over the points".to_string()],
-            &g,
+            BarData {
+                groups: &g,
+                errors: &[],
+            },
             &[Rule {
                 name: "high risk".into(),
                 value: t.high_risk_m_s2,
@@ -776,6 +803,39 @@ fn figures(
     Ok(files)
 }
 
+/// Which neighbours of the cylinder ranking are resolved by the averaged cycles: for the
+/// cylinders' largest mean peaks m1 > m2 (sample deviations s1, s2 over n cycles) the
+/// difference counts as resolved when m1 - m2 > 2 sqrt((s1^2 + s2^2) / n), two standard errors.
+fn ranking_resolution(r: &Report) -> String {
+    let n = r.simulate.stats.cycles_averaged.max(1) as f64;
+    let worst = |cyl: usize| -> Option<(f64, f64)> {
+        let c = r.simulate.cylinders.iter().find(|c| c.cylinder == cyl)?;
+        c.points
+            .iter()
+            .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))
+            .map(|p| (p.peak_negative_m_s2, p.peak_negative_std_m_s2))
+    };
+    let pairs: Vec<String> = r
+        .evaluation
+        .ranking
+        .windows(2)
+        .filter_map(|w| {
+            let ((m1, s1), (m2, s2)) = (worst(w[0])?, worst(w[1])?);
+            let resolved = m1 - m2 > 2.0 * ((s1 * s1 + s2 * s2) / n).sqrt();
+            Some(format!(
+                "{} > {}: {}",
+                w[0],
+                w[1],
+                if resolved { "yes" } else { "no" }
+            ))
+        })
+        .collect();
+    format!(
+        "Neighbours in the ranking separated by more than two standard errors: {}.",
+        pairs.join(", ")
+    )
+}
+
 fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     use std::fmt::Write;
     let ev = &r.evaluation;
@@ -783,6 +843,10 @@ fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     let mut s = format!("# linercav report: {}\n\n{} at {:.0} rpm; peak cylinder pressure {:.1} bar at {:.1} deg; hot clearance {:.1} um.\n\n", r.title, r.scene, r.speed_rpm, r.simulate.peak_pressure_bar, r.simulate.peak_pressure_deg, r.simulate.hot_clearance_um);
     let _ = writeln!(s, "## Verdict\n");
     let _ = writeln!(s, "Acceleration criterion ({}): onset {:.0} m/s^2, high risk {:.0} m/s^2 (k_p {:.1} Pa per m/s^2). Cylinders from the highest to the lowest peak negative acceleration: {:?}. The most active point along the liner: {} (of {}, top to bottom).\n", ev.threshold_source, t.onset_m_s2, t.high_risk_m_s2, t.k_p_pa_per_m_s2, ev.ranking, ev.most_active_point, ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0));
+    let n_avg = r.simulate.stats.cycles_averaged;
+    if n_avg > 1 {
+        let _ = writeln!(s, "Peaks are means over the last {n_avg} of {} cycles with their sample standard deviation (slap on the ringing liner is not periodic; the standard error of a mean is the deviation / sqrt({n_avg})); risk and ranking use the means. {}\n", r.simulate.stats.cycles_run, ranking_resolution(r));
+    }
     let _ = writeln!(s, "| cylinder | risk | peak negative per point [m/s^2] | Ca per point | CSF per point | slap force [kN] | side force [kN] at [deg] |\n|---|---|---|---|---|---|---|");
     for (c, cr) in ev.cylinders.iter().zip(&r.simulate.cylinders) {
         let f = |v: Vec<String>| v.join(" / ");
@@ -793,7 +857,15 @@ fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
             c.worst.label(),
             f(c.points
                 .iter()
-                .map(|p| format!("{:.0}", p.peak_negative_m_s2))
+                .zip(&cr.points)
+                .map(|(p, q)| if n_avg > 1 {
+                    format!(
+                        "{:.0} ± {:.0}",
+                        p.peak_negative_m_s2, q.peak_negative_std_m_s2
+                    )
+                } else {
+                    format!("{:.0}", p.peak_negative_m_s2)
+                })
                 .collect()),
             f(c.points.iter().map(|p| format!("{:.2}", p.ca)).collect()),
             f(c.points.iter().map(|p| format!("{:.2}", p.csf)).collect()),

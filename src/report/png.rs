@@ -204,6 +204,13 @@ impl Chart<'_> {
     }
 }
 
+/// Bar heights per group (outer) and bar (inner), with optional error half-widths of the same
+/// shape (empty: no whiskers).
+pub struct BarData<'a> {
+    pub groups: &'a [Vec<f64>],
+    pub errors: &'a [Vec<f64>],
+}
+
 /// A bar chart of labelled groups: `groups[g][k]` is bar k of group g (e.g. cylinders x
 /// points), with optional horizontal rules (thresholds).
 pub fn bars(
@@ -212,14 +219,17 @@ pub fn bars(
     y_label: &str,
     group_names: &[String],
     bar_names: &[String],
-    groups: &[Vec<f64>],
+    data: BarData<'_>,
     rules: &[Rule],
 ) -> DrawResult {
+    let BarData { groups, errors } = data;
     let nb = bar_names.len().max(1);
+    let err = |g: usize, k: usize| errors.get(g).and_then(|e| e.get(k)).copied();
     let ymax = groups
         .iter()
-        .flatten()
-        .copied()
+        .enumerate()
+        .flat_map(|(g, v)| v.iter().enumerate().map(move |(k, x)| (g, k, *x)))
+        .map(|(g, k, x)| x + err(g, k).unwrap_or(0.0))
         .chain(rules.iter().map(|r| r.value))
         .fold(0.0f64, f64::max)
         * 1.12;
@@ -258,6 +268,29 @@ pub fn bars(
         if let Some(name) = bar_names.get(k) {
             e.label(name.clone())
                 .legend(move |(a, b)| Rectangle::new([(a, b - 5), (a + 12, b + 5)], c.filled()));
+        }
+        // whiskers: value +- error, a vertical line with short caps
+        for (g, v) in groups.iter().enumerate() {
+            let (Some(&val), Some(e)) = (v.get(k), err(g, k)) else {
+                continue;
+            };
+            if !(e > 0.0) {
+                continue;
+            }
+            let xm = g as f64 + 0.1 + k as f64 * w + w * 0.45;
+            let cap = w * 0.2;
+            let lo = (val - e).max(0.0);
+            let hi = val + e;
+            let black = BLACK.stroke_width(1);
+            chart.draw_series(
+                [
+                    vec![(xm, lo), (xm, hi)],
+                    vec![(xm - cap, lo), (xm + cap, lo)],
+                    vec![(xm - cap, hi), (xm + cap, hi)],
+                ]
+                .into_iter()
+                .map(|pts| PathElement::new(pts, black)),
+            )?;
         }
     }
     for r in rules {

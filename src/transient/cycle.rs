@@ -139,7 +139,8 @@ pub struct Stats {
     pub max_penetration_m: f64,
     /// Largest relative change of a peak negative acceleration between the last two cycles.
     pub cycle_change: f64,
-    /// Cycles whose peaks are averaged.
+    /// Cycles run, and the last ones whose peaks are averaged.
+    pub cycles_run: usize,
     pub cycles_averaged: usize,
     pub dt_s: f64,
     /// Per-cylinder coupling: largest difference between the liner displacement a contact
@@ -891,6 +892,7 @@ impl<'a> EngineRun<'a> {
         }
         let (err, scale) = self.energy_balance();
         self.stats.energy_error = if scale > 0.0 { err / scale } else { 0.0 };
+        self.stats.cycles_run = cycles;
         self.stats.cycles_averaged = kept.len();
         let series = last_series.expect("at least one cycle");
         let peaks = average_peaks(&kept);
