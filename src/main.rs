@@ -138,6 +138,25 @@ enum Command {
         #[command(flatten)]
         cache: CacheArgs,
     },
+    /// What the reduction costs: the ROM built at several cut-off factors against one full
+    /// coupled FE solve (frequency error and MAC of the modes below the band, build times);
+    /// prints a table, and with --out writes rom_tradeoff.png, .json and .txt.
+    RomTradeoff {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Override any scene field (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Cut-off factors (cut-off = factor x rom.band_hz), each >= 1.
+        #[arg(long, value_delimiter = ',', default_value = "1.5,2,2.5,3")]
+        factors: Vec<f64>,
+        /// Directory for the PNG, JSON and text table.
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Print JSON on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Mode-shape coefficients: radial thrust-side amplitude of each system mode at every
     /// cylinder's analysis points, normalised per mode.
     Shapes {
@@ -358,6 +377,16 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             let mut report = rom::RomReport::new(&loaded);
             report.seconds = started.elapsed().as_secs_f64();
             print_report(json, &report, || report.to_text());
+        }
+        Command::RomTradeoff {
+            scene,
+            sets,
+            factors,
+            out,
+            json,
+        } => {
+            let r = linercav::app::rom_tradeoff::run(&scene, &sets, &factors, out.as_deref())?;
+            print_report(json, &r, || r.to_text());
         }
         Command::Shapes {
             scene,

@@ -8,6 +8,7 @@ pub mod full_order;
 pub mod modes;
 pub mod progress;
 pub mod rom;
+pub mod rom_tradeoff;
 pub mod simulate;
 pub mod summary;
 pub mod sweep;
