@@ -321,3 +321,51 @@ fn interface_errors_name_part_and_set() {
         "nothing written"
     );
 }
+
+/// `rom-tradeoff`: one full solve, one ROM per cut-off factor; the error must not grow as the
+/// cut-off rises (each ROM's Ritz space holds the lower cut-off's part modes, so its modes
+/// below the band are at least as good, up to roundoff: 1e-6 slack) and meets the issue-3
+/// floors at the default factor. Bad factors are refused before any solve, nothing written.
+#[test]
+fn rom_tradeoff_cli_contract() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("rt");
+    let ds = d.to_str().unwrap();
+    let out = linercav(&[
+        "rom-tradeoff",
+        SMALL,
+        "--factors",
+        "1.5,2.5",
+        "--out",
+        ds,
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    assert!(v["modes_compared"].as_u64().unwrap() >= 5);
+    let err = |k: usize| rows[k]["worst_frequency_error"].as_f64().unwrap();
+    assert!(err(1) <= err(0) + 1e-6, "{} -> {}", err(0), err(1));
+    assert!(err(1) < 5e-3 && rows[1]["worst_mac"].as_f64().unwrap() > 0.98);
+    assert!(rows[0]["system_modes"].as_u64().unwrap() < rows[1]["system_modes"].as_u64().unwrap());
+    for f in ["rom_tradeoff.png", "rom_tradeoff.json", "rom_tradeoff.txt"] {
+        assert!(d.join(f).exists(), "{f}");
+    }
+    let bad = dir.path().join("bad");
+    let out = linercav(&[
+        "rom-tradeoff",
+        SMALL,
+        "--factors",
+        "0.5",
+        "--out",
+        bad.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--factors"));
+    assert!(!bad.exists());
+}
