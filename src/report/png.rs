@@ -274,7 +274,7 @@ pub fn bars(
             let (Some(&val), Some(e)) = (v.get(k), err(g, k)) else {
                 continue;
             };
-            if !(e > 0.0) {
+            if e.is_nan() || e <= 0.0 {
                 continue;
             }
             let xm = g as f64 + 0.1 + k as f64 * w + w * 0.45;
