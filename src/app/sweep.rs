@@ -212,7 +212,7 @@ pub fn csv(report: &SweepReport) -> String {
     }
     let _ = writeln!(
         s,
-        "cylinder,point,peak_negative_m_s2,peak_slap_force_n,peak_positive_m_s2,crank_angle_deg,peak_side_force_n,side_force_crank_angle_deg,peak_tilt_mrad,ca,risk"
+        "cylinder,point,peak_negative_m_s2,peak_slap_force_n,peak_positive_m_s2,crank_angle_deg,peak_side_force_n,side_force_crank_angle_deg,peak_tilt_mrad,ca,risk,peak_negative_std_m_s2,peak_negative_max_m_s2"
     );
     for r in &report.runs {
         for (ci, c) in r.cylinders.iter().enumerate() {
@@ -223,7 +223,7 @@ pub fn csv(report: &SweepReport) -> String {
                 let risk = r.risk.get(ci).and_then(|x| x.points.get(pi));
                 let _ = writeln!(
                     s,
-                    "{},{},{:.3},{:.2},{:.3},{:.3},{:.2},{:.3},{:.5},{:.4},{}",
+                    "{},{},{:.3},{:.2},{:.3},{:.3},{:.2},{:.3},{:.5},{:.4},{},{:.3},{:.3}",
                     c.cylinder,
                     p.point,
                     p.peak_negative_m_s2,
@@ -235,6 +235,8 @@ pub fn csv(report: &SweepReport) -> String {
                     r.peak_tilt_rad.get(ci).copied().unwrap_or(0.0) * 1e3,
                     risk.map(|x| x.ca).unwrap_or(f64::NAN),
                     risk.map(|x| x.risk.label()).unwrap_or("-"),
+                    p.peak_negative_std_m_s2,
+                    p.peak_negative_max_m_s2,
                 );
             }
         }
