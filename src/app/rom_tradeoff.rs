@@ -210,37 +210,37 @@ fn write_files(t: &RomTradeoff, dir: &Path) -> Result<Vec<PathBuf>> {
         let freq: Vec<(f64, f64)> = t
             .rows
             .iter()
-            .map(|r| (r.build_seconds, r.worst_frequency_error.max(1e-9).log10()))
+            .map(|r| (r.cutoff_factor, r.worst_frequency_error.max(1e-9).log10()))
             .collect();
         let shape: Vec<(f64, f64)> = t
             .rows
             .iter()
-            .map(|r| (r.build_seconds, (1.0 - r.worst_mac).max(1e-9).log10()))
+            .map(|r| (r.cutoff_factor, (1.0 - r.worst_mac).max(1e-9).log10()))
             .collect();
         let title = format!(
-            "ROM against the full FE model ({} modes below {:.0} Hz; full solve {:.0} s), over cut-off factors",
-            t.modes_compared, t.band_hz, t.full_seconds
+            "ROM against the full FE model ({} modes below {:.0} Hz); builds {} s, full solve {:.0} s",
+            t.modes_compared,
+            t.band_hz,
+            t.rows
+                .iter()
+                .map(|r| format!("{:.0}", r.build_seconds))
+                .collect::<Vec<_>>()
+                .join(" / "),
+            t.full_seconds
         );
         Chart {
             title: &title,
-            x_label: "ROM build from scratch [s]",
+            x_label: "cut-off factor (cut-off = factor x band)",
             y_label: "log10: worst relative frequency error; 1 - worst MAC",
             series: vec![
                 Series {
-                    name: format!(
-                        "frequency error (factors {})",
-                        t.rows
-                            .iter()
-                            .map(|r| format!("{}", r.cutoff_factor))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
+                    name: "worst relative frequency error".into(),
                     points: freq,
                     mark: Mark::LineDots,
                     color: 0,
                 },
                 Series {
-                    name: "1 - MAC".into(),
+                    name: "1 - worst MAC".into(),
                     points: shape,
                     mark: Mark::LineDots,
                     color: 1,
