@@ -1,10 +1,18 @@
 //! Fast-path regression: the default engine's per-cylinder, per-point peak accelerations,
 //! side and slap forces pinned against `tests/baseline/default_engine.json`.
 //!
-//! Tolerance 1e-4 relative: the run is deterministic, and a relative perturbation of 4e-8 in
-//! an input moved the peaks by 2e-7 (the slap amplifies roundoff about fivefold, no more), so
-//! 1e-4 absorbs roundoff differences (ROM rebuilds, summation order) while any change of the
-//! physics or numerics shows. To update the baseline on purpose:
+//! Tolerances. The quasi-static side force is kinematics and pressure only: 1e-4 relative.
+//! The slap peaks are means over 5 cycles of a non-periodic slap (cycles differ by 20-40 %),
+//! and they are sensitive to any perturbation, roundoff included: two builds of the same ROM
+//! (the build is not bit-reproducible; one had 2629 reduced DOFs, another 2624, frequencies
+//! equal to 1e-5) moved single-cycle peaks by up to 20 %, the 5-cycle means by at most 1.0
+//! standard error of their difference (5.9 % at most), and the non-bouncing 40 um case by
+//! 1.6 %. So each mean must lie within 3 standard errors of the difference,
+//! 3 sqrt((s^2 + s_base^2) / n), plus 3 % of its value (the ROM-build part); positive peaks,
+//! which carry no deviation of their own, use the same point's negative-peak relative error
+//! scale; the peaks' crank angles within 2 deg (measured 0.5-1.4 deg). This catches any change
+//! that moves a mean by more than ~3 standard errors (5-15 %), not smaller ones: a tighter pin
+//! needs a bit-reproducible ROM build (open). To update the baseline on purpose:
 //!   LINERCAV_UPDATE_BASELINE=1 cargo test --release --test baseline
 //! and commit the file with the reason.
 
@@ -52,7 +60,13 @@ fn default_engine_peaks_match_the_baseline() {
     }
     let text = std::fs::read_to_string(BASELINE).expect("baseline file");
     let base: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let n = report.stats.cycles_averaged.max(1) as f64;
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-4 * b.abs().max(1.0);
+    // |x - y| <= 3 sqrt((sx^2 + sy^2) / n) + 0.03 |y|
+    let within = |x: f64, y: f64, sx: f64, sy: f64| {
+        (x - y).abs() <= 3.0 * ((sx * sx + sy * sy) / n).sqrt() + 0.03 * y.abs()
+    };
+    let num = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
     for (c, b) in now["cylinders"]
         .as_array()
         .unwrap()
@@ -60,33 +74,51 @@ fn default_engine_peaks_match_the_baseline() {
         .zip(base["cylinders"].as_array().unwrap())
     {
         let cyl = &c["cylinder"];
-        for key in [
-            "peak_slap_force_n",
-            "peak_side_force_n",
-            "slap_crank_angle_deg",
-            "side_force_crank_angle_deg",
-        ] {
-            let (x, y) = (c[key].as_f64().unwrap(), b[key].as_f64().unwrap());
+        for key in ["peak_side_force_n", "side_force_crank_angle_deg"] {
+            let (x, y) = (num(c, key), num(b, key));
             assert!(close(x, y), "cylinder {cyl}: {key} {x} vs baseline {y}");
         }
+        let (x, y) = (num(c, "peak_slap_force_n"), num(b, "peak_slap_force_n"));
+        let (sx, sy) = (num(c, "slap_force_std_n"), num(b, "slap_force_std_n"));
+        assert!(
+            within(x, y, sx, sy),
+            "cylinder {cyl}: slap force {x} +- {sx} vs baseline {y} +- {sy}"
+        );
+        let (x, y) = (
+            num(c, "slap_crank_angle_deg"),
+            num(b, "slap_crank_angle_deg"),
+        );
+        assert!(
+            (x - y).abs() <= 2.0,
+            "cylinder {cyl}: slap at {x} vs {y} deg"
+        );
         for (p, q) in c["points"]
             .as_array()
             .unwrap()
             .iter()
             .zip(b["points"].as_array().unwrap())
         {
-            for key in [
-                "peak_negative_m_s2",
-                "peak_positive_m_s2",
-                "crank_angle_deg",
-            ] {
-                let (x, y) = (p[key].as_f64().unwrap(), q[key].as_f64().unwrap());
-                assert!(
-                    close(x, y),
-                    "cylinder {cyl} point {}: {key} {x} vs baseline {y}",
-                    p["point"]
-                );
-            }
+            let pt = &p["point"];
+            let (x, y) = (num(p, "peak_negative_m_s2"), num(q, "peak_negative_m_s2"));
+            let (sx, sy) = (
+                num(p, "peak_negative_std_m_s2"),
+                num(q, "peak_negative_std_m_s2"),
+            );
+            assert!(
+                within(x, y, sx, sy),
+                "cylinder {cyl} point {pt}: peak negative {x} +- {sx} vs baseline {y} +- {sy}"
+            );
+            // positive peak: the negative peak's relative deviations as its scale
+            let (u, v) = (num(p, "peak_positive_m_s2"), num(q, "peak_positive_m_s2"));
+            assert!(
+                within(u, v, sx / x * u, sy / y * v),
+                "cylinder {cyl} point {pt}: peak positive {u} vs baseline {v}"
+            );
+            let (x, y) = (num(p, "crank_angle_deg"), num(q, "crank_angle_deg"));
+            assert!(
+                (x - y).abs() <= 2.0,
+                "cylinder {cyl} point {pt}: at {x} vs {y} deg"
+            );
         }
     }
 }
