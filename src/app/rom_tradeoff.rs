@@ -146,8 +146,6 @@ pub fn run(
             Scene::load(scene_path, &s)
         })
         .collect::<std::result::Result<_, _>>()?;
-    // the full model's modes below the band (rigid-body free: the engine is fixed), plus a
-    // margin so a ROM mode that moved above the band still finds its partner
     let mut rows = Vec::new();
     let mut reference: Option<(FullModes, f64, usize)> = None;
     for (f, sc) in factors.iter().zip(&scenes) {
@@ -155,6 +153,9 @@ pub fn run(
         let (b, _, _) = build_rom(sc, true)?;
         let build_seconds = t0.elapsed().as_secs_f64();
         if reference.is_none() {
+            // one full solve, sized by the first ROM: its modes below the band (no rigid-body
+            // modes, the engine is fixed) plus 4, so the full model's count below the band
+            // (<= the ROM's: Ritz values lie above) is always covered
             let n = b.rom.frequencies_hz.iter().filter(|&&x| x < band).count() + 4;
             let t1 = Instant::now();
             let r = full::run(sc, n, None)?;
