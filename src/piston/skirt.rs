@@ -76,6 +76,15 @@ impl SliceLaw {
         out
     }
 
+    /// Onset of contact: the largest p at which no sample touches, min_j o_j / c_j over the
+    /// samples with c_j > 0 (F(p) = 0 for every p <= onset; +inf when no sample can touch).
+    pub fn onset(&self) -> f64 {
+        (0..7)
+            .filter(|&j| self.c[j] > 0.0)
+            .map(|j| self.o[j] / self.c[j])
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// The linear piece with the samples of `mask` in contact.
     pub fn piece_of(&self, mask: u8) -> Piece {
         let mut out = Piece {

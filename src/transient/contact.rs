@@ -33,30 +33,20 @@ pub trait Structure {
     fn prepare(&mut self, locs: &[Location]);
     /// Predicted displacement and velocity at location `i` (no new contact force).
     fn predicted(&self, i: usize) -> (f64, f64);
+    /// An interval (centre, radius) that holds the predicted displacement at location `i`,
+    /// cheaper than [`Structure::predicted`]; `None` when the structure has no such bound.
+    /// A slice whose penetration stays below its law's onset over the whole interval is apart
+    /// without its exact prediction.
+    fn predicted_bound(&self, _i: usize) -> Option<(f64, f64)> {
+        None
+    }
     /// Compliances G (displacement per force) and G_v (velocity per force) among `active`.
     fn compliance(&mut self, active: &[usize]) -> (DMatrix<f64>, DMatrix<f64>);
     /// Displacement at every location caused by the forces `forces` at `active`: G F.
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64>;
 }
 
-/// Dot product with four partial sums (vectorises; the order differs from a plain sum only
-/// by roundoff).
-pub fn dot4(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut s = [0.0; 4];
-    for (x, y) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
-        for k in 0..4 {
-            s[k] += x[k] * y[k];
-        }
-    }
-    let tail = n - n % 4;
-    let mut t = 0.0;
-    for k in tail..n {
-        t += a[k] * b[k];
-    }
-    (s[0] + s[1]) + (s[2] + s[3]) + t
-}
+pub use crate::linalg::kernels::dot4;
 
 /// A slice that may touch during the step.
 #[derive(Clone, Debug)]
@@ -135,13 +125,46 @@ pub fn step(
         .collect();
     let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
     structure.prepare(&locs);
-    let pred: Vec<(f64, f64)> = (0..slices.len()).map(|i| structure.predicted(i)).collect();
+    // exact predictions where a slice may touch: at slices in contact or damped at the last
+    // step, and wherever the penetration's upper bound (the structure's interval) reaches the
+    // law's onset; the others are apart and keep that bound as their penetration
+    let mut pred: Vec<Option<(f64, f64)>> = vec![None; slices.len()];
+    let bounds: Vec<Option<(f64, f64)>> = slices
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let touching = s.prev_penetration > 0.0 || s.law.piece(s.prev_penetration).mask != 0;
+            if touching {
+                None
+            } else {
+                structure.predicted_bound(i)
+            }
+        })
+        .collect();
+    let threshold: Vec<f64> = slices.iter().map(|s| s.law.onset().min(0.0)).collect();
+    // penetration of slice i at body coordinates qb and extra structure displacement `extra`
+    let penetration = |i: usize,
+                       qb: [f64; 2],
+                       extra: f64,
+                       pred: &mut [Option<(f64, f64)>],
+                       structure: &dyn Structure| {
+        let s = &slices[i];
+        let base = s.row[0] * qb[0] + s.row[1] * qb[1] - s.gap;
+        if pred[i].is_none() {
+            if let Some((centre, radius)) = bounds[i] {
+                let upper = base - (centre - radius) - extra;
+                if upper <= threshold[i] {
+                    return upper;
+                }
+            }
+            pred[i] = Some(structure.predicted(i));
+        }
+        base - pred[i].expect("set above").0 - extra
+    };
     // penetration of each slice without new contact forces: first guess of the pieces
     let dot = |r: [f64; 2], q: [f64; 2]| r[0] * q[0] + r[1] * q[1];
-    let mut pen: Vec<f64> = slices
-        .iter()
-        .zip(&pred)
-        .map(|(s, &(u, _))| dot(s.row, qh[s.body]) - s.gap - u)
+    let mut pen: Vec<f64> = (0..slices.len())
+        .map(|i| penetration(i, qh[slices[i].body], 0.0, &mut pred, &*structure))
         .collect();
     let mut pieces: Vec<(u8, bool)> = slices
         .iter()
@@ -186,7 +209,7 @@ pub fn step(
             for (c2, _) in active.iter().enumerate() {
                 w[(r, c2)] += kt[r] * g[(r, c2)] + cd[r] * gv[(r, c2)];
             }
-            let (u, du) = pred[i];
+            let (u, du) = pred[i].expect("active slices have their prediction");
             let b = s.body;
             rhs[(r, 0)] = av[r] - kt[r] * (s.gap + u)
                 + cd[r] * (dot(s.row, vh[b]) - kappa * dot(s.row, qh[b]) - du);
@@ -244,7 +267,7 @@ pub fn step(
         for i in 0..slices.len() {
             let s = &slices[i];
             let qb = [q[2 * s.body], q[2 * s.body + 1]];
-            pen[i] = dot(s.row, qb) - s.gap - pred[i].0 - extra[i];
+            pen[i] = penetration(i, qb, extra[i], &mut pred, &*structure);
             let mask = s.law.piece(pen[i]).mask;
             if mask != pieces[i].0 {
                 let v = pen[i].abs();

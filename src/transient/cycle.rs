@@ -559,12 +559,11 @@ impl<'a> EngineRun<'a> {
                     iterations: 0,
                 };
                 // other cylinders' residual-flexibility displacement at a contact DOF, lagged:
-                // u_d = sum_{loaded k, other cylinder} R(d, x_k) F_k, memoised per DOF (one
-                // memo serves all cylinders: each contact DOF belongs to one cylinder's liner)
-                // (the loads are first gathered per DOF, F_e = sum_k w_ke F_k, then listed per
-                // cylinder; each DOF belongs to one cylinder's liner)
+                // u_d = sum_{loaded e, other cylinder} R_de F_e with the last step's forces
+                // gathered on the DOFs, F_e = sum_k w_ke F_k (each DOF belongs to one cylinder's
+                // liner). R is symmetric, so u over a cylinder's slice DOFs is a sum of
+                // contiguous pieces of the loaded DOFs' rows: u[lo..hi] += F_e R_e[lo..hi].
                 let ndof = self.structure.contact_dofs();
-                let mut u_dof = vec![f64::NAN; ndof];
                 let mut f_dof = vec![0.0; ndof];
                 let mut owner = vec![usize::MAX; ndof];
                 let mut touched = Vec::new();
@@ -578,27 +577,39 @@ impl<'a> EngineRun<'a> {
                         f_dof[e] += at.weights[k] * f;
                     }
                 }
+                let mut u_dof = vec![0.0; ndof];
                 for b in 0..bodies.len() {
                     let idx: Vec<usize> =
                         (0..slices.len()).filter(|&k| slices[k].body == b).collect();
-                    let others: Vec<(usize, f64)> = touched
-                        .iter()
-                        .filter(|&&e| owner[e] != b)
-                        .map(|&e| (e, f_dof[e]))
-                        .collect();
-                    let mut lagged = |d: usize| {
-                        if u_dof[d].is_nan() {
-                            u_dof[d] = self.structure.rflex_dot(d, &others);
+                    // the slices' DOF span on each side (slices run along a bore line)
+                    let mut spans: Vec<(usize, usize)> = Vec::new();
+                    for side in [true, false] {
+                        let (lo, hi) = idx.iter().filter(|&&k| meta[k].1 == side).fold(
+                            (usize::MAX, 0),
+                            |(lo, hi), &k| {
+                                (
+                                    lo.min(slices[k].at.dofs[0]),
+                                    hi.max(slices[k].at.dofs[1] + 1),
+                                )
+                            },
+                        );
+                        if lo < hi {
+                            spans.push((lo, hi));
                         }
-                        u_dof[d]
-                    };
+                    }
+                    for &e in touched.iter().filter(|&&e| owner[e] != b) {
+                        for &(lo, hi) in &spans {
+                            self.structure
+                                .rflex_axpy(&mut u_dof[lo..hi], f_dof[e], e, lo..hi);
+                        }
+                    }
                     let sub: Vec<Slice<'_>> = idx
                         .iter()
                         .map(|&k| {
                             let mut sl = slices[k].clone();
                             sl.body = 0;
                             let [d0, d1] = sl.at.dofs;
-                            sl.gap += sl.at.weights[0] * lagged(d0) + sl.at.weights[1] * lagged(d1);
+                            sl.gap += sl.at.weights[0] * u_dof[d0] + sl.at.weights[1] * u_dof[d1];
                             sl
                         })
                         .collect();
@@ -817,6 +828,9 @@ impl<'a> EngineRun<'a> {
                 .iter()
                 .map(|c| vec![Vec::with_capacity(steps_per_cycle); c.rom.point_modes.rows])
                 .collect();
+            // only the last cycle's series is returned: the crankcase points (series only,
+            // no peaks) are evaluated in it alone
+            let last_cycle = cycle + 1 == cycles;
             for s in 0..steps_per_cycle {
                 let target = ((cycle * steps_per_cycle + s + 1) as f64) * dt;
                 let h = target - self.time;
@@ -842,8 +856,10 @@ impl<'a> EngineRun<'a> {
                     for (p, r) in self.point_residual(c).into_iter().enumerate() {
                         residual[c][p].push(r);
                     }
-                    for (p, a) in self.point_accelerations(c, true).into_iter().enumerate() {
-                        cs.crankcase_acceleration[p].push(a);
+                    if last_cycle {
+                        for (p, a) in self.point_accelerations(c, true).into_iter().enumerate() {
+                            cs.crankcase_acceleration[p].push(a);
+                        }
                     }
                     let q = self.cyls[c].body.q;
                     cs.lateral_m.push(q[0]);
@@ -869,6 +885,7 @@ impl<'a> EngineRun<'a> {
                         .acceleration
                         .iter_mut()
                         .chain(cs.crankcase_acceleration.iter_mut())
+                        .filter(|a| !a.is_empty())
                     {
                         *acc = low_pass(acc, dt, band, true).0;
                     }

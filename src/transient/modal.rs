@@ -11,10 +11,16 @@
 //! formed once per step size (one matrix product over all contact DOFs) and every per-step
 //! quantity is an interpolation of it: G(x, y) = sum_{d,e} w_d w_e S_de + R(x, y). The only
 //! per-step products over the modes are the predictor at the touched DOFs, phi_d . eta~ and
-//! phi_d . eta'~ (each once per DOF, shared by the slices beside it).
+//! phi_d . eta'~ (each once per DOF, shared by the slices beside it), and only at the slices
+//! that may touch: with mass-normalised modes, Cauchy-Schwarz on (phi_dj / omega_j)(omega_j eta_j)
+//! bounds the modal displacement by the static modal flexibility and the strain norm,
+//!   |phi_d . eta~| <= sqrt(sum_j phi_dj^2 / omega_j^2) sqrt(sum_j omega_j^2 eta~_j^2),
+//! so a slice whose penetration stays below its law's onset over that interval is apart
+//! without its dot products (the result is the same bit for bit).
 
-use super::contact::{dot4, Location, Structure};
+use super::contact::{Location, Structure};
 use super::scheme::ModalIntegrator;
+use crate::linalg::kernels::{axpy, dot4, dot4_pair};
 use crate::reduce::engine::Dense;
 use nalgebra::DMatrix;
 
@@ -25,6 +31,8 @@ pub struct ModalStructure {
     rows: Dense,
     rflex: Dense,
     preload: Vec<f64>,
+    /// sqrt(sum_j phi_dj^2 / omega_j^2) per contact DOF (+inf with a mode at omega = 0).
+    static_norm: Vec<f64>,
     /// Whether the residual flexibility is used.
     pub static_correction: bool,
     /// Per step size and static-correction flag (key: dt bits, flag): S = Phi D Phi^T over
@@ -40,13 +48,43 @@ pub struct ModalStructure {
 
 impl ModalStructure {
     /// `rows`: contact DOFs x modes; `rflex`: contact DOFs squared; `preload` per contact DOF.
-    pub fn new(integrator: ModalIntegrator, rows: Dense, rflex: Dense, preload: Vec<f64>) -> Self {
+    /// `rflex` is made exactly symmetric, (R + R^T) / 2 (its products leave roundoff
+    /// asymmetry; the per-cylinder coupling reads its rows as columns).
+    pub fn new(
+        integrator: ModalIntegrator,
+        rows: Dense,
+        mut rflex: Dense,
+        preload: Vec<f64>,
+    ) -> Self {
         let ndof = rows.rows;
+        let nr = rflex.rows;
+        for a in 0..nr {
+            for b in a + 1..nr {
+                let v = 0.5 * (rflex.data[a * nr + b] + rflex.data[b * nr + a]);
+                rflex.data[a * nr + b] = v;
+                rflex.data[b * nr + a] = v;
+            }
+        }
+        let k = integrator.stiffness();
+        let static_norm = (0..ndof)
+            .map(|d| {
+                let row = &rows.row(d)[..k.len()];
+                if k.iter().any(|&w2| w2 <= 0.0) {
+                    return f64::INFINITY;
+                }
+                row.iter()
+                    .zip(k)
+                    .map(|(p, w2)| p * p / w2)
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect();
         Self {
             integrator,
             rows,
             rflex,
             preload,
+            static_norm,
             static_correction: true,
             step_compliance: Vec::new(),
             current: 0,
@@ -141,14 +179,12 @@ impl ModalStructure {
         self.rows.rows
     }
 
-    /// Residual-flexibility displacement at contact DOF `d` of DOF forces `loads` (DOF, force),
-    /// sum_e R_de F_e [m] (0 without the static correction).
-    pub fn rflex_dot(&self, d: usize, loads: &[(usize, f64)]) -> f64 {
-        if !self.static_correction {
-            return 0.0;
+    /// u += f R_e[range] (row `e` of the residual flexibility, which is symmetric: the column
+    /// too); nothing without the static correction.
+    pub fn rflex_axpy(&self, u: &mut [f64], f: f64, e: usize, range: std::ops::Range<usize>) {
+        if self.static_correction {
+            axpy(u, f, &self.rflex.row(e)[range]);
         }
-        let row = self.rflex.row(d);
-        loads.iter().map(|&(e, f)| row[e] * f).sum()
     }
 
     /// Modal force sum_k phi_k F_k of forces at arbitrary locations.
@@ -161,9 +197,7 @@ impl ModalStructure {
             if fe == 0.0 {
                 continue;
             }
-            for (fj, &r) in f.iter_mut().zip(&self.rows.row(e)[..n]) {
-                *fj += r * fe;
-            }
+            axpy(&mut f, fe, &self.rows.row(e)[..n]);
         }
         f
     }
@@ -203,6 +237,22 @@ impl Structure for ModalStructure {
             v += at.weights[k] * vd;
         }
         (u, v)
+    }
+
+    /// Centre u0(x) and radius sum_d w_d sqrt(sum_j phi_dj^2 / omega_j^2) * |eta~|_K, widened
+    /// by 1e-9 relative (the dot product's roundoff is below n eps ~ 1e-13 of the radius).
+    fn predicted_bound(&self, i: usize) -> Option<(f64, f64)> {
+        let at = &self.locs[i];
+        let e = self.integrator.pred_strain_norm;
+        let (mut centre, mut radius) = (0.0, 0.0);
+        for k in 0..2 {
+            let d = at.dofs[k];
+            centre += at.weights[k] * self.preload[d];
+            radius += at.weights[k].abs() * self.static_norm[d] * e;
+        }
+        radius
+            .is_finite()
+            .then_some((centre, radius * (1.0 + 1e-9)))
     }
 
     /// G_AA = T_AA = S_AA + R_AA, G_v,AA = gamma / (beta dt) S_AA (interpolated from the DOFs).
@@ -270,74 +320,88 @@ fn gather_on_dofs<'a>(loads: impl Iterator<Item = (&'a Location, f64)>) -> Vec<(
     gathered
 }
 
-/// (a . b, a . c) in one pass with four partial sums each; the body compiled for AVX2 when the
-/// CPU has it (same operations in the same order, so the same result bit for bit).
-fn dot4_pair(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked just above).
-            return unsafe { dot4_pair_avx2(a, b, c) };
-        }
-    }
-    dot4_pair_body(a, b, c)
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transient::scheme::Scheme;
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn dot4_pair_avx2(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
-    use std::arch::x86_64::{
-        _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_setzero_pd, _mm256_storeu_pd,
-    };
-    let n = a.len().min(b.len()).min(c.len());
-    let m = n - n % 4;
-    // lane k holds the partial sum of the elements k mod 4, as in `dot4_pair_body`
-    let (mut s, mut t) = (_mm256_setzero_pd(), _mm256_setzero_pd());
-    let mut i = 0;
-    while i < m {
-        // SAFETY: i + 4 <= m <= the length of each slice
-        let x = _mm256_loadu_pd(a.as_ptr().add(i));
-        s = _mm256_add_pd(s, _mm256_mul_pd(x, _mm256_loadu_pd(b.as_ptr().add(i))));
-        t = _mm256_add_pd(t, _mm256_mul_pd(x, _mm256_loadu_pd(c.as_ptr().add(i))));
-        i += 4;
+    /// Deterministic pseudo-random numbers in [-1, 1) (a fixed LCG: the test needs spread, not
+    /// quality).
+    fn lcg(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }
-    let (mut sv, mut tv) = ([0.0; 4], [0.0; 4]);
-    _mm256_storeu_pd(sv.as_mut_ptr(), s);
-    _mm256_storeu_pd(tv.as_mut_ptr(), t);
-    let (mut ss, mut tt) = (0.0, 0.0);
-    for k in m..n {
-        ss += a[k] * b[k];
-        tt += a[k] * c[k];
-    }
-    (
-        (sv[0] + sv[1]) + (sv[2] + sv[3]) + ss,
-        (tv[0] + tv[1]) + (tv[2] + tv[3]) + tt,
-    )
-}
 
-#[inline(always)]
-fn dot4_pair_body(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
-    let n = a.len().min(b.len()).min(c.len());
-    let (a, b, c) = (&a[..n], &b[..n], &c[..n]);
-    let mut s = [0.0; 4];
-    let mut t = [0.0; 4];
-    for ((x, y), z) in a
-        .chunks_exact(4)
-        .zip(b.chunks_exact(4))
-        .zip(c.chunks_exact(4))
-    {
-        for k in 0..4 {
-            s[k] += x[k] * y[k];
-            t[k] += x[k] * z[k];
+    /// The interval of `predicted_bound` holds the exact prediction at every location, for
+    /// modal states from rest to strongly excited, and is tight for a single mode (Cauchy-
+    /// Schwarz is an equality when phi_d / omega is parallel to omega eta).
+    #[test]
+    fn predicted_bound_holds_the_exact_prediction() {
+        let (ndof, n) = (9, 37);
+        let mut st = 7u64;
+        let omega: Vec<f64> = (0..n).map(|j| 2e3 + 1e3 * j as f64).collect();
+        let mut integrator =
+            ModalIntegrator::new(&omega, &vec![0.02; n], Scheme::average_acceleration());
+        let rows = Dense {
+            rows: ndof,
+            cols: n,
+            data: (0..ndof * n).map(|_| lcg(&mut st)).collect(),
+        };
+        let preload: Vec<f64> = (0..ndof).map(|_| 1e-5 * lcg(&mut st)).collect();
+        for j in 0..n {
+            integrator.eta[j] = 1e-6 * lcg(&mut st);
+            integrator.deta[j] = 1e-3 * lcg(&mut st);
         }
+        let rflex = Dense {
+            rows: ndof,
+            cols: ndof,
+            data: vec![0.0; ndof * ndof],
+        };
+        let mut s = ModalStructure::new(integrator, rows, rflex, preload);
+        let locs: Vec<Location> = (0..ndof - 1)
+            .map(|d| {
+                let t = 0.5 + 0.5 * lcg(&mut st);
+                Location {
+                    dofs: [d, d + 1],
+                    weights: [1.0 - t, t],
+                }
+            })
+            .collect();
+        for dt in [1e-6, 2e-5, 1e-4] {
+            s.integrator.predict(dt);
+            s.prepare(&locs);
+            for i in 0..locs.len() {
+                let (u, _) = s.predicted(i);
+                let (c, r) = s.predicted_bound(i).expect("all modes have omega > 0");
+                assert!((u - c).abs() <= r, "location {i}: |{u} - {c}| > {r}");
+                // not vacuous: the radius is within the modal displacement's order
+                assert!(r < 1e3 * (u - c).abs().max(1e-12), "radius {r} at {i}");
+            }
+        }
+        // one mode: the bound is attained
+        let mut one = ModalIntegrator::new(&[3e3], &[0.0], Scheme::average_acceleration());
+        one.eta[0] = 2e-6;
+        let rows1 = Dense {
+            rows: 2,
+            cols: 1,
+            data: vec![0.7, -0.3],
+        };
+        let zero = Dense {
+            rows: 2,
+            cols: 2,
+            data: vec![0.0; 4],
+        };
+        let mut s1 = ModalStructure::new(one, rows1, zero, vec![0.0; 2]);
+        s1.integrator.predict(1e-9);
+        let at = [Location {
+            dofs: [0, 1],
+            weights: [1.0, 0.0],
+        }];
+        s1.prepare(&at);
+        let (u, _) = s1.predicted(0);
+        let (_, r) = s1.predicted_bound(0).expect("omega > 0");
+        assert!((r - u.abs()).abs() <= 1e-8 * r, "{r} vs {u}");
     }
-    let (mut ss, mut tt) = (0.0, 0.0);
-    for k in n - n % 4..n {
-        ss += a[k] * b[k];
-        tt += a[k] * c[k];
-    }
-    (
-        (s[0] + s[1]) + (s[2] + s[3]) + ss,
-        (t[0] + t[1]) + (t[2] + t[3]) + tt,
-    )
 }

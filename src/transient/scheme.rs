@@ -90,6 +90,8 @@ pub struct ModalIntegrator {
     pub dpred: Vec<f64>,
     /// D_j of the current step.
     pub compliance: Vec<f64>,
+    /// Strain norm of the predictor, sqrt(sum_j omega_j^2 eta~_j^2).
+    pub pred_strain_norm: f64,
 }
 
 impl ModalIntegrator {
@@ -110,6 +112,7 @@ impl ModalIntegrator {
             pred: vec![0.0; n],
             dpred: vec![0.0; n],
             compliance: vec![0.0; n],
+            pred_strain_norm: 0.0,
         }
     }
 
@@ -121,10 +124,17 @@ impl ModalIntegrator {
         self.k.is_empty()
     }
 
-    /// Prepares a step of size `dt`: predictor and compliance (the new force still unknown).
+    /// omega_j^2 of every mode.
+    pub fn stiffness(&self) -> &[f64] {
+        &self.k
+    }
+
+    /// Prepares a step of size `dt`: predictor and compliance (the new force still unknown),
+    /// and the predictor's strain norm sqrt(sum_j omega_j^2 eta~_j^2).
     pub fn predict(&mut self, dt: f64) {
         let Scheme { beta, gamma, alpha } = self.scheme;
         self.dt = dt;
+        let mut strain = 0.0;
         for j in 0..self.k.len() {
             let (k, c) = (self.k[j], self.c[j]);
             let uh = self.eta[j] + dt * self.deta[j] + dt * dt * (0.5 - beta) * self.ddeta[j];
@@ -138,7 +148,9 @@ impl ModalIntegrator {
             self.pred[j] = uh + beta * dt * dt * a0;
             self.dpred[j] = vh + gamma * dt * a0;
             self.compliance[j] = beta * dt * dt * self.inv_m[j];
+            strain += k * self.pred[j] * self.pred[j];
         }
+        self.pred_strain_norm = strain.sqrt();
     }
 
     /// Size of the current step [s].

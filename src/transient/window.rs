@@ -253,6 +253,9 @@ impl Structure for ModalLiner {
     fn predicted(&self, i: usize) -> (f64, f64) {
         self.structure.predicted(i)
     }
+    fn predicted_bound(&self, i: usize) -> Option<(f64, f64)> {
+        self.structure.predicted_bound(i)
+    }
     fn compliance(&mut self, active: &[usize]) -> (DMatrix<f64>, DMatrix<f64>) {
         self.structure.compliance(active)
     }
