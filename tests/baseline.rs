@@ -10,7 +10,8 @@
 //! 1.6 %. So each mean must lie within 3 standard errors of the difference,
 //! 3 sqrt((s^2 + s_base^2) / n), plus 3 % of its value (the ROM-build part); positive peaks,
 //! which carry no deviation of their own, use the same point's negative-peak relative error
-//! scale; the peaks' crank angles within 2 deg (measured 0.5-1.4 deg). This catches any change
+//! scale; the crank angles of the slap and of the peaks at the primary slap within 2 deg
+//! (measured 0.5-1.4 deg; angles are per-cycle medoids). This catches any change
 //! that moves a mean by more than ~3 standard errors (5-15 %), not smaller ones: a tighter pin
 //! needs a bit-reproducible ROM build (open). To update the baseline on purpose:
 //!   LINERCAV_UPDATE_BASELINE=1 cargo test --release --test baseline
@@ -114,11 +115,17 @@ fn default_engine_peaks_match_the_baseline() {
                 within(u, v, sx / x * u, sy / y * v),
                 "cylinder {cyl} point {pt}: peak positive {u} vs baseline {v}"
             );
+            // the angle of the primary slap (the baseline peak within 330-400 deg); a point
+            // whose peak lies at a weaker, secondary event may switch between comparable
+            // events under any perturbation (cylinder 4 point 1: 196 deg), so only its value
+            // is pinned
             let (x, y) = (num(p, "crank_angle_deg"), num(q, "crank_angle_deg"));
-            assert!(
-                (x - y).abs() <= 2.0,
-                "cylinder {cyl} point {pt}: at {x} vs {y} deg"
-            );
+            if (330.0..=400.0).contains(&y) {
+                assert!(
+                    (x - y).abs() <= 2.0,
+                    "cylinder {cyl} point {pt}: at {x} vs {y} deg"
+                );
+            }
         }
     }
 }

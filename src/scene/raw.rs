@@ -193,7 +193,7 @@ fn default_cutoff_factor() -> f64 {
     2.5
 }
 fn default_residual_spacing() -> usize {
-    1
+    2
 }
 fn default_harmonics() -> usize {
     6

@@ -46,7 +46,7 @@ pub trait Structure {
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64>;
 }
 
-pub use crate::linalg::kernels::dot4;
+pub use crate::linalg::kernels::dot;
 
 /// A slice that may touch during the step.
 #[derive(Clone, Debug)]

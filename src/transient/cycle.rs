@@ -177,8 +177,8 @@ pub struct CylinderSeries {
 }
 
 /// A peak value and the cylinder's own crank angle where it occurs; over several cycles the
-/// mean of the per-cycle peaks, the mean crank angle (on the 720 deg circle), the sample
-/// standard deviation and the largest per-cycle peak.
+/// mean of the per-cycle peaks, the medoid of their crank angles (on the 720 deg circle), the
+/// sample standard deviation and the largest per-cycle peak.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Peak {
     pub value: f64,
@@ -200,27 +200,35 @@ impl Peak {
         }
     }
 
-    /// Statistics of per-cycle peaks P_k (k = 1..n): mean, mean angle (deviations from the
-    /// first angle wrapped to (-360, 360]), s = sqrt(sum (P_k - mean)^2 / (n - 1)), max P_k.
+    /// Statistics of per-cycle peaks P_k at angles a_k (k = 1..n): mean, the medoid angle (the
+    /// a_k with the least summed distance to the others on the 720 deg circle; the first such
+    /// one on ties), s = sqrt(sum (P_k - mean)^2 / (n - 1)), max P_k. The medoid is an angle
+    /// where a peak occurred: when cycles peak at different events (a non-periodic slap), a
+    /// mean angle would fall between them, where nothing happens.
     pub fn over_cycles(per_cycle: &[Peak]) -> Self {
         let n = per_cycle.len();
         if n == 0 {
             return Peak::default();
         }
         let mean = per_cycle.iter().map(|p| p.value).sum::<f64>() / n as f64;
-        let a0 = per_cycle[0].crank_angle_deg;
-        let dev = per_cycle
+        // circular distance on the 720 deg cycle
+        let dist = |a: f64, b: f64| {
+            let d = (a - b).rem_euclid(720.0);
+            d.min(720.0 - d)
+        };
+        let medoid = per_cycle
             .iter()
-            .map(|p| {
-                let d = (p.crank_angle_deg - a0).rem_euclid(720.0);
-                if d > 360.0 {
-                    d - 720.0
-                } else {
-                    d
-                }
+            .map(|p| p.crank_angle_deg)
+            .min_by(|&a, &b| {
+                let spread = |x: f64| {
+                    per_cycle
+                        .iter()
+                        .map(|q| dist(x, q.crank_angle_deg))
+                        .sum::<f64>()
+                };
+                spread(a).total_cmp(&spread(b))
             })
-            .sum::<f64>()
-            / n as f64;
+            .expect("n > 0");
         let std = if n > 1 {
             (per_cycle
                 .iter()
@@ -233,7 +241,7 @@ impl Peak {
         };
         Peak {
             value: mean,
-            crank_angle_deg: (a0 + dev).rem_euclid(720.0),
+            crank_angle_deg: medoid,
             std,
             max: per_cycle
                 .iter()
@@ -283,6 +291,8 @@ pub struct EngineRun<'a> {
     pub time: f64,
     energy_work: f64,
     energy_damped: f64,
+    /// Modal energy after the last committed step.
+    energy_now: f64,
     energy_scale: f64,
     pub stats: Stats,
     /// Summed contact forces of the last step per cylinder (thrust, anti-thrust).
@@ -425,6 +435,17 @@ impl<'a> EngineRun<'a> {
         let rflex = truncated_flexibility(rom, nm);
         let mut structure = ModalStructure::new(integrator, rows, rflex, pre);
         structure.static_correction = settings.static_correction;
+        if settings.coupling == Coupling::PerCylinder {
+            // each cylinder's contact step sees its own liner's DOFs only
+            structure.blocks = Some(
+                rom.cylinders
+                    .iter()
+                    .map(|c| {
+                        c.contact_offset..c.contact_offset + c.thrust_z.len() + c.antithrust_z.len()
+                    })
+                    .collect(),
+            );
+        }
         let n = setup.firing_order.len();
         let cyls = rom
             .cylinders
@@ -469,6 +490,7 @@ impl<'a> EngineRun<'a> {
             time: 0.0,
             energy_work: 0.0,
             energy_damped: 0.0,
+            energy_now: 0.0,
             energy_scale: 0.0,
             stats,
             last_forces: Vec::new(),
@@ -667,19 +689,12 @@ impl<'a> EngineRun<'a> {
         // commit
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
         let f = self.structure.modal_force_at(&locs, &res.forces);
-        let it = &self.structure.integrator;
-        let (eta0, v0, f0) = (it.eta.clone(), it.deta.clone(), it.force.clone());
-        self.structure.integrator.commit(&f);
-        let it = &self.structure.integrator;
-        let mut work = 0.0;
-        let mut vbar = vec![0.0; it.len()];
-        for j in 0..it.len() {
-            work += 0.5 * (f0[j] + f[j]) * (it.eta[j] - eta0[j]);
-            vbar[j] = 0.5 * (v0[j] + it.deta[j]);
-        }
-        self.energy_work += work;
-        self.energy_damped += dt * it.damping_power(&vbar);
-        if !it.eta.iter().all(|x| x.is_finite()) {
+        let step = self.structure.integrator.commit_with_energy(&f);
+        self.energy_work += step.work;
+        self.energy_damped += dt * step.damping_power;
+        self.energy_now = step.energy;
+        // a non-finite modal coordinate makes the energy non-finite
+        if !step.energy.is_finite() {
             return Err(Failure::NonFinite(0));
         }
         for (cyl, b) in self.cyls.iter_mut().zip(&res.bodies) {
@@ -735,7 +750,7 @@ impl<'a> EngineRun<'a> {
 
     /// Energy balance: (E - W + D) and the scale max(E, |W|, D).
     pub fn energy_balance(&mut self) -> (f64, f64) {
-        let e = self.structure.integrator.energy();
+        let e = self.energy_now;
         self.energy_scale = self
             .energy_scale
             .max(e)
@@ -760,7 +775,7 @@ impl<'a> EngineRun<'a> {
         let a = &self.structure.integrator.ddeta;
         let nb = a.len();
         (0..m.rows)
-            .map(|p| contact::dot4(&m.row(p)[..nb], &a[..nb]))
+            .map(|p| contact::dot(&m.row(p)[..nb], &a[..nb]))
             .collect()
     }
 
@@ -1038,8 +1053,8 @@ mod tests {
     #[test]
     fn peak_statistics_over_cycles() {
         // mean 2, sample std 1 (deviations -1, 0, 1 over n - 1 = 2), max 3; angles 719, 1 and
-        // 3 deg lie around 1 deg on the 720 deg circle (deviations 0, 2, 4 from the first, 719:
-        // mean 721 = 1 deg)
+        // 3 deg lie around 1 deg on the 720 deg circle: summed distances 2 + 4, 2 + 2, 4 + 2,
+        // so the medoid is 1 deg
         let p = Peak::over_cycles(&[
             Peak::single(1.0, 719.0),
             Peak::single(2.0, 1.0),
@@ -1048,11 +1063,18 @@ mod tests {
         assert!((p.value - 2.0).abs() < 1e-12);
         assert!((p.std - 1.0).abs() < 1e-12);
         assert_eq!(p.max, 3.0);
-        assert!(
-            (p.crank_angle_deg - 1.0).abs() < 1e-9,
-            "{}",
-            p.crank_angle_deg
-        );
+        assert_eq!(p.crank_angle_deg, 1.0);
+        // peaks at two events (three cycles at 366.5-367.5 deg, two at 90 deg): the medoid is
+        // an angle of the majority event (366.5: summed distances 554 against 554.5 for 367),
+        // not their mean (~256 deg)
+        let e = Peak::over_cycles(&[
+            Peak::single(1.0, 367.0),
+            Peak::single(1.0, 90.0),
+            Peak::single(1.0, 367.5),
+            Peak::single(1.0, 90.5),
+            Peak::single(1.0, 366.5),
+        ]);
+        assert_eq!(e.crank_angle_deg, 366.5);
         // one cycle: itself, no spread
         let q = Peak::over_cycles(&[Peak::single(5.0, 367.0)]);
         assert_eq!(

@@ -20,7 +20,7 @@
 
 use super::contact::{Location, Structure};
 use super::scheme::ModalIntegrator;
-use crate::linalg::kernels::{axpy, dot4, dot4_pair};
+use crate::linalg::kernels::{axpy, dot, dot_pair};
 use crate::reduce::engine::Dense;
 use nalgebra::DMatrix;
 
@@ -35,6 +35,9 @@ pub struct ModalStructure {
     static_norm: Vec<f64>,
     /// Whether the residual flexibility is used.
     pub static_correction: bool,
+    /// Contact-DOF blocks that exchange force within one step (`None`: all of them). With
+    /// blocks, S and T are formed on the diagonal blocks only (zero elsewhere).
+    pub blocks: Option<Vec<std::ops::Range<usize>>>,
     /// Per step size and static-correction flag (key: dt bits, flag): S = Phi D Phi^T over
     /// the contact DOFs and T = S + R (T = S without the static correction).
     step_compliance: Vec<(u64, bool, Dense, Dense)>,
@@ -86,6 +89,7 @@ impl ModalStructure {
             preload,
             static_norm,
             static_correction: true,
+            blocks: None,
             step_compliance: Vec::new(),
             current: 0,
             locs: Vec::new(),
@@ -114,14 +118,22 @@ impl ModalStructure {
         let psi =
             faer::Mat::<f64>::from_fn(ndof, n, |r, j| self.rows.data[r * nm + j] * d[j].sqrt());
         let mut s = faer::Mat::<f64>::zeros(ndof, ndof);
-        faer::linalg::matmul::matmul(
-            s.as_mut(),
-            faer::Accum::Replace,
-            psi.as_ref(),
-            psi.transpose(),
-            1.0,
-            faer::Par::Seq,
-        );
+        let whole = 0..ndof;
+        let blocks = self
+            .blocks
+            .as_deref()
+            .unwrap_or(std::slice::from_ref(&whole));
+        for r in blocks {
+            let p = psi.as_ref().subrows(r.start, r.len());
+            faer::linalg::matmul::matmul(
+                s.as_mut().submatrix_mut(r.start, r.start, r.len(), r.len()),
+                faer::Accum::Replace,
+                p,
+                p.transpose(),
+                1.0,
+                faer::Par::Seq,
+            );
+        }
         // a handful of step sizes at most (the base step and its halvings)
         if self.step_compliance.len() >= 8 {
             self.step_compliance.remove(0);
@@ -154,7 +166,7 @@ impl ModalStructure {
         if memo[d].0.is_nan() {
             let it = &self.integrator;
             let n = it.len();
-            memo[d] = dot4_pair(&self.rows.row(d)[..n], &it.pred, &it.dpred);
+            memo[d] = dot_pair(&self.rows.row(d)[..n], &it.pred, &it.dpred);
             self.touched.borrow_mut().push(d);
         }
         memo[d]
@@ -210,7 +222,7 @@ impl ModalStructure {
         (0..2)
             .map(|i| {
                 let d = at.dofs[i];
-                at.weights[i] * (self.preload[d] + dot4(&self.rows.row(d)[..n], eta))
+                at.weights[i] * (self.preload[d] + dot(&self.rows.row(d)[..n], eta))
             })
             .sum()
     }

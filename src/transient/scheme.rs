@@ -65,6 +65,17 @@ impl Scheme {
     }
 }
 
+/// Energy quantities of one committed step ([`ModalIntegrator::commit_with_energy`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepEnergy {
+    /// Work of the modal forces over the step [J].
+    pub work: f64,
+    /// Damping power at the step's mean velocity [W].
+    pub damping_power: f64,
+    /// Modal energy after the step [J].
+    pub energy: f64,
+}
+
 /// Modal (diagonal) Newmark/HHT update of uncoupled modes
 /// eta'' + 2 zeta omega eta' + omega^2 eta = f.
 ///
@@ -165,14 +176,34 @@ impl ModalIntegrator {
 
     /// Completes the step with the modal force `f` of the new time.
     pub fn commit(&mut self, f: &[f64]) {
+        self.commit_with_energy(f);
+    }
+
+    /// Completes the step like [`ModalIntegrator::commit`] and returns, from the same pass over
+    /// the modes, the step's work of the modal forces (trapezoidal),
+    /// W = sum_j (f0_j + f_j) / 2 (eta1_j - eta0_j), the damping power at the mean velocity,
+    /// P = sum_j c_j ((v0_j + v1_j) / 2)^2, and the new energy [`ModalIntegrator::energy`]
+    /// (each summed over j in ascending order, as the separate functions do).
+    pub fn commit_with_energy(&mut self, f: &[f64]) -> StepEnergy {
         let Scheme { beta, gamma, .. } = self.scheme;
         let dt = self.dt;
+        let (mut work, mut power, mut energy) = (0.0, 0.0, 0.0);
         for j in 0..self.k.len() {
+            let (eta0, v0, f0) = (self.eta[j], self.deta[j], self.force[j]);
             let a = self.base_acc[j] + self.inv_m[j] * f[j];
             self.eta[j] = self.pred[j] + beta * dt * dt * self.inv_m[j] * f[j];
             self.deta[j] = self.dpred[j] + gamma * dt * self.inv_m[j] * f[j];
             self.ddeta[j] = a;
             self.force[j] = f[j];
+            work += 0.5 * (f0 + f[j]) * (self.eta[j] - eta0);
+            let vbar = 0.5 * (v0 + self.deta[j]);
+            power += self.c[j] * vbar * vbar;
+            energy += self.deta[j].powi(2) + self.k[j] * self.eta[j].powi(2);
+        }
+        StepEnergy {
+            work,
+            damping_power: power,
+            energy: 0.5 * energy,
         }
     }
 

@@ -6,7 +6,7 @@
 //! The window starts with the structure at rest in its preload state and the piston centred
 //! with zero velocity (its acceleration from the loads at the start); the step is fixed.
 
-use super::contact::{self, dot4, Body, Location, Structure};
+use super::contact::{self, dot, Body, Location, Structure};
 use super::cycle::{push_slices, BoreLines, TransientError};
 use super::modal::ModalStructure;
 use super::scheme::Scheme;
@@ -276,7 +276,7 @@ impl Liner for ModalLiner {
         let a = &self.structure.integrator.ddeta;
         let n = a.len().min(self.points.cols);
         (0..self.points.rows)
-            .map(|p| dot4(&self.points.row(p)[..n], &a[..n]))
+            .map(|p| dot(&self.points.row(p)[..n], &a[..n]))
             .collect()
     }
     fn point_residual(&self, locs: &[Location], forces: &[f64]) -> Vec<f64> {
@@ -332,7 +332,7 @@ pub fn low_pass(x: &[f64], dt: f64, band_hz: f64, cyclic: bool) -> (Vec<f64>, us
         }
     }
     let y = (0..n)
-        .map(|i| super::contact::dot4(&h, &ext[i..i + len]))
+        .map(|i| super::contact::dot(&h, &ext[i..i + len]))
         .collect();
     (y, if cyclic { 0 } else { half })
 }
