@@ -4,16 +4,18 @@
 //! Tolerances. The quasi-static side force is kinematics and pressure only: 1e-4 relative.
 //! The slap peaks are means over 5 cycles of a non-periodic slap (cycles differ by 20-40 %),
 //! and they are sensitive to any perturbation, roundoff included: two builds of the same ROM
-//! (the build is not bit-reproducible; one had 2629 reduced DOFs, another 2624, frequencies
-//! equal to 1e-5) moved single-cycle peaks by up to 20 %, the 5-cycle means by at most 1.0
-//! standard error of their difference (5.9 % at most), and the non-bouncing 40 um case by
-//! 1.6 %. So each mean must lie within 3 standard errors of the difference,
-//! 3 sqrt((s^2 + s_base^2) / n), plus 3 % of its value (the ROM-build part); positive peaks,
-//! which carry no deviation of their own, use the same point's negative-peak relative error
-//! scale; the crank angles of the slap and of the peaks at the primary slap within 2 deg
-//! (measured 0.5-1.4 deg; angles are per-cycle medoids). This catches any change
-//! that moves a mean by more than ~3 standard errors (5-15 %), not smaller ones: a tighter pin
-//! needs a bit-reproducible ROM build (open). To update the baseline on purpose:
+//! that differed in roundoff only (a threaded against a single-threaded BLAS under ARPACK; 2624
+//! against 2629 reduced DOFs, frequencies equal to 1e-5) moved single-cycle peaks by up to 20 %,
+//! the 5-cycle means by at most 1.0 standard error of their difference (5.9 % at most), and the
+//! non-bouncing 40 um case by 1.6 %. Builds on this machine are now identical (the tests run
+//! with the CLI's single-threaded BLAS, `.cargo/config.toml`), but another CPU or BLAS changes
+//! the roundoff the same way. So each mean must lie within 3 standard errors of the difference,
+//! 3 sqrt((s^2 + s_base^2) / n), plus 3 % of its value; positive peaks, which carry no
+//! deviation of their own, use the same point's negative-peak relative error scale; the crank
+//! angles of the peaks at the primary slap within 2 deg (single cycles within +-0.5 deg; angles
+//! are per-cycle medoids) and of the slap force within 4.5 deg (two sub-events, below). This
+//! catches any change that moves a mean by more than ~3 standard errors (5-15 %), not smaller
+//! ones; bit-level regressions are the business of the unit tests. To update on purpose:
 //!   LINERCAV_UPDATE_BASELINE=1 cargo test --release --test baseline
 //! and commit the file with the reason.
 
@@ -89,8 +91,11 @@ fn default_engine_peaks_match_the_baseline() {
             num(c, "slap_crank_angle_deg"),
             num(b, "slap_crank_angle_deg"),
         );
+        // the dynamic slap force peaks at one of two sub-events per cycle (~364 and ~367 deg:
+        // single cycles 2-6 of the default engine gave 363.75-367.75 deg), and the medoid
+        // over five cycles may take either: 4.5 deg spans both
         assert!(
-            (x - y).abs() <= 2.0,
+            (x - y).abs() <= 4.5,
             "cylinder {cyl}: slap at {x} vs {y} deg"
         );
         for (p, q) in c["points"]
