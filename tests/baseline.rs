@@ -274,12 +274,12 @@ fn trend_dominant_response_in_the_khz_band() {
 /// dominant response. Target: among the three system modes nearest the dominant response, one's
 /// per-cylinder coefficients correlate with the per-cylinder peak negative acceleration with
 /// Pearson r > 0.7 (six cylinders: r > 0.7 has p < 0.06 for uncorrelated data). Not reproduced
-/// on the default engine since its peaks are means over cycles (best r = 0.48; a single cycle
+/// on the default engine since its peaks are means over cycles (best r = 0.58; a single cycle
 /// had given 0.71-0.76, which was one draw of a non-periodic slap), so it is ignored until the
 /// crankcase tuning of issue 3; run it with
 /// `cargo test --release --test baseline -- --ignored`.
 #[test]
-#[ignore = "not reproduced on the default engine (best r = 0.48 with cycle-averaged peaks); reports/README.md"]
+#[ignore = "not reproduced on the default engine (best r = 0.58 with cycle-averaged peaks); reports/README.md"]
 fn trend_cylinder_differences_follow_a_crankcase_mode() {
     let ev = evaluated();
     let best = ev
