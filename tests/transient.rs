@@ -337,6 +337,38 @@ fn per_cylinder_coupling_matches_the_monolithic_step() {
 }
 
 #[test]
+fn bounded_predictions_change_nothing() {
+    // The predictor's products are skipped only where the Cauchy-Schwarz bound proves a slice
+    // apart, and such a slice's exact penetration would have been below the onset as well: every
+    // peak, angle and counter of a run with the bound equals the run without it, bit for bit
+    // (the HHT scheme too: its predictor differs).
+    for scheme in [&[][..], &["transient.scheme=hht"][..]] {
+        let with = simulate(scheme, |_| {}).unwrap();
+        let without = simulate(scheme, |s| s.bound_predictions = false).unwrap();
+        assert_eq!(with.stats.steps, without.stats.steps);
+        assert_eq!(
+            with.stats.newton_iterations,
+            without.stats.newton_iterations
+        );
+        assert_eq!(
+            with.stats.max_penetration_m.to_bits(),
+            without.stats.max_penetration_m.to_bits()
+        );
+        for (a, b) in with.peaks.iter().zip(&without.peaks) {
+            for (x, y) in a.peak_negative.iter().zip(&b.peak_negative) {
+                assert_eq!(x.value.to_bits(), y.value.to_bits(), "{x:?} vs {y:?}");
+                assert_eq!(x.crank_angle_deg, y.crank_angle_deg);
+            }
+            assert_eq!(a.slap_force.value.to_bits(), b.slap_force.value.to_bits());
+        }
+        for (a, b) in with.series.cylinders.iter().zip(&without.series.cylinders) {
+            assert_eq!(a.lateral_m, b.lateral_m);
+            assert_eq!(a.thrust_force_n, b.thrust_force_n);
+        }
+    }
+}
+
+#[test]
 fn hard_cases_run_stably_or_stop_clearly() {
     // very stiff contact: stable (average acceleration is unconditionally stable)
     let r = simulate(&["piston.contact_stiffness_n_per_m=1e10"], |_| {}).unwrap();

@@ -88,6 +88,7 @@ pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
         static_correction: true,
         coupling: crate::transient::cycle::Coupling::PerCylinder,
         output_band_hz: Some(band_hz),
+        bound_predictions: true,
     }
 }
 

@@ -53,6 +53,10 @@ pub struct CycleSettings {
     pub static_correction: bool,
     /// How the cylinders' contacts are coupled within a step.
     pub coupling: Coupling,
+    /// Skip the predictor's products over the modes at slices that an energy bound proves
+    /// apart ([`super::modal`]); the results are the same bit for bit (false: every slice's
+    /// prediction is formed, for verification).
+    pub bound_predictions: bool,
     /// Accelerations at the analysis points are reported in the band of the ROM [Hz]: the sum
     /// over every integrated mode plus the quasi-static (residual) response to the contact
     /// forces, low-passed by a zero-phase FIR over the cycle
@@ -435,6 +439,7 @@ impl<'a> EngineRun<'a> {
         let rflex = truncated_flexibility(rom, nm);
         let mut structure = ModalStructure::new(integrator, rows, rflex, pre);
         structure.static_correction = settings.static_correction;
+        structure.bound_predictions = settings.bound_predictions;
         if settings.coupling == Coupling::PerCylinder {
             // each cylinder's contact step sees its own liner's DOFs only
             structure.blocks = Some(

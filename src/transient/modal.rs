@@ -35,6 +35,8 @@ pub struct ModalStructure {
     static_norm: Vec<f64>,
     /// Whether the residual flexibility is used.
     pub static_correction: bool,
+    /// Whether [`Structure::predicted_bound`] offers its bound (false: every prediction exact).
+    pub bound_predictions: bool,
     /// Contact-DOF blocks that exchange force within one step (`None`: all of them). With
     /// blocks, S and T are formed on the diagonal blocks only (zero elsewhere).
     pub blocks: Option<Vec<std::ops::Range<usize>>>,
@@ -89,6 +91,7 @@ impl ModalStructure {
             preload,
             static_norm,
             static_correction: true,
+            bound_predictions: true,
             blocks: None,
             step_compliance: Vec::new(),
             current: 0,
@@ -254,6 +257,9 @@ impl Structure for ModalStructure {
     /// Centre u0(x) and radius sum_d w_d sqrt(sum_j phi_dj^2 / omega_j^2) * |eta~|_K, widened
     /// by 1e-9 relative (the dot product's roundoff is below n eps ~ 1e-13 of the radius).
     fn predicted_bound(&self, i: usize) -> Option<(f64, f64)> {
+        if !self.bound_predictions {
+            return None;
+        }
         let at = &self.locs[i];
         let e = self.integrator.pred_strain_norm;
         let (mut centre, mut radius) = (0.0, 0.0);
