@@ -7,8 +7,8 @@
 //! that differed in roundoff only (a threaded against a single-threaded BLAS under ARPACK; 2624
 //! against 2629 reduced DOFs, frequencies equal to 1e-5) moved single-cycle peaks by up to 20 %,
 //! the 5-cycle means by at most 1.0 standard error of their difference (5.9 % at most), and the
-//! non-bouncing 40 um case by 1.6 %. Builds on this machine are now identical (the tests run
-//! with the CLI's single-threaded BLAS, `.cargo/config.toml`), but another CPU or BLAS changes
+//! non-bouncing 40 um case by 1.6 %. Builds on this machine are now identical (ARPACK runs a
+//! single-threaded BLAS wherever the library runs, `eigen::arpack`), but another CPU or BLAS changes
 //! the roundoff the same way. So each mean must lie within 3 standard errors of the difference,
 //! 3 sqrt((s^2 + s_base^2) / n), plus 3 % of its value; positive peaks, which carry no
 //! deviation of their own, use the same point's negative-peak relative error scale; the crank

@@ -8,6 +8,27 @@ use std::sync::Mutex;
 /// Serialises every ARPACK call in the process (tests run on parallel threads).
 pub static ARPACK_LOCK: Mutex<()> = Mutex::new(());
 
+/// Makes ARPACK's BLAS single-threaded when it is OpenBLAS, whoever calls the library: a
+/// threaded BLAS sums in another order, and that roundoff moved the Craig-Bampton attachment
+/// block's rank cut (a continuous Gram spectrum at 1e-10), so a ROM built in a test process
+/// differed from the CLI's (2624 against 2629 reduced DOFs). `openblas_set_num_threads` is
+/// looked up at run time (absent with the reference BLAS, whose calls are serial anyway).
+/// Called once, before the first ARPACK solve.
+pub fn single_threaded_blas() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // SAFETY: dlsym with RTLD_DEFAULT and a NUL-terminated name only reads; the symbol,
+        // when present, is OpenBLAS's `void openblas_set_num_threads(int)`.
+        unsafe {
+            let sym = libc::dlsym(libc::RTLD_DEFAULT, c"openblas_set_num_threads".as_ptr());
+            if !sym.is_null() {
+                let set: extern "C" fn(c_int) = std::mem::transmute(sym);
+                set(1);
+            }
+        }
+    });
+}
+
 extern "C" {
     pub fn dsaupd_c(
         ido: *mut c_int,

@@ -140,6 +140,7 @@ pub fn solve_modes(
     let (mut t_solve, mut t_mass, mut t_arpack) = (0.0, 0.0, 0.0);
     let clock = std::time::Instant::now;
     let _guard = ARPACK_LOCK.lock().unwrap_or_else(|p| p.into_inner());
+    super::arpack::single_threaded_blas();
     loop {
         let t0 = clock();
         // SAFETY: all arrays have the sizes dsaupd documents (resid n, v n x ncv, workd 3n,

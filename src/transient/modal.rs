@@ -71,12 +71,13 @@ impl ModalStructure {
             }
         }
         let k = integrator.stiffness();
+        let rigid = k.iter().any(|&w2| w2 <= 0.0);
         let static_norm = (0..ndof)
             .map(|d| {
-                let row = &rows.row(d)[..k.len()];
-                if k.iter().any(|&w2| w2 <= 0.0) {
+                if rigid {
                     return f64::INFINITY;
                 }
+                let row = &rows.row(d)[..k.len()];
                 row.iter()
                     .zip(k)
                     .map(|(p, w2)| p * p / w2)
