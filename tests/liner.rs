@@ -88,6 +88,7 @@ fn ring(length: f64) -> LinerGeometry {
         flange_outer_diameter: 0.135,
         flange_height: length / 4.0,
         guide_height: length / 4.0,
+        guide_bottom: 0.0,
         analysis_depths: vec![length / 2.0],
     }
 }

@@ -29,6 +29,17 @@ fn rom_matches_full_coupled_model() {
     rom_against_full(&scene(&[]));
 }
 
+/// The same floor with the guide band part-way up (`liner.guide_depth_mm`): a short-jacket
+/// liner whose lower end hangs free in the crank bay. The guide interface then sits between
+/// two free liner sections and the crankcase's support plate above an open hanging zone.
+#[test]
+fn rom_matches_full_coupled_model_with_a_raised_guide() {
+    let sc = scene(&["liner.guide_depth_mm=150"]);
+    let g = &sc.liner_geometry;
+    assert!((g.guide_bottom - 0.080).abs() < 1e-12, "{}", g.guide_bottom);
+    rom_against_full(&sc);
+}
+
 /// The same floor on the default engine (347,946 full DOFs; ~12 min and ~6 GB on 2 cores):
 /// `cargo test --release --test rom -- --ignored default_engine`.
 #[test]
@@ -77,8 +88,8 @@ fn reused_liner_reduction_equals_reducing_a_placed_copy() {
             r_out: inp.flange_radius,
         };
         let guide = InterfaceShape::Guide {
-            z0: 0.0,
-            z1: inp.guide_height,
+            z0: inp.guide_bottom,
+            z1: inp.guide_bottom + inp.guide_height,
         };
         let mk = |set: &str, shape, dirs: &[Direction]| InterfaceBlock {
             set: set.into(),
@@ -368,4 +379,50 @@ fn rom_tradeoff_cli_contract() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--factors"));
     assert!(!bad.exists());
+}
+
+/// `liner.guide_depth_mm` moves the guide band on both parts: the liner's `lower_guide` and
+/// every crankcase `guide_c` set cover exactly the band, and below it the crankcase leaves the
+/// liner's lower end free (no crankcase node on the liner's outer radius or inside the open
+/// ring around it in the hanging zone). Without the key the band ends the liner, as before.
+#[test]
+fn guide_depth_moves_the_guide_band_on_both_parts() {
+    for (sets, bottom) in [(vec![], 0.0), (vec!["liner.guide_depth_mm=150"], 0.080)] {
+        let sc = scene(&sets);
+        let g = sc.liner_geometry.clone();
+        assert!((g.guide_bottom - bottom).abs() < 1e-12);
+        let top = bottom + g.guide_height;
+        let (lm, cm) = load_meshes(&sc).unwrap();
+        let tol = 1e-9;
+        let guide = &lm.node_sets["lower_guide"];
+        assert!(!guide.is_empty());
+        let zs: Vec<f64> = guide.iter().map(|&n| lm.nodes[n][2]).collect();
+        let (zmin, zmax) = zs
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+        assert!(
+            (zmin - bottom).abs() < tol && (zmax - top).abs() < tol,
+            "{zmin} {zmax}"
+        );
+        let (ro, rf) = (g.outer_diameter / 2.0, g.flange_outer_diameter / 2.0);
+        let pitch = 0.152;
+        for c in 0..2 {
+            let xc = (c as f64 - 0.5) * pitch;
+            let r = |p: &[f64; 3]| (p[0] - xc).hypot(p[1]);
+            let set = &cm.node_sets[&format!("guide_{}", c + 1)];
+            assert!(!set.is_empty());
+            for &n in set {
+                let p = &cm.nodes[n];
+                assert!((r(p) - ro).abs() < 1e-7 && p[2] > bottom - tol && p[2] < top + tol);
+            }
+            let in_hanging_ring = cm
+                .nodes
+                .iter()
+                .any(|p| p[2] > tol && p[2] < bottom - tol && r(p) > ro - 1e-7 && r(p) < rf - 1e-7);
+            assert!(
+                !in_hanging_ring,
+                "crankcase material around the hanging liner end"
+            );
+        }
+    }
 }

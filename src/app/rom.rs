@@ -155,6 +155,7 @@ pub fn rom_inputs<'a>(
         flange_radius: g.flange_outer_diameter / 2.0,
         seat_z: g.length - g.flange_height,
         guide_height: g.guide_height,
+        guide_bottom: g.guide_bottom,
         analysis_points: g.analysis_depths.len(),
         axis_x,
         pitch: e.cylinder_pitch,

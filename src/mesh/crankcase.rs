@@ -16,8 +16,10 @@
 //!   outward flange (the rail) on both sides;
 //! - crank bay (below the liner, down to `skirt_depth`): skirt walls (the wall rings on the
 //!   y-sides), bulkheads (all rings on the x-sides, between cylinders and at the ends);
-//! - lower support (z in [0, guide_height]): all rings; its bore (r = r_o) is the liner's radial
-//!   guide seat;
+//! - hanging zone (z in [0, z_g], z_g the guide band's lower edge; empty when the band ends the
+//!   liner): the wall rings only, ring 0 is the open space around the liner's free lower end;
+//! - lower support (z in [z_g, z_g + guide_height]): all rings; its bore (r = r_o) is the
+//!   liner's radial guide seat;
 //! - water jacket (up to the deck): the wall rings only; ring 0 is the coolant space;
 //! - deck (`deck_thickness` below the flange seat): all rings; its top face carries the liner
 //!   flange (seat annulus r_o..r_f) under the head-bolt clamp load.
@@ -26,7 +28,7 @@
 //! block over its full height.
 //!
 //! Node sets: `seat_c` (deck top, r <= r_f around cylinder c), `guide_c` (support bore,
-//! r = r_o, 0 <= z <= guide height), `point_c_k` (jacket wall, thrust side, at the liner's
+//! r = r_o, over the guide band), `point_c_k` (jacket wall, thrust side, at the liner's
 //! analysis heights, top to bottom), `deck_top`, `pan_rail` (bottom face, z = -skirt_depth).
 
 use super::lattice::{level_at, subdivide, Key, Lattice};
@@ -47,6 +49,8 @@ pub struct CrankcaseGeometry {
     /// Height of the flange seat (deck top face) above the liner bottom.
     pub seat_z: f64,
     pub guide_height: f64,
+    /// Height of the guide band's lower edge above the liner bottom.
+    pub guide_bottom: f64,
     pub deck_thickness: f64,
     /// Thrust/anti-thrust jacket wall thickness t_w at the cylinder centre line.
     pub jacket_wall: f64,
@@ -76,6 +80,7 @@ pub struct CrankcaseMeshing {
 enum Zone {
     Rail,
     Bay,
+    Hanging,
     Support,
     Jacket,
     Deck,
@@ -135,8 +140,8 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
         0.0,
         meshing.axial_size,
     );
-    subdivide(&mut z_levels, 0.0, geo.guide_height, meshing.axial_size);
-    let mut planes = vec![geo.guide_height, z_deck];
+    let guide_top = geo.guide_bottom + geo.guide_height;
+    let mut planes = vec![0.0, geo.guide_bottom, guide_top, z_deck];
     planes.extend(geo.analysis_z.iter().copied());
     planes.sort_by(|p, q| p.partial_cmp(q).unwrap());
     planes.dedup_by(|p, q| (*p - *q).abs() < 1e-9);
@@ -151,7 +156,9 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
             Zone::Rail
         } else if zm < 0.0 {
             Zone::Bay
-        } else if zm < geo.guide_height {
+        } else if zm < geo.guide_bottom {
+            Zone::Hanging
+        } else if zm < guide_top {
             Zone::Support
         } else if zm < z_deck {
             Zone::Jacket
@@ -168,7 +175,7 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
             let x_side = (j / s) % 2 == 0;
             match zone(k) {
                 Zone::Deck | Zone::Support => true,
-                Zone::Jacket => i >= 1,
+                Zone::Jacket | Zone::Hanging => i >= 1,
                 Zone::Bay | Zone::Rail => x_side || i >= 1,
             }
         };
@@ -271,7 +278,9 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
         );
         sets.insert(
             format!("guide_{}", c + 1),
-            select(&|p| (r(p) - ro).abs() < tol && p[2] > -tol && p[2] < geo.guide_height + tol),
+            select(&|p| {
+                (r(p) - ro).abs() < tol && p[2] > geo.guide_bottom - tol && p[2] < guide_top + tol
+            }),
         );
         for (k, &z) in geo.analysis_z.iter().enumerate() {
             sets.insert(

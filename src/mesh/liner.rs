@@ -4,12 +4,14 @@
 //! cylinder-head face). The thrust side is +y (theta = 90 deg), the anti-thrust side -y; x is
 //! along the crankshaft. The flange occupies the top `flange_height` between the outer diameter
 //! and the flange diameter. Axial lattice planes are placed exactly at the flange underside, the
-//! top of the lower guide band and every analysis point, so those sets are exact node sets.
+//! edges of the lower guide band and every analysis point, so those sets are exact node sets.
 //!
 //! Node sets produced:
 //! - `flange_seat`: flange underside (bears on the crankcase deck counterbore),
 //! - `flange_top`: flange top face (head-bolt clamp load),
-//! - `lower_guide`: outer surface for z <= `guide_height` (radial support in the crankcase),
+//! - `lower_guide`: outer surface of the guide band, `guide_bottom <= z <= guide_bottom +
+//!   guide_height` (radial support in the crankcase; at the liner bottom by default, higher up
+//!   for a short-jacket liner whose lower end hangs free in the crank bay),
 //! - `bore_thrust`, `bore_antithrust`: bore lines at theta = 90 and 270 deg (piston contact),
 //! - `outer_thrust`: coolant-side line at theta = 90 deg,
 //! - `point_1` .. `point_n`: single coolant-side nodes on the thrust side, top to bottom.
@@ -28,6 +30,9 @@ pub struct LinerGeometry {
     pub flange_outer_diameter: f64,
     pub flange_height: f64,
     pub guide_height: f64,
+    /// Height z of the guide band's lower edge above the liner bottom (0: the band ends the
+    /// liner).
+    pub guide_bottom: f64,
     /// Depths of the analysis points below the liner top, top to bottom.
     pub analysis_depths: Vec<f64>,
 }
@@ -65,7 +70,8 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
         );
     }
     let z_flange = geo.length - geo.flange_height;
-    let mut planes: Vec<f64> = vec![0.0, geo.guide_height, z_flange, geo.length];
+    let guide_top = geo.guide_bottom + geo.guide_height;
+    let mut planes: Vec<f64> = vec![0.0, geo.guide_bottom, guide_top, z_flange, geo.length];
     planes.extend(geo.analysis_depths.iter().map(|d| geo.length - d));
     planes.sort_by(|a, b| a.partial_cmp(b).unwrap());
     planes.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
@@ -106,7 +112,7 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
             .position(|&l| (l - z).abs() < 1e-9)
             .expect("plane is a level")
     };
-    let kguide = z_index(geo.guide_height);
+    let (kguide0, kguide1) = (z_index(geo.guide_bottom), z_index(guide_top));
     let select = |pred: &dyn Fn(&Key) -> bool| -> Vec<usize> {
         (0..keys.len()).filter(|&n| pred(&keys[n])).collect()
     };
@@ -121,7 +127,7 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
     );
     sets.insert(
         "lower_guide".into(),
-        select(&|k| k[0] == iwall && k[2] <= kguide),
+        select(&|k| k[0] == iwall && k[2] >= kguide0 && k[2] <= kguide1),
     );
     sets.insert(
         "bore_thrust".into(),

@@ -100,6 +100,8 @@ pub struct RomInputs<'a> {
     pub flange_radius: f64,
     pub seat_z: f64,
     pub guide_height: f64,
+    /// Height of the guide band's lower edge above the liner bottom [m].
+    pub guide_bottom: f64,
     pub analysis_points: usize,
     /// Bore axis x of every cylinder (all cylinders of the crankcase).
     pub axis_x: Vec<f64>,
@@ -274,8 +276,8 @@ pub fn interface_blocks(
         r_out: inp.flange_radius,
     };
     let guide = InterfaceShape::Guide {
-        z0: 0.0,
-        z1: inp.guide_height,
+        z0: inp.guide_bottom,
+        z1: inp.guide_bottom + inp.guide_height,
     };
     let lm = inp.liner;
     let liner = vec![

@@ -318,7 +318,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         })
     };
     let l = &raw.liner;
-    let geometry = LinerGeometry {
+    let mut geometry = LinerGeometry {
         outer_diameter: c.mm("liner.outer_diameter_mm", l.outer_diameter_mm)?,
         inner_diameter: c.mm("liner.inner_diameter_mm", l.inner_diameter_mm)?,
         length: c.mm("liner.length_mm", l.length_mm)?,
@@ -326,6 +326,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
             .mm("liner.flange_outer_diameter_mm", l.flange_outer_diameter_mm)?,
         flange_height: c.mm("liner.flange_height_mm", l.flange_height_mm)?,
         guide_height: c.mm("liner.guide_height_mm", l.guide_height_mm)?,
+        guide_bottom: 0.0,
         analysis_depths: (0..l.analysis_points)
             .map(|i| (l.analysis_first_depth_mm + i as f64 * l.analysis_spacing_mm) * 1e-3)
             .collect(),
@@ -360,6 +361,21 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
             "flange and guide band together must be shorter than the liner",
         ));
     }
+    if let Some(depth_mm) = l.guide_depth_mm {
+        let depth = c.mm("liner.guide_depth_mm", depth_mm)?;
+        let bottom = geometry.length - depth - geometry.guide_height;
+        if depth <= geometry.flange_height || bottom < -1e-9 {
+            return Err(c.err(
+                "liner.guide_depth_mm",
+                format!(
+                    "the guide band must lie below the flange and within the liner: depth in ({}, {}] mm",
+                    l.flange_height_mm,
+                    l.length_mm - l.guide_height_mm
+                ),
+            ));
+        }
+        geometry.guide_bottom = bottom.max(0.0);
+    }
     c.positive("liner.analysis_spacing_mm", l.analysis_spacing_mm)?;
     c.positive("liner.analysis_first_depth_mm", l.analysis_first_depth_mm)?;
     if l.analysis_points == 0 {
@@ -367,7 +383,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
     }
     let deepest = geometry.analysis_depths.last().copied().unwrap_or(0.0);
     if geometry.analysis_depths[0] <= geometry.flange_height
-        || deepest >= geometry.length - geometry.guide_height
+        || deepest >= geometry.length - geometry.guide_bottom - geometry.guide_height
     {
         return Err(c.err(
             "liner.analysis_first_depth_mm",
@@ -836,6 +852,7 @@ fn validate_crankcase(
         flange_radius: liner.flange_outer_diameter / 2.0,
         seat_z: liner.length - liner.flange_height,
         guide_height: liner.guide_height,
+        guide_bottom: liner.guide_bottom,
         deck_thickness: c.mm("crankcase.deck_thickness_mm", cc.deck_thickness_mm)?,
         jacket_wall: c.mm("crankcase.jacket_wall_mm", cc.jacket_wall_mm)?,
         skirt_depth: c.mm("crankcase.skirt_depth_mm", cc.skirt_depth_mm)?,
@@ -855,7 +872,9 @@ fn validate_crankcase(
             "the crankcase needs a liner flange to seat on (flange diameter > outer diameter)",
         ));
     }
-    if geometry.seat_z - geometry.deck_thickness <= geometry.guide_height + 1e-9 {
+    if geometry.seat_z - geometry.deck_thickness
+        <= geometry.guide_bottom + geometry.guide_height + 1e-9
+    {
         return Err(c.err(
             "crankcase.deck_thickness_mm",
             "the deck reaches down into the lower guide band: no water jacket left",

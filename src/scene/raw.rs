@@ -250,8 +250,15 @@ pub struct RawLiner {
     pub flange_outer_diameter_mm: f64,
     /// Height of the top flange [mm].
     pub flange_height_mm: f64,
-    /// Height of the lower guide band from the liner bottom [mm].
+    /// Height (axial length) of the lower guide band, the liner's radial support in the
+    /// crankcase [mm].
     pub guide_height_mm: f64,
+    /// Depth of the guide band's top edge below the liner top [mm]. Omitted: the band ends the
+    /// liner (depth = length - guide height). Smaller: a short-jacket liner, supported part-way
+    /// down, its lower end hanging free in the crank bay; the coolant zone (flange to guide)
+    /// shortens, which stiffens the liner's ovalling.
+    #[serde(default)]
+    pub guide_depth_mm: Option<f64>,
     /// Depth of the first analysis point below the liner top [mm].
     pub analysis_first_depth_mm: f64,
     /// Spacing of the analysis points, top to bottom [mm] (paper: 25).
