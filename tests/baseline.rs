@@ -258,7 +258,7 @@ fn evaluated() -> linercav::app::evaluate::Evaluation {
 }
 
 /// Study: the dominant response lies in the kHz range of the crankcase's thrust-side family
-/// (~1850 Hz there). Ours: the dominant frequency of the spectra lies in 1-2.5 kHz (1441 Hz on
+/// (~1850 Hz there). Ours: the dominant frequency of the spectra lies in 1-2.5 kHz (1589 Hz on
 /// the default engine; the 1.85 kHz placement itself is open, reports/README.md).
 #[test]
 fn trend_dominant_response_in_the_khz_band() {
@@ -271,15 +271,12 @@ fn trend_dominant_response_in_the_khz_band() {
 }
 
 /// Study: cylinders differ because the crankcase mode shapes differ at the cylinders near the
-/// dominant response. Target: among the three system modes nearest the dominant response, one's
+/// dominant response. Ours: among the three system modes nearest the dominant response, one's
 /// per-cylinder coefficients correlate with the per-cylinder peak negative acceleration with
-/// Pearson r > 0.7 (six cylinders: r > 0.7 has p < 0.06 for uncorrelated data). Not reproduced
-/// on the default engine since its peaks are means over cycles (best r = 0.58; a single cycle
-/// had given 0.71-0.76, which was one draw of a non-periodic slap), so it is ignored until the
-/// crankcase tuning of issue 3; run it with
-/// `cargo test --release --test baseline -- --ignored`.
+/// Pearson r > 0.7 (six cylinders: r > 0.7 has p < 0.06 for uncorrelated data). On the default
+/// engine since the short-jacket liner (2026-11-23) r = 0.96 at 1622 Hz; before it (liner
+/// guided at its bottom, 10 mm wall) the best was 0.58 and this test was ignored.
 #[test]
-#[ignore = "not reproduced on the default engine (best r = 0.58 with cycle-averaged peaks); reports/README.md"]
 fn trend_cylinder_differences_follow_a_crankcase_mode() {
     let ev = evaluated();
     let best = ev
