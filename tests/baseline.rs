@@ -184,7 +184,7 @@ fn trend_reference_thresholds() {
 /// same claim on the same cylinder: each of cylinder 6's points rises monotonically
 /// 40 -> 80 -> 120 um, the engine-wide peak rises by more than 30 % from 80 to 120 um, and at
 /// 120 um all four points of cylinder 6 exceed the high-risk threshold. (Over the whole engine
-/// 23 of 24 points exceed it; cylinder 5's top point stays 0.7 % under, reports/README.md.)
+/// 22 of 24 points exceed it; the top points of cylinders 2 and 5 stay under, reports/README.md.)
 #[test]
 fn trend_clearance_raises_acceleration() {
     let (_, r40) = run_scene(&["piston.clearance_um=40"]);
