@@ -426,3 +426,21 @@ fn guide_depth_moves_the_guide_band_on_both_parts() {
         }
     }
 }
+
+/// A guide band above the flange's underside, past the liner bottom, or above an analysis
+/// point is refused with the key named.
+#[test]
+fn bad_guide_depth_is_refused_with_the_key() {
+    for (depth, needle) in [
+        ("5", "liner.guide_depth_mm"),
+        ("240", "liner.guide_depth_mm"),
+        ("100", "analysis points"),
+    ] {
+        let sets = vec![format!("liner.guide_depth_mm={depth}")];
+        let err = Scene::load(Path::new(SMALL), &sets)
+            .err()
+            .unwrap_or_else(|| panic!("depth {depth} accepted"))
+            .to_string();
+        assert!(err.contains(needle), "depth {depth}: {err}");
+    }
+}
