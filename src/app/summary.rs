@@ -590,7 +590,13 @@ fn figures(
     let shapes = super::rom::shapes(rom);
     write_png(&p, (1500, 600), |root| {
         let (a, b) = root.split_horizontally(750);
-        if let Some(m) = ev.nearest_modes.first() {
+        // of the modes nearest the dominant response, the one whose coefficients follow the
+        // per-cylinder peaks best (highest Pearson r): the picture answers "why do they differ"
+        let best = ev.nearest_modes.iter().max_by(|p, q| {
+            let (rp, rq) = (p.pearson.unwrap_or(-2.0), q.pearson.unwrap_or(-2.0));
+            rp.total_cmp(&rq)
+        });
+        if let Some(m) = best {
             let j = shapes
                 .iter()
                 .position(|s| s.frequency_hz == m.frequency_hz)
@@ -601,7 +607,7 @@ fn figures(
                 .map(|r| r.iter().map(|v| v.abs()).collect())
                 .collect();
             let title = format!(
-                "|Mode-shape coefficient|, system mode {:.0} Hz (r = {})",
+                "|Mode-shape coefficient|, system mode {:.0} Hz (best r of the nearest: {})",
                 m.frequency_hz,
                 m.pearson.map(|v| format!("{v:.2}")).unwrap_or("-".into())
             );
