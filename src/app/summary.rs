@@ -4,8 +4,8 @@
 //!
 //! Figures: `pressure.png` (cylinder pressure, side force), `acceleration.png` (liner
 //! acceleration per cylinder around firing, with the thresholds), `spectra.png`, `peaks.png`
-//! (per cylinder and point, with the thresholds), `modes_risk.png` (coefficients of the mode
-//! nearest the dominant response beside the per-cylinder peaks), `sweep_clearance.png`,
+//! (per cylinder and point, with the thresholds), `modes_risk.png` (coefficients of the
+//! best-correlated of the modes nearest the dominant response beside the per-cylinder peaks), `sweep_clearance.png`,
 //! `sweep_pin_offset.png`, `criteria.png` (CSF against Ca), `speed_error.png`, `frf.png`
 //! (inertance from the slap location to each cylinder's worst point, from the modal model).
 
