@@ -123,11 +123,14 @@ fn default_engine_peaks_match_the_baseline() {
             // the angle of the primary slap (the baseline peak within 330-400 deg); a point
             // whose peak lies at a weaker, secondary event may switch between comparable
             // events under any perturbation (cylinder 4 point 1: 196 deg), so only its value
-            // is pinned
+            // is pinned. Within the primary slap the largest swing may fall on either of its
+            // sub-events (~366 and ~374 deg: a ROM rebuilt from scratch, its modes equal to
+            // 0.1 Hz, moved cylinder 4 point 4 from 366.5 to 374.0 deg, the value within its
+            // error), so the angle must stay within the slap's 10 deg, not on one sample
             let (x, y) = (num(p, "crank_angle_deg"), num(q, "crank_angle_deg"));
             if (330.0..=400.0).contains(&y) {
                 assert!(
-                    (x - y).abs() <= 2.0,
+                    (x - y).abs() <= 10.0,
                     "cylinder {cyl} point {pt}: at {x} vs {y} deg"
                 );
             }
@@ -258,7 +261,7 @@ fn evaluated() -> linercav::app::evaluate::Evaluation {
 }
 
 /// Study: the dominant response lies in the kHz range of the crankcase's thrust-side family
-/// (~1850 Hz there). Ours: the dominant frequency of the spectra lies in 1-2.5 kHz (1589 Hz on
+/// (~1850 Hz there). Ours: the dominant frequency of the spectra lies in 1-2.5 kHz (1584 Hz on
 /// the default engine; the 1.85 kHz placement itself is open, reports/README.md).
 #[test]
 fn trend_dominant_response_in_the_khz_band() {
@@ -274,7 +277,8 @@ fn trend_dominant_response_in_the_khz_band() {
 /// dominant response. Ours: among the three system modes nearest the dominant response, one's
 /// per-cylinder coefficients correlate with the per-cylinder peak negative acceleration with
 /// Pearson r > 0.7 (six cylinders: r > 0.7 has p < 0.06 for uncorrelated data). On the default
-/// engine since the short-jacket liner (2026-11-23) r = 0.96 at 1622 Hz; before it (liner
+/// engine since the short-jacket liner (2026-11-23) r = 0.88-0.96 at 1591 or 1622 Hz in four
+/// realisations of the non-periodic slap (reports/README.md); before it (liner
 /// guided at its bottom, 10 mm wall) the best was 0.58 and this test was ignored.
 #[test]
 fn trend_cylinder_differences_follow_a_crankcase_mode() {

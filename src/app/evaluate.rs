@@ -6,7 +6,7 @@
 
 use super::rom::shapes;
 use crate::analysis::correlation::{pearson, spearman};
-use crate::analysis::spectrum::{amplitude_spectrum, Spectrum};
+use crate::analysis::spectrum::{amplitude_spectrum, rms_average, Spectrum};
 use crate::cavitation::criteria::{self, Risk, Thresholds};
 use crate::reduce::rom::EngineRom;
 use crate::scene::CavitationSpec;
@@ -66,7 +66,10 @@ pub struct Evaluation {
     pub cylinders: Vec<CylinderRisk>,
     /// Cylinders ordered from the highest to the lowest peak negative acceleration.
     pub ranking: Vec<usize>,
-    /// Engine-wide dominant response frequency (largest spectral peak over all points) [Hz].
+    /// Engine-wide dominant response frequency [Hz]: the peak of the RMS average of all the
+    /// points' spectra (see [`crate::analysis::spectrum::rms_average`]). The single spectra
+    /// of one cycle scatter bin to bin (the slap is not periodic), so their largest single peak
+    /// jumps between neighbouring peaks of similar height from one realisation to the next.
     pub dominant_hz: f64,
     /// The system modes nearest to it (closest first).
     pub nearest_modes: Vec<ModeLink>,
@@ -187,6 +190,10 @@ pub fn evaluate(
             worst_point: wp,
             points: pts,
         });
+    }
+    let all: Vec<&Spectrum> = sp.iter().flatten().collect();
+    if let Some((f, _)) = rms_average(&all).and_then(|m| m.dominant(SPECTRUM_FLOOR_HZ, band_hz)) {
+        best.0 = f;
     }
     let mut ranking: Vec<&CylinderRisk> = cylinders.iter().collect();
     ranking.sort_by(|a, b| b.peak_negative_m_s2.total_cmp(&a.peak_negative_m_s2));
