@@ -13,6 +13,7 @@ use super::evaluate::{evaluate, spectra, Evaluation};
 use super::full_order::{peak_negative, rom_window};
 use super::rom::{get_rom, CacheOptions};
 use super::simulate::{piston_of, run_cycle, settings_of, simulation, SimulateReport};
+use crate::analysis::spectrum::{rms_average, Spectrum};
 use crate::error::{Error, Result};
 use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
@@ -424,7 +425,7 @@ fn figures(
     let sp = spectra(s, fo);
     let band = scene.rom.band_hz;
     write_png(&p, (1500, 600), |root| {
-        let series = ev
+        let mut series: Vec<Series> = ev
             .cylinders
             .iter()
             .enumerate()
@@ -444,9 +445,25 @@ fn figures(
                 })
             })
             .collect();
+        // the engine-wide dominant response is the peak of this average (evaluate::evaluate)
+        let all: Vec<&Spectrum> = sp.iter().flatten().collect();
+        if let Some(avg) = rms_average(&all) {
+            series.push(Series {
+                name: format!("RMS average of all {} points", all.len()),
+                points: avg
+                    .frequency_hz
+                    .iter()
+                    .zip(&avg.amplitude)
+                    .filter(|(f, _)| **f <= band)
+                    .map(|(f, a)| (*f, *a))
+                    .collect(),
+                mark: Mark::Line,
+                color: 7,
+            });
+        }
         let rules = mode_rules(ev);
         let title = format!(
-            "Amplitude spectra (Hann, window centred on firing); dominant {:.0} Hz",
+            "Amplitude spectra (Hann, window centred on firing); dominant {:.0} Hz (peak of the RMS average)",
             ev.dominant_hz
         );
         Chart {
