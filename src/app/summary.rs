@@ -424,6 +424,15 @@ fn figures(
     let p = out.join("spectra.png");
     let sp = spectra(s, fo);
     let band = scene.rom.band_hz;
+    // (frequency, amplitude) pairs within the band
+    let curve = |x: &Spectrum| -> Vec<(f64, f64)> {
+        x.frequency_hz
+            .iter()
+            .zip(&x.amplitude)
+            .filter(|(f, _)| **f <= band)
+            .map(|(f, a)| (*f, *a))
+            .collect()
+    };
     write_png(&p, (1500, 600), |root| {
         let mut series: Vec<Series> = ev
             .cylinders
@@ -433,13 +442,7 @@ fn figures(
                 let spc = sp.get(ci)?.get(c.worst_point.checked_sub(1)?)?;
                 Some(Series {
                     name: format!("cylinder {} point {}", c.cylinder, c.worst_point),
-                    points: spc
-                        .frequency_hz
-                        .iter()
-                        .zip(&spc.amplitude)
-                        .filter(|(f, _)| **f <= band)
-                        .map(|(f, a)| (*f, *a))
-                        .collect(),
+                    points: curve(spc),
                     mark: Mark::Line,
                     color: ci,
                 })
@@ -450,13 +453,7 @@ fn figures(
         if let Some(avg) = rms_average(&all) {
             series.push(Series {
                 name: format!("RMS average of all {} points", all.len()),
-                points: avg
-                    .frequency_hz
-                    .iter()
-                    .zip(&avg.amplitude)
-                    .filter(|(f, _)| **f <= band)
-                    .map(|(f, a)| (*f, *a))
-                    .collect(),
+                points: curve(&avg),
                 mark: Mark::Line,
                 color: 7,
             });
