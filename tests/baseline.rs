@@ -158,6 +158,13 @@ fn run_scene(sets: &[&str]) -> (Scene, CycleResult) {
     (scene, r)
 }
 
+/// The default scene's run, once for every test that needs it (the clearance, pin-offset and
+/// evaluation tests all start from it).
+fn default_run() -> &'static (Scene, CycleResult) {
+    static RUN: OnceLock<(Scene, CycleResult)> = OnceLock::new();
+    RUN.get_or_init(|| run_scene(&[]))
+}
+
 /// Largest peak negative acceleration over all cylinders and points.
 fn engine_peak(r: &CycleResult) -> f64 {
     r.peaks
@@ -194,9 +201,9 @@ fn trend_reference_thresholds() {
 #[test]
 fn trend_clearance_raises_acceleration() {
     let (_, r40) = run_scene(&["piston.clearance_um=40"]);
-    let (_, r80) = run_scene(&[]);
+    let r80 = &default_run().1;
     let (scene, r120) = run_scene(&["piston.clearance_um=120"]);
-    let (a40, a80, a120) = (engine_peak(&r40), engine_peak(&r80), engine_peak(&r120));
+    let (a40, a80, a120) = (engine_peak(&r40), engine_peak(r80), engine_peak(&r120));
     assert!(a40 < a80 && a80 < a120, "{a40} {a80} {a120}");
     assert!(a120 > 2.0 * a40, "not a strong rise: {a40} -> {a120}");
     let high = scene.cavitation.thresholds.high_risk_m_s2;
@@ -208,7 +215,7 @@ fn trend_clearance_raises_acceleration() {
             .expect("cylinder 6");
         c.peak_negative.iter().map(|p| p.value).collect()
     };
-    let (p40, p80, p120) = (cyl6(&r40), cyl6(&r80), cyl6(&r120));
+    let (p40, p80, p120) = (cyl6(&r40), cyl6(r80), cyl6(&r120));
     for k in 0..p120.len() {
         assert!(
             p40[k] < p80[k] && p80[k] < p120[k],
@@ -233,17 +240,16 @@ fn trend_clearance_raises_acceleration() {
 /// the offset; the engine-wide peak acceleration is largest at 0 mm and smallest at +1 mm.
 #[test]
 fn trend_pin_offset() {
-    let runs: Vec<CycleResult> = ["-1", "0", "1"]
-        .iter()
-        .map(|o| run_scene(&[&format!("piston.pin_offset_mm={o}")]).1)
-        .collect();
+    let (_, minus) = run_scene(&["piston.pin_offset_mm=-1"]);
+    let (_, plus) = run_scene(&["piston.pin_offset_mm=1"]);
+    let runs = [&minus, &default_run().1, &plus];
     let side: Vec<f64> = runs.iter().map(|r| r.peaks[0].side_force.value).collect();
     assert!(side[0] < side[1] && side[1] < side[2], "{side:?}");
     for r in &runs {
         let deg = r.peaks[0].side_force.crank_angle_deg;
         assert!((370.0..400.0).contains(&deg), "side-force peak at {deg}");
     }
-    let acc: Vec<f64> = runs.iter().map(engine_peak).collect();
+    let acc: Vec<f64> = runs.iter().map(|r| engine_peak(r)).collect();
     assert!(
         acc[1] > acc[0] && acc[1] > acc[2],
         "0 mm not the strongest: {acc:?}"
@@ -255,9 +261,9 @@ fn trend_pin_offset() {
 fn evaluated() -> &'static linercav::app::evaluate::Evaluation {
     static EV: OnceLock<linercav::app::evaluate::Evaluation> = OnceLock::new();
     EV.get_or_init(|| {
-        let (scene, r) = run_scene(&[]);
+        let (scene, r) = default_run();
         evaluate(
-            &r,
+            r,
             default_rom(),
             &scene.cavitation,
             &scene.engine.firing_order,
@@ -270,7 +276,9 @@ fn evaluated() -> &'static linercav::app::evaluate::Evaluation {
 /// (~1850 Hz there, next to a crankcase mode at 1874 Hz). Ours: the dominant frequency (peak of
 /// the RMS-averaged spectrum) lies within 5 % of the study's 1850 Hz (1869-1874 Hz over four
 /// realisations of the non-periodic slap, reports/README.md), and a system mode lies within
-/// 2 % of it (1870 Hz; the next at 1855 and 1889 Hz).
+/// 2 % of it (1870 Hz; the next at 1855 and 1889 Hz). The second check is weak on its own: the
+/// system modes lie 5-40 Hz apart there, so some mode is nearly always that close; it guards
+/// against a response between families (the 1.72-1.84 kHz gap), the first check carries the trend.
 #[test]
 fn trend_dominant_response_near_the_study_s() {
     let ev = evaluated();
