@@ -8,6 +8,7 @@
 
 use super::progress::Progress;
 use crate::error::{Error, Result};
+use crate::fem::surface::SurfaceMass;
 use crate::mesh::checks::check_and_compact;
 use crate::mesh::{crankcase, gmsh, liner, Mesh};
 use crate::reduce::cache::{self, Lookup};
@@ -116,7 +117,26 @@ pub fn key_description(scene: &Scene) -> Result<String> {
         "residual_vector_spacing": scene.rom.residual_vector_spacing,
         "cylinders": scene.rom.cylinders,
     });
+    let mut d = d;
+    // only when present, so the keys of dry scenes stay those of earlier builds
+    let surface = liner_surface_mass(scene);
+    if !surface.is_empty() {
+        d["liner_surface_mass"] = serde_json::json!(surface);
+    }
     Ok(d.to_string())
+}
+
+/// The liner's normal surface masses: the coolant layer on `coolant_wetted` when modelled.
+pub fn liner_surface_mass(scene: &Scene) -> Vec<SurfaceMass> {
+    scene
+        .cavitation
+        .layer_mass_per_area
+        .map(|mu| SurfaceMass {
+            set: "coolant_wetted".into(),
+            mass_per_area: mu,
+        })
+        .into_iter()
+        .collect()
 }
 
 /// Builds the ROM of a loaded scene (no cache). `keep_bases` keeps full bases for recovery.
@@ -148,6 +168,7 @@ pub fn rom_inputs<'a>(
     RomInputs {
         liner: lm,
         liner_material: scene.liner.material,
+        liner_surface_mass: liner_surface_mass(scene),
         crankcase: cm,
         crankcase_material: cc.material,
         crankcase_fix: cc.fix.clone(),

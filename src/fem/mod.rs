@@ -9,3 +9,4 @@ pub mod model;
 pub mod quadrature;
 pub mod shape;
 pub mod statics;
+pub mod surface;

@@ -4,6 +4,7 @@
 use super::assembly::{Assembler, AssemblyError};
 use super::dofs::{DofMap, UnknownSet};
 use super::material::Elastic;
+use super::surface::{self, SurfaceMass};
 use crate::eigen::certify::{self, SturmCheck};
 use crate::eigen::{solve_modes, EigenError, EigenSettings, Modes};
 use crate::linalg::factor::{Analysis, FactorError};
@@ -27,6 +28,8 @@ pub enum ModelError {
     Eigen(#[from] EigenError),
     #[error("the model has no free DOFs")]
     NoDofs,
+    #[error(transparent)]
+    Surface(#[from] super::surface::SurfaceError),
 }
 
 /// Wall-clock seconds of each phase.
@@ -60,6 +63,17 @@ pub struct ModalSolution {
 impl FeModel {
     /// Assembles K, M for `mesh` with `fixed` node sets constrained and analyses the pattern.
     pub fn build(mesh: Mesh, material: &Elastic, fixed: &[String]) -> Result<Self, ModelError> {
+        Self::build_with(mesh, material, fixed, &[])
+    }
+
+    /// As [`FeModel::build`], with normal surface masses added to M (the coolant layer on a
+    /// wet liner; `fem::surface`).
+    pub fn build_with(
+        mesh: Mesh,
+        material: &Elastic,
+        fixed: &[String],
+        surface: &[SurfaceMass],
+    ) -> Result<Self, ModelError> {
         let mut timings = Timings::default();
         let t = Instant::now();
         let dofs = DofMap::with_fixed_sets(&mesh, fixed)?;
@@ -67,7 +81,14 @@ impl FeModel {
             return Err(ModelError::NoDofs);
         }
         let asm = Assembler::new(&mesh, &dofs);
-        let km = asm.assemble(&mesh, material)?;
+        let mut km = asm.assemble(&mesh, material)?;
+        for sm in surface {
+            for face in surface::boundary_faces(&mesh, &sm.set)? {
+                let (me, _) =
+                    surface::face_mass(&face, &mesh.coords_of(&face.nodes), sm.mass_per_area);
+                asm.scatter(&face.nodes, &me, &mut km.m);
+            }
+        }
         timings.assembly = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let node_dofs = dofs.node_dofs();

@@ -14,6 +14,8 @@
 //!   for a short-jacket liner whose lower end hangs free in the crank bay),
 //! - `bore_thrust`, `bore_antithrust`: bore lines at theta = 90 and 270 deg (piston contact),
 //! - `outer_thrust`: coolant-side line at theta = 90 deg,
+//! - `coolant_wetted`: the outer surface in the coolant zone, from the guide band's top up to
+//!   the flange underside (where a coolant layer's mass acts, `fem::surface`),
 //! - `point_1` .. `point_n`: single coolant-side nodes on the thrust side, top to bottom.
 
 use super::lattice::{level_at, subdivide, Key, Lattice};
@@ -140,6 +142,10 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
     sets.insert(
         "outer_thrust".into(),
         select(&|k| k[0] == iwall && k[1] == jthrust && k[2] <= kf),
+    );
+    sets.insert(
+        "coolant_wetted".into(),
+        select(&|k| k[0] == iwall && k[2] >= kguide1 && k[2] <= kf),
     );
     for (p, d) in geo.analysis_depths.iter().enumerate() {
         let kz = z_index(geo.length - d);

@@ -19,6 +19,7 @@ use crate::eigen::{solve_modes, EigenSettings};
 use crate::fem::dofs::{DofMap, FIXED};
 use crate::fem::material::Elastic;
 use crate::fem::model::{FeModel, ModelError};
+use crate::fem::surface::SurfaceMass;
 use crate::mesh::Mesh;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
@@ -121,12 +122,14 @@ fn columns_solve(llt: &crate::linalg::factor::Llt<'_>, mut rhs: Mat<f64>) -> Mat
 }
 
 /// Reduces one part. `fix` are the sets held fixed for good (e.g. the engine mounts),
-/// `interfaces` the coupled boundaries, `loads` the attachment load patterns.
+/// `surface` the normal surface masses its M carries (coolant layer), `interfaces` the coupled
+/// boundaries, `loads` the attachment load patterns.
 #[allow(clippy::too_many_arguments)]
 pub fn reduce(
     part: &str,
     mesh: &Mesh,
     material: &Elastic,
+    surface: &[SurfaceMass],
     fix: &[String],
     interfaces: &[InterfaceBlock],
     loads: &[Load],
@@ -144,7 +147,7 @@ pub fn reduce(
         part: part.to_string(),
         source,
     };
-    let full = FeModel::build(mesh.clone(), material, fix).map_err(err_model)?;
+    let full = FeModel::build_with(mesh.clone(), material, fix, surface).map_err(err_model)?;
     let mut sets: Vec<String> = fix.to_vec();
     for b in interfaces {
         let nodes = mesh
@@ -172,7 +175,7 @@ pub fn reduce(
         }
         sets.push(b.set.clone());
     }
-    let inner = FeModel::build(mesh.clone(), material, &sets).map_err(err_model)?;
+    let inner = FeModel::build_with(mesh.clone(), material, &sets, surface).map_err(err_model)?;
     let (na, nb) = (full.n_free(), inner.n_free());
     tick(&format!("assembled: {na} DOFs, {nb} interior"));
     let llt = inner

@@ -60,10 +60,11 @@ struct PartData {
 fn prepare(
     mesh: &Mesh,
     material: &crate::fem::material::Elastic,
+    surface: &[crate::fem::surface::SurfaceMass],
     fix: &[String],
     blocks: &[super::craig_bampton::InterfaceBlock],
 ) -> Result<PartData> {
-    let model = FeModel::build(mesh.clone(), material, fix)?;
+    let model = FeModel::build_with(mesh.clone(), material, fix, surface)?;
     let mut sets = fix.to_vec();
     sets.extend(blocks.iter().map(|b| b.set.clone()));
     let inner =
@@ -168,10 +169,17 @@ impl FullSystem {
     /// the ROM) and analyses its pattern.
     pub fn build(inp: &RomInputs<'_>) -> Result<Self> {
         let (liner_blocks, cc_blocks) = super::rom::interface_blocks(inp).map_err(Error::from)?;
-        let liner = prepare(inp.liner, &inp.liner_material, &[], &liner_blocks)?;
+        let liner = prepare(
+            inp.liner,
+            &inp.liner_material,
+            &inp.liner_surface_mass,
+            &[],
+            &liner_blocks,
+        )?;
         let cc = prepare(
             inp.crankcase,
             &inp.crankcase_material,
+            &[],
             &inp.crankcase_fix,
             &cc_blocks,
         )?;

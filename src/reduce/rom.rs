@@ -10,6 +10,7 @@ use super::engine::{
 };
 use super::interface::{self, Direction, InterfaceShape};
 use crate::fem::material::Elastic;
+use crate::fem::surface::SurfaceMass;
 use crate::mesh::Mesh;
 use faer::Mat;
 use std::time::Instant;
@@ -92,6 +93,8 @@ pub struct EngineRom {
 pub struct RomInputs<'a> {
     pub liner: &'a Mesh,
     pub liner_material: Elastic,
+    /// Normal surface masses on the liner (the coolant layer on its wet outer surface).
+    pub liner_surface_mass: Vec<SurfaceMass>,
     pub crankcase: &'a Mesh,
     pub crankcase_material: Elastic,
     pub crankcase_fix: Vec<String>,
@@ -466,6 +469,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         "liner",
         lm,
         &inp.liner_material,
+        &inp.liner_surface_mass,
         &[],
         &liner_blocks,
         &loads,
@@ -494,6 +498,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         "crankcase",
         cm,
         &inp.crankcase_material,
+        &[],
         &inp.crankcase_fix,
         &cc_blocks,
         &cc_loads,

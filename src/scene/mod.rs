@@ -172,6 +172,9 @@ pub struct CavitationSpec {
     pub coolant: crate::cavitation::coolant::Coolant,
     pub gap: f64,
     pub thresholds: crate::cavitation::criteria::Thresholds,
+    /// The coolant layer's normal mass on the liner's wet surface [kg/m^2] (rho h), when the
+    /// scene models it (`coolant_mass = "layer"`).
+    pub layer_mass_per_area: Option<f64>,
 }
 
 /// A validated scene, SI units.
@@ -583,10 +586,21 @@ fn validate_cavitation(
             ),
         ));
     }
+    let layer_mass_per_area = match r.coolant_mass.as_str() {
+        "none" => None,
+        "layer" => Some(coolant.density_kg_m3 * gap),
+        other => {
+            return Err(c.err(
+                "cavitation.coolant_mass",
+                format!("expected \"none\" or \"layer\", got \"{other}\""),
+            ))
+        }
+    };
     Ok(CavitationSpec {
         coolant,
         gap,
         thresholds,
+        layer_mass_per_area,
     })
 }
 

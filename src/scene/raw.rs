@@ -69,6 +69,14 @@ pub struct RawCavitation {
     /// high-risk and k_p replace the defaults; not allowed together with the three keys above.
     #[serde(default)]
     pub calibration_file: Option<String>,
+    /// Coolant carried by the liner's wet outer surface (flange underside down to the guide
+    /// band, node set `coolant_wetted`): "none" (default; the reference study's model) or
+    /// "layer": the gap's coolant column moves with the wall's normal motion, a normal mass
+    /// rho h per unit area (rho of the coolant above, h = `gap_mm`; the same column whose
+    /// pressure difference rho a h the cavitation number uses). Part of the ROM: a scene with
+    /// "layer" builds and caches its own.
+    #[serde(default = "default_coolant_mass")]
+    pub coolant_mass: String,
 }
 
 impl Default for RawCavitation {
@@ -82,8 +90,12 @@ impl Default for RawCavitation {
             onset_m_s2: None,
             high_risk_m_s2: None,
             calibration_file: None,
+            coolant_mass: default_coolant_mass(),
         }
     }
+}
+fn default_coolant_mass() -> String {
+    "none".into()
 }
 fn default_coolant_temp() -> f64 {
     90.0
