@@ -392,3 +392,75 @@ fn trend_interior_point_most_active() {
         assert_eq!(least, a[a.len() - 1], "cylinder {}: {a:?}", c.cylinder);
     }
 }
+
+/// Study: the simulation left out the coolant around the liner and was 6 % off the measured
+/// acceleration (cylinder 1, point 4). Ours: the same engine with the coolant layer's normal
+/// mass (`cavitation.coolant_mass = "layer"`: rho h = 4.5 kg/m^2 on the wet zone, 4.5 % of the
+/// 14 mm wall's 101 kg/m^2) against the dry default.
+/// - Every system mode in the band comes down (more mass, same stiffness: Courant-Fischer),
+///   within the ROM's frequency error (1e-3 in f^2, rom-tradeoff: <= 4e-4 in f), and f^2 by at
+///   most the layer-to-wall mass ratio (Rayleigh: the layer adds at most that fraction of the
+///   liner wall's kinetic energy to a mode; f by at most 2.3 % here).
+/// - The peaks move by a few percent, as the study's 6 %: at the study's measuring point and
+///   on average over the 24 points by less than twice 6 %, the engine's mean by less than 6 %.
+///   (Measured: band modes -0.0 to -0.3 %; cylinder 1 point 4 +4 %; mean |change| 5 % with
+///   single points up to 16 % where the dense 1.84-1.89 kHz family reshuffles; engine mean
+///   -0.2 %. The dry model's own realisation spread, damping 0.0199 against 0.02: mean
+///   |change| 2.6 %.) What fails: a layer as heavy as a closed annulus's thin-gap added mass
+///   (rho R^2 / (n^2 h), 2.6 times the wall's for ovalling, n = 2) would pull the
+///   liner-dominated band modes down by tens of percent.
+#[test]
+fn trend_leaving_out_the_coolant_costs_a_few_percent() {
+    let sets = vec!["cavitation.coolant_mass=layer".to_string()];
+    let wet_scene = Scene::load(Path::new(SCENE), &sets).unwrap();
+    let mu = wet_scene.cavitation.layer_mass_per_area.unwrap();
+    let g = &wet_scene.liner_geometry;
+    let wall = wet_scene.liner.material.density * (g.outer_diameter - g.inner_diameter) / 2.0;
+    let ratio = mu / wall;
+    let wet_rom = get_rom(&wet_scene, &CacheOptions::default()).unwrap().rom;
+    let dry_rom = default_rom();
+    let band = wet_scene.rom.band_hz;
+    let dry_f: Vec<f64> = dry_rom.frequencies_hz[..dry_rom.info.system_modes]
+        .iter()
+        .copied()
+        .filter(|&f| f <= band)
+        .collect();
+    let wet_f = &wet_rom.frequencies_hz[..dry_f.len()];
+    for (k, (d, w)) in dry_f.iter().zip(wet_f).enumerate() {
+        let drop = 1.0 - (w / d).powi(2);
+        assert!(
+            (-1e-3..=ratio).contains(&drop),
+            "mode {k}: {d:.1} -> {w:.1} Hz, f^2 drop {drop:.4} outside [-1e-3, {ratio:.4}]"
+        );
+    }
+    let (_, dry) = default_run();
+    let sim = simulation(&wet_scene).unwrap();
+    let piston = piston_of(&wet_scene).unwrap();
+    let wet = run_cycle(
+        &wet_scene,
+        &wet_rom,
+        &piston,
+        settings_of(sim, wet_scene.rom.band_hz),
+        None,
+    )
+    .unwrap();
+    let values = |r: &CycleResult| -> Vec<f64> {
+        r.peaks
+            .iter()
+            .flat_map(|c| c.peak_negative.iter().map(|p| p.value))
+            .collect()
+    };
+    let (a, b) = (values(dry), values(&wet));
+    let change: Vec<f64> = a.iter().zip(&b).map(|(x, y)| y / x - 1.0).collect();
+    let mean_abs = change.iter().map(|c| c.abs()).sum::<f64>() / change.len() as f64;
+    let engine = b.iter().sum::<f64>() / a.iter().sum::<f64>() - 1.0;
+    println!(
+        "coolant layer: mu/wall {ratio:.4}; cylinder 1 point 4 {:+.1} %, mean |change| {:.1} %, engine mean {:+.1} %",
+        100.0 * change[3],
+        100.0 * mean_abs,
+        100.0 * engine
+    );
+    assert!(change[3].abs() < 0.12, "cylinder 1 point 4: {change:?}");
+    assert!(mean_abs < 0.12, "mean |change| {mean_abs}: {change:?}");
+    assert!(engine.abs() < 0.06, "engine mean {engine}");
+}

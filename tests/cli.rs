@@ -329,3 +329,34 @@ fn bad_input_is_refused_cleanly() {
     a.extend(["--count", "4", "--part", "crankshaft"]);
     refused(&a, "crankshaft", None);
 }
+
+/// A scene that models the coolant layer on an imported liner needs the wet surface as a
+/// physical group: without it, exit 2 before any build, naming the key, the set and the file.
+#[test]
+fn coolant_layer_on_an_imported_liner_needs_its_wet_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let msh = dir.path().join("liner.msh");
+    let mut args = vec!["export-mesh"];
+    args.extend(small_scene_args());
+    args.extend(["--part", "liner", "--out", msh.to_str().unwrap()]);
+    assert!(linercav(&args).status.success());
+    let text = std::fs::read_to_string(&msh).unwrap();
+    assert!(text.contains("\"coolant_wetted\""), "exported with the set");
+    let dry = dir.path().join("dry.msh");
+    std::fs::write(&dry, text.replace("\"coolant_wetted\"", "\"outer\"")).unwrap();
+    let set_file = format!("liner.mesh_file={}", dry.display());
+    let cache = format!("{}", dir.path().join("cache").display());
+    let mut a = vec!["rom"];
+    a.extend(small_scene_args());
+    a.extend([
+        "--set",
+        &set_file,
+        "--set",
+        "cavitation.coolant_mass=layer",
+        "--cache-dir",
+        &cache,
+    ]);
+    refused(&a, "coolant_wetted", None);
+    refused(&a, "dry.msh", None);
+    refused(&a, "cavitation.coolant_mass", None);
+}

@@ -57,9 +57,22 @@ pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
         MeshSource::File(p) => (gmsh::read(p)?, Some(p.display().to_string())),
     };
     check_and_compact(&mut lm).map_err(|source| Error::Mesh {
-        file: lfile,
+        file: lfile.clone(),
         source,
     })?;
+    for sm in liner_surface_mass(scene) {
+        if let Err(e) = crate::fem::surface::boundary_faces(&lm, &sm.set) {
+            return Err(Error::Input(format!(
+                "{}: cavitation.coolant_mass = \"layer\" needs the liner's wet outer surface as node set '{}' covering whole element faces{}: {e}",
+                scene.path.display(),
+                sm.set,
+                lfile
+                    .as_ref()
+                    .map(|f| format!(" (a physical group of {f})"))
+                    .unwrap_or_default()
+            )));
+        }
+    }
     let (mut cm, cfile) = match &cc.source {
         CrankcaseSource::Parametric { geometry, meshing } => {
             (crankcase::generate(geometry, meshing), None)

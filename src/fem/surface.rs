@@ -88,9 +88,18 @@ pub fn boundary_faces(mesh: &Mesh, set: &str) -> Result<Vec<Face>, SurfaceError>
     Ok(faces)
 }
 
-/// Face quadrature: points (s, t) in the face parameter domain with weights, and the map of
-/// (s, t) to element reference coordinates with its two tangents d xi / ds, d xi / dt.
-fn face_points(kind: ElementKind, corners: &[usize]) -> Vec<([f64; 3], [f64; 3], [f64; 3], f64)> {
+/// A face quadrature point in element reference coordinates, with the face parameters'
+/// tangents d xi / ds, d xi / dt and the weight of the parameter domain.
+struct FacePoint {
+    xi: [f64; 3],
+    xi_s: [f64; 3],
+    xi_t: [f64; 3],
+    weight: f64,
+}
+
+/// Face quadrature: points (s, t) of the face parameter domain mapped to element reference
+/// coordinates.
+fn face_points(kind: ElementKind, corners: &[usize]) -> Vec<FacePoint> {
     let c: Vec<[f64; 3]> = corners.iter().map(|&a| kind.ref_node(a)).collect();
     let g = gauss_legendre(3);
     let mut out = Vec::new();
@@ -133,7 +142,12 @@ fn face_points(kind: ElementKind, corners: &[usize]) -> Vec<([f64; 3], [f64; 3],
                         xt[i] += dt[k] * c[k][i];
                     }
                 }
-                out.push((xi, xs, xt, wgt_s * wgt_t));
+                out.push(FacePoint {
+                    xi,
+                    xi_s: xs,
+                    xi_t: xt,
+                    weight: wgt_s * wgt_t,
+                });
             }
         }
     } else {
@@ -145,7 +159,12 @@ fn face_points(kind: ElementKind, corners: &[usize]) -> Vec<([f64; 3], [f64; 3],
                 let (u, v) = ((u + 1.0) / 2.0, (v + 1.0) / 2.0);
                 let (s, t) = (u, (1.0 - u) * v);
                 let xi = std::array::from_fn(|i| c[0][i] + s * xs[i] + t * xt[i]);
-                out.push((xi, xs, xt, wu * wv / 4.0 * (1.0 - u)));
+                out.push(FacePoint {
+                    xi,
+                    xi_s: xs,
+                    xi_t: xt,
+                    weight: wu * wv / 4.0 * (1.0 - u),
+                });
             }
         }
     }
@@ -169,7 +188,13 @@ pub fn face_mass(face: &Face, coords: &[[f64; 3]], mu: f64) -> (Vec<f64>, f64) {
     let mut n = vec![0.0; nn];
     let mut dn = vec![[0.0; 3]; nn];
     let mut area = 0.0;
-    for (xi, xi_s, xi_t, w) in face_points(face.kind, face.corners) {
+    for FacePoint {
+        xi,
+        xi_s,
+        xi_t,
+        weight: w,
+    } in face_points(face.kind, face.corners)
+    {
         face.kind.eval(xi, &mut n, &mut dn);
         // J[i][k] = dx_i / dxi_k; tangents x_s = J xi_s, x_t = J xi_t
         let mut x_s = [0.0; 3];
@@ -214,36 +239,50 @@ pub fn face_mass(face: &Face, coords: &[[f64; 3]], mu: f64) -> (Vec<f64>, f64) {
 mod tests {
     use super::*;
 
-    /// The unit cube as one element of `kind` (hex8/hex20), its top face z = 1 in a set.
-    fn cube(kind: ElementKind) -> Mesh {
+    /// One element of `kind` on its reference shape (hexahedra mapped to the unit cube), the
+    /// nodes of its face z = `z_face` in the set "face".
+    fn single(kind: ElementKind, z_face: f64) -> Mesh {
         let nodes: Vec<[f64; 3]> = (0..kind.num_nodes())
             .map(|a| {
                 let r = kind.ref_node(a);
-                [(r[0] + 1.0) / 2.0, (r[1] + 1.0) / 2.0, (r[2] + 1.0) / 2.0]
+                if kind.is_tet() {
+                    r
+                } else {
+                    [(r[0] + 1.0) / 2.0, (r[1] + 1.0) / 2.0, (r[2] + 1.0) / 2.0]
+                }
             })
             .collect();
-        let top: Vec<usize> = (0..nodes.len()).filter(|&a| nodes[a][2] == 1.0).collect();
+        let face: Vec<usize> = (0..nodes.len())
+            .filter(|&a| nodes[a][2] == z_face)
+            .collect();
         let conn = (0..nodes.len()).collect();
         let mut mesh = Mesh {
             nodes,
             blocks: vec![crate::mesh::ElementBlock { kind, conn }],
             ..Mesh::default()
         };
-        mesh.node_sets.insert("top".into(), top);
+        mesh.node_sets.insert("face".into(), face);
         mesh
     }
 
-    /// Total normal mass of a flat unit face: a rigid unit motion along the normal gives
-    /// u^T M u = mu A exactly; tangential motion gives zero (the layer slides).
+    /// Total normal mass of a flat face: a rigid unit motion along the normal gives
+    /// u^T M u = mu A exactly (the quadrature is exact for N_a N_b on flat faces); tangential
+    /// motion gives zero (the layer slides). Unit cube top (A = 1), unit tetrahedron bottom
+    /// (A = 1/2).
     #[test]
     fn flat_face_carries_mu_times_area_in_the_normal_direction_only() {
-        for kind in [ElementKind::Hex8, ElementKind::Hex20] {
-            let mesh = cube(kind);
-            let faces = boundary_faces(&mesh, "top").unwrap();
+        for (kind, z_face, a_exact) in [
+            (ElementKind::Hex8, 1.0, 1.0),
+            (ElementKind::Hex20, 1.0, 1.0),
+            (ElementKind::Tet4, 0.0, 0.5),
+            (ElementKind::Tet10, 0.0, 0.5),
+        ] {
+            let mesh = single(kind, z_face);
+            let faces = boundary_faces(&mesh, "face").unwrap();
             assert_eq!(faces.len(), 1, "{kind:?}");
             let coords = mesh.coords_of(&faces[0].nodes);
             let (me, area) = face_mass(&faces[0], &coords, 2.5);
-            assert!((area - 1.0).abs() < 1e-14);
+            assert!((area - a_exact).abs() < 1e-14, "{kind:?}: area {area}");
             let nd = 3 * kind.num_nodes();
             let quad = |dir: usize| -> f64 {
                 let mut s = 0.0;
@@ -254,14 +293,18 @@ mod tests {
                 }
                 s
             };
-            assert!((quad(2) - 2.5).abs() < 1e-13, "{kind:?}: {}", quad(2));
-            assert!(quad(0).abs() < 1e-15 && quad(1).abs() < 1e-15);
+            assert!(
+                (quad(2) - 2.5 * a_exact).abs() < 1e-13,
+                "{kind:?}: {}",
+                quad(2)
+            );
+            assert!(quad(0).abs() < 1e-15 && quad(1).abs() < 1e-15, "{kind:?}");
         }
     }
 
     #[test]
     fn a_set_without_whole_faces_is_an_error_naming_it() {
-        let mut mesh = cube(ElementKind::Hex8);
+        let mut mesh = single(ElementKind::Hex8, 1.0);
         mesh.node_sets.insert("one".into(), vec![0]);
         let e = boundary_faces(&mesh, "one").unwrap_err().to_string();
         assert!(e.contains("'one'"), "{e}");

@@ -146,7 +146,7 @@ impl RomError {
             RomError::Set { .. } => 2,
             RomError::Reduce(ReduceError::Interface { .. }) => 2,
             RomError::Reduce(ReduceError::Model {
-                source: ModelError::Set(_) | ModelError::NoDofs,
+                source: ModelError::Set(_) | ModelError::NoDofs | ModelError::Surface(_),
                 ..
             }) => 2,
             _ => 1,
