@@ -47,6 +47,8 @@ pub struct Report {
     pub scene: String,
     pub title: String,
     pub speed_rpm: f64,
+    /// The coolant layer's normal mass on the liner's wet zone [kg/m^2]; null: dry model.
+    pub coolant_layer_kg_m2: Option<f64>,
     pub simulate: SimulateReport,
     pub evaluation: Evaluation,
     pub clearance_sweep: Vec<SweepPoint>,
@@ -240,6 +242,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         scene: scene.path.display().to_string(),
         title: scene.title.clone(),
         speed_rpm: scene.engine.speed_rpm,
+        coolant_layer_kg_m2: scene.cavitation.layer_mass_per_area,
         simulate,
         evaluation: ev,
         clearance_sweep: clearance,
@@ -860,7 +863,11 @@ fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     use std::fmt::Write;
     let ev = &r.evaluation;
     let t = &ev.thresholds;
-    let mut s = format!("# linercav report: {}\n\n{} at {:.0} rpm; peak cylinder pressure {:.1} bar at {:.1} deg; hot clearance {:.1} um.\n\n", r.title, r.scene, r.speed_rpm, r.simulate.peak_pressure_bar, r.simulate.peak_pressure_deg, r.simulate.hot_clearance_um);
+    let coolant = match r.coolant_layer_kg_m2 {
+        None => "coolant around the liner not modelled (dry, as the study's model)".to_string(),
+        Some(mu) => format!("coolant layer on the liner's wet zone: {mu:.2} kg/m^2"),
+    };
+    let mut s = format!("# linercav report: {}\n\n{} at {:.0} rpm; peak cylinder pressure {:.1} bar at {:.1} deg; hot clearance {:.1} um; {coolant}.\n\n", r.title, r.scene, r.speed_rpm, r.simulate.peak_pressure_bar, r.simulate.peak_pressure_deg, r.simulate.hot_clearance_um);
     let _ = writeln!(s, "## Verdict\n");
     let _ = writeln!(s, "Acceleration criterion ({}): onset {:.0} m/s^2, high risk {:.0} m/s^2 (k_p {:.1} Pa per m/s^2). Cylinders from the highest to the lowest peak negative acceleration: {:?}. The most active point along the liner: {} (of {}, top to bottom).\n", ev.threshold_source, t.onset_m_s2, t.high_risk_m_s2, t.k_p_pa_per_m_s2, ev.ranking, ev.most_active_point, ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0));
     let n_avg = r.simulate.stats.cycles_averaged;
