@@ -14,7 +14,15 @@
 //! Newton on the piecewise-linear contact: solve for the assumed pieces, recompute every
 //! slice's penetration, repeat until no slice changes its piece (the exact solution of the
 //! step). Only contact-sized systems are solved.
+//!
+//! HHT-alpha: the bodies' equation is taken at the same shifted time as the structure's,
+//!   M a_{n+1} = (1 + alpha) (f_{n+1} + B^T F_{n+1}) - alpha (f_n + B^T F_n),
+//! so the slice forces act on body and structure with the same weights (the momentum they
+//! exchange balances step by step). The body's M / (beta dt^2) row then carries
+//! (1 + alpha) B^T on the slice forces and -alpha times the total force of the last step
+//! ([`Body::applied`]) on its right-hand side; alpha = 0 is Newmark exactly.
 
+use super::scheme::Scheme;
 use nalgebra::{DMatrix, DVector};
 
 /// Where a slice touches the structure: up to two structure contact DOFs with weights
@@ -75,6 +83,9 @@ pub struct Body {
     pub a: [f64; 2],
     /// External generalised force at the new time.
     pub force: [f64; 2],
+    /// Total generalised force (external and contact) at the body's current time: the
+    /// -alpha f_n term of HHT-alpha. Set it to the external force when starting from rest.
+    pub applied: [f64; 2],
 }
 
 /// Result of one step.
@@ -94,16 +105,16 @@ pub enum StepFailure {
     Singular,
 }
 
-/// Solves one step of size `dt` (bodies with Newmark `beta`, `gamma`).
+/// Solves one step of size `dt` with the structure's `scheme` (Newmark beta, gamma; HHT alpha).
 pub fn step(
     bodies: &[Body],
     slices: &[Slice<'_>],
     structure: &mut dyn Structure,
     dt: f64,
-    beta: f64,
-    gamma: f64,
+    scheme: Scheme,
     max_iterations: usize,
 ) -> Result<StepResult, StepFailure> {
+    let Scheme { beta, gamma, alpha } = scheme;
     let nb = bodies.len();
     let nq = 2 * nb;
     let kappa = gamma / (beta * dt);
@@ -231,16 +242,17 @@ pub fn step(
                     a[(2 * k + i, 2 * k + j)] = body.mass[i][j] * c_acc;
                     bvec[2 * k + i] += body.mass[i][j] * c_acc * qh[k][j];
                 }
-                bvec[2 * k + i] += body.force[i];
+                bvec[2 * k + i] += (1.0 + alpha) * body.force[i] - alpha * body.applied[i];
             }
         }
         for (r, &i) in active.iter().enumerate() {
             let s = &slices[i];
             let row = 2 * s.body;
             for d in 0..2 {
-                bvec[row + d] += s.force_row[d] * sol[(r, 0)];
+                let fr = (1.0 + alpha) * s.force_row[d];
+                bvec[row + d] += fr * sol[(r, 0)];
                 for col in 0..nq {
-                    a[(row + d, col)] -= s.force_row[d] * sol[(r, 1 + col)];
+                    a[(row + d, col)] -= fr * sol[(r, 1 + col)];
                 }
             }
         }
@@ -296,7 +308,14 @@ pub fn step(
                     b.a[d] = an;
                     b.v[d] = vh[k][d] + gamma * dt * an;
                 }
+                b.applied = body.force;
                 out.push(b);
+            }
+            for (r, &i) in active.iter().enumerate() {
+                let s = &slices[i];
+                for d in 0..2 {
+                    out[s.body].applied[d] += s.force_row[d] * fa[r];
+                }
             }
             return Ok(StepResult {
                 bodies: out,

@@ -476,6 +476,7 @@ impl<'a> EngineRun<'a> {
                     body: Body {
                         mass,
                         a,
+                        applied: f,
                         ..Body::default()
                     },
                 }
@@ -573,8 +574,7 @@ impl<'a> EngineRun<'a> {
                 &slices,
                 &mut self.structure,
                 dt,
-                s.beta,
-                s.gamma,
+                s,
                 self.settings.max_newton,
             )
             .map_err(Failure::Step)?,
@@ -645,8 +645,7 @@ impl<'a> EngineRun<'a> {
                         &sub,
                         &mut self.structure,
                         dt,
-                        s.beta,
-                        s.gamma,
+                        s,
                         self.settings.max_newton,
                     )
                     .map_err(Failure::Step)?;

@@ -75,6 +75,7 @@ pub fn body_at_rest(piston: &Piston, deg: f64) -> Body {
             (mass[1][1] * f[0] - mass[0][1] * f[1]) / det,
             (mass[0][0] * f[1] - mass[1][0] * f[0]) / det,
         ],
+        applied: f,
         ..Body::default()
     }
 }
@@ -121,22 +122,26 @@ pub fn run(
             &mut slices,
             &mut meta,
         );
-        let Scheme { beta, gamma, .. } = window.scheme;
-        let res = contact::step(&[body], &slices, liner, dt, beta, gamma, window.max_newton)
-            .map_err(|f| match f {
-                contact::StepFailure::NoConvergence { iterations } => {
-                    TransientError::NoConvergence {
-                        crank_angle_deg: deg,
-                        time_s,
-                        iterations,
-                        halvings: 0,
-                    }
-                }
-                contact::StepFailure::Singular => TransientError::Singular {
-                    crank_angle_deg: deg,
-                    time_s,
-                },
-            })?;
+        let res = contact::step(
+            &[body],
+            &slices,
+            liner,
+            dt,
+            window.scheme,
+            window.max_newton,
+        )
+        .map_err(|f| match f {
+            contact::StepFailure::NoConvergence { iterations } => TransientError::NoConvergence {
+                crank_angle_deg: deg,
+                time_s,
+                iterations,
+                halvings: 0,
+            },
+            contact::StepFailure::Singular => TransientError::Singular {
+                crank_angle_deg: deg,
+                time_s,
+            },
+        })?;
         if let Some((k, &p)) = res
             .penetrations
             .iter()
