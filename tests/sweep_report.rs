@@ -133,3 +133,68 @@ fn report_writes_the_figure_set() {
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("## Verdict") && md.contains("![peaks.png](peaks.png)"));
 }
+
+/// `simulate --out` writes the last cycle's time series: one row per step of the 720 deg
+/// cycle, per cylinder the liner points' and the facing jacket wall's accelerations, and
+/// columns that agree with the JSON: with two averaged cycles the last cycle's most negative
+/// acceleration at a point is one of the two cycle peaks, i.e. the largest (`_max`) or
+/// 2 mean - max (to the CSV's 3 decimals), and the side-force column peaks at the JSON's value.
+#[test]
+fn simulate_time_series_agrees_with_its_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sim");
+    let (code, stdout, err) = linercav(&[
+        "simulate",
+        SCENE,
+        "--set",
+        "transient.cycles=3",
+        "--set",
+        "transient.averaged_cycles=2",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let text = std::fs::read_to_string(out.join("time_series.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 2880, "720 deg at 0.25 deg");
+    let col = |name: &str| -> Vec<f64> {
+        let j = header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("column {name} in {header:?}"));
+        rows.iter().map(|r| r[j]).collect()
+    };
+    for c in json["cylinders"].as_array().unwrap() {
+        let k = c["cylinder"].as_u64().unwrap();
+        for p in c["points"].as_array().unwrap() {
+            let n = p["point"].as_u64().unwrap();
+            let min = col(&format!("c{k}_p{n}_acc_m_s2"))
+                .into_iter()
+                .fold(f64::INFINITY, f64::min);
+            let mean = p["peak_negative_m_s2"].as_f64().unwrap();
+            let max = p["peak_negative_max_m_s2"].as_f64().unwrap();
+            let other = 2.0 * mean - max;
+            assert!(
+                (-min - max).abs() < 2e-3 || (-min - other).abs() < 2e-3,
+                "cylinder {k} point {n}: last cycle {} against cycle peaks {max} and {other}",
+                -min
+            );
+            let wall = col(&format!("c{k}_p{n}_wall_acc_m_s2"));
+            assert!(wall.iter().all(|a| a.is_finite()) && wall.iter().any(|a| *a != 0.0));
+        }
+        let side = col(&format!("c{k}_side_force_n"))
+            .into_iter()
+            .fold(f64::NEG_INFINITY, f64::max);
+        let expected = c["peak_side_force_n"].as_f64().unwrap();
+        assert!(
+            (side - expected).abs() < 0.01,
+            "side force {side} vs {expected}"
+        );
+    }
+}

@@ -367,7 +367,10 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     Ok(report)
 }
 
-/// Writes the last cycle's time series (one row per step).
+/// Writes the last cycle's time series (one row per step): per cylinder the liner points'
+/// accelerations (+ toward the coolant), the crankcase jacket wall's at the facing points
+/// (across the coolant gap, same sign convention), piston lateral motion and tilt, contact
+/// forces, the quasi-static side force and the cylinder pressure.
 pub fn write_series(path: &Path, res: &CycleResult) -> Result<()> {
     let s = &res.series;
     write_atomic(path, |w| {
@@ -376,6 +379,9 @@ pub fn write_series(path: &Path, res: &CycleResult) -> Result<()> {
             let k = c.cylinder;
             for p in 0..c.acceleration.len() {
                 write!(w, ",c{k}_p{}_acc_m_s2", p + 1)?;
+            }
+            for p in 0..c.crankcase_acceleration.len() {
+                write!(w, ",c{k}_p{}_wall_acc_m_s2", p + 1)?;
             }
             write!(
                 w,
@@ -386,7 +392,7 @@ pub fn write_series(path: &Path, res: &CycleResult) -> Result<()> {
         for i in 0..s.time_s.len() {
             write!(w, "{:.4},{:.8}", s.crank_angle_deg[i], s.time_s[i])?;
             for c in &s.cylinders {
-                for a in &c.acceleration {
+                for a in c.acceleration.iter().chain(&c.crankcase_acceleration) {
                     write!(w, ",{:.3}", a[i])?;
                 }
                 write!(
