@@ -34,6 +34,15 @@ fn comparison(sets: &[&str]) -> linercav::app::full_order::FullOrderReport {
     .unwrap()
 }
 
+fn print_points(c: &linercav::app::full_order::FullOrderReport) {
+    for p in &c.points {
+        eprintln!(
+            "point {}: full {:.1} rom {:.1} ({:.2e})",
+            p.point, p.peak_negative_full_m_s2, p.peak_negative_rom_m_s2, p.relative_error
+        );
+    }
+}
+
 #[test]
 fn rom_matches_the_full_order_model_on_the_window() {
     let c = comparison(&["rom.residual_vector_spacing=1"]);
@@ -47,12 +56,7 @@ fn rom_matches_the_full_order_model_on_the_window() {
     // Peak negative acceleration in the band, every analysis point: the 2 % floor
     // (measured 0.14 % with residual vectors at every bore-line node; without them, static
     // correction only, 11 %: the slap's contact frequency, ~5 kHz, sits at this ROM's cut-off).
-    for p in &c.points {
-        eprintln!(
-            "point {}: full {:.1} rom {:.1} ({:.2e})",
-            p.point, p.peak_negative_full_m_s2, p.peak_negative_rom_m_s2, p.relative_error
-        );
-    }
+    print_points(&c);
     assert!(
         c.rom_error_peak_negative < 0.02,
         "ROM error {:.3e}",
@@ -91,12 +95,7 @@ fn coolant_layer_enters_both_models() {
         "cavitation.coolant_mass=layer",
         "cavitation.gap_mm=30",
     ]);
-    for p in &c.points {
-        eprintln!(
-            "point {}: full {:.1} rom {:.1} ({:.2e})",
-            p.point, p.peak_negative_full_m_s2, p.peak_negative_rom_m_s2, p.relative_error
-        );
-    }
+    print_points(&c);
     assert!(
         c.rom_error_peak_negative < 0.02,
         "ROM error {:.3e}",

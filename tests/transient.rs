@@ -102,6 +102,23 @@ impl Structure for Wall {
     }
 }
 
+/// The one slice of a body moving along its first coordinate into structure location 0.
+fn head_on(law: &SliceLaw, damping: f64, prev_penetration: f64) -> Slice<'_> {
+    Slice {
+        body: 0,
+        row: [1.0, 0.0],
+        force_row: [-1.0, 0.0],
+        gap: 0.0,
+        law,
+        damping,
+        at: Location {
+            dofs: [0, 0],
+            weights: [1.0, 0.0],
+        },
+        prev_penetration,
+    }
+}
+
 /// Coefficient of restitution of a mass hitting the wall through the penalty law with a
 /// dashpot, integrated with step `dt`.
 fn bounce(m: f64, k: f64, c: f64, dt: f64) -> f64 {
@@ -118,19 +135,7 @@ fn bounce(m: f64, k: f64, c: f64, dt: f64) -> f64 {
     let mut wall = Wall { n: 0 };
     let mut prev = -1e-6;
     for _ in 0..1_000_000 {
-        let slice = Slice {
-            body: 0,
-            row: [1.0, 0.0],
-            force_row: [-1.0, 0.0],
-            gap: 0.0,
-            law: &law,
-            damping: c,
-            at: Location {
-                dofs: [0, 0],
-                weights: [1.0, 0.0],
-            },
-            prev_penetration: prev,
-        };
+        let slice = head_on(&law, c, prev);
         let r = contact::step(
             &[body],
             &[slice],
@@ -254,19 +259,7 @@ fn hht_bodies_exchange_momentum_with_the_structure_exactly() {
         let mut worst: f64 = 0.0;
         let mut touched = false;
         for _ in 0..400 {
-            let slice = Slice {
-                body: 0,
-                row: [1.0, 0.0],
-                force_row: [-1.0, 0.0],
-                gap: 0.0,
-                law: &law,
-                damping: c,
-                at: Location {
-                    dofs: [0, 0],
-                    weights: [1.0, 0.0],
-                },
-                prev_penetration: prev,
-            };
+            let slice = head_on(&law, c, prev);
             let r = contact::step(&[body], &[slice], &mut wall, dt, scheme, 50).unwrap();
             body = r.bodies[0];
             prev = r.penetrations[0];
