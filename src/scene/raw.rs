@@ -74,7 +74,8 @@ pub struct RawCavitation {
     /// "layer": the gap's coolant column moves with the wall's normal motion, a normal mass
     /// rho h per unit area (rho of the coolant above, h = `gap_mm`; the same column whose
     /// pressure difference rho a h the cavitation number uses). Part of the ROM: a scene with
-    /// "layer" builds and caches its own.
+    /// "layer" builds and caches its own, one per value of rho h (so a sweep over the coolant
+    /// temperature, glycol or gap with the layer on builds one ROM per value).
     #[serde(default = "default_coolant_mass")]
     pub coolant_mass: String,
 }
