@@ -48,6 +48,8 @@ fn coolant_json_matches_hand_values() {
     assert!((get("vccv_m_s") - 0.1135).abs() < 3e-4);
     // Ca = 1 with the reference k_p lands on the study's 1189 m/s^2
     assert!((get("threshold_m_s2") - 1189.0).abs() < 0.5);
+    // the layer's mass per area: 965.3 kg/m^3 x 4.7 mm = 4.537 kg/m^2
+    assert!((get("layer_mass_kg_m2") - 4.537).abs() < 1e-3);
     let (code, _, err) = linercav(&["coolant", "--temp-c", "130", "--static-kpa", "150"]);
     assert_eq!(code, 2);
     assert!(err.contains("boils"), "{err}");

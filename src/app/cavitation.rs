@@ -27,6 +27,10 @@ pub struct CoolantReport {
     pub static_threshold_m_s2: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub threshold_m_s2: Option<f64>,
+    /// With a gap: the coolant layer's mass per unit wall area rho h [kg/m^2], what
+    /// `cavitation.coolant_mass = "layer"` puts on the liner's wet zone.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub layer_mass_kg_m2: Option<f64>,
     pub k_p_pa_per_m_s2: f64,
 }
 
@@ -70,6 +74,7 @@ pub fn coolant(
         gap_mm,
         static_threshold_m_s2: gap.map(|h| c.static_threshold(h)),
         threshold_m_s2: gap.map(|h| criteria::threshold(&c, k_p, h)),
+        layer_mass_kg_m2: gap.map(|h| c.density_kg_m3 * h),
         k_p_pa_per_m_s2: k_p,
     })
 }
@@ -86,11 +91,14 @@ impl CoolantReport {
             self.speed_of_sound_m_s,
             self.vccv_m_s
         );
-        if let (Some(h), Some(st), Some(t)) =
-            (self.gap_mm, self.static_threshold_m_s2, self.threshold_m_s2)
-        {
+        if let (Some(h), Some(st), Some(t), Some(mu)) = (
+            self.gap_mm,
+            self.static_threshold_m_s2,
+            self.threshold_m_s2,
+            self.layer_mass_kg_m2,
+        ) {
             s += &format!(
-                "  gap {h} mm: static threshold (p_s - p_v)/(rho h) = {st:.0} m/s^2\n  with the wall-pressure swing k_p = {:.1} Pa/(m/s^2): Ca = 1 at {t:.0} m/s^2\n",
+                "  gap {h} mm: static threshold (p_s - p_v)/(rho h) = {st:.0} m/s^2\n  with the wall-pressure swing k_p = {:.1} Pa/(m/s^2): Ca = 1 at {t:.0} m/s^2\n  coolant layer rho h = {mu:.2} kg/m^2 (cavitation.coolant_mass = \"layer\")\n",
                 self.k_p_pa_per_m_s2
             );
         }
