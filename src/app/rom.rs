@@ -113,7 +113,7 @@ pub fn key_description(scene: &Scene) -> Result<String> {
         }
         CrankcaseSource::File(p) => serde_json::json!({"file": file_digest(p)?}),
     };
-    let d = serde_json::json!({
+    let mut d = serde_json::json!({
         "format": ROM_FORMAT,
         "liner": liner_src,
         "liner_geometry": scene.liner_geometry,
@@ -130,7 +130,6 @@ pub fn key_description(scene: &Scene) -> Result<String> {
         "residual_vector_spacing": scene.rom.residual_vector_spacing,
         "cylinders": scene.rom.cylinders,
     });
-    let mut d = d;
     // only when present, so the keys of dry scenes stay those of earlier builds
     let surface = liner_surface_mass(scene);
     if !surface.is_empty() {
@@ -145,7 +144,7 @@ pub fn liner_surface_mass(scene: &Scene) -> Vec<SurfaceMass> {
         .cavitation
         .layer_mass_per_area
         .map(|mu| SurfaceMass {
-            set: "coolant_wetted".into(),
+            set: liner::COOLANT_WETTED.into(),
             mass_per_area: mu,
         })
         .into_iter()

@@ -19,6 +19,9 @@
 //! - `point_1` .. `point_n`: single coolant-side nodes on the thrust side, top to bottom.
 
 use super::lattice::{level_at, subdivide, Key, Lattice};
+
+/// Name of the node set of the liner's wet outer surface (the coolant layer's mass acts there).
+pub const COOLANT_WETTED: &str = "coolant_wetted";
 use super::Mesh;
 use crate::fem::shape::ElementKind;
 use std::f64::consts::PI;
@@ -144,7 +147,7 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
         select(&|k| k[0] == iwall && k[1] == jthrust && k[2] <= kf),
     );
     sets.insert(
-        "coolant_wetted".into(),
+        COOLANT_WETTED.into(),
         select(&|k| k[0] == iwall && k[2] >= kguide1 && k[2] <= kf),
     );
     for (p, d) in geo.analysis_depths.iter().enumerate() {

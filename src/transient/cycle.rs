@@ -24,7 +24,7 @@
 use super::contact::{self, Body, Location, Slice, StepFailure};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
-use super::window::{low_pass, second_difference};
+use super::window::{body_at_rest, low_pass, second_difference};
 use crate::piston::Piston;
 use crate::reduce::engine::Dense;
 use crate::reduce::rom::{CylinderRom, EngineRom};
@@ -462,23 +462,10 @@ impl<'a> EngineRun<'a> {
                     .position(|&f| f == c.cylinder)
                     .unwrap_or(0);
                 let phase = 720.0 * k as f64 / n as f64;
-                let mass = setup.piston.mass_matrix();
-                let loads = setup.piston.loads(-phase);
-                let det = mass[0][0] * mass[1][1] - mass[0][1] * mass[1][0];
-                let f = loads.force;
-                let a = [
-                    (mass[1][1] * f[0] - mass[0][1] * f[1]) / det,
-                    (mass[0][0] * f[1] - mass[1][0] * f[0]) / det,
-                ];
                 Cyl {
                     rom: c,
                     phase,
-                    body: Body {
-                        mass,
-                        a,
-                        applied: f,
-                        ..Body::default()
-                    },
+                    body: body_at_rest(setup.piston, -phase),
                 }
             })
             .collect();
