@@ -21,7 +21,7 @@
 //! fraction of the scale for HHT-alpha, which balances a different energy) stops the run (a
 //! numerical instability).
 
-use super::contact::{self, Body, Location, Slice, StepFailure};
+use super::contact::{self, Body, Location, Slice, SliceState, StepFailure};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
 use super::window::{body_at_rest, low_pass, second_difference};
@@ -301,8 +301,8 @@ pub struct EngineRun<'a> {
     pub stats: Stats,
     /// Summed contact forces of the last step per cylinder (thrust, anti-thrust).
     pub last_forces: Vec<(f64, f64)>,
-    /// Penetration of every slice at the last step, (cylinder, side, slice) order.
-    prev_pen: Vec<f64>,
+    /// State of every slice at the last step, (cylinder, side, slice) order.
+    prev_state: Vec<SliceState>,
     /// Loaded locations of the last step (cylinder index, location, force).
     prev_loaded: Vec<(usize, Location, f64)>,
 }
@@ -487,7 +487,7 @@ impl<'a> EngineRun<'a> {
             energy_scale: 0.0,
             stats,
             last_forces: Vec::new(),
-            prev_pen: vec![-1.0; 2 * nslices * ncyl],
+            prev_state: vec![SliceState::APART; 2 * nslices * ncyl],
             prev_loaded: Vec::new(),
         }
     }
@@ -549,7 +549,7 @@ impl<'a> EngineRun<'a> {
                 self.setup.liner_top,
                 &bore,
                 b,
-                &|side, i| self.prev_pen[pen_index(b, side, i)],
+                &|side, i| self.prev_state[pen_index(b, side, i)].penetration,
                 &mut slices,
                 &mut meta,
             );
@@ -570,6 +570,9 @@ impl<'a> EngineRun<'a> {
                     bodies: bodies.clone(),
                     forces: vec![0.0; slices.len()],
                     penetrations: vec![0.0; slices.len()],
+                    rates: vec![0.0; slices.len()],
+                    damper: vec![0.0; slices.len()],
+                    clamped: vec![false; slices.len()],
                     iterations: 0,
                 };
                 // other cylinders' residual-flexibility displacement at a contact DOF, lagged:
@@ -640,6 +643,9 @@ impl<'a> EngineRun<'a> {
                     for (j, &k) in idx.iter().enumerate() {
                         out.forces[k] = r.forces[j];
                         out.penetrations[k] = r.penetrations[j];
+                        out.rates[k] = r.rates[j];
+                        out.damper[k] = r.damper[j];
+                        out.clamped[k] = r.clamped[j];
                     }
                     out.iterations = out.iterations.max(r.iterations);
                 }
@@ -688,7 +694,27 @@ impl<'a> EngineRun<'a> {
         if !step.energy.is_finite() {
             return Err(Failure::NonFinite(0));
         }
-        for (cyl, b) in self.cyls.iter_mut().zip(&res.bodies) {
+        // the damper impulse the step missed at contact onsets, on pistons and structure
+        let before: Vec<SliceState> = meta
+            .iter()
+            .map(|&(b, side, i, _)| self.prev_state[pen_index(b, side, i)])
+            .collect();
+        let after: Vec<SliceState> = (0..slices.len())
+            .map(|k| SliceState {
+                penetration: res.penetrations[k],
+                rate: res.rates[k],
+                damper: res.damper[k],
+                clamped: res.clamped[k],
+            })
+            .collect();
+        let damping: Vec<f64> = slices.iter().map(|s| s.damping).collect();
+        let impulses = contact::onset_impulses(&before, &after, &damping, dt, s);
+        let mut bodies_after = res.bodies.clone();
+        if impulses.iter().any(|&d| d != 0.0) {
+            contact::kick_bodies(&mut bodies_after, &slices, &impulses);
+            self.structure.impulse(&locs, &impulses);
+        }
+        for (cyl, b) in self.cyls.iter_mut().zip(&bodies_after) {
             cyl.body = *b;
         }
         let mut per = vec![(0.0, 0.0); self.cyls.len()];
@@ -728,9 +754,9 @@ impl<'a> EngineRun<'a> {
             self.stats.coupling_lag_m = self.stats.coupling_lag_m.max(lag);
         }
         self.prev_loaded = loaded;
-        self.prev_pen.fill(-1.0);
+        self.prev_state.fill(SliceState::APART);
         for (k, &(b, side, i, _)) in meta.iter().enumerate() {
-            self.prev_pen[pen_index(b, side, i)] = res.penetrations[k];
+            self.prev_state[pen_index(b, side, i)] = after[k];
         }
         self.time = t1;
         self.stats.steps += 1;
@@ -794,79 +820,86 @@ impl<'a> EngineRun<'a> {
 
     /// Runs `settings.cycles` cycles and returns the peaks averaged over the last
     /// `settings.averaged_cycles` ([`Peak::over_cycles`]) and the series of the last one.
+    ///
+    /// The point accelerations are filtered over the continuous record, never a cycle wrapped
+    /// onto itself (cycles differ): cycle k's output is formed once the run has gone `margin`
+    /// samples (the FIR's half length plus one) past its end, from the record
+    /// [k N - margin, (k + 1) N + margin), N steps per cycle. Before t = 0 the engine is at
+    /// rest (zero acceleration, no contact force), and the run goes on `margin` steps past its
+    /// last cycle. Only that rolling segment of the record is kept.
     pub fn run(
         mut self,
         mut on_step: impl FnMut(usize, usize),
     ) -> Result<CycleResult, TransientError> {
-        let steps_per_cycle = (720.0 / self.settings.step_deg).round() as usize;
+        let spc = (720.0 / self.settings.step_deg).round() as usize;
         let dt = self.base_dt();
         self.stats.dt_s = dt;
         let cycles = self.settings.cycles.max(1);
-        let total = steps_per_cycle * cycles;
         let averaged = self.settings.averaged_cycles.clamp(1, cycles);
+        let margin = self
+            .settings
+            .output_band_hz
+            .map_or(0, |band| super::window::fir_half_length(dt, band))
+            + 1;
+        let total = cycles * spc + margin;
+        let ncyl = self.cyls.len();
+        let npts: Vec<usize> = self.cyls.iter().map(|c| c.rom.point_modes.rows).collect();
+        // rolling record from sample `rec_start` on: per cylinder and point the modal
+        // acceleration, the residual displacement and (last cycle only) the crankcase's
+        let mut rec_start = 0usize;
+        let mut raw: Vec<Vec<Vec<f64>>> = npts.iter().map(|&n| vec![Vec::new(); n]).collect();
+        let mut res: Vec<Vec<Vec<f64>>> = raw.clone();
+        let mut wall: Vec<Vec<Vec<f64>>> = self
+            .cyls
+            .iter()
+            .map(|c| vec![Vec::new(); c.rom.crankcase_point_modes.rows])
+            .collect();
+        let wall_from = ((cycles - 1) * spc).saturating_sub(margin);
         let mut prev_peaks: Option<Vec<CylinderPeaks>> = None;
         let mut kept: Vec<Vec<CylinderPeaks>> = Vec::with_capacity(averaged);
         let mut last_series = None;
+        let mut building: Option<Series> = None;
+        let mut pending: Option<(usize, Series)> = None;
         let piston = self.setup.piston;
-        for cycle in 0..cycles {
-            let mut series = Series {
-                crank_angle_deg: Vec::with_capacity(steps_per_cycle),
-                time_s: Vec::with_capacity(steps_per_cycle),
-                cylinders: self
-                    .cyls
-                    .iter()
-                    .map(|c| CylinderSeries {
-                        cylinder: c.rom.cylinder,
-                        acceleration: vec![
-                            Vec::with_capacity(steps_per_cycle);
-                            c.rom.point_modes.rows
-                        ],
-                        crankcase_acceleration: vec![
-                            Vec::with_capacity(steps_per_cycle);
-                            c.rom.crankcase_point_modes.rows
-                        ],
-                        ..CylinderSeries::default()
-                    })
-                    .collect(),
-            };
-            let mut residual: Vec<Vec<Vec<f64>>> = self
-                .cyls
-                .iter()
-                .map(|c| vec![Vec::with_capacity(steps_per_cycle); c.rom.point_modes.rows])
-                .collect();
-            // only the last cycle's series is returned: the crankcase points (series only,
-            // no peaks) are evaluated in it alone
-            let last_cycle = cycle + 1 == cycles;
-            for s in 0..steps_per_cycle {
-                let target = ((cycle * steps_per_cycle + s + 1) as f64) * dt;
-                let h = target - self.time;
-                self.advance(h)?;
-                let (err, scale) = self.energy_balance();
-                if scale > 1e-12
-                    && err > self.structure.integrator.scheme.energy_tolerance() * scale
-                {
-                    return Err(TransientError::EnergyGrowth {
-                        excess_j: err,
-                        scale_j: scale,
-                        crank_angle_deg: self.angle_at(self.time),
-                        time_s: self.time,
-                    });
+        for g in 0..total {
+            let cycle = g / spc;
+            if g % spc == 0 && cycle < cycles {
+                if let Some(done) = building.take() {
+                    pending = Some((cycle - 1, done));
                 }
+                building = Some(self.empty_series(spc));
+            }
+            let target = ((g + 1) as f64) * dt;
+            let h = target - self.time;
+            self.advance(h)?;
+            let (err, scale) = self.energy_balance();
+            if scale > 1e-12 && err > self.structure.integrator.scheme.energy_tolerance() * scale {
+                return Err(TransientError::EnergyGrowth {
+                    excess_j: err,
+                    scale_j: scale,
+                    crank_angle_deg: self.angle_at(self.time),
+                    time_s: self.time,
+                });
+            }
+            for c in 0..ncyl {
+                for (p, a) in self.point_accelerations(c, false).into_iter().enumerate() {
+                    raw[c][p].push(a);
+                }
+                for (p, r) in self.point_residual(c).into_iter().enumerate() {
+                    res[c][p].push(r);
+                }
+                if g >= wall_from {
+                    for (p, a) in self.point_accelerations(c, true).into_iter().enumerate() {
+                        wall[c][p].push(a);
+                    }
+                }
+            }
+            if cycle < cycles {
                 let theta = self.angle_at(self.time);
+                let series = building.as_mut().expect("a cycle is being built");
                 series.crank_angle_deg.push(theta - 720.0 * cycle as f64);
                 series.time_s.push(self.time);
                 for (c, cs) in series.cylinders.iter_mut().enumerate() {
-                    for (p, a) in self.point_accelerations(c, false).into_iter().enumerate() {
-                        cs.acceleration[p].push(a);
-                    }
-                    for (p, r) in self.point_residual(c).into_iter().enumerate() {
-                        residual[c][p].push(r);
-                    }
-                    if last_cycle {
-                        for (p, a) in self.point_accelerations(c, true).into_iter().enumerate() {
-                            cs.crankcase_acceleration[p].push(a);
-                        }
-                    }
                     let q = self.cyls[c].body.q;
                     cs.lateral_m.push(q[0]);
                     cs.tilt_rad.push(q[1]);
@@ -877,26 +910,45 @@ impl<'a> EngineRun<'a> {
                     cs.side_force_n.push(loads.side_force);
                     cs.pressure_pa.push(loads.pressure);
                 }
-                on_step(cycle * steps_per_cycle + s + 1, total);
             }
-            // residual accelerations, then the output band (one cycle: cyclic)
-            for (cs, res) in series.cylinders.iter_mut().zip(&residual) {
-                for (acc, r) in cs.acceleration.iter_mut().zip(res) {
-                    for (a, d) in acc.iter_mut().zip(second_difference(r, dt, true)) {
-                        *a += d;
-                    }
-                }
-                if let Some(band) = self.settings.output_band_hz {
-                    for acc in cs
-                        .acceleration
-                        .iter_mut()
-                        .chain(cs.crankcase_acceleration.iter_mut())
-                        .filter(|a| !a.is_empty())
-                    {
-                        *acc = low_pass(acc, dt, band, true).0;
-                    }
+            on_step(g + 1, total);
+            if g + 1 == total {
+                if let Some(done) = building.take() {
+                    pending = Some((cycles - 1, done));
                 }
             }
+            // a cycle's output is complete `margin` samples past its end
+            let ready = pending
+                .as_ref()
+                .is_some_and(|(k, _)| g + 1 >= (k + 1) * spc + margin);
+            if !ready {
+                continue;
+            }
+            let (k, mut series) = pending.take().expect("ready");
+            let lo = (k * spc) as isize - margin as isize;
+            let len = spc + 2 * margin;
+            for c in 0..ncyl {
+                let cs = &mut series.cylinders[c];
+                for p in 0..npts[c] {
+                    let mut acc = record_segment(&raw[c][p], rec_start, lo, len);
+                    let r = record_segment(&res[c][p], rec_start, lo, len);
+                    let d2 = second_difference(&r, dt, false);
+                    acc.iter_mut().zip(d2).for_each(|(a, d)| *a += d);
+                    cs.acceleration[p] = self.output_filter(&acc, dt, margin, spc);
+                }
+                if k + 1 == cycles {
+                    for p in 0..wall[c].len() {
+                        let w = record_segment(&wall[c][p], wall_from, lo, len);
+                        cs.crankcase_acceleration[p] = self.output_filter(&w, dt, margin, spc);
+                    }
+                }
+            }
+            // drop what no later cycle needs
+            let keep_from = ((k + 1) * spc).saturating_sub(margin).max(rec_start);
+            for v in raw.iter_mut().chain(res.iter_mut()).flatten() {
+                v.drain(..keep_from - rec_start);
+            }
+            rec_start = keep_from;
             let peaks = self.peaks(&series);
             if let Some(prev) = &prev_peaks {
                 let mut change: f64 = 0.0;
@@ -907,7 +959,7 @@ impl<'a> EngineRun<'a> {
                 }
                 self.stats.cycle_change = change;
             }
-            if cycle + averaged >= cycles {
+            if k + averaged >= cycles {
                 kept.push(peaks.clone());
             }
             prev_peaks = Some(peaks);
@@ -924,6 +976,33 @@ impl<'a> EngineRun<'a> {
             series,
             stats: self.stats,
         })
+    }
+
+    /// A cycle's series with room for `spc` steps (accelerations are set when it completes).
+    fn empty_series(&self, spc: usize) -> Series {
+        Series {
+            crank_angle_deg: Vec::with_capacity(spc),
+            time_s: Vec::with_capacity(spc),
+            cylinders: self
+                .cyls
+                .iter()
+                .map(|c| CylinderSeries {
+                    cylinder: c.rom.cylinder,
+                    acceleration: vec![Vec::new(); c.rom.point_modes.rows],
+                    crankcase_acceleration: vec![Vec::new(); c.rom.crankcase_point_modes.rows],
+                    ..CylinderSeries::default()
+                })
+                .collect(),
+        }
+    }
+
+    /// The output band of a record segment with `margin` samples each side of the `spc`
+    /// samples wanted: low-passed when the settings name a band, then cut to the cycle.
+    fn output_filter(&self, seg: &[f64], dt: f64, margin: usize, spc: usize) -> Vec<f64> {
+        match self.settings.output_band_hz {
+            Some(band) => low_pass(seg, dt, band, false).0[margin..margin + spc].to_vec(),
+            None => seg[margin..margin + spc].to_vec(),
+        }
     }
 
     fn peaks(&self, series: &Series) -> Vec<CylinderPeaks> {
@@ -955,6 +1034,20 @@ impl<'a> EngineRun<'a> {
             })
             .collect()
     }
+}
+
+/// Samples [lo, lo + len) of a record whose element 0 is sample `start`; samples before t = 0
+/// (negative indices: the engine at rest) and beyond the record are zero.
+fn record_segment(v: &[f64], start: usize, lo: isize, len: usize) -> Vec<f64> {
+    (lo..lo + len as isize)
+        .map(|i| {
+            if i < start as isize {
+                0.0
+            } else {
+                v.get(i as usize - start).copied().unwrap_or(0.0)
+            }
+        })
+        .collect()
 }
 
 /// Per cylinder, the statistics of each peak over the cycles in `per_cycle` (all with the same

@@ -170,6 +170,14 @@ impl Structure for FullLiner<'_> {
         (g, gv)
     }
 
+    /// G_v F = kappa G F (the full model's step compliance has no quasi-static part).
+    fn velocity_response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
+        let k = self.kappa();
+        let mut u = self.response(active, forces);
+        u.iter_mut().for_each(|x| *x *= k);
+        u
+    }
+
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
         self.locs
             .iter()

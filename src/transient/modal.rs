@@ -299,7 +299,21 @@ impl Structure for ModalStructure {
     /// (G F)_i = sum_d w_id sum_e T_de F_e with the forces gathered on the DOFs,
     /// F_e = sum_k w_ke F_k.
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
-        let t = &self.step_compliance[self.current].3;
+        self.apply_step_matrix(&self.step_compliance[self.current].3, 1.0, active, forces)
+    }
+
+    /// (G_v F)_i = gamma / (beta dt) sum_d w_id sum_e S_de F_e (the residual flexibility
+    /// responds quasi-statically: no velocity).
+    fn velocity_response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
+        let kv = self.integrator.velocity_factor();
+        self.apply_step_matrix(&self.step_compliance[self.current].2, kv, active, forces)
+    }
+}
+
+impl ModalStructure {
+    /// scale * sum_d w_id sum_e X_de F_e at every location of this step, X a DOF-level step
+    /// matrix (S or T) and the forces at `active` gathered on the DOFs.
+    fn apply_step_matrix(&self, x: &Dense, scale: f64, active: &[usize], forces: &[f64]) -> Vec<f64> {
         let gathered = gather_on_dofs(
             active
                 .iter()
@@ -311,12 +325,20 @@ impl Structure for ModalStructure {
             .map(|at| {
                 let mut u = 0.0;
                 for m in 0..2 {
-                    let row = t.row(at.dofs[m]);
+                    let row = x.row(at.dofs[m]);
                     u += at.weights[m] * gathered.iter().map(|&(e, f)| row[e] * f).sum::<f64>();
                 }
-                u
+                scale * u
             })
             .collect()
+    }
+
+    /// Impulses `impulses` [N s] at `locs` (outward on the liner, like contact forces),
+    /// delivered over the next step ([`ModalIntegrator::impulse_over_next_step`]) as the modal
+    /// impulses d_j = sum_k phi_kj dI_k.
+    pub fn impulse(&mut self, locs: &[Location], impulses: &[f64]) {
+        let d = self.modal_force_at(locs, impulses);
+        self.integrator.impulse_over_next_step(&d);
     }
 }
 

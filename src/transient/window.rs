@@ -267,6 +267,9 @@ impl Structure for ModalLiner {
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
         self.structure.response(active, forces)
     }
+    fn velocity_response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
+        self.structure.velocity_response(active, forces)
+    }
 }
 
 impl Liner for ModalLiner {
@@ -298,6 +301,12 @@ pub fn rayleigh(zeta: f64, w1: f64, w2: f64) -> (f64, f64) {
     (2.0 * zeta * w1 * w2 / (w1 + w2), 2.0 * zeta / (w1 + w2))
 }
 
+/// Half length L/2 of the [`low_pass`] FIR at sampling step `dt` and band `band_hz`: the number
+/// of samples on each side of an output sample that enter it.
+pub fn fir_half_length(dt: f64, band_hz: f64) -> usize {
+    ((5.5 / (0.5 * band_hz * dt)) / 2.0).ceil() as usize
+}
+
 /// Zero-phase low-pass: a symmetric windowed-sinc FIR (Blackman window), h_k =
 /// w_k sin(2 pi f_c (k - L/2) T) / (pi (k - L/2)) normalised to unit DC gain, with the cut-off
 /// f_c = 1.25 `band_hz` and L = 5.5 / (0.5 band T) + 1 taps (Blackman transition width 5.5/L
@@ -306,7 +315,7 @@ pub fn rayleigh(zeta: f64, w1: f64, w2: f64) -> (f64, f64) {
 /// samples beyond the ends count as zero. Returns the filtered series and how many samples at
 /// each end the ends affect (L/2; 0 when cyclic).
 pub fn low_pass(x: &[f64], dt: f64, band_hz: f64, cyclic: bool) -> (Vec<f64>, usize) {
-    let half = ((5.5 / (0.5 * band_hz * dt)) / 2.0).ceil() as usize;
+    let half = fir_half_length(dt, band_hz);
     let fc = 1.25 * band_hz * dt; // cycles per sample
     let len = 2 * half + 1;
     let mut h: Vec<f64> = (0..len)
