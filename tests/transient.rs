@@ -265,7 +265,15 @@ struct Impact {
 /// stiffness `mode = Some((m_s, k_s))`, stepped with `dt` exactly as the engine cycle steps:
 /// [`contact::step`], the structure's commit, then [`contact::onset_impulses`] on body and
 /// structure. The body starts `gap_time * v0` away, so the onset falls inside a step.
-fn impact(m: f64, k: f64, c: f64, v0: f64, gap_time: f64, mode: Option<(f64, f64)>, dt: f64) -> Impact {
+fn impact(
+    m: f64,
+    k: f64,
+    c: f64,
+    v0: f64,
+    gap_time: f64,
+    mode: Option<(f64, f64)>,
+    dt: f64,
+) -> Impact {
     use linercav::reduce::engine::Dense;
     use linercav::transient::contact::SliceState;
     use linercav::transient::modal::ModalStructure;
@@ -339,7 +347,16 @@ fn impact(m: f64, k: f64, c: f64, v0: f64, gap_time: f64, mode: Option<(f64, f64
 /// structure as ODEs, x_b'' = -F / m, x_s'' = (F - k_s x_s) / m_s, F = max(0, k p + c p') for
 /// p = x_b - x_s > 0, by classical Runge-Kutta with a fixed tiny step, the onset located inside
 /// its step by bisection (the force jumps there), until the body moves away apart.
-fn impact_reference(m: f64, k: f64, c: f64, v0: f64, gap_time: f64, ms: f64, ks: f64, h: f64) -> Impact {
+fn impact_reference(
+    m: f64,
+    k: f64,
+    c: f64,
+    v0: f64,
+    gap_time: f64,
+    ms: f64,
+    ks: f64,
+    h: f64,
+) -> Impact {
     let force = |y: &[f64; 4]| {
         let p = y[0] - y[2];
         if p > 0.0 {
@@ -353,7 +370,14 @@ fn impact_reference(m: f64, k: f64, c: f64, v0: f64, gap_time: f64, ms: f64, ks:
         [y[1], -f / m, y[3], (f - ks * y[2]) / ms]
     };
     let rk4 = |y: &[f64; 4], h: f64| {
-        let add = |a: &[f64; 4], b: &[f64; 4], s: f64| [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2], a[3] + s * b[3]];
+        let add = |a: &[f64; 4], b: &[f64; 4], s: f64| {
+            [
+                a[0] + s * b[0],
+                a[1] + s * b[1],
+                a[2] + s * b[2],
+                a[3] + s * b[3],
+            ]
+        };
         let k1 = deriv(y);
         let k2 = deriv(&add(y, &k1, h / 2.0));
         let k3 = deriv(&add(y, &k2, h / 2.0));
@@ -391,7 +415,11 @@ fn impact_reference(m: f64, k: f64, c: f64, v0: f64, gap_time: f64, ms: f64, ks:
         y = next;
         if touched {
             let f = force(&y);
-            let acc = if ms.is_finite() { (f - ks * y[2]) / ms } else { f / m };
+            let acc = if ms.is_finite() {
+                (f - ks * y[2]) / ms
+            } else {
+                f / m
+            };
             peak = peak.max(acc.abs());
             if y[0] - y[2] < 0.0 && y[1] < 0.0 {
                 return Impact {
@@ -426,10 +454,14 @@ fn verification_wall_impact_converges_at_second_order() {
     let w = (k / m).sqrt();
     let wd = w * (1.0 - zeta * zeta).sqrt();
     let x = |t: f64| v0 / wd * (-zeta * w * t).exp() * (wd * t).sin();
-    let xd = |t: f64| v0 * (-zeta * w * t).exp() * ((wd * t).cos() - zeta * w / wd * (wd * t).sin());
+    let xd =
+        |t: f64| v0 * (-zeta * w * t).exp() * ((wd * t).cos() - zeta * w / wd * (wd * t).sin());
     let f = |t: f64| k * x(t) + c * xd(t);
     // t_c: F > 0 from t = 0 until it first crosses zero, after the half period pi / w_d
-    let (mut lo, mut hi) = (0.5 * std::f64::consts::PI / wd, 1.5 * std::f64::consts::PI / wd);
+    let (mut lo, mut hi) = (
+        0.5 * std::f64::consts::PI / wd,
+        1.5 * std::f64::consts::PI / wd,
+    );
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
         if f(mid) > 0.0 {
@@ -475,12 +507,23 @@ fn verification_wall_impact_converges_at_second_order() {
 fn verification_one_mode_impact_converges_at_second_order() {
     let (m, k, v0): (f64, f64, f64) = (3.5, 3.6e9, 0.5);
     let c = 0.2 * 2.0 * (k * m).sqrt();
-    let (ms, ks) = (10.0, 10.0 * (2.0 * std::f64::consts::PI * 2000.0f64).powi(2));
+    let (ms, ks) = (
+        10.0,
+        10.0 * (2.0 * std::f64::consts::PI * 2000.0f64).powi(2),
+    );
     let period = 2.0 * std::f64::consts::PI / (k / m).sqrt();
     let reference = impact_reference(m, k, c, v0, 0.371_830_2 * period, ms, ks, period / 20_000.0);
     let (mut de, mut dp) = (Vec::new(), Vec::new());
     for n in [25.0, 50.0, 100.0, 200.0] {
-        let r = impact(m, k, c, v0, 0.371_830_2 * period, Some((ms, ks)), period / n);
+        let r = impact(
+            m,
+            k,
+            c,
+            v0,
+            0.371_830_2 * period,
+            Some((ms, ks)),
+            period / n,
+        );
         println!("{n} steps per contact period: {r:?} (reference {reference:?})");
         de.push((r.restitution - reference.restitution).abs() / reference.restitution);
         dp.push((r.peak_acc - reference.peak_acc).abs() / reference.peak_acc);

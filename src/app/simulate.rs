@@ -12,7 +12,7 @@ use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
 use crate::report::atomic::write_atomic;
 use crate::scene::{PressureSource, Scene, Simulation};
-use crate::transient::cycle::{CycleResult, CycleSettings, EngineRun, EngineSetup, Stats};
+use crate::transient::cycle::{CycleResult, CycleSettings, EngineSetup, Stats};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -89,6 +89,8 @@ pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
         coupling: crate::transient::cycle::Coupling::PerCylinder,
         output_band_hz: Some(band_hz),
         bound_predictions: true,
+        step_error: true,
+        tolerance: Some(t.tolerance),
     }
 }
 
@@ -107,8 +109,7 @@ pub fn run_cycle(
         omega: piston.kinematics.omega,
         liner_top: scene.liner_geometry.length,
     };
-    let run = EngineRun::new(&setup, settings);
-    run.run(|k, n| {
+    crate::transient::cycle::run_with_tolerance(&setup, settings, 2, |k, n| {
         if let Some(p) = progress {
             if k % 200 == 0 {
                 p.phase(&format!("transient: step {k} of {n}"));
@@ -133,6 +134,12 @@ pub struct PointPeaks {
     /// acceleration [m/s^2].
     pub peak_negative_std_m_s2: f64,
     pub peak_negative_max_m_s2: f64,
+    /// Standard error of the mean peak negative acceleration, corrected for the correlation
+    /// of consecutive cycles (`stats.autocorrelation_cycles`) [m/s^2].
+    pub peak_negative_se_m_s2: f64,
+    /// Estimated step error of the peak negative acceleration: the relative step error of
+    /// the point's firing-slap peak (`transient::cycle::StepError`) times the mean [m/s^2].
+    pub peak_negative_step_error_m_s2: f64,
 }
 
 /// One cylinder's results.
@@ -159,6 +166,8 @@ pub struct SimulateReport {
     pub transient_seconds: f64,
     pub stats: Stats,
     pub cache: &'static str,
+    /// The scene's `transient.tolerance`.
+    pub tolerance: f64,
     pub hot_clearance_um: f64,
     pub peak_pressure_bar: f64,
     pub peak_pressure_deg: f64,
@@ -191,6 +200,7 @@ impl SimulateReport {
             transient_seconds,
             stats: res.stats.clone(),
             cache,
+            tolerance: simulation(scene).map_or(0.0, |s| s.transient.tolerance),
             hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
             peak_pressure_bar: pp / 1e5,
             peak_pressure_deg: pdeg,
@@ -205,7 +215,11 @@ impl SimulateReport {
     pub fn cylinders_of(res: &CycleResult) -> Vec<CylinderReport> {
         res.peaks
             .iter()
-            .map(|c| CylinderReport {
+            .map(|c| {
+                let step = res.step_error.iter().find(|e| e.cylinder == c.cylinder);
+                (c, step)
+            })
+            .map(|(c, step)| CylinderReport {
                 cylinder: c.cylinder,
                 points: c
                     .peak_negative
@@ -220,6 +234,9 @@ impl SimulateReport {
                         positive_crank_angle_deg: p.crank_angle_deg,
                         peak_negative_std_m_s2: n.std,
                         peak_negative_max_m_s2: n.max,
+                        peak_negative_se_m_s2: n.se,
+                        peak_negative_step_error_m_s2: step
+                            .map_or(0.0, |e| e.relative(k) * n.value),
                     })
                     .collect(),
                 peak_slap_force_n: c.slap_force.value,
@@ -242,17 +259,20 @@ impl SimulateReport {
         );
         let n = self.stats.cycles_averaged;
         s += &format!(
-            "peaks: mean over the last {n} cycle(s), +- sample standard deviation, largest\n"
+            "peaks: mean over the last {n} cycle(s); sample std; standard error of the mean (cycles correlated: tau {:.2}); estimated step error; largest\n",
+            self.stats.autocorrelation_cycles
         );
-        s += "cyl  point  peak neg [m/s^2]    +-    max @deg   peak pos [m/s^2] @deg\n";
+        s += "cyl  point  peak neg [m/s^2]   std    SE  step    max @deg   peak pos [m/s^2] @deg\n";
         for c in &self.cylinders {
             for p in &c.points {
                 s += &format!(
-                    "{:>3}  {:>5}  {:>16.0} {:>5.0} {:>7.0} {:>6.1}   {:>16.0} {:>6.1}\n",
+                    "{:>3}  {:>5}  {:>16.0} {:>5.0} {:>5.0} {:>5.0} {:>6.0} {:>6.1}   {:>16.0} {:>6.1}\n",
                     c.cylinder,
                     p.point,
                     p.peak_negative_m_s2,
                     p.peak_negative_std_m_s2,
+                    p.peak_negative_se_m_s2,
+                    p.peak_negative_step_error_m_s2,
                     p.peak_negative_max_m_s2,
                     p.crank_angle_deg,
                     p.peak_positive_m_s2,
@@ -275,6 +295,14 @@ impl SimulateReport {
         s += &format!(
             "solver: {} steps (dt {:.2} us), {} Newton iterations (max {} per step), {} rejected, {} modes, energy balance {:.1e}, max penetration {:.2} um, last-cycle change {:.1e}, coupling lag {:.3} um\n",
             st.steps, st.dt_s * 1e6, st.newton_iterations, st.max_newton_per_step, st.rejected_steps, st.modes, st.energy_error, st.max_penetration_m * 1e6, st.cycle_change, st.coupling_lag_m * 1e6
+        );
+        s += &format!(
+            "accuracy: estimated step error of the mean peak {:.1} % (tolerance {:.1} %{}), step {:.4} deg{}\n",
+            100.0 * st.step_error_estimate,
+            100.0 * self.tolerance,
+            if st.step_error_estimate <= self.tolerance { ", met" } else { ", NOT met: refine transient.step_deg" },
+            st.dt_s * self.speed_rpm * 6.0,
+            if st.step_refinements > 0 { format!(" (halved {} time(s) to meet the tolerance)", st.step_refinements) } else { String::new() }
         );
         s += &format!(
             "ROM cache: {}; {:.2} s (transient {:.3} s)\n",

@@ -156,6 +156,8 @@ pub struct TransientSpec {
     pub damping_ratio: f64,
     pub max_penetration: f64,
     pub mode_cutoff_hz: Option<f64>,
+    /// Largest acceptable estimated relative step error of the mean peak.
+    pub tolerance: f64,
 }
 
 /// What `simulate` needs beyond the ROM.
@@ -842,6 +844,14 @@ fn validate_simulation(
         mode_cutoff_hz: match t.mode_cutoff_hz {
             Some(f) => Some(c.positive("transient.mode_cutoff_hz", f)?),
             None => None,
+        },
+        tolerance: if t.tolerance.is_finite() && t.tolerance > 0.0 && t.tolerance < 1.0 {
+            t.tolerance
+        } else {
+            return Err(c.err(
+                "transient.tolerance",
+                format!("must lie in (0, 1) (a relative error), got {}", t.tolerance),
+            ));
         },
     };
     Ok(Some(Simulation {

@@ -57,6 +57,13 @@ pub struct CycleSettings {
     /// apart ([`super::modal`]); the results are the same bit for bit (false: every slice's
     /// prediction is formed, for verification).
     pub bound_predictions: bool,
+    /// Largest acceptable estimated relative step error of the mean peak
+    /// ([`mean_step_error`]); above it [`run_with_tolerance`] halves the step (None: no
+    /// control).
+    pub tolerance: Option<f64>,
+    /// Estimate the step error of each cylinder's firing slap ([`StepError`]; the window run
+    /// at h and h/2 costs about 0.46 cycles of work per cylinder).
+    pub step_error: bool,
     /// Accelerations at the analysis points are reported in the band of the ROM [Hz]: the sum
     /// over every integrated mode plus the quasi-static (residual) response to the contact
     /// forces, low-passed by a zero-phase FIR over the cycle
@@ -146,6 +153,14 @@ pub struct Stats {
     /// Cycles run, and the last ones whose peaks are averaged.
     pub cycles_run: usize,
     pub cycles_averaged: usize,
+    /// Estimated relative step error of the mean peak negative acceleration
+    /// ([`mean_step_error`]; 0 when not estimated), and how often the step was halved to
+    /// bring it within the tolerance.
+    pub step_error_estimate: f64,
+    pub step_refinements: usize,
+    /// Integrated autocorrelation time of the per-cycle peaks (1: independent cycles), pooled
+    /// over every peak series of the run ([`standard_errors`]).
+    pub autocorrelation_cycles: f64,
     pub dt_s: f64,
     /// Per-cylinder coupling: largest difference between the liner displacement a contact
     /// slice used and the one of the completed step [m].
@@ -189,6 +204,9 @@ pub struct Peak {
     pub crank_angle_deg: f64,
     /// Sample standard deviation of the per-cycle peaks (0 for one cycle).
     pub std: f64,
+    /// Standard error of the mean, corrected for the correlation of consecutive cycles
+    /// ([`standard_errors`]; 0 for one cycle).
+    pub se: f64,
     /// Largest per-cycle peak.
     pub max: f64,
 }
@@ -200,6 +218,7 @@ impl Peak {
             value,
             crank_angle_deg,
             std: 0.0,
+            se: 0.0,
             max: value,
         }
     }
@@ -247,6 +266,7 @@ impl Peak {
             value: mean,
             crank_angle_deg: medoid,
             std,
+            se: if n > 1 { std / (n as f64).sqrt() } else { 0.0 },
             max: per_cycle
                 .iter()
                 .map(|p| p.value)
@@ -275,9 +295,53 @@ pub struct CycleResult {
     pub peaks: Vec<CylinderPeaks>,
     pub series: Series,
     pub stats: Stats,
+    /// Step-error estimate of each cylinder's firing slap ([`StepError`]).
+    pub step_error: Vec<StepError>,
+}
+
+/// The step error of one cylinder's peak negative accelerations, measured on its firing
+/// slap in the last cycle: from the state at the start of the window (its own crank angle
+/// [`STEP_ERROR_WINDOW_DEG`]), the engine is run over the window at the base step h and at
+/// h/2 and the filtered peaks of the cylinder's points compared away from the filter's ends.
+/// The estimate of |P_h - P_converged| is 2 |P_h - P_{h/2}|, which holds for any order of
+/// convergence >= 1 (4/3 of it for second order).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct StepError {
+    pub cylinder: usize,
+    /// Window peaks at h and at h/2 per point [m/s^2].
+    pub peak_h: Vec<f64>,
+    pub peak_half_h: Vec<f64>,
+}
+
+impl StepError {
+    /// Estimated relative error of point `p`'s peak, 2 |P_h - P_{h/2}| / P_h.
+    pub fn relative(&self, p: usize) -> f64 {
+        2.0 * (self.peak_h[p] - self.peak_half_h[p]).abs() / self.peak_h[p].abs().max(1e-12)
+    }
+}
+
+/// The firing-slap window of the step-error estimate, in the cylinder's own crank angle [deg].
+pub const STEP_ERROR_WINDOW_DEG: (f64, f64) = (320.0, 430.0);
+
+/// Estimated relative step error of the mean of all peaks: 2 |sum (P_h - P_{h/2})| / sum P_h
+/// over every cylinder and point.
+pub fn mean_step_error(errors: &[StepError]) -> f64 {
+    let (mut d, mut s) = (0.0, 0.0);
+    for e in errors {
+        for (a, b) in e.peak_h.iter().zip(&e.peak_half_h) {
+            d += a - b;
+            s += a;
+        }
+    }
+    if s > 0.0 {
+        2.0 * d.abs() / s
+    } else {
+        0.0
+    }
 }
 
 /// A piston slice's fixed data: which side, and its bore line.
+#[derive(Clone)]
 struct Cyl<'a> {
     rom: &'a CylinderRom,
     /// Firing phase [deg].
@@ -286,6 +350,7 @@ struct Cyl<'a> {
 }
 
 /// The running engine transient.
+#[derive(Clone)]
 pub struct EngineRun<'a> {
     setup: &'a EngineSetup<'a>,
     settings: CycleSettings,
@@ -861,7 +926,25 @@ impl<'a> EngineRun<'a> {
         let mut building: Option<Series> = None;
         let mut pending: Option<(usize, Series)> = None;
         let piston = self.setup.piston;
+        // where each cylinder's step-error window starts in the last cycle (global step)
+        let window_steps = ((STEP_ERROR_WINDOW_DEG.1 - STEP_ERROR_WINDOW_DEG.0)
+            / self.settings.step_deg)
+            .round() as usize;
+        let starts: Vec<usize> = self
+            .cyls
+            .iter()
+            .map(|c| {
+                let own = (STEP_ERROR_WINDOW_DEG.0 + c.phase).rem_euclid(720.0);
+                (cycles - 1) * spc + (own / self.settings.step_deg).round() as usize % spc
+            })
+            .collect();
+        let mut snapshots: Vec<(usize, EngineRun<'a>)> = Vec::new();
         for g in 0..total {
+            for (c, &g0) in starts.iter().enumerate() {
+                if g == g0 && self.settings.step_error {
+                    snapshots.push((c, self.clone()));
+                }
+            }
             let cycle = g / spc;
             if g % spc == 0 && cycle < cycles {
                 if let Some(done) = building.take() {
@@ -970,12 +1053,63 @@ impl<'a> EngineRun<'a> {
         self.stats.cycles_run = cycles;
         self.stats.cycles_averaged = kept.len();
         let series = last_series.expect("at least one cycle");
-        let peaks = average_peaks(&kept);
+        let mut peaks = average_peaks(&kept);
+        self.stats.autocorrelation_cycles = standard_errors(&kept, &mut peaks);
+        let mut step_error: Vec<StepError> = Vec::with_capacity(snapshots.len());
+        for (c, snap) in snapshots {
+            let peak_h = snap.clone().window_peaks(c, window_steps, dt)?;
+            let peak_half_h = snap.window_peaks(c, 2 * window_steps, 0.5 * dt)?;
+            step_error.push(StepError {
+                cylinder: self.cyls[c].rom.cylinder,
+                peak_h,
+                peak_half_h,
+            });
+        }
+        self.stats.step_error_estimate = mean_step_error(&step_error);
         Ok(CycleResult {
             peaks,
             series,
             stats: self.stats,
+            step_error,
         })
+    }
+
+    /// Runs `steps` steps of `h` from the current state and returns the peak negative
+    /// acceleration of cylinder index `c`'s points over the window, filtered like the cycle's
+    /// outputs and taken where the filter's ends do not reach.
+    fn window_peaks(mut self, c: usize, steps: usize, h: f64) -> Result<Vec<f64>, TransientError> {
+        let n = self.cyls[c].rom.point_modes.rows;
+        let (mut raw, mut res) = (vec![Vec::new(); n], vec![Vec::new(); n]);
+        let t0 = self.time;
+        for k in 1..=steps {
+            let target = t0 + k as f64 * h;
+            let dt = target - self.time;
+            self.advance(dt)?;
+            for (p, a) in self.point_accelerations(c, false).into_iter().enumerate() {
+                raw[p].push(a);
+            }
+            for (p, r) in self.point_residual(c).into_iter().enumerate() {
+                res[p].push(r);
+            }
+        }
+        let half = self
+            .settings
+            .output_band_hz
+            .map_or(0, |band| super::window::fir_half_length(h, band))
+            + 1;
+        Ok((0..n)
+            .map(|p| {
+                let mut acc = raw[p].clone();
+                let d2 = second_difference(&res[p], h, false);
+                acc.iter_mut().zip(d2).for_each(|(a, d)| *a += d);
+                let y = match self.settings.output_band_hz {
+                    Some(band) => low_pass(&acc, h, band, false).0,
+                    None => acc,
+                };
+                let core = &y[half.min(y.len())..y.len().saturating_sub(half)];
+                core.iter().fold(0.0f64, |m, &a| m.max(-a))
+            })
+            .collect())
     }
 
     /// A cycle's series with room for `spc` steps (accelerations are set when it completes).
@@ -1073,6 +1207,101 @@ fn average_peaks(per_cycle: &[Vec<CylinderPeaks>]) -> Vec<CylinderPeaks> {
             side_force: over(&|x| x[c].side_force),
         })
         .collect()
+}
+
+/// Runs the engine ([`EngineRun::run`]) and, while the estimated step error of the mean peak
+/// exceeds `settings.tolerance`, halves the step and runs again, at most `max_refinements`
+/// times; returns the last run (its `stats.step_refinements` says how often it was halved).
+pub fn run_with_tolerance(
+    setup: &EngineSetup<'_>,
+    mut settings: CycleSettings,
+    max_refinements: usize,
+    mut on_step: impl FnMut(usize, usize),
+) -> Result<CycleResult, TransientError> {
+    let mut refinements = 0;
+    loop {
+        let mut r = EngineRun::new(setup, settings.clone()).run(&mut on_step)?;
+        r.stats.step_refinements = refinements;
+        let within = settings
+            .tolerance
+            .is_none_or(|tol| !settings.step_error || r.stats.step_error_estimate <= tol);
+        if within || refinements >= max_refinements {
+            return Ok(r);
+        }
+        settings.step_deg *= 0.5;
+        refinements += 1;
+    }
+}
+
+/// Standard errors of the cycle means that account for the correlation of consecutive cycles
+/// (which slice bounced how often carries over from one slap to the next); sets `se` of every
+/// peak in `peaks` (the means of `per_cycle`) and returns the autocorrelation time used.
+///
+/// For n cycle values P_k of one series with mean m and deviations d_k = P_k - m, the lag-k
+/// autocorrelation is pooled over all S series of the run (every cylinder, point and peak
+/// kind: one dynamics; 20 cycles are too few to estimate it per series):
+///   rho_k = sum_s sum_i d_i d_{i+k} / sum_s sum_i d_i^2,
+/// the integrated autocorrelation time tau = 1 + 2 sum_{k=1}^{K} rho_k over the initial run of
+/// positive rho_k (Geyer's initial positive sequence; K <= n / 3), clamped to [1, n], and
+///   SE = s sqrt(tau / n),  s the sample standard deviation
+/// (for independent cycles tau = 1 and SE = s / sqrt(n)). Fewer than 4 cycles: tau = 1.
+pub fn standard_errors(per_cycle: &[Vec<CylinderPeaks>], peaks: &mut [CylinderPeaks]) -> f64 {
+    let n = per_cycle.len();
+    if n < 2 {
+        return 1.0;
+    }
+    // every series of per-cycle values, in a fixed order, with a setter for its peak
+    let series = |c: usize, kind: usize, p: usize| -> Vec<f64> {
+        per_cycle
+            .iter()
+            .map(|cyc| match kind {
+                0 => cyc[c].peak_negative[p].value,
+                1 => cyc[c].peak_positive[p].value,
+                _ => cyc[c].slap_force.value,
+            })
+            .collect()
+    };
+    let mut all: Vec<(usize, usize, usize, Vec<f64>)> = Vec::new();
+    for (c, cp) in peaks.iter().enumerate() {
+        for p in 0..cp.peak_negative.len() {
+            all.push((c, 0, p, series(c, 0, p)));
+            all.push((c, 1, p, series(c, 1, p)));
+        }
+        all.push((c, 2, 0, series(c, 2, 0)));
+    }
+    let dev: Vec<Vec<f64>> = all
+        .iter()
+        .map(|(_, _, _, v)| {
+            let m = v.iter().sum::<f64>() / n as f64;
+            v.iter().map(|x| x - m).collect()
+        })
+        .collect();
+    let var: f64 = dev.iter().flatten().map(|d| d * d).sum();
+    let mut tau = 1.0;
+    if n >= 4 && var > 0.0 {
+        for k in 1..=n / 3 {
+            let cov: f64 = dev
+                .iter()
+                .map(|d| (0..n - k).map(|i| d[i] * d[i + k]).sum::<f64>())
+                .sum();
+            let rho = cov / var;
+            if rho <= 0.0 {
+                break;
+            }
+            tau += 2.0 * rho;
+        }
+    }
+    let tau = tau.clamp(1.0, n as f64);
+    let factor = (tau / n as f64).sqrt();
+    for (c, kind, p, _) in &all {
+        let peak = match kind {
+            0 => &mut peaks[*c].peak_negative[*p],
+            1 => &mut peaks[*c].peak_positive[*p],
+            _ => &mut peaks[*c].slap_force,
+        };
+        peak.se = peak.std * factor;
+    }
+    tau
 }
 
 /// A failed step attempt.

@@ -25,6 +25,7 @@ use crate::reduce::engine::Dense;
 use nalgebra::DMatrix;
 
 /// ROM structure state of a transient.
+#[derive(Clone)]
 pub struct ModalStructure {
     pub integrator: ModalIntegrator,
     /// Contact DOF rows (contact DOFs x modes), row-major.
@@ -313,7 +314,13 @@ impl Structure for ModalStructure {
 impl ModalStructure {
     /// scale * sum_d w_id sum_e X_de F_e at every location of this step, X a DOF-level step
     /// matrix (S or T) and the forces at `active` gathered on the DOFs.
-    fn apply_step_matrix(&self, x: &Dense, scale: f64, active: &[usize], forces: &[f64]) -> Vec<f64> {
+    fn apply_step_matrix(
+        &self,
+        x: &Dense,
+        scale: f64,
+        active: &[usize],
+        forces: &[f64],
+    ) -> Vec<f64> {
         let gathered = gather_on_dofs(
             active
                 .iter()
