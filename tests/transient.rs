@@ -310,13 +310,15 @@ fn impact(
             None => contact::step(&[body], &[slice.clone()], &mut wall, dt, scheme, 50),
         }
         .unwrap();
-        let after = SliceState {
+        let mut after = [SliceState {
             penetration: r.penetrations[0],
             rate: r.rates[0],
             damper: r.damper[0],
             clamped: r.clamped[0],
-        };
-        let di = contact::onset_impulses(&[prev], &[after], &[c], dt, scheme);
+            onset: false,
+        }];
+        let di = contact::onset_impulses(&[prev], &mut after, &[c], dt, scheme);
+        let after = after[0];
         let mut bodies = r.bodies.clone();
         contact::kick_bodies(&mut bodies, &[slice.clone()], &di);
         body = bodies[0];
@@ -345,17 +347,21 @@ fn impact(
 
 /// Reference for [`impact`] that shares no code with the tool: the same body, slice law and
 /// structure as ODEs, x_b'' = -F / m, x_s'' = (F - k_s x_s) / m_s, F = max(0, k p + c p') for
-/// p = x_b - x_s > 0, by classical Runge-Kutta with a fixed tiny step, the onset located inside
-/// its step by bisection (the force jumps there), until the body moves away apart.
+/// p = x_b - x_s > 0, from the same start (p = -gap_time v0), by classical Runge-Kutta on the
+/// grid dt / `sub` (the onset, where the force jumps, located inside its step by bisection and
+/// the step finished from there, so the grid stays on the coarse nodes). The peak is taken at
+/// the coarse nodes t_k = k dt, as the tool samples it, so the comparison measures the
+/// integration error, not where the samples fall.
+#[allow(clippy::too_many_arguments)]
 fn impact_reference(
     m: f64,
     k: f64,
     c: f64,
     v0: f64,
     gap_time: f64,
-    ms: f64,
-    ks: f64,
-    h: f64,
+    (ms, ks): (f64, f64),
+    dt: f64,
+    sub: usize,
 ) -> Impact {
     let force = |y: &[f64; 4]| {
         let p = y[0] - y[2];
@@ -388,15 +394,13 @@ fn impact_reference(
         }
         out
     };
-    // free flight to the onset, exactly
-    let mut y = [0.0, v0, 0.0, 0.0];
+    let h = dt / sub as f64;
+    let mut y = [-gap_time * v0, v0, 0.0, 0.0];
     let (mut peak, mut touched) = (0.0f64, false);
-    let _ = gap_time;
-    loop {
-        let next = rk4(&y, h);
-        let p = next[0] - next[2];
-        if !touched && p > 0.0 {
-            // bisection for the crossing inside [0, h], then continue from there
+    for step in 1.. {
+        let mut next = rk4(&y, h);
+        if !touched && next[0] - next[2] > 0.0 {
+            // the onset inside this step: bisection, then the rest of the step from there
             let (mut lo, mut hi) = (0.0, h);
             for _ in 0..60 {
                 let mid = 0.5 * (lo + hi);
@@ -407,29 +411,29 @@ fn impact_reference(
                     lo = mid;
                 }
             }
-            y = rk4(&y, lo);
-            y[0] = y[2]; // p = 0 to roundoff
+            let mut at = rk4(&y, lo);
+            at[0] = at[2]; // p = 0 to roundoff
+            next = rk4(&at, h - lo);
             touched = true;
-            continue;
         }
         y = next;
-        if touched {
+        if touched && step % sub == 0 && y[0] - y[2] > 0.0 {
             let f = force(&y);
-            let acc = if ms.is_finite() {
-                (f - ks * y[2]) / ms
-            } else {
-                f / m
+            peak = peak.max(((f - ks * y[2]) / ms).abs());
+        }
+        if touched && y[0] - y[2] < 0.0 && y[1] < 0.0 {
+            return Impact {
+                restitution: -y[1] / v0,
+                peak_acc: peak,
             };
-            peak = peak.max(acc.abs());
-            if y[0] - y[2] < 0.0 && y[1] < 0.0 {
-                return Impact {
-                    restitution: -y[1] / v0,
-                    peak_acc: peak,
-                };
-            }
         }
     }
+    unreachable!()
 }
+
+/// Where in its step the onset falls, as fractions of the step (the error of an event depends
+/// on it; the order is measured on the largest error over these).
+const PHASES: [f64; 7] = [0.03, 0.17, 0.31, 0.45, 0.59, 0.73, 0.87];
 
 /// Observed orders log2(e_k / e_{k+1}) of the errors of successive halvings, and over all of
 /// them, log2(e_0 / e_last) / halvings.
@@ -442,7 +446,8 @@ fn orders(errs: &[f64]) -> (Vec<f64>, f64) {
 /// Verification against the exact solution: a mass striking a rigid wall through a
 /// Kelvin-Voigt slice that never pulls. Exact: x = v0 / w_d e^{-zeta w t} sin(w_d t) while
 /// F = k x + c x' > 0; the contact ends at t_c where F = 0 (x still > 0), the restitution is
-/// -x'(t_c) / v0 (no force after it) and the peak acceleration max F / m over [0, t_c]. The
+/// -x'(t_c) / v0 (no force after it) and the peak acceleration max F / m over the nodes in
+/// [0, t_c], where the tool samples it. The
 /// onset's damper jump (c v0) is integrated by the onset correction, so restitution and peak
 /// converge at second order: the observed order over three halvings must be at least 1.8
 /// (theory 2; the margin covers the pre-asymptotic range), chosen before the run.
@@ -472,20 +477,30 @@ fn verification_wall_impact_converges_at_second_order() {
     }
     let tc = lo;
     let e_exact = -xd(tc) / v0;
-    let peak_exact = (0..=200_000)
-        .map(|i| f(tc * i as f64 / 200_000.0))
-        .fold(0.0f64, f64::max)
-        / m;
     let period = 2.0 * std::f64::consts::PI / w;
     let (mut de, mut dp) = (Vec::new(), Vec::new());
-    for n in [25.0, 50.0, 100.0, 200.0] {
-        let r = impact(m, k, c, v0, 0.371_830_2 * period, None, period / n);
-        println!(
-            "{n} steps per contact period: e = {:.6} (exact {e_exact:.6}), peak {:.1} (exact {peak_exact:.1})",
-            r.restitution, r.peak_acc
-        );
-        de.push((r.restitution - e_exact).abs() / e_exact);
-        dp.push((r.peak_acc - peak_exact).abs() / peak_exact);
+    for n in [50.0, 100.0, 200.0, 400.0] {
+        let dt = period / n;
+        // the largest error over onset phases spread across one step (the constant of an
+        // event's error depends on where in its step the event falls)
+        let (mut we, mut wp) = (0.0f64, 0.0f64);
+        for phase in PHASES {
+            let gap_time = 0.37 * period + phase * dt;
+            // the exact peak at the nodes t_k = k dt the tool samples (onset at t = gap_time)
+            let peak_exact = (1..)
+                .map(|i| i as f64 * dt - gap_time)
+                .skip_while(|&t| t <= 0.0)
+                .take_while(|&t| t < tc)
+                .map(f)
+                .fold(0.0f64, f64::max)
+                / m;
+            let r = impact(m, k, c, v0, gap_time, None, dt);
+            we = we.max((r.restitution - e_exact).abs() / e_exact);
+            wp = wp.max((r.peak_acc - peak_exact).abs() / peak_exact);
+        }
+        println!("{n} steps per contact period: largest errors over onset phases: restitution {we:.2e}, peak {wp:.2e} (exact e = {e_exact:.6})");
+        de.push(we);
+        dp.push(wp);
     }
     let (oe, oe_all) = orders(&de);
     let (op, op_all) = orders(&dp);
@@ -499,7 +514,7 @@ fn verification_wall_impact_converges_at_second_order() {
 
 /// Verification against an independent reference: the same impact on a one-mode structure
 /// (10 kg at 2 kHz, the liner-like side; undamped), through the production modal structure,
-/// against a fine Runge-Kutta solution written in the test (step 1/20000 of the contact
+/// against a fine Runge-Kutta solution written in the test (step 1/40000 of the contact
 /// period, onset located by bisection: its error is far below the coarse runs'). Restitution
 /// and the structure's peak acceleration must converge at an observed order of at least 1.8
 /// over three halvings (theory 2), chosen before the run.
@@ -512,21 +527,20 @@ fn verification_one_mode_impact_converges_at_second_order() {
         10.0 * (2.0 * std::f64::consts::PI * 2000.0f64).powi(2),
     );
     let period = 2.0 * std::f64::consts::PI / (k / m).sqrt();
-    let reference = impact_reference(m, k, c, v0, 0.371_830_2 * period, ms, ks, period / 20_000.0);
     let (mut de, mut dp) = (Vec::new(), Vec::new());
-    for n in [25.0, 50.0, 100.0, 200.0] {
-        let r = impact(
-            m,
-            k,
-            c,
-            v0,
-            0.371_830_2 * period,
-            Some((ms, ks)),
-            period / n,
-        );
-        println!("{n} steps per contact period: {r:?} (reference {reference:?})");
-        de.push((r.restitution - reference.restitution).abs() / reference.restitution);
-        dp.push((r.peak_acc - reference.peak_acc).abs() / reference.peak_acc);
+    for n in [50usize, 100, 200, 400] {
+        let dt = period / n as f64;
+        let (mut we, mut wp) = (0.0f64, 0.0f64);
+        for phase in PHASES {
+            let gap_time = 0.37 * period + phase * dt;
+            let reference = impact_reference(m, k, c, v0, gap_time, (ms, ks), dt, 40_000 / n);
+            let r = impact(m, k, c, v0, gap_time, Some((ms, ks)), dt);
+            we = we.max((r.restitution - reference.restitution).abs() / reference.restitution);
+            wp = wp.max((r.peak_acc - reference.peak_acc).abs() / reference.peak_acc);
+        }
+        println!("{n} steps per contact period: largest errors over onset phases: restitution {we:.2e}, peak {wp:.2e}");
+        de.push(we);
+        dp.push(wp);
     }
     let (oe, oe_all) = orders(&de);
     let (op, op_all) = orders(&dp);
@@ -565,7 +579,7 @@ fn simulate(
 
 #[test]
 fn engine_cycle_runs_with_bounded_energy_and_finite_peaks() {
-    let r = simulate(&[], |_| {}).unwrap();
+    let r = simulate(&[], |s| s.tolerance = None).unwrap();
     assert_eq!(r.peaks.len(), 2);
     for c in &r.peaks {
         for p in &c.peak_negative {
@@ -628,51 +642,41 @@ fn averaged_cycles_are_the_statistics_of_the_single_cycles() {
     assert!(e.contains("transient.averaged_cycles"), "{e}");
 }
 
+/// Verification against a converged run: the test engine at its default settings (the
+/// accuracy control `transient.tolerance` = 2 % on, so the step may be halved) against the same
+/// engine at a fixed step 64 times finer than the default 1/4 deg. The mean peak negative
+/// acceleration must lie within the tolerance of the converged one (the control's promise;
+/// one cycle from rest is deterministic, so no statistical margin is due). Measured: at 1/4 deg
+/// the estimate is 7.4 % against an error of 6.0 %, so the control halves the step; at
+/// 1/8 deg the error is 1.5 % while that run's own estimate says 0.17 % (the estimate covers
+/// each cylinder's firing slap of the last cycle only, and can under-state; it is printed, not
+/// asserted). The quasi-static side force is smooth and only sampled: its peak agrees to 1e-3.
 #[test]
-fn step_convergence_of_peaks_and_side_force() {
-    // The contact dashpot of a slice engages from the step after the contact starts, an
-    // impulse error of at most c v dt per impact (first order; the impact test above measures
-    // the restitution's convergence). The slap peaks follow a sequence of such impacts, so
-    // they converge at first order with a sizeable constant; the quasi-static side force is
-    // smooth and only sampled. Reference: 1/16 deg (4x finer than the default 1/4 deg).
-    let steps = [1.0, 0.5, 0.25, 0.0625];
-    let runs: Vec<_> = steps
-        .iter()
-        .map(|h| simulate(&[&format!("transient.step_deg={h}")], |_| {}).unwrap())
-        .collect();
-    let finest = runs.last().unwrap();
-    // worst relative difference over cylinders and points of the peak negative acceleration
-    let worst = |r: &linercav::transient::cycle::CycleResult| {
-        let mut w: f64 = 0.0;
-        for (c, f) in r.peaks.iter().zip(&finest.peaks) {
-            for (p, q) in c.peak_negative.iter().zip(&f.peak_negative) {
-                w = w.max((p.value - q.value).abs() / q.value);
-            }
-        }
-        w
+fn verification_accuracy_control_meets_its_tolerance_against_a_converged_run() {
+    let controlled = simulate(&[], |_| {}).unwrap();
+    let converged = simulate(&["transient.step_deg=0.00390625"], |s| s.tolerance = None).unwrap();
+    let mean = |r: &linercav::transient::cycle::CycleResult| {
+        let v: Vec<f64> = r
+            .peaks
+            .iter()
+            .flat_map(|c| c.peak_negative.iter().map(|p| p.value))
+            .collect();
+        v.iter().sum::<f64>() / v.len() as f64
     };
-    let errs: Vec<f64> = runs[..3].iter().map(worst).collect();
-    for (h, e) in steps.iter().zip(&errs) {
-        println!(
-            "step {h} deg: peak negative acceleration within {:.1} % of 1/16 deg",
-            100.0 * e
-        );
-    }
-    // measured on this engine: 27 %, 13 %, 6.5 % at 1, 1/2, 1/4 deg, i.e. first order. The
-    // observed order over 1 -> 1/4 deg must be at least 0.8 (the finest run's own error makes
-    // it look slightly lower than 1 at most), and the default step within 8 % (first order
-    // from the 1 deg error gives ~7 %).
-    let order = (errs[0] / errs[2]).log2() / 2.0;
-    println!("observed order {order:.2}");
-    assert!(order > 0.8 && errs[2] < 0.08, "{errs:?}");
-    // the side force is a smooth curve sampled at the step: its peak moves by (h/2)^2 times
-    // its curvature, far below 0.1 % at 1/4 deg
-    for (c, f) in runs[2].peaks.iter().zip(&finest.peaks) {
+    let err = (mean(&controlled) - mean(&converged)).abs() / mean(&converged);
+    let est = controlled.stats.step_error_estimate;
+    println!(
+        "step {:.4} deg after {} halving(s): mean {:.1} against converged {:.1}: error {:.2} %, estimate {:.2} %",
+        controlled.stats.dt_s * 1900.0 * 6.0,
+        controlled.stats.step_refinements,
+        mean(&controlled),
+        mean(&converged),
+        100.0 * err,
+        100.0 * est
+    );
+    assert!(err <= 0.02, "{err}");
+    for (c, f) in controlled.peaks.iter().zip(&converged.peaks) {
         let d = (c.side_force.value - f.side_force.value).abs() / f.side_force.value;
-        println!(
-            "cylinder {}: side force {:.1} N, {d:.1e} from 1/16 deg",
-            c.cylinder, c.side_force.value
-        );
         assert!(d < 1e-3, "{d}");
     }
 }
@@ -682,9 +686,10 @@ fn per_cylinder_coupling_matches_the_monolithic_step() {
     // Lagging the other cylinder's within-step influence changes the contact by the measured
     // lag; on this engine that is below 1 % of the skirt penetration, and the peaks (which
     // follow the slap, itself sensitive to the contact history) agree to 2 %.
-    let fast = simulate(&["transient.step_deg=0.5"], |_| {}).unwrap();
+    let fast = simulate(&["transient.step_deg=0.5"], |s| s.tolerance = None).unwrap();
     let exact = simulate(&["transient.step_deg=0.5"], |s| {
-        s.coupling = linercav::transient::cycle::Coupling::Monolithic
+        s.coupling = linercav::transient::cycle::Coupling::Monolithic;
+        s.tolerance = None;
     })
     .unwrap();
     println!(

@@ -90,6 +90,7 @@ pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
         output_band_hz: Some(band_hz),
         bound_predictions: true,
         step_error: true,
+        onset_correction: true,
         tolerance: Some(t.tolerance),
     }
 }

@@ -126,6 +126,8 @@ pub struct SliceState {
     pub rate: f64,
     pub damper: f64,
     pub clamped: bool,
+    /// The contact began in the step that ended here (the damper was lagged).
+    pub onset: bool,
 }
 
 impl SliceState {
@@ -135,31 +137,31 @@ impl SliceState {
         rate: 0.0,
         damper: 0.0,
         clamped: false,
+        onset: false,
     };
 }
 
 /// Damper impulses that the average-acceleration steps miss at a contact onset, one per
-/// slice [N s].
+/// slice [N s]; marks the onsets in `after` (the next call needs them).
 ///
 /// The steps integrate a slice force by the trapezoidal rule, dt/2 (F_n + F_{n+1}). In
 /// sustained contact the damper's impulse c_d int p' dt is then dt/2 c_d (p'_n + p'_{n+1}),
-/// exact for the trapezoidal kinematics. At an onset (p_n <= 0 < p_{n+1}) the damper is lagged:
-/// the onset step carries none of it, and the next step starts from a node without it. With
-/// the onset at t* located from the step's end state, t_{n+1} - t* = min(dt, p_{n+1} / p'_{n+1})
-/// (linear in time: second order; the start side's penetration may be only a bound, see
-/// [`Structure::predicted_bound`], so it is not used), the missing impulse is the damper's
-/// from t* to t_{n+1} plus the half node the next step misses,
-///   dI = c_d p'_{n+1} (t_{n+1} - t*) + dt/2 c_d p'_{n+1}
-/// (p' over [t*, t_{n+1}] taken at its end: an O(c_d p'' dt^2) error). A grazing onset,
-/// already receding at t_{n+1} (p'_{n+1} <= 0), gets none: its damper would pull and is
-/// clamped.
-/// given at the onset step's end (moving it by at most one step changes positions by
-/// O(dI dt): second order). It acts on body and structure like a slice force (equal and
+/// exact for the trapezoidal kinematics. At an onset (p_n <= 0 < p_{n+1}) the damper is
+/// lagged, so two steps miss part of it:
+/// - the onset step carries none; the damper's impulse from the onset t* on is
+///   c_d p'_{n+1} (t_{n+1} - t*), with t_{n+1} - t* = min(dt, p_{n+1} / p'_{n+1}) (linear in
+///   time: second order; the start's penetration may be only a bound, see
+///   [`Structure::predicted_bound`], so it is not used);
+/// - the next step starts from a node without damper force; if the slice still penetrates
+///   and is damped at its end, it misses dt/2 c_d p'_{n+1}.
+///
+/// A grazing onset, already receding at t_{n+1} (p'_{n+1} <= 0), gets none: its damper would
+/// pull and is clamped. The impulses act on body and structure like slice forces (equal and
 /// opposite). Average acceleration only (HHT-alpha weights the nodal forces differently):
 /// other schemes get none.
 pub fn onset_impulses(
     before: &[SliceState],
-    after: &[SliceState],
+    after: &mut [SliceState],
     damping: &[f64],
     dt: f64,
     scheme: Scheme,
@@ -169,16 +171,23 @@ pub fn onset_impulses(
     }
     before
         .iter()
-        .zip(after)
+        .zip(after.iter_mut())
         .zip(damping)
         .map(|((b, a), &c)| {
-            // a grazing onset (already receding at t_{n+1}) would have its damper clamped
-            if c == 0.0 || b.penetration > 0.0 || a.penetration <= 0.0 || a.rate <= 0.0 {
+            if c == 0.0 || a.penetration <= 0.0 {
                 return 0.0;
             }
-            // time in contact within the step, (1 - theta) dt = p_{n+1} / p'_{n+1}
-            let in_contact = (a.penetration / a.rate).min(dt);
-            c * a.rate * (in_contact + 0.5 * dt) - 0.5 * dt * a.damper
+            if b.penetration <= 0.0 {
+                if a.rate <= 0.0 {
+                    return 0.0;
+                }
+                a.onset = true;
+                return c * a.rate * (a.penetration / a.rate).min(dt);
+            }
+            if b.onset && a.damper != 0.0 && !a.clamped {
+                return 0.5 * dt * c * b.rate;
+            }
+            0.0
         })
         .collect()
 }

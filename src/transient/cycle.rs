@@ -57,6 +57,10 @@ pub struct CycleSettings {
     /// apart ([`super::modal`]); the results are the same bit for bit (false: every slice's
     /// prediction is formed, for verification).
     pub bound_predictions: bool,
+    /// Restore the damper impulse the steps miss at contact onsets
+    /// ([`contact::onset_impulses`]; false: the plain lagged damper, first order, for
+    /// verification).
+    pub onset_correction: bool,
     /// Largest acceptable estimated relative step error of the mean peak
     /// ([`mean_step_error`]); above it [`run_with_tolerance`] halves the step (None: no
     /// control).
@@ -148,6 +152,8 @@ pub struct Stats {
     pub energy_error: f64,
     /// Largest penetration [m].
     pub max_penetration_m: f64,
+    /// Smallest force of any slice at any committed step [N] (the law never pulls: >= 0).
+    pub min_slice_force_n: f64,
     /// Largest relative change of a peak negative acceleration between the last two cycles.
     pub cycle_change: f64,
     /// Cycles run, and the last ones whose peaks are averaged.
@@ -499,7 +505,8 @@ impl<'a> EngineRun<'a> {
             .map(|f| 2.0 * std::f64::consts::PI * f)
             .collect();
         let zeta = vec![settings.damping_ratio; nm];
-        let integrator = ModalIntegrator::new(&omega, &zeta, settings.scheme);
+        let mut integrator = ModalIntegrator::new(&omega, &zeta, settings.scheme);
+        integrator.dynamic_modes = rom.info.system_modes.min(nm);
         let (rows, pre) = contact_data(rom, nm);
         let rflex = truncated_flexibility(rom, nm);
         let mut structure = ModalStructure::new(integrator, rows, rflex, pre);
@@ -538,6 +545,7 @@ impl<'a> EngineRun<'a> {
         let ncyl = rom.cylinders.len();
         let stats = Stats {
             modes: nm,
+            min_slice_force_n: f64::INFINITY,
             ..Stats::default()
         };
         Self {
@@ -749,6 +757,8 @@ impl<'a> EngineRun<'a> {
             return Err(Failure::NonFinite(self.cyls[b].rom.cylinder));
         }
         // commit
+        let fmin = res.forces.iter().copied().fold(f64::INFINITY, f64::min);
+        self.stats.min_slice_force_n = self.stats.min_slice_force_n.min(fmin);
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
         let f = self.structure.modal_force_at(&locs, &res.forces);
         let step = self.structure.integrator.commit_with_energy(&f);
@@ -764,18 +774,19 @@ impl<'a> EngineRun<'a> {
             .iter()
             .map(|&(b, side, i, _)| self.prev_state[pen_index(b, side, i)])
             .collect();
-        let after: Vec<SliceState> = (0..slices.len())
+        let mut after: Vec<SliceState> = (0..slices.len())
             .map(|k| SliceState {
                 penetration: res.penetrations[k],
                 rate: res.rates[k],
                 damper: res.damper[k],
                 clamped: res.clamped[k],
+                onset: false,
             })
             .collect();
         let damping: Vec<f64> = slices.iter().map(|s| s.damping).collect();
-        let impulses = contact::onset_impulses(&before, &after, &damping, dt, s);
+        let impulses = contact::onset_impulses(&before, &mut after, &damping, dt, s);
         let mut bodies_after = res.bodies.clone();
-        if impulses.iter().any(|&d| d != 0.0) {
+        if self.settings.onset_correction && impulses.iter().any(|&d| d != 0.0) {
             contact::kick_bodies(&mut bodies_after, &slices, &impulses);
             self.structure.impulse(&locs, &impulses);
         }
