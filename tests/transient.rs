@@ -305,9 +305,16 @@ fn impact(
         let r = match modal.as_mut() {
             Some((st, _)) => {
                 st.integrator.predict(dt);
-                contact::step(&[body], &[slice.clone()], st, dt, scheme, 50)
+                contact::step(&[body], std::slice::from_ref(&slice), st, dt, scheme, 50)
             }
-            None => contact::step(&[body], &[slice.clone()], &mut wall, dt, scheme, 50),
+            None => contact::step(
+                &[body],
+                std::slice::from_ref(&slice),
+                &mut wall,
+                dt,
+                scheme,
+                50,
+            ),
         }
         .unwrap();
         let mut after = [SliceState {
@@ -320,7 +327,7 @@ fn impact(
         let di = contact::onset_impulses(&[prev], &mut after, &[c], dt, scheme);
         let after = after[0];
         let mut bodies = r.bodies.clone();
-        contact::kick_bodies(&mut bodies, &[slice.clone()], &di);
+        contact::kick_bodies(&mut bodies, std::slice::from_ref(&slice), &di);
         body = bodies[0];
         prev = after;
         match modal.as_mut() {

@@ -90,6 +90,11 @@ pub fn compare(
     progress: &dyn Fn(&str),
 ) -> Result<FullOrderReport> {
     progress("full-order window: ROM run");
+    // the full-order model takes no onset impulses: both models run without the correction
+    let settings = &CycleSettings {
+        onset_correction: false,
+        ..settings.clone()
+    };
     let rw = rom_window(scene, rom, piston, settings, None, None)?;
     let RomWindow {
         cylinder,
@@ -360,6 +365,7 @@ pub fn rom_window(
         antithrust_z: crom.antithrust_z.clone(),
         max_newton: settings.max_newton,
         max_penetration: settings.max_penetration,
+        onset_correction: settings.onset_correction,
     };
     let fail = |e: crate::transient::cycle::TransientError, what: &str| {
         Error::Failure(format!(
@@ -442,13 +448,10 @@ pub fn rom_window(
         .chain(&crom.preload_antithrust)
         .copied()
         .collect();
+    let mut integrator = ModalIntegrator::new(&w, &zeta, scheme);
+    integrator.dynamic_modes = rom.info.system_modes.min(w.len());
     let mut modal = ModalLiner {
-        structure: ModalStructure::new(
-            ModalIntegrator::new(&w, &zeta, scheme),
-            rows,
-            rflex,
-            rom_preload.clone(),
-        ),
+        structure: ModalStructure::new(integrator, rows, rflex, rom_preload.clone()),
         points,
         point_residual: Some(point_residual),
     };

@@ -4,7 +4,10 @@
 //! difference of their results is the difference of the structural models.
 //!
 //! The window starts with the structure at rest in its preload state and the piston centred
-//! with zero velocity (its acceleration from the loads at the start); the step is fixed.
+//! with zero velocity (its acceleration from the loads at the start); the step is fixed. The
+//! onset correction of the engine cycle ([`super::contact::onset_impulses`]) needs a structure
+//! that takes impulses: the ROM does, the full-order model does not, so ROM-against-full
+//! comparisons run both without it.
 
 use super::contact::{self, dot, Body, Location, Structure};
 use super::cycle::{push_slices, BoreLines, TransientError};
@@ -28,6 +31,12 @@ pub trait Liner: Structure {
     fn point_residual(&self, _locs: &[Location], _forces: &[f64]) -> Vec<f64> {
         Vec::new()
     }
+    /// Takes contact-onset impulses at `locs` over the next step
+    /// ([`super::contact::onset_impulses`]); false when the structure cannot (then the window
+    /// runs without the onset correction).
+    fn impulse(&mut self, _locs: &[Location], _impulses: &[f64]) -> bool {
+        false
+    }
 }
 
 /// The crank-angle window and the piston's bore.
@@ -47,6 +56,9 @@ pub struct Window {
     pub antithrust_z: Vec<f64>,
     pub max_newton: usize,
     pub max_penetration: f64,
+    /// Restore the damper impulse missed at contact onsets, as the engine cycle does (only
+    /// where the structure takes impulses: [`Liner::impulse`]).
+    pub onset_correction: bool,
 }
 
 /// What the window produced, one entry per step.
@@ -91,7 +103,7 @@ pub fn run(
     let dt = window.step_deg.to_radians() / window.omega;
     let ns = piston.skirt.heights.len();
     let mut body = body_at_rest(piston, window.start_deg);
-    let mut prev_pen = vec![-1.0; 2 * ns];
+    let mut prev = vec![contact::SliceState::APART; 2 * ns];
     let bore = BoreLines {
         thrust_z: &window.thrust_z,
         antithrust_z: &window.antithrust_z,
@@ -111,7 +123,7 @@ pub fn run(
         body.force = loads.force;
         let mut slices = Vec::with_capacity(2 * ns);
         let mut meta = Vec::with_capacity(2 * ns);
-        let pen_of = |side: bool, i: usize| prev_pen[usize::from(!side) * ns + i];
+        let pen_of = |side: bool, i: usize| prev[usize::from(!side) * ns + i].penetration;
         push_slices(
             piston,
             &loads,
@@ -162,7 +174,7 @@ pub fn run(
                 });
             }
         }
-        let b = res.bodies[0];
+        let mut b = res.bodies[0];
         if !b.q.iter().chain(&b.v).chain(&b.a).all(|x| x.is_finite()) {
             return Err(TransientError::NonFinite {
                 crank_angle_deg: deg,
@@ -180,11 +192,35 @@ pub fn run(
             residual.resize(npoints, Vec::new());
             residual[p].push(r);
         }
+        // the damper impulse missed at onsets, as in the engine cycle
+        let before: Vec<contact::SliceState> = meta
+            .iter()
+            .map(|&(_, side, i, _)| prev[usize::from(!side) * ns + i])
+            .collect();
+        let mut after: Vec<contact::SliceState> = (0..slices.len())
+            .map(|k| contact::SliceState {
+                penetration: res.penetrations[k],
+                rate: res.rates[k],
+                damper: res.damper[k],
+                clamped: res.clamped[k],
+                onset: false,
+            })
+            .collect();
+        let damping: Vec<f64> = slices.iter().map(|s| s.damping).collect();
+        let impulses = contact::onset_impulses(&before, &mut after, &damping, dt, window.scheme);
+        if window.onset_correction
+            && impulses.iter().any(|&d| d != 0.0)
+            && liner.impulse(&locs, &impulses)
+        {
+            let mut kicked = [b];
+            contact::kick_bodies(&mut kicked, &slices, &impulses);
+            b = kicked[0];
+        }
         body = b;
-        prev_pen.fill(-1.0);
+        prev.fill(contact::SliceState::APART);
         let mut net = 0.0;
         for (k, &(_, side, i, _)) in meta.iter().enumerate() {
-            prev_pen[usize::from(!side) * ns + i] = res.penetrations[k];
+            prev[usize::from(!side) * ns + i] = after[k];
             net += if side { res.forces[k] } else { -res.forces[k] };
         }
         out.newton_iterations += res.iterations;
@@ -286,6 +322,10 @@ impl Liner for ModalLiner {
         (0..self.points.rows)
             .map(|p| dot(&self.points.row(p)[..n], &a[..n]))
             .collect()
+    }
+    fn impulse(&mut self, locs: &[Location], impulses: &[f64]) -> bool {
+        self.structure.impulse(locs, impulses);
+        true
     }
     fn point_residual(&self, locs: &[Location], forces: &[f64]) -> Vec<f64> {
         match &self.point_residual {
