@@ -650,9 +650,9 @@ fn averaged_cycles_are_the_statistics_of_the_single_cycles() {
 }
 
 /// Verification against a converged run: the test engine at its default settings (the
-/// accuracy control `transient.tolerance` = 2 % on, so the step may be halved) against the same
+/// accuracy control `transient.tolerance` = 5 % on, so the step may be halved) against the same
 /// engine at a fixed step 64 times finer than the default 1/4 deg. The mean peak negative
-/// acceleration must lie within the tolerance of the converged one (the control's promise;
+/// acceleration must lie within 2 % of the converged one (issue 22's floor for the default;
 /// one cycle from rest is deterministic, so no statistical margin is due). Measured: at 1/4 deg
 /// the estimate is 7.4 % against an error of 6.0 %, so the control halves the step; at
 /// 1/8 deg the error is 1.5 % while that run's own estimate says 0.17 % (the estimate covers

@@ -553,21 +553,32 @@ fn figures(
         .iter()
         .map(|c| c.points.iter().map(|p| p.peak_negative_m_s2).collect())
         .collect();
-    // whiskers: +- one sample standard deviation over the averaged cycles
+    // whiskers: the combined standard uncertainty of each mean, sqrt(SE^2 + E^2), SE its
+    // standard error (cycles correlated) and E its estimated step error
     let errors: Vec<Vec<f64>> = ev
         .cylinders
         .iter()
         .map(|c| {
+            let step = base.step_error.iter().find(|e| e.cylinder == c.cylinder);
             base.peaks
                 .iter()
                 .find(|b| b.cylinder == c.cylinder)
-                .map(|b| b.peak_negative.iter().map(|p| p.std).collect())
+                .map(|b| {
+                    b.peak_negative
+                        .iter()
+                        .enumerate()
+                        .map(|(k, p)| {
+                            let e = step.map_or(0.0, |s| s.relative(k) * p.value);
+                            p.se.hypot(e)
+                        })
+                        .collect()
+                })
                 .unwrap_or_default()
         })
         .collect();
     let n_avg = base.stats.cycles_averaged;
     let peaks_title = if n_avg > 1 {
-        format!("Peak negative liner acceleration per cylinder and point (top to bottom): mean of {n_avg} cycles +- 1 std")
+        format!("Peak negative liner acceleration per cylinder and point (top to bottom): mean of {n_avg} cycles +- uncertainty (standard error and step error)")
     } else {
         "Peak negative liner acceleration per cylinder and point (top to bottom)".to_string()
     };
@@ -828,35 +839,38 @@ fn figures(
     Ok(files)
 }
 
-/// Which neighbours of the cylinder ranking are resolved by the averaged cycles: for the
-/// cylinders' largest mean peaks m1 > m2 (sample deviations s1, s2 over n cycles) the
-/// difference counts as resolved when m1 - m2 > 2 sqrt((s1^2 + s2^2) / n), two standard errors.
+/// Which neighbours of the cylinder ranking are separated beyond the uncertainty: each
+/// cylinder's largest mean peak m carries u = sqrt(SE^2 + E^2), SE its standard error (cycles
+/// correlated) and E its estimated step error; neighbours m1 > m2 count as separated when
+/// m1 - m2 > 2 sqrt(u1^2 + u2^2), and as tied otherwise.
 fn ranking_resolution(r: &Report) -> String {
-    let n = r.simulate.stats.cycles_averaged.max(1) as f64;
     let worst = |cyl: usize| -> Option<(f64, f64)> {
         let c = r.simulate.cylinders.iter().find(|c| c.cylinder == cyl)?;
         c.points
             .iter()
             .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))
-            .map(|p| (p.peak_negative_m_s2, p.peak_negative_std_m_s2))
+            .map(|p| {
+                let u = p.peak_negative_se_m_s2.hypot(p.peak_negative_step_error_m_s2);
+                (p.peak_negative_m_s2, u)
+            })
     };
     let pairs: Vec<String> = r
         .evaluation
         .ranking
         .windows(2)
         .filter_map(|w| {
-            let ((m1, s1), (m2, s2)) = (worst(w[0])?, worst(w[1])?);
-            let resolved = m1 - m2 > 2.0 * ((s1 * s1 + s2 * s2) / n).sqrt();
+            let ((m1, u1), (m2, u2)) = (worst(w[0])?, worst(w[1])?);
+            let separated = m1 - m2 > 2.0 * u1.hypot(u2);
             Some(format!(
-                "{} > {}: {}",
+                "{} {} {}",
                 w[0],
-                w[1],
-                if resolved { "yes" } else { "no" }
+                if separated { ">" } else { "~" },
+                w[1]
             ))
         })
         .collect();
     format!(
-        "Neighbours in the ranking separated by more than two standard errors: {}.",
+        "Ranking with its uncertainty (each cylinder's worst point; > separated by more than two combined standard uncertainties, standard error and step error; ~ tied): {}.",
         pairs.join(", ")
     )
 }
@@ -874,7 +888,8 @@ fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     let _ = writeln!(s, "Acceleration criterion ({}): onset {:.0} m/s^2, high risk {:.0} m/s^2 (k_p {:.1} Pa per m/s^2). Cylinders from the highest to the lowest peak negative acceleration: {:?}. The most active point along the liner: {} (of {}, top to bottom).\n", ev.threshold_source, t.onset_m_s2, t.high_risk_m_s2, t.k_p_pa_per_m_s2, ev.ranking, ev.most_active_point, ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0));
     let n_avg = r.simulate.stats.cycles_averaged;
     if n_avg > 1 {
-        let _ = writeln!(s, "Peaks are means over the last {n_avg} of {} cycles with their sample standard deviation (slap on the ringing liner is not periodic; the standard error of a mean is the deviation / sqrt({n_avg})); risk and ranking use the means. {}\n", r.simulate.stats.cycles_run, ranking_resolution(r));
+        let st = &r.simulate.stats;
+        let _ = writeln!(s, "Peaks are means over the last {n_avg} of {} cycles (slap on the ringing liner is not periodic), given as mean ± standard error (the cycles' correlation counted: autocorrelation time {:.2} cycles). Estimated step error of the mean peak: {:.1} % (tolerance {:.1} %, step {:.4} deg). Risk and ranking use the means. {}\n", st.cycles_run, st.autocorrelation_cycles, 100.0 * st.step_error_estimate, 100.0 * r.simulate.tolerance, st.dt_s * r.speed_rpm * 6.0, ranking_resolution(r));
     }
     let _ = writeln!(s, "| cylinder | risk | peak negative per point [m/s^2] | Ca per point | CSF per point | slap force [kN] | side force [kN] at [deg] |\n|---|---|---|---|---|---|---|");
     for (c, cr) in ev.cylinders.iter().zip(&r.simulate.cylinders) {
@@ -890,7 +905,7 @@ fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
                 .map(|(p, q)| if n_avg > 1 {
                     format!(
                         "{:.0} ± {:.0}",
-                        p.peak_negative_m_s2, q.peak_negative_std_m_s2
+                        p.peak_negative_m_s2, q.peak_negative_se_m_s2
                     )
                 } else {
                     format!("{:.0}", p.peak_negative_m_s2)
