@@ -297,6 +297,24 @@ impl SimulateReport {
             "solver: {} steps (dt {:.2} us), {} Newton iterations (max {} per step), {} rejected, {} modes, energy balance {:.1e}, max penetration {:.2} um, last-cycle change {:.1e}, coupling lag {:.3} um\n",
             st.steps, st.dt_s * 1e6, st.newton_iterations, st.max_newton_per_step, st.rejected_steps, st.modes, st.energy_error, st.max_penetration_m * 1e6, st.cycle_change, st.coupling_lag_m * 1e6
         );
+        let wide: Vec<String> = self
+            .cylinders
+            .iter()
+            .filter_map(|c| {
+                let w = c
+                    .points
+                    .iter()
+                    .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))?;
+                let rel = w.peak_negative_se_m_s2 / w.peak_negative_m_s2.abs().max(1e-12);
+                (rel > 0.02).then(|| format!("cylinder {} ({:.1} %)", c.cylinder, 100.0 * rel))
+            })
+            .collect();
+        if !wide.is_empty() {
+            s += &format!(
+                "statistics: standard error of the worst point's mean above 2 % for {}: average more cycles (transient.cycles, transient.averaged_cycles)\n",
+                wide.join(", ")
+            );
+        }
         s += &format!(
             "accuracy: estimated step error of the mean peak {:.1} % (tolerance {:.1} %{}), step {:.4} deg{}\n",
             100.0 * st.step_error_estimate,

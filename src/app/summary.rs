@@ -850,7 +850,9 @@ fn ranking_resolution(r: &Report) -> String {
             .iter()
             .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))
             .map(|p| {
-                let u = p.peak_negative_se_m_s2.hypot(p.peak_negative_step_error_m_s2);
+                let u = p
+                    .peak_negative_se_m_s2
+                    .hypot(p.peak_negative_step_error_m_s2);
                 (p.peak_negative_m_s2, u)
             })
     };
