@@ -117,6 +117,21 @@ pub struct StepResult {
     pub iterations: usize,
 }
 
+impl StepResult {
+    /// Every slice's state at the end of the step, for [`onset_impulses`] (onsets unmarked).
+    pub fn slice_states(&self) -> Vec<SliceState> {
+        (0..self.forces.len())
+            .map(|k| SliceState {
+                penetration: self.penetrations[k],
+                rate: self.rates[k],
+                damper: self.damper[k],
+                clamped: self.clamped[k],
+                onset: false,
+            })
+            .collect()
+    }
+}
+
 /// One slice at one end of a step, as [`onset_impulses`] needs it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SliceState {

@@ -774,15 +774,7 @@ impl<'a> EngineRun<'a> {
             .iter()
             .map(|&(b, side, i, _)| self.prev_state[pen_index(b, side, i)])
             .collect();
-        let mut after: Vec<SliceState> = (0..slices.len())
-            .map(|k| SliceState {
-                penetration: res.penetrations[k],
-                rate: res.rates[k],
-                damper: res.damper[k],
-                clamped: res.clamped[k],
-                onset: false,
-            })
-            .collect();
+        let mut after = res.slice_states();
         let damping: Vec<f64> = slices.iter().map(|s| s.damping).collect();
         let impulses = contact::onset_impulses(&before, &mut after, &damping, dt, s);
         let mut bodies_after = res.bodies.clone();

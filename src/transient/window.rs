@@ -197,15 +197,7 @@ pub fn run(
             .iter()
             .map(|&(_, side, i, _)| prev[usize::from(!side) * ns + i])
             .collect();
-        let mut after: Vec<contact::SliceState> = (0..slices.len())
-            .map(|k| contact::SliceState {
-                penetration: res.penetrations[k],
-                rate: res.rates[k],
-                damper: res.damper[k],
-                clamped: res.clamped[k],
-                onset: false,
-            })
-            .collect();
+        let mut after = res.slice_states();
         let damping: Vec<f64> = slices.iter().map(|s| s.damping).collect();
         let impulses = contact::onset_impulses(&before, &mut after, &damping, dt, window.scheme);
         if window.onset_correction
