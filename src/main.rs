@@ -335,6 +335,11 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                     started,
                 )?;
                 print_report(json, &report, || report.to_text());
+                if report.sturm_count_ok == Some(false) {
+                    return Err(Error::Failure(
+                        "certification failed: the Sturm count found more eigenvalues below the check's shift than were computed (a mode was missed)".into(),
+                    ));
+                }
                 return Ok(());
             }
             let req = modes::ModesRequest {
@@ -350,6 +355,12 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             };
             let report = modes::run(&req, started)?;
             print_report(json, &report, || report.to_text());
+            if let Some(st) = report.sturm.as_ref().filter(|st| !st.ok) {
+                return Err(Error::Failure(format!(
+                    "certification failed: the Sturm count at {:.1} Hz found {} eigenvalues below, {} were computed (a mode was missed; raise --count or lower --shift-hz)",
+                    st.shift_hz, st.found, st.expected
+                )));
+            }
         }
         Command::ExportMatrices { model, out } => {
             let r = export::export_matrices(&model.input()?, &model.fix, &out)?;

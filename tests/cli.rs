@@ -360,3 +360,60 @@ fn coolant_layer_on_an_imported_liner_needs_its_wet_surface() {
     refused(&a, "dry.msh", None);
     refused(&a, "cavitation.coolant_mass", None);
 }
+
+/// Regression (issue 23): fewer modes asked than a free body's six rigid-body modes used to be
+/// "certified" with the Sturm shift inside the rigid cluster, where round-off decides the count
+/// (a false MISMATCH); the check now passes the cluster and certifies through the first elastic
+/// gap.
+#[test]
+fn fewer_modes_than_rigid_body_modes_are_certified() {
+    let mut args = vec![
+        "modes",
+        "--mesh",
+        "tests/fixtures/block_hex20.msh",
+        "--count",
+        "5",
+        "--json",
+    ];
+    args.extend(STEEL);
+    let out = linercav(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json(&out);
+    assert_eq!(v["sturm"]["ok"], true, "{}", v["sturm"]);
+    assert!(
+        v["sturm"]["shift_hz"].as_f64().unwrap() > 1.0,
+        "{}",
+        v["sturm"]
+    );
+}
+
+/// Regression (issue 23): a failed certification exits 1 (it printed MISMATCH and exited 0). A
+/// nearly incompressible block solved far above its spectrum misses modes below the shift.
+#[test]
+fn a_missed_mode_exits_non_zero() {
+    let out = linercav(&[
+        "modes",
+        "--mesh",
+        "tests/fixtures/block_hex20.msh",
+        "--youngs",
+        "2.1e11",
+        "--poisson",
+        "0.4999",
+        "--density",
+        "7850",
+        "--count",
+        "6",
+        "--shift-hz",
+        "1e6",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("certification failed") && err.contains("Sturm"),
+        "{err}"
+    );
+}
