@@ -450,6 +450,30 @@ fn orders(errs: &[f64]) -> (Vec<f64>, f64) {
     (each, all)
 }
 
+/// Observed orders over three halvings (50 to 400 steps per contact `period`) of the two
+/// relative errors (restitution, peak) that `case(dt, gap_time)` returns, each the largest
+/// over the onset [`PHASES`]; prints the errors and returns the orders over all halvings.
+fn observed_orders(period: f64, case: impl Fn(f64, f64) -> (f64, f64)) -> (f64, f64) {
+    let (mut de, mut dp) = (Vec::new(), Vec::new());
+    for n in [50.0, 100.0, 200.0, 400.0] {
+        let dt = period / n;
+        let (mut we, mut wp) = (0.0f64, 0.0f64);
+        for phase in PHASES {
+            let (e, p) = case(dt, 0.37 * period + phase * dt);
+            we = we.max(e);
+            wp = wp.max(p);
+        }
+        println!("{n} steps per contact period: largest errors over onset phases: restitution {we:.2e}, peak {wp:.2e}");
+        de.push(we);
+        dp.push(wp);
+    }
+    let (oe, oe_all) = orders(&de);
+    let (op, op_all) = orders(&dp);
+    println!("restitution errors {de:?}, orders {oe:.2?}, over all {oe_all:.2}");
+    println!("peak errors {dp:?}, orders {op:.2?}, over all {op_all:.2}");
+    (oe_all, op_all)
+}
+
 /// Verification against the exact solution: a mass striking a rigid wall through a
 /// Kelvin-Voigt slice that never pulls. Exact: x = v0 / w_d e^{-zeta w t} sin(w_d t) while
 /// F = k x + c x' > 0; the contact ends at t_c where F = 0 (x still > 0), the restitution is
@@ -485,34 +509,21 @@ fn verification_wall_impact_converges_at_second_order() {
     let tc = lo;
     let e_exact = -xd(tc) / v0;
     let period = 2.0 * std::f64::consts::PI / w;
-    let (mut de, mut dp) = (Vec::new(), Vec::new());
-    for n in [50.0, 100.0, 200.0, 400.0] {
-        let dt = period / n;
-        // the largest error over onset phases spread across one step (the constant of an
-        // event's error depends on where in its step the event falls)
-        let (mut we, mut wp) = (0.0f64, 0.0f64);
-        for phase in PHASES {
-            let gap_time = 0.37 * period + phase * dt;
-            // the exact peak at the nodes t_k = k dt the tool samples (onset at t = gap_time)
-            let peak_exact = (1..)
-                .map(|i| i as f64 * dt - gap_time)
-                .skip_while(|&t| t <= 0.0)
-                .take_while(|&t| t < tc)
-                .map(f)
-                .fold(0.0f64, f64::max)
-                / m;
-            let r = impact(m, k, c, v0, gap_time, None, dt);
-            we = we.max((r.restitution - e_exact).abs() / e_exact);
-            wp = wp.max((r.peak_acc - peak_exact).abs() / peak_exact);
-        }
-        println!("{n} steps per contact period: largest errors over onset phases: restitution {we:.2e}, peak {wp:.2e} (exact e = {e_exact:.6})");
-        de.push(we);
-        dp.push(wp);
-    }
-    let (oe, oe_all) = orders(&de);
-    let (op, op_all) = orders(&dp);
-    println!("restitution errors {de:?}, orders {oe:.2?}, over all {oe_all:.2}");
-    println!("peak errors {dp:?}, orders {op:.2?}, over all {op_all:.2}");
+    let (oe_all, op_all) = observed_orders(period, |dt, gap_time| {
+        // the exact peak at the nodes t_k = k dt the tool samples (onset at t = gap_time)
+        let peak_exact = (1..)
+            .map(|i| i as f64 * dt - gap_time)
+            .skip_while(|&t| t <= 0.0)
+            .take_while(|&t| t < tc)
+            .map(f)
+            .fold(0.0f64, f64::max)
+            / m;
+        let r = impact(m, k, c, v0, gap_time, None, dt);
+        (
+            (r.restitution - e_exact).abs() / e_exact,
+            (r.peak_acc - peak_exact).abs() / peak_exact,
+        )
+    });
     assert!(oe_all >= 1.8 && op_all >= 1.8, "{oe_all} {op_all}");
     // no damping: elastic rebound, e = 1 to the accuracy of the trapezoidal rule
     let r = impact(m, k, 0.0, v0, 0.371_830_2 * period, None, period / 200.0);
@@ -534,25 +545,15 @@ fn verification_one_mode_impact_converges_at_second_order() {
         10.0 * (2.0 * std::f64::consts::PI * 2000.0f64).powi(2),
     );
     let period = 2.0 * std::f64::consts::PI / (k / m).sqrt();
-    let (mut de, mut dp) = (Vec::new(), Vec::new());
-    for n in [50usize, 100, 200, 400] {
-        let dt = period / n as f64;
-        let (mut we, mut wp) = (0.0f64, 0.0f64);
-        for phase in PHASES {
-            let gap_time = 0.37 * period + phase * dt;
-            let reference = impact_reference(m, k, c, v0, gap_time, (ms, ks), dt, 40_000 / n);
-            let r = impact(m, k, c, v0, gap_time, Some((ms, ks)), dt);
-            we = we.max((r.restitution - reference.restitution).abs() / reference.restitution);
-            wp = wp.max((r.peak_acc - reference.peak_acc).abs() / reference.peak_acc);
-        }
-        println!("{n} steps per contact period: largest errors over onset phases: restitution {we:.2e}, peak {wp:.2e}");
-        de.push(we);
-        dp.push(wp);
-    }
-    let (oe, oe_all) = orders(&de);
-    let (op, op_all) = orders(&dp);
-    println!("restitution errors {de:?}, orders {oe:.2?}, over all {oe_all:.2}");
-    println!("peak errors {dp:?}, orders {op:.2?}, over all {op_all:.2}");
+    let (oe_all, op_all) = observed_orders(period, |dt, gap_time| {
+        let sub = (40_000.0 * dt / period).round() as usize;
+        let reference = impact_reference(m, k, c, v0, gap_time, (ms, ks), dt, sub);
+        let r = impact(m, k, c, v0, gap_time, Some((ms, ks)), dt);
+        (
+            (r.restitution - reference.restitution).abs() / reference.restitution,
+            (r.peak_acc - reference.peak_acc).abs() / reference.peak_acc,
+        )
+    });
     assert!(oe_all >= 1.8 && op_all >= 1.8, "{oe_all} {op_all}");
 }
 
