@@ -4,6 +4,9 @@
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
+    // LAPACK's XERBLA is replaced by linercav's (src/eigen/arpack.rs), which records the error
+    // instead of printing on stdout: export it so the shared LAPACK binds to it.
+    println!("cargo:rustc-link-arg=-Wl,--export-dynamic-symbol=xerbla_");
     if let Err(e) = pkg_config::Config::new().probe("arpack") {
         panic!(
             "\n\nlinercav needs ARPACK-NG: install the Debian package `libarpack2-dev` \

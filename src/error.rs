@@ -2,9 +2,9 @@
 //! (2 = bad input the user can fix, 1 = numerical or system failure).
 
 use crate::fem::model::ModelError;
+use crate::files::WriteError;
 use crate::mesh::checks::MeshError;
 use crate::mesh::gmsh::MshError;
-use crate::report::atomic::WriteError;
 use crate::scene::SceneError;
 
 #[derive(Debug, thiserror::Error)]

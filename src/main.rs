@@ -532,10 +532,16 @@ fn main() {
     let started = Instant::now();
     let cli = Cli::parse();
     if let Err(e) = run(cli, started) {
-        eprint!("error: {e}");
+        let mut said = e.to_string();
+        eprint!("error: {said}");
         let mut source = std::error::Error::source(&e);
         while let Some(s) = source {
-            eprint!("\n  caused by: {s}");
+            // a cause whose text the message already carries is not repeated
+            let text = s.to_string();
+            if !said.contains(&text) {
+                eprint!("\n  caused by: {text}");
+                said.push_str(&text);
+            }
             source = s.source();
         }
         eprintln!();

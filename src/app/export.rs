@@ -4,8 +4,9 @@
 use super::{load_part, ModelInput};
 use crate::error::{Error, Result};
 use crate::fem::model::FeModel;
+use crate::files as atomic;
 use crate::mesh::gmsh;
-use crate::report::{atomic, mtx};
+use crate::report::mtx;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

@@ -255,7 +255,7 @@ pub fn write_window_series(path: &std::path::Path, report: &FullOrderReport) -> 
                 .collect()
         })
         .collect();
-    crate::report::atomic::write_atomic(path, |w| {
+    crate::files::write_atomic(path, |w| {
         write!(w, "crank_angle_deg")?;
         for (name, r) in &runs {
             write!(

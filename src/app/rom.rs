@@ -39,7 +39,7 @@ pub struct LoadedRom {
 }
 
 fn file_digest(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path)
+    let bytes = crate::files::read_regular(path, crate::files::LIMIT_MESH)
         .map_err(|e| Error::Input(format!("{}: cannot read mesh file: {e}", path.display())))?;
     Ok(blake3::hash(&bytes).to_hex().to_string())
 }

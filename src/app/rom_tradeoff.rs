@@ -11,9 +11,9 @@
 
 use super::rom::build_rom;
 use crate::error::{Error, Result};
+use crate::files::write_all_atomic;
 use crate::reduce::full::{self, FullModes};
 use crate::reduce::rom::RomBuild;
-use crate::report::atomic::write_all_atomic;
 use crate::report::png::{write_png, Chart, Mark, Rule, Series};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};

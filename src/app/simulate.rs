@@ -5,12 +5,12 @@ use super::full_order::{compare, FullOrderReport};
 use super::progress::Progress;
 use super::rom::{get_rom, CacheOptions};
 use crate::error::{Error, Result};
+use crate::files::write_atomic;
 use crate::piston::kinematics::CrankSlider;
 use crate::piston::pressure::PressureCurve;
 use crate::piston::skirt::Skirt;
 use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
-use crate::report::atomic::write_atomic;
 use crate::scene::{PressureSource, Scene, Simulation};
 use crate::transient::cycle::{CycleResult, CycleSettings, EngineSetup, Stats};
 use std::path::{Path, PathBuf};
@@ -395,7 +395,7 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         report.full_order = Some(cmp);
     }
     if let Some(dir) = &req.out {
-        std::fs::create_dir_all(dir).map_err(|source| crate::report::atomic::WriteError {
+        std::fs::create_dir_all(dir).map_err(|source| crate::files::WriteError {
             path: dir.clone(),
             source,
         })?;

@@ -8,7 +8,7 @@ use super::simulate::{
     piston_of, run_cycle, settings_of, simulation, CylinderReport, SimulateReport,
 };
 use crate::error::{Error, Result};
-use crate::report::atomic::{write_all_atomic, Filler};
+use crate::files::{write_all_atomic, Filler};
 use crate::report::png::{write_png, Chart, Mark, Series};
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -326,7 +326,7 @@ pub fn draw_key(path: &Path, report: &SweepReport, key: usize) -> Result<()> {
 }
 
 fn write_outputs(dir: &Path, vary: &[Vary], report: &SweepReport) -> Result<Vec<String>> {
-    std::fs::create_dir_all(dir).map_err(|source| crate::report::atomic::WriteError {
+    std::fs::create_dir_all(dir).map_err(|source| crate::files::WriteError {
         path: dir.to_path_buf(),
         source,
     })?;

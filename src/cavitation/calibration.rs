@@ -61,9 +61,11 @@ impl RigData {
     /// ignored; `#` lines and blank lines skipped).
     pub fn read(path: &Path) -> Result<Self, CalibrationError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| CalibrationError::Io {
-            file: file.clone(),
-            msg: e.to_string(),
+        let text = crate::files::read_text(path, crate::files::LIMIT_DATA).map_err(|e| {
+            CalibrationError::Io {
+                file: file.clone(),
+                msg: e.to_string(),
+            }
         })?;
         Self::parse(&file, &text)
     }

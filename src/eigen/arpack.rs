@@ -29,6 +29,41 @@ pub fn single_threaded_blas() {
     });
 }
 
+/// The last LAPACK/BLAS argument error reported through `xerbla_`: routine name and the
+/// position of the illegal argument.
+static LAPACK_ERROR: Mutex<Option<(String, i32)>> = Mutex::new(None);
+
+/// LAPACK's error handler, replacing the library's: the reference `XERBLA` prints
+/// `** On entry to ... had an illegal value` on stdout (mixing into a `--json` output) and the
+/// run went on to exit 0 without a result. Here the routine and argument are recorded and the
+/// caller ([`take_lapack_error`]) turns them into an error; LAPACK returns from the failing
+/// routine as it does after printing. Fortran passes the name's length as a trailing hidden
+/// argument (gfortran: `size_t`). The symbol is exported from the executable by build.rs
+/// (`--export-dynamic-symbol`) so that the shared LAPACK resolves to it.
+///
+/// # Safety
+/// Called by LAPACK with a pointer to at least `len` bytes of name and a pointer to an integer.
+#[no_mangle]
+pub unsafe extern "C" fn xerbla_(srname: *const c_char, info: *const c_int, len: usize) {
+    let name = if srname.is_null() {
+        String::from("?")
+    } else {
+        let bytes = std::slice::from_raw_parts(srname as *const u8, len.min(32));
+        String::from_utf8_lossy(bytes).trim().to_string()
+    };
+    let arg = if info.is_null() { 0 } else { *info };
+    let mut slot = LAPACK_ERROR.lock().unwrap_or_else(|p| p.into_inner());
+    slot.get_or_insert((name, arg));
+}
+
+/// Takes the LAPACK argument error recorded since the last call, if any.
+pub fn take_lapack_error() -> Option<(String, i32)> {
+    LAPACK_ERROR
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .take()
+}
+
 extern "C" {
     pub fn dsaupd_c(
         ido: *mut c_int,

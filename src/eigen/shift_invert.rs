@@ -6,7 +6,9 @@
 //! modes included (A stays positive definite for sigma < 0 even for a free-free part).
 //! Eigenvectors come back M-orthonormal: phi_i^T M phi_j = delta_ij.
 
-use super::arpack::{dsaupd_c, dseupd_c, saupd_message, seupd_message, ARPACK_LOCK};
+use super::arpack::{
+    dsaupd_c, dseupd_c, saupd_message, seupd_message, take_lapack_error, ARPACK_LOCK,
+};
 use std::os::raw::c_int;
 
 /// Settings of one eigen-solve.
@@ -89,6 +91,8 @@ pub enum EigenError {
     Seupd { info: i32, msg: &'static str },
     #[error("ARPACK returned a non-finite eigenvalue (mode {index})")]
     NonFinite { index: usize },
+    #[error("LAPACK routine {routine} (inside ARPACK) rejected its argument {argument} as illegal: the operator is not finite or badly scaled (check the material and the shift)")]
+    Lapack { routine: String, argument: i32 },
 }
 
 /// Deterministic start vector (a fixed linear congruential sequence), so runs are repeatable.
@@ -141,6 +145,9 @@ pub fn solve_modes(
     let clock = std::time::Instant::now;
     let _guard = ARPACK_LOCK.lock().unwrap_or_else(|p| p.into_inner());
     super::arpack::single_threaded_blas();
+    take_lapack_error();
+    let lapack_failed =
+        || take_lapack_error().map(|(routine, argument)| EigenError::Lapack { routine, argument });
     loop {
         let t0 = clock();
         // SAFETY: all arrays have the sizes dsaupd documents (resid n, v n x ncv, workd 3n,
@@ -166,6 +173,9 @@ pub fn solve_modes(
             );
         }
         t_arpack += t0.elapsed().as_secs_f64();
+        if let Some(e) = lapack_failed() {
+            return Err(e);
+        }
         let x0 = ipntr[0] as usize - 1;
         let y0 = ipntr[1] as usize - 1;
         match ido {
@@ -249,6 +259,9 @@ pub fn solve_modes(
             lworkl as c_int,
             &mut info2,
         );
+    }
+    if let Some(e) = lapack_failed() {
+        return Err(e);
     }
     drop(_guard);
     t_arpack += t0.elapsed().as_secs_f64();

@@ -9,12 +9,13 @@
 
 use super::{ElementBlock, Mesh};
 use crate::fem::shape::ElementKind;
+use crate::files::{read_text, ReadError, LIMIT_MESH};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
 /// Why a mesh file could not be read: the file, the line and what was expected.
 #[derive(Debug, thiserror::Error)]
-#[error("{}:{line}: {msg}", path.display())]
+#[error("{}{}: {msg}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
 pub struct MshError {
     pub path: PathBuf,
     pub line: usize,
@@ -47,6 +48,8 @@ struct Lines<'a> {
     path: &'a Path,
     it: std::iter::Enumerate<std::str::Lines<'a>>,
     line: usize,
+    /// Number of lines in the file.
+    total: usize,
 }
 
 impl<'a> Lines<'a> {
@@ -76,6 +79,25 @@ impl<'a> Lines<'a> {
             })
             .collect()
     }
+    /// Lines left after the current one (an upper bound of the records still to come).
+    fn remaining(&self) -> usize {
+        self.total.saturating_sub(self.line)
+    }
+    /// Checks a count read from the file against what the rest of the file can hold:
+    /// non-negative, and at most the remaining lines divided by the lines each record takes.
+    fn count(&self, value: i64, lines_each: usize, what: &str) -> Result<usize, MshError> {
+        if value < 0 {
+            return Err(self.err(format!("{what} is {value}, expected a count >= 0")));
+        }
+        let room = self.remaining() / lines_each.max(1);
+        if value as u64 > room as u64 {
+            return Err(self.err(format!(
+                "{what} is {value}, but only {} lines follow (a record takes {lines_each}): the count does not match the file",
+                self.remaining()
+            )));
+        }
+        Ok(value as usize)
+    }
     fn expect(&mut self, tag: &str) -> Result<(), MshError> {
         let l = self.next_line()?;
         if l != tag {
@@ -92,24 +114,25 @@ fn need<T: Copy>(v: &[T], n: usize, lines: &Lines, what: &str) -> Result<(), Msh
     Ok(())
 }
 
-/// Reads an MSH 4.1 file from disk.
+/// Reads an MSH 4.1 file from disk (a regular file of at most [`LIMIT_MESH`] bytes).
 pub fn read(path: &Path) -> Result<Mesh, MshError> {
-    let bytes = std::fs::read(path).map_err(|e| MshError {
-        path: path.to_path_buf(),
-        line: 0,
-        msg: format!("cannot read the file: {e}"),
-    })?;
-    let text = match std::str::from_utf8(&bytes) {
-        Ok(t) => t,
-        Err(_) => {
-            return Err(MshError {
-                path: path.to_path_buf(),
-                line: 0,
-                msg: "not a text file: binary MSH is not supported, save the mesh as ASCII MSH 4.1 (Gmsh: -format msh41 with Mesh.Binary = 0)".into(),
-            })
+    let text = read_text(path, LIMIT_MESH).map_err(|e| {
+        let (line, msg) = match e {
+            ReadError::NotText { line, byte } => (
+                line,
+                format!(
+                    "byte 0x{byte:02x} is not text: the reader takes ASCII MSH 4.1 (binary MSH: save as ASCII, Gmsh -format msh41 with Mesh.Binary = 0)"
+                ),
+            ),
+            other => (0, other.to_string()),
+        };
+        MshError {
+            path: path.to_path_buf(),
+            line,
+            msg,
         }
-    };
-    parse(path, text)
+    })?;
+    parse(path, &text)
 }
 
 /// Parses MSH 4.1 ASCII text; `path` is used in messages only.
@@ -118,6 +141,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
         path,
         it: text.lines().enumerate(),
         line: 0,
+        total: text.lines().count(),
     };
     let mut names: HashMap<(i32, i32), String> = HashMap::new();
     // (dim, entity tag) -> physical tags
@@ -152,9 +176,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                 saw_format = true;
             }
             "$PhysicalNames" => {
-                let n = lines.numbers::<usize>("number of physical names")?;
+                let n = lines.numbers::<i64>("number of physical names")?;
                 need(&n, 1, &lines, "count")?;
-                for _ in 0..n[0] {
+                for _ in 0..lines.count(n[0], 1, "the number of physical names")? {
                     let l = lines.next_line()?;
                     let mut it = l.splitn(3, char::is_whitespace);
                     let dim = it.next().and_then(|w| w.parse::<i32>().ok());
@@ -170,16 +194,23 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                 lines.expect("$EndPhysicalNames")?;
             }
             "$Entities" => {
-                let c = lines.numbers::<usize>("entity counts")?;
+                let c = lines.numbers::<i64>("entity counts")?;
                 need(&c, 4, &lines, "numPoints numCurves numSurfaces numVolumes")?;
                 for (dim, &count) in c.iter().take(4).enumerate() {
-                    for _ in 0..count {
+                    for _ in 0..lines.count(count, 1, "an entity count")? {
                         let v = lines.numbers::<f64>("entity record")?;
                         // points: tag x y z nphys phys...; others: tag 6 bbox nphys phys...
                         let at = if dim == 0 { 4 } else { 7 };
                         need(&v, at + 1, &lines, "entity record")?;
-                        let np = v[at] as usize;
-                        need(&v, at + 1 + np, &lines, "physical tags")?;
+                        let np = v[at];
+                        if !(np >= 0.0 && np.fract() == 0.0 && np <= (v.len() - at - 1) as f64) {
+                            return Err(lines.err(format!(
+                                "the entity record gives {} physical tags but holds {} numbers after the count",
+                                crate::text::num(np),
+                                v.len() - at - 1
+                            )));
+                        }
+                        let np = np as usize;
                         let tags = v[at + 1..at + 1 + np].iter().map(|&t| t as i32).collect();
                         entity_phys.insert((dim as i32, v[0] as i32), tags);
                     }
@@ -187,15 +218,17 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                 lines.expect("$EndEntities")?;
             }
             "$Nodes" => {
-                let h = lines.numbers::<usize>("'numEntityBlocks numNodes minTag maxTag'")?;
+                let h = lines.numbers::<i64>("'numEntityBlocks numNodes minTag maxTag'")?;
                 need(
                     &h,
                     4,
                     &lines,
                     "numEntityBlocks numNodes minNodeTag maxNodeTag",
                 )?;
-                nodes.reserve(h[1]);
-                for _ in 0..h[0] {
+                // each node takes two lines (its tag, its coordinates); each block one more
+                let total_nodes = lines.count(h[1], 2, "numNodes")?;
+                nodes.reserve(total_nodes);
+                for _ in 0..lines.count(h[0], 1, "numEntityBlocks")? {
                     let b = lines.numbers::<i64>("node block header")?;
                     need(
                         &b,
@@ -204,7 +237,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                         "entityDim entityTag parametric numNodesInBlock",
                     )?;
                     let parametric = b[2] != 0;
-                    let count = b[3] as usize;
+                    let count = lines.count(b[3], 2, "numNodesInBlock")?;
                     let mut tags = Vec::with_capacity(count);
                     for _ in 0..count {
                         let t = lines.numbers::<usize>("node tag")?;
@@ -227,14 +260,15 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                 saw_nodes = true;
             }
             "$Elements" => {
-                let h = lines.numbers::<usize>("'numEntityBlocks numElements minTag maxTag'")?;
+                let h = lines.numbers::<i64>("'numEntityBlocks numElements minTag maxTag'")?;
                 need(
                     &h,
                     4,
                     &lines,
                     "numEntityBlocks numElements minElementTag maxElementTag",
                 )?;
-                for _ in 0..h[0] {
+                lines.count(h[1], 1, "numElements")?;
+                for _ in 0..lines.count(h[0], 1, "numEntityBlocks")? {
                     let b = lines.numbers::<i64>("element block header")?;
                     need(
                         &b,
@@ -242,8 +276,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                         &lines,
                         "entityDim entityTag elementType numElementsInBlock",
                     )?;
-                    let (dim, ent, et, count) =
-                        (b[0] as i32, b[1] as i32, b[2] as u32, b[3] as usize);
+                    let count = lines.count(b[3], 1, "numElementsInBlock")?;
+                    let (dim, ent) = (b[0] as i32, b[1] as i32);
+                    let et = u32::try_from(b[2]).map_err(|_| {
+                        lines.err(format!("element type {} is not a Gmsh element type", b[2]))
+                    })?;
                     let nn = nodes_per_type(et)
                         .ok_or_else(|| lines.err(format!("unsupported element type {et}")))?;
                     if dim == 3 && ElementKind::from_gmsh_type(et).is_none() {

@@ -47,7 +47,7 @@ pub enum PressureError {
     #[error("{}: cannot read the pressure file: {source}", path.display())]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        source: crate::files::ReadError,
     },
     #[error("{}: line {line}: {msg}", path.display())]
     Line {
@@ -70,9 +70,11 @@ impl PressureCurve {
     /// Reads `crank_angle_deg,pressure_bar` (header line required; angles strictly increasing
     /// within [0, 720], spanning less than 720 deg; pressures finite and positive).
     pub fn from_csv(path: &Path) -> Result<Self, PressureError> {
-        let text = std::fs::read_to_string(path).map_err(|source| PressureError::Io {
-            path: path.into(),
-            source,
+        let text = crate::files::read_text(path, crate::files::LIMIT_TEXT).map_err(|source| {
+            PressureError::Io {
+                path: path.into(),
+                source,
+            }
         })?;
         Self::parse(path, &text)
     }

@@ -8,7 +8,7 @@
 //! written to a temporary name and renamed.
 
 use super::rom::{EngineRom, ROM_FORMAT};
-use crate::report::atomic::{write_atomic, WriteError};
+use crate::files::{write_atomic, WriteError};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"LCAVROM\0";

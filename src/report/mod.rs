@@ -1,6 +1,5 @@
-//! Output writers: atomic file writes, Matrix Market, VTU mode shapes.
+//! Output writers: Matrix Market, VTU mode shapes.
 
-pub mod atomic;
 pub mod mtx;
 pub mod png;
 pub mod vtu;

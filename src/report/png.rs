@@ -2,7 +2,7 @@
 //! (drawn to a temporary file in the target directory, then renamed), and one small chart
 //! helper that covers the report's line, point and threshold plots.
 
-use super::atomic::WriteError;
+use crate::files::WriteError;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;

@@ -19,7 +19,7 @@ pub enum SceneError {
     #[error("{}: cannot read the scene file: {source}", path.display())]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        source: crate::files::ReadError,
     },
     #[error("{}: not valid TOML: {msg}", path.display())]
     Syntax { path: PathBuf, msg: String },
@@ -203,9 +203,11 @@ pub const PARTS: [&str; 1] = ["liner"];
 impl Scene {
     /// Reads, overrides and validates a scene file.
     pub fn load(path: &Path, sets: &[String]) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_path_buf(),
-            source,
+        let text = crate::files::read_text(path, crate::files::LIMIT_TEXT).map_err(|source| {
+            SceneError::Io {
+                path: path.to_path_buf(),
+                source,
+            }
         })?;
         Self::from_str_with(path, &text, sets)
     }
@@ -528,7 +530,7 @@ fn validate_cavitation(
             ));
         }
         let path = base.join(f);
-        let text = std::fs::read_to_string(&path).map_err(|e| {
+        let text = crate::files::read_text(&path, crate::files::LIMIT_TEXT).map_err(|e| {
             c.err(
                 "cavitation.calibration_file",
                 format!("cannot read {}: {e}", path.display()),

@@ -1,0 +1,49 @@
+//! Numbers in messages: a few significant digits, whatever the magnitude (`1e308`, not 309 digits).
+
+/// Formats `x` with about four significant digits: plain notation between 1e-3 and 1e6,
+/// scientific outside, integers as integers; `inf`, `-inf` and `NaN` as such.
+pub fn num(x: f64) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let a = x.abs();
+    if x == x.trunc() && a < 1e15 {
+        return format!("{}", x as i64);
+    }
+    if a == 0.0 || (1e-3..1e6).contains(&a) {
+        let s = format!("{:.*}", (3 - a.log10().floor() as i32).max(0) as usize, x);
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    } else {
+        let s = format!("{x:.3e}");
+        // 1.500e-7 -> 1.5e-7
+        match s.split_once('e') {
+            Some((m, e)) if m.contains('.') => {
+                format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+            }
+            _ => s,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    #[test]
+    fn few_significant_digits() {
+        assert_eq!(num(1e308), "1e308");
+        assert_eq!(num(1e-308), "1e-308");
+        assert_eq!(num(2.5), "2.5");
+        assert_eq!(num(0.125), "0.125");
+        assert_eq!(num(1234.5678), "1235");
+        assert_eq!(num(-3.0), "-3");
+        assert_eq!(num(9.223372036854776e18), "9.223e18");
+        assert_eq!(num(1.0 / 3.0), "0.3333");
+        assert_eq!(num(f64::NAN), "NaN");
+        assert_eq!(num(1.5e-7), "1.5e-7");
+    }
+}
