@@ -29,6 +29,8 @@ pub enum Error {
     Failure(String),
     #[error(transparent)]
     Rom(#[from] crate::reduce::rom::RomError),
+    #[error(transparent)]
+    Cache(#[from] crate::reduce::cache::CacheReadError),
 }
 
 impl Error {
@@ -36,10 +38,13 @@ impl Error {
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Scene(_) | Error::Msh(_) | Error::Mesh { .. } | Error::Input(_) => 2,
+            // an output that cannot be written, a cache file that cannot be read: the user's
+            // to fix (a path, a permission, a full disk)
+            Error::Write(_) | Error::Cache(_) => 2,
             Error::Model(ModelError::Set(_)) | Error::Model(ModelError::NoDofs) => 2,
             Error::Model(ModelError::Eigen(crate::eigen::EigenError::TooMany { .. })) => 2,
             Error::Rom(e) => e.exit_code(),
-            Error::Model(_) | Error::Write(_) | Error::Failure(_) => 1,
+            Error::Model(_) | Error::Failure(_) => 1,
         }
     }
 }

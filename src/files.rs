@@ -1,10 +1,50 @@
 //! Files in and out. Input: only regular files are read, and never more than a stated size
 //! (a link to `/dev/zero` or a mistyped multi-gigabyte file is refused before it is read).
 //! Output: written to a temporary file in the target directory, then renamed, so a failed run
-//! never leaves a half-written file behind.
+//! never leaves a half-written file behind; a command's set of files is staged in a temporary
+//! directory and moved into place only when complete ([`OutputDir`]). Temporary files and
+//! directories are registered and removed when the process is stopped by SIGINT, SIGTERM or
+//! SIGHUP ([`install_signal_cleanup`]); the handler waits for a move in progress to finish, so
+//! an output directory is left either as it was or complete.
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Temporary files and directories of this process, removed on a stopping signal.
+static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Held while staged outputs are moved into place (the signal handler waits for it).
+static COMMITTING: Mutex<()> = Mutex::new(());
+
+fn register(p: &Path) {
+    lock(&TEMPORARIES).push(p.to_path_buf());
+}
+
+fn unregister(p: &Path) {
+    lock(&TEMPORARIES).retain(|q| q != p);
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Removes this process's temporary files and directories and exits with 128 + the signal's
+/// usual number (130) when SIGINT, SIGTERM or SIGHUP arrives; a move of staged outputs in
+/// progress is finished first. Called once by the command-line front end.
+pub fn install_signal_cleanup() {
+    let _ = ctrlc::set_handler(|| {
+        let _moving = lock(&COMMITTING);
+        for p in lock(&TEMPORARIES).drain(..) {
+            if p.is_dir() {
+                let _ = std::fs::remove_dir_all(&p);
+            } else {
+                let _ = std::fs::remove_file(&p);
+            }
+        }
+        eprintln!("\nstopped by a signal; temporary files removed, outputs left as they were");
+        std::process::exit(130);
+    });
+}
 
 /// An output file that could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -103,6 +143,7 @@ pub fn write_all_atomic(files: Vec<(PathBuf, Filler<'_>)>) -> Result<(), WriteEr
     let mut done: Vec<(PathBuf, PathBuf)> = Vec::new();
     for (path, fill) in files {
         let tmp = temp_path(&path);
+        register(&tmp);
         let r = (|| {
             let file = std::fs::File::create(&tmp)?;
             let mut w = BufWriter::with_capacity(1 << 20, file);
@@ -112,15 +153,135 @@ pub fn write_all_atomic(files: Vec<(PathBuf, Filler<'_>)>) -> Result<(), WriteEr
         })();
         if let Err(source) = r {
             let _ = std::fs::remove_file(&tmp);
+            unregister(&tmp);
             for (t, _) in &done {
                 let _ = std::fs::remove_file(t);
+                unregister(t);
             }
             return Err(WriteError { path, source });
         }
         done.push((tmp, path));
     }
+    let _moving = lock(&COMMITTING);
+    let mut result = Ok(());
     for (tmp, path) in done {
-        std::fs::rename(&tmp, &path).map_err(|source| WriteError { path, source })?;
+        if result.is_ok() {
+            result = std::fs::rename(&tmp, &path).map_err(|source| WriteError { path, source });
+        }
+        if result.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        unregister(&tmp);
     }
-    Ok(())
+    result
+}
+
+/// A set of output files written all-or-nothing: the command writes into [`OutputDir::path`]
+/// (a temporary directory), and [`OutputDir::commit`] moves the files into the target
+/// directory only when all are written. When the target does not exist the staging directory
+/// is made beside it and renamed onto it (one atomic step); when it exists (a `reports/` with
+/// its own README) the files are renamed into it one by one while the signal handler waits.
+/// Before anything moves, every target name is checked: one taken by a directory or another
+/// non-file stops the commit with nothing moved. Dropped without a commit, the staging
+/// directory is removed.
+pub struct OutputDir {
+    target: PathBuf,
+    staging: PathBuf,
+    committed: bool,
+}
+
+impl OutputDir {
+    /// Creates the staging directory for `target` (and the target's parent directories), so an
+    /// unwritable output is found before any work starts.
+    pub fn create(target: &Path) -> Result<Self, WriteError> {
+        let fail = |source| WriteError {
+            path: target.to_path_buf(),
+            source,
+        };
+        if target.exists() && !target.is_dir() {
+            return Err(fail(std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                "exists and is not a directory",
+            )));
+        }
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&parent).map_err(fail)?;
+        let staging = if target.is_dir() {
+            target.join(format!(".linercav-staging.{}", std::process::id()))
+        } else {
+            temp_path(target)
+        };
+        let _ = std::fs::remove_dir_all(&staging);
+        std::fs::create_dir(&staging).map_err(fail)?;
+        register(&staging);
+        Ok(Self {
+            target: target.to_path_buf(),
+            staging,
+            committed: false,
+        })
+    }
+
+    /// Where the files are written until the commit.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// The final path of a file written at `staged` (inside [`OutputDir::path`]).
+    pub fn final_path(&self, staged: &Path) -> PathBuf {
+        match staged.strip_prefix(&self.staging) {
+            Ok(rel) => self.target.join(rel),
+            Err(_) => staged.to_path_buf(),
+        }
+    }
+
+    /// Moves the staged files into place (see the type's documentation).
+    pub fn commit(mut self) -> Result<(), WriteError> {
+        let fail = |path: &Path, source| WriteError {
+            path: path.to_path_buf(),
+            source,
+        };
+        let _moving = lock(&COMMITTING);
+        if !self.target.exists() {
+            std::fs::rename(&self.staging, &self.target).map_err(|e| fail(&self.target, e))?;
+            unregister(&self.staging);
+            self.committed = true;
+            return Ok(());
+        }
+        let mut names = Vec::new();
+        for entry in std::fs::read_dir(&self.staging).map_err(|e| fail(&self.staging, e))? {
+            let entry = entry.map_err(|e| fail(&self.staging, e))?;
+            let to = self.target.join(entry.file_name());
+            if let Ok(meta) = std::fs::symlink_metadata(&to) {
+                if !meta.is_file() {
+                    return Err(fail(
+                        &to,
+                        std::io::Error::new(
+                            std::io::ErrorKind::AlreadyExists,
+                            "the name is taken by a directory or another non-file; nothing was written",
+                        ),
+                    ));
+                }
+            }
+            names.push((entry.path(), to));
+        }
+        for (from, to) in names {
+            std::fs::rename(&from, &to).map_err(|e| fail(&to, e))?;
+        }
+        let _ = std::fs::remove_dir(&self.staging);
+        unregister(&self.staging);
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.staging);
+            unregister(&self.staging);
+        }
+    }
 }

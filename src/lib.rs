@@ -12,6 +12,7 @@ pub mod error;
 pub mod fem;
 pub mod files;
 pub mod linalg;
+pub mod machine;
 pub mod mesh;
 pub mod piston;
 pub mod reduce;

@@ -527,8 +527,38 @@ fn single_threaded_blas() {
         .exec();
 }
 
+/// Warnings of the library (`log::warn!`) on stderr, each distinct message once (a sweep loads
+/// its scene once per run).
+struct StderrLog {
+    said: std::sync::Mutex<std::collections::HashSet<String>>,
+}
+
+impl log::Log for StderrLog {
+    fn enabled(&self, m: &log::Metadata) -> bool {
+        m.level() <= log::Level::Warn
+    }
+    fn log(&self, r: &log::Record) {
+        if self.enabled(r.metadata()) {
+            let msg = r.args().to_string();
+            let mut said = self.said.lock().unwrap_or_else(|p| p.into_inner());
+            if said.insert(msg.clone()) {
+                eprintln!("warning: {msg}");
+            }
+        }
+    }
+    fn flush(&self) {}
+}
+
 fn main() {
     single_threaded_blas();
+    linercav::files::install_signal_cleanup();
+    static LOG: std::sync::OnceLock<StderrLog> = std::sync::OnceLock::new();
+    let logger = LOG.get_or_init(|| StderrLog {
+        said: Default::default(),
+    });
+    if log::set_logger(logger).is_ok() {
+        log::set_max_level(log::LevelFilter::Warn);
+    }
     let started = Instant::now();
     let cli = Cli::parse();
     if let Err(e) = run(cli, started) {

@@ -7,7 +7,7 @@ pub fn num(x: f64) -> String {
         return format!("{x}");
     }
     let a = x.abs();
-    if x == x.trunc() && a < 1e15 {
+    if x == x.trunc() && a < 1e6 {
         return format!("{}", x as i64);
     }
     if a == 0.0 || (1e-3..1e6).contains(&a) {
@@ -29,6 +29,17 @@ pub fn num(x: f64) -> String {
     }
 }
 
+/// The message for a CSV row whose field count differs from the header's; more fields than
+/// columns usually means decimal commas (`369,5` for 369.5), which would shift every value.
+pub fn field_count_message(found: usize, header: usize) -> String {
+    let hint = if found > header {
+        ": decimal commas? write numbers with a decimal point (369.5, not 369,5)"
+    } else {
+        ""
+    };
+    format!("{found} fields, the header has {header}{hint}")
+}
+
 #[cfg(test)]
 mod tests {
     use super::num;
@@ -40,6 +51,8 @@ mod tests {
         assert_eq!(num(2.5), "2.5");
         assert_eq!(num(0.125), "0.125");
         assert_eq!(num(1234.5678), "1235");
+        assert_eq!(num(1e9), "1e9");
+        assert_eq!(num(16416000.0), "1.642e7");
         assert_eq!(num(-3.0), "-3");
         assert_eq!(num(9.223372036854776e18), "9.223e18");
         assert_eq!(num(1.0 / 3.0), "0.3333");

@@ -247,12 +247,72 @@ fn cache_hit_miss_and_corruption() {
         }
         assert!(
             matches!(
-                linercav::reduce::cache::load(&path),
-                linercav::reduce::cache::Lookup::Hit(_)
+                linercav::reduce::cache::load(&path, &key_description(&sc).unwrap()),
+                Ok(linercav::reduce::cache::Lookup::Hit(_))
             ),
             "rebuilt file valid"
         );
     }
+    forged_files_are_not_trusted(&sc, &path);
+}
+
+/// Files with a valid checksum but forged content (regression of issue 23: an all-zero
+/// payload loaded as a hit with no cylinders; a NaN frequency was printed as null): each is
+/// reported as corrupt, never a hit. A link to a device and an unreadable file are errors, not
+/// a hang or a silent miss.
+fn forged_files_are_not_trusted(sc: &linercav::scene::Scene, path: &std::path::Path) {
+    use linercav::reduce::cache::{load, Lookup};
+    let description = key_description(sc).unwrap();
+    let good = std::fs::read(path).unwrap();
+    let sign = |payload: &[u8]| {
+        let mut f = good[..12].to_vec();
+        f.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        f.extend_from_slice(blake3::hash(payload).as_bytes());
+        f.extend_from_slice(payload);
+        f
+    };
+    let (stored, rom): (String, linercav::reduce::rom::EngineRom) =
+        bincode::deserialize(&good[52..]).unwrap();
+    assert_eq!(stored, description);
+    let mut nan = rom.clone();
+    nan.frequencies_hz[3] = f64::NAN;
+    let mut empty = rom.clone();
+    empty.cylinders.clear();
+    let mut short = rom.clone();
+    short.cylinders[0].point_modes.data.pop();
+    let cases = [
+        ("all-zero payload", sign(&vec![0u8; good.len() - 52])),
+        (
+            "NaN frequency",
+            sign(&bincode::serialize(&(&stored, &nan)).unwrap()),
+        ),
+        (
+            "no cylinders",
+            sign(&bincode::serialize(&(&stored, &empty)).unwrap()),
+        ),
+        (
+            "short matrix",
+            sign(&bincode::serialize(&(&stored, &short)).unwrap()),
+        ),
+        (
+            "other inputs",
+            sign(&bincode::serialize(&("x", &rom)).unwrap()),
+        ),
+    ];
+    for (what, bytes) in cases {
+        std::fs::write(path, bytes).unwrap();
+        assert!(
+            matches!(load(path, &description), Ok(Lookup::Corrupt(_))),
+            "{what}: must be reported corrupt"
+        );
+    }
+    std::fs::remove_file(path).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", path).unwrap();
+    assert!(
+        load(path, &description).is_err(),
+        "a link to a device is an error"
+    );
+    std::fs::remove_file(path).unwrap();
 }
 
 #[test]

@@ -13,6 +13,7 @@ use crate::mesh::checks::check_and_compact;
 use crate::mesh::{crankcase, gmsh, liner, Mesh};
 use crate::reduce::cache::{self, Lookup};
 use crate::reduce::rom::{build, EngineRom, RomBuild, RomInputs, ROM_FORMAT};
+use crate::scene::budget::{self, Limits};
 use crate::scene::{CrankcaseSource, MeshSource, Scene};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -209,11 +210,12 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
         .dir
         .clone()
         .unwrap_or_else(|| scene.rom.cache_dir.clone());
-    let key = cache::key_of(&key_description(scene)?);
+    let description = key_description(scene)?;
+    let key = cache::key_of(&description);
     let path = cache::path_for(&dir, &key);
     let mut replaced = None;
     if !opts.no_cache {
-        match cache::load(&path) {
+        match cache::load(&path, &description)? {
             Lookup::Hit(rom) => {
                 return Ok(LoadedRom {
                     rom: *rom,
@@ -225,16 +227,37 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
                 })
             }
             Lookup::Corrupt(reason) => {
-                eprintln!("warning: {}: {reason}; rebuilding the ROM", path.display());
+                log::warn!("{}: {reason}; rebuilding the ROM", path.display());
                 replaced = Some(reason);
             }
             Lookup::Miss => {}
         }
     }
+    // nothing is built that the machine cannot hold or whose result cannot be stored
+    let limits = Limits::of(scene);
+    if let Some(est) = budget::rom_build(scene) {
+        limits.check(scene, &est)?;
+    }
+    if !opts.no_cache {
+        cache::check_writable(&dir)?;
+    }
     let (b, _, _) = build_rom(scene, false)?;
     let rom = b.rom.clone();
+    if rom.info.system_modes == 0 {
+        return Err(Error::Input(format!(
+            "{}: the engine has no mode below the cut-off {} Hz (rom.band_hz x rom.cutoff_factor): raise rom.band_hz",
+            scene.path.display(),
+            crate::text::num(scene.rom.cutoff_hz)
+        )));
+    }
+    rom.validate().map_err(|e| {
+        Error::Failure(format!(
+            "{}: the built ROM is inconsistent: {e}",
+            scene.path.display()
+        ))
+    })?;
     if !opts.no_cache {
-        cache::store(&path, &rom)?;
+        cache::store(&path, &description, &rom)?;
     }
     Ok(LoadedRom {
         rom,

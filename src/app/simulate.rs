@@ -5,7 +5,7 @@ use super::full_order::{compare, FullOrderReport};
 use super::progress::Progress;
 use super::rom::{get_rom, CacheOptions};
 use crate::error::{Error, Result};
-use crate::files::write_atomic;
+use crate::files::{write_atomic, OutputDir};
 use crate::piston::kinematics::CrankSlider;
 use crate::piston::pressure::PressureCurve;
 use crate::piston::skirt::Skirt;
@@ -371,6 +371,11 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     let scene = Scene::load(&req.scene, &req.sets)?;
     let sim = simulation(&scene)?;
     let piston = piston_of(&scene)?;
+    // refused before any work: a transient beyond the limits, an output that cannot be written
+    if let Some(est) = crate::scene::budget::transient(&scene) {
+        crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
+    }
+    let stage = req.out.as_deref().map(OutputDir::create).transpose()?;
     let progress = Progress::new();
     progress.phase("engine ROM");
     let loaded = get_rom(&scene, &req.cache)?;
@@ -394,14 +399,11 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         report.speedup = Some(cmp.speedup);
         report.full_order = Some(cmp);
     }
-    if let Some(dir) = &req.out {
-        std::fs::create_dir_all(dir).map_err(|source| crate::files::WriteError {
-            path: dir.clone(),
-            source,
-        })?;
+    if let Some(stage) = stage {
+        let dir = stage.path().to_path_buf();
         let path = dir.join("time_series.csv");
         write_series(&path, &res)?;
-        report.time_series_csv = Some(path.display().to_string());
+        report.time_series_csv = Some(stage.final_path(&path).display().to_string());
         if let Some(cmp) = &report.full_order {
             super::full_order::write_window_series(&dir.join("full_order_window.csv"), cmp)?;
         }
@@ -409,6 +411,7 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         report.seconds = started.elapsed().as_secs_f64();
         let text = serde_json::to_string_pretty(&report).expect("serialisable");
         write_atomic(&json, |w| w.write_all(text.as_bytes()))?;
+        stage.commit()?;
     }
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)

@@ -172,6 +172,16 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     let scene = Scene::load(scene_path, sets)?;
     let sim = simulation(&scene)?;
     let piston = piston_of(&scene)?;
+    // about ten transients (the scene and its two sweeps): refused before any work when beyond
+    // the limits, as is an output directory that cannot be written
+    if let Some(mut est) = crate::scene::budget::transient(&scene) {
+        est.what = "the report's transients";
+        est.seconds *= (1 + CLEARANCES_UM.len() + PIN_OFFSETS_MM.len()) as f64 / 2.0;
+        crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
+    }
+    let stage = crate::files::OutputDir::create(out)?;
+    let target = out;
+    let out = stage.path();
     let progress = super::progress::Progress::new();
     progress.phase("engine ROM");
     let loaded = get_rom(&scene, cache)?;
@@ -230,12 +240,6 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     );
     let mut simulate = SimulateReport::new(&scene, &piston, base, loaded.cache, 0.0);
     simulate.seconds = started.elapsed().as_secs_f64();
-    std::fs::create_dir_all(out).map_err(|e| {
-        Error::Input(format!(
-            "{}: cannot create the output directory: {e}",
-            out.display()
-        ))
-    })?;
     progress.phase("figures");
     let figs = figures(
         out, &scene, &piston, base, &ev, &clearance, &offset, &trade, rom,
@@ -250,11 +254,14 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         clearance_sweep: clearance,
         pin_offset_sweep: offset,
         tradeoff: trade,
-        files: figs.iter().map(|p| p.display().to_string()).collect(),
+        files: figs
+            .iter()
+            .map(|p| stage.final_path(p).display().to_string())
+            .collect(),
         seconds: 0.0,
     };
     report.seconds = started.elapsed().as_secs_f64();
-    let md = markdown(&report, scene_path, out);
+    let md = markdown(&report, scene_path, target);
     let json = serde_json::to_string_pretty(&report).expect("serialisable");
     write_all_atomic(vec![
         (
@@ -266,6 +273,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
             Box::new(move |w: &mut dyn std::io::Write| w.write_all(md.as_bytes())),
         ),
     ])?;
+    stage.commit()?;
     Ok(report)
 }
 

@@ -8,7 +8,7 @@ use super::simulate::{
     piston_of, run_cycle, settings_of, simulation, CylinderReport, SimulateReport,
 };
 use crate::error::{Error, Result};
-use crate::files::{write_all_atomic, Filler};
+use crate::files::{write_all_atomic, Filler, OutputDir};
 use crate::report::png::{write_png, Chart, Mark, Series};
 use crate::scene::Scene;
 use rayon::prelude::*;
@@ -91,6 +91,8 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     if let Some(d) = vary.iter().find(|v| !seen.insert(v.key.clone())) {
         return Err(Error::Input(format!("--vary: key '{}' given twice", d.key)));
     }
+    check_size(req, &vary)?;
+    let stage = req.out.as_deref().map(OutputDir::create).transpose()?;
     // the Cartesian product, last key fastest
     let mut combos: Vec<Vec<String>> = vec![vec![]];
     for v in &vary {
@@ -188,11 +190,40 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         seconds: 0.0,
         files: vec![],
     };
-    if let Some(dir) = &req.out {
-        report.files = write_outputs(dir, &vary, &report)?;
+    if let Some(stage) = stage {
+        let files = write_outputs(stage.path(), &vary, &report)?;
+        report.files = files
+            .iter()
+            .map(|f| stage.final_path(Path::new(f)).display().to_string())
+            .collect();
+        stage.commit()?;
     }
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// Refuses, before any scene is loaded for each run, a sweep whose runs would take longer
+/// than `limits.max_hours` on this machine: runs x the base scene's transient estimate /
+/// cores.
+fn check_size(req: &SweepRequest, vary: &[Vary]) -> Result<()> {
+    let runs = vary
+        .iter()
+        .try_fold(1usize, |n, v| n.checked_mul(v.values.len()))
+        .unwrap_or(usize::MAX);
+    let base = Scene::load(&req.scene, &req.sets)?;
+    let Some(one) = crate::scene::budget::transient(&base) else {
+        return Ok(());
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    let est = crate::scene::budget::Estimate {
+        what: "the sweep",
+        memory: one.memory * cores,
+        seconds: runs as f64 * one.seconds / cores,
+        keys: "the --vary lists (fewer values), transient.step_deg or transient.cycles",
+        detail: format!("{runs} runs of {}", one.detail),
+    };
+    crate::scene::budget::Limits::of(&base).check(&base, &est)?;
+    Ok(())
 }
 
 fn label(vary: &[Vary], values: &[String]) -> String {
@@ -326,10 +357,6 @@ pub fn draw_key(path: &Path, report: &SweepReport, key: usize) -> Result<()> {
 }
 
 fn write_outputs(dir: &Path, vary: &[Vary], report: &SweepReport) -> Result<Vec<String>> {
-    std::fs::create_dir_all(dir).map_err(|source| crate::files::WriteError {
-        path: dir.to_path_buf(),
-        source,
-    })?;
     let csv_text = csv(report);
     let json = serde_json::to_string_pretty(report).expect("serialisable");
     let mut files: Vec<(PathBuf, Filler<'_>)> = vec![

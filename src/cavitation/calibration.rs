@@ -98,6 +98,13 @@ impl RigData {
         let mut d = RigData::default();
         for (ln, line) in lines {
             let fields: Vec<&str> = line.split(',').map(|s| s.trim()).collect();
+            if fields.len() != names.len() {
+                return Err(CalibrationError::Line {
+                    file: file.into(),
+                    line: ln + 1,
+                    msg: crate::text::field_count_message(fields.len(), names.len()),
+                });
+            }
             let mut v = [0.0; 3];
             for k in 0..3 {
                 let s = fields.get(idx[k]).ok_or_else(|| CalibrationError::Line {

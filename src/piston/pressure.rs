@@ -106,6 +106,12 @@ impl PressureCurve {
         let (mut angles_deg, mut pa) = (Vec::new(), Vec::new());
         for (i, l) in lines {
             let f: Vec<&str> = l.split(',').map(str::trim).collect();
+            if f.len() != cols.len() {
+                return Err(line_err(
+                    i + 1,
+                    crate::text::field_count_message(f.len(), cols.len()),
+                ));
+            }
             let get = |k: usize, name: &str| -> Result<f64, PressureError> {
                 let s = f
                     .get(k)

@@ -3,15 +3,17 @@
 //! File `rom-<key>.bin` in the cache directory, `key` the BLAKE3 hash of the canonical JSON of
 //! everything the reduction depends on (see [`crate::app::rom`]). Layout: magic `LCAVROM\0`,
 //! format version (u32 LE), payload length (u64 LE), BLAKE3 hash of the payload (32 bytes),
-//! payload (bincode of [`EngineRom`]). A file whose magic, version, length or hash does not
-//! match is treated as absent (and overwritten by the rebuild), never trusted. Files are
-//! written to a temporary name and renamed.
+//! payload (bincode of the key description and the [`EngineRom`]). A file is trusted only when
+//! it is a regular file whose magic, version, length and hash match, whose stored key
+//! description is the one asked for, and whose ROM passes [`EngineRom::validate`]; otherwise it
+//! is reported and rebuilt. Files are written to a temporary name and renamed.
 
 use super::rom::{EngineRom, ROM_FORMAT};
-use crate::files::{write_atomic, WriteError};
+use crate::files::{read_regular, write_atomic, ReadError, WriteError};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"LCAVROM\0";
+const HEADER: usize = 8 + 4 + 8 + 32;
 
 /// Outcome of a cache lookup.
 pub enum Lookup {
@@ -32,33 +34,56 @@ pub fn key_of(description: &str) -> String {
     h.to_hex()[..32].to_string()
 }
 
-/// Reads and verifies a cached ROM.
-pub fn load(path: &Path) -> Lookup {
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(_) => return Lookup::Miss,
-    };
-    match decode(&bytes) {
-        Ok(rom) => Lookup::Hit(Box::new(rom)),
-        Err(msg) => Lookup::Corrupt(msg),
-    }
+/// A cache file that exists but cannot be read (permissions, a device or directory in its
+/// place): an error, not a silent miss.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: cannot read the ROM cache file: {source} (remove it, or run with --no-cache)", path.display())]
+pub struct CacheReadError {
+    pub path: PathBuf,
+    pub source: ReadError,
 }
 
-fn decode(bytes: &[u8]) -> Result<EngineRom, String> {
-    let header = 8 + 4 + 8 + 32;
-    if bytes.len() < header {
+/// Reads and verifies a cached ROM made from `description`.
+pub fn load(path: &Path, description: &str) -> Result<Lookup, CacheReadError> {
+    // the stored payload never exceeds what the machine can hold
+    let limit = crate::machine::available_memory();
+    let bytes = match read_regular(path, limit) {
+        Ok(b) => b,
+        Err(ReadError::Io(e)) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Ok(Lookup::Miss)
+        }
+        Err(ReadError::TooLarge { size, .. }) => {
+            return Ok(Lookup::Corrupt(format!(
+                "{size} bytes, more than the machine's available memory"
+            )))
+        }
+        Err(source) => {
+            return Err(CacheReadError {
+                path: path.to_path_buf(),
+                source,
+            })
+        }
+    };
+    Ok(match decode(&bytes, description) {
+        Ok(rom) => Lookup::Hit(Box::new(rom)),
+        Err(msg) => Lookup::Corrupt(msg),
+    })
+}
+
+fn decode(bytes: &[u8], description: &str) -> Result<EngineRom, String> {
+    if bytes.len() < HEADER {
         return Err(format!("truncated header ({} bytes)", bytes.len()));
     }
     if &bytes[..8] != MAGIC {
         return Err("not a linercav ROM file".into());
     }
-    let version = u32::from_le_bytes(bytes[8..12].try_into().unwrap());
+    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
     if version != ROM_FORMAT {
         return Err(format!("format version {version}, expected {ROM_FORMAT}"));
     }
-    let len = u64::from_le_bytes(bytes[12..20].try_into().unwrap()) as usize;
-    let payload = &bytes[header..];
-    if payload.len() != len {
+    let len = u64::from_le_bytes(bytes[12..20].try_into().expect("8 bytes"));
+    let payload = &bytes[HEADER..];
+    if payload.len() as u64 != len {
         return Err(format!(
             "payload is {} bytes, header says {len} (truncated?)",
             payload.len()
@@ -67,18 +92,44 @@ fn decode(bytes: &[u8]) -> Result<EngineRom, String> {
     if blake3::hash(payload).as_bytes() != &bytes[20..52] {
         return Err("checksum mismatch (corrupt file)".into());
     }
-    bincode::deserialize(payload).map_err(|e| format!("cannot decode: {e}"))
+    // bincode's length prefixes are bounded by the payload it reads from
+    let (stored, rom): (String, EngineRom) = bincode::options()
+        .with_fixint_encoding()
+        .with_limit(len)
+        .deserialize(payload)
+        .map_err(|e| format!("cannot decode: {e}"))?;
+    if stored != description {
+        return Err("made from other inputs than its name says (a copied or forged file)".into());
+    }
+    rom.validate()
+        .map_err(|e| format!("inconsistent ROM: {e}"))?;
+    Ok(rom)
 }
 
-/// Writes a ROM atomically.
-pub fn store(path: &Path, rom: &EngineRom) -> Result<(), WriteError> {
+use bincode::Options;
+
+/// Checks, before a build, that `dir` exists or can be made and that a file can be created in
+/// it, so that a build whose result could not be stored is never started.
+pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
+    let fail = |source| WriteError {
+        path: dir.to_path_buf(),
+        source,
+    };
+    std::fs::create_dir_all(dir).map_err(fail)?;
+    let probe = dir.join(format!(".probe.{}.tmp", std::process::id()));
+    std::fs::File::create(&probe).map_err(fail)?;
+    std::fs::remove_file(&probe).map_err(fail)
+}
+
+/// Writes a ROM made from `description` atomically.
+pub fn store(path: &Path, description: &str, rom: &EngineRom) -> Result<(), WriteError> {
     if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).map_err(|source| WriteError {
-            path: dir.to_path_buf(),
-            source,
-        })?;
+        check_writable(dir)?;
     }
-    let payload = bincode::serialize(rom).expect("ROM serialises");
+    let payload = bincode::options()
+        .with_fixint_encoding()
+        .serialize(&(description, rom))
+        .expect("ROM serialises");
     write_atomic(path, |w| {
         w.write_all(MAGIC)?;
         w.write_all(&ROM_FORMAT.to_le_bytes())?;

@@ -64,6 +64,17 @@ pub enum ReduceError {
     },
     #[error("part '{part}': {msg}")]
     Other { part: String, msg: String },
+    /// More modes below the cut-off than the machine can hold (a material far too soft, a
+    /// cut-off far too high): found by the Sturm count, before the eigen-solve.
+    #[error("part '{part}': {count} of its {dofs} interior DOFs' modes lie below the cut-off {cutoff_hz} Hz (basis about {gb} GB, {available_gb} GB available; more than a quarter of the spectrum is beyond what the mesh resolves): lower rom.band_hz or rom.cutoff_factor, or check the material (Young's modulus, density)")]
+    TooManyModes {
+        part: String,
+        count: usize,
+        dofs: usize,
+        cutoff_hz: String,
+        gb: String,
+        available_gb: String,
+    },
 }
 
 /// Work counters and timings of one reduction.
@@ -191,6 +202,21 @@ pub fn reduce(
     tick(&format!(
         "factorised; {count} fixed-interface modes below the cut-off"
     ));
+    // the Lanczos basis (2 count + 1 vectors) and the modes: about 3 count vectors of nb; and
+    // a cut-off that takes in more than a quarter of the spectrum lies beyond what the mesh
+    // resolves (the upper modes of a discretisation are not the structure's)
+    let need = 3.0 * count as f64 * nb as f64 * 8.0;
+    let available = crate::machine::available_memory() as f64;
+    if need > available || 4 * count > nb {
+        return Err(ReduceError::TooManyModes {
+            part: part.to_string(),
+            count,
+            dofs: nb,
+            cutoff_hz: crate::text::num(settings.cutoff_hz),
+            gb: crate::text::num(need / 1e9),
+            available_gb: crate::text::num(available / 1e9),
+        });
+    }
     let (lambdas, modes_b): (Vec<f64>, Mat<f64>) = if count > 0 {
         let pattern = &inner.km.pattern;
         let m = &inner.km.m;

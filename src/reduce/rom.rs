@@ -16,7 +16,7 @@ use faer::Mat;
 use std::time::Instant;
 
 /// Version of the ROM layout; part of the cache key.
-pub const ROM_FORMAT: u32 = 3;
+pub const ROM_FORMAT: u32 = 4;
 
 /// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
 /// system modes along the stated direction.
@@ -89,6 +89,92 @@ pub struct EngineRom {
     pub info: RomInfo,
 }
 
+impl EngineRom {
+    /// Checks what a checksum cannot (a forged or mis-written file with a valid hash): at least
+    /// one system mode, frequencies finite, non-negative and ascending within the system and
+    /// the residual-vector groups, every matrix's dimensions consistent with the mode count and
+    /// the contact DOFs, and every entry finite. Returns what is wrong.
+    pub fn validate(&self) -> Result<(), String> {
+        let i = &self.info;
+        let nm = self.frequencies_hz.len();
+        if i.system_modes == 0 || nm != i.system_modes + i.residual_vectors {
+            return Err(format!(
+                "{} frequencies for {} system modes and {} residual vectors (at least one system mode needed)",
+                nm, i.system_modes, i.residual_vectors
+            ));
+        }
+        let f = &self.frequencies_hz;
+        if f.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+            return Err("a frequency is negative or not finite".into());
+        }
+        let ascending = |s: &[f64]| s.windows(2).all(|w| w[0] <= w[1]);
+        if !ascending(&f[..i.system_modes]) || !ascending(&f[i.system_modes..]) {
+            return Err("the frequencies are not in ascending order".into());
+        }
+        if self.cylinders.is_empty() {
+            return Err("no cylinder".into());
+        }
+        let contact: usize = self
+            .cylinders
+            .iter()
+            .map(|c| c.thrust_z.len() + c.antithrust_z.len())
+            .sum();
+        let square = &self.residual_flexibility;
+        check_dense("residual flexibility", square, contact, contact)?;
+        for c in &self.cylinders {
+            let (nt, na) = (c.thrust_z.len(), c.antithrust_z.len());
+            let np = c.point_modes.rows;
+            let at = |what: &str| format!("cylinder {}: {what}", c.cylinder);
+            check_dense(&at("thrust modes"), &c.thrust_modes, nt, nm)?;
+            check_dense(&at("anti-thrust modes"), &c.antithrust_modes, na, nm)?;
+            check_dense(&at("point modes"), &c.point_modes, np, nm)?;
+            let ncp = c.crankcase_point_modes.rows;
+            check_dense(
+                &at("crankcase point modes"),
+                &c.crankcase_point_modes,
+                ncp,
+                nm,
+            )?;
+            check_dense(&at("point residual"), &c.point_residual, np, nt + na)?;
+            let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+            if c.preload_thrust.len() != nt
+                || c.preload_antithrust.len() != na
+                || c.preload_points.len() != np
+                || !finite(&c.preload_thrust)
+                || !finite(&c.preload_antithrust)
+                || !finite(&c.preload_points)
+                || !finite(&c.thrust_z)
+                || !finite(&c.antithrust_z)
+                || np == 0
+                || nt == 0
+                || na == 0
+                || c.contact_offset + nt + na > contact
+            {
+                return Err(at(
+                    "bore lines, points or preload inconsistent or not finite",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A stored matrix has the expected dimensions and finite entries.
+fn check_dense(what: &str, d: &Dense, rows: usize, cols: usize) -> Result<(), String> {
+    if d.rows != rows || d.cols != cols || d.data.len() != rows * cols {
+        return Err(format!(
+            "{what}: {} x {} with {} entries, expected {rows} x {cols}",
+            d.rows,
+            d.cols,
+            d.data.len()
+        ));
+    }
+    if d.data.iter().any(|x| !x.is_finite()) {
+        return Err(format!("{what}: an entry is not finite"));
+    }
+    Ok(())
+}
+
 /// Everything the build needs, already loaded and checked.
 pub struct RomInputs<'a> {
     pub liner: &'a Mesh,
@@ -145,6 +231,7 @@ impl RomError {
         match self {
             RomError::Set { .. } => 2,
             RomError::Reduce(ReduceError::Interface { .. }) => 2,
+            RomError::Reduce(ReduceError::TooManyModes { .. }) => 2,
             RomError::Reduce(ReduceError::Model {
                 source: ModelError::Set(_) | ModelError::NoDofs | ModelError::Surface(_),
                 ..

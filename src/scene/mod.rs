@@ -3,13 +3,16 @@
 //! Loading goes text -> TOML tree -> `--set` overrides -> raw structs (serde, unknown keys
 //! rejected) -> validated [`Scene`] in SI units. Every error names the file and the key.
 
+pub mod budget;
 pub mod overrides;
 pub mod raw;
+pub mod sanity;
 
 use crate::fem::material::Elastic;
 use crate::fem::shape::ElementKind;
 use crate::mesh::crankcase::{CrankcaseGeometry, CrankcaseMeshing};
 use crate::mesh::liner::{LinerGeometry, LinerMeshing};
+use crate::text::num;
 use raw::RawScene;
 use std::path::{Path, PathBuf};
 
@@ -31,6 +34,9 @@ pub enum SceneError {
     },
     #[error(transparent)]
     Override(#[from] overrides::OverrideError),
+    /// Work beyond the machine or `[limits]` (see [`budget`]).
+    #[error("{}: {msg}", path.display())]
+    TooLarge { path: PathBuf, msg: String },
 }
 
 /// Engine layout and operating point, SI.
@@ -195,6 +201,34 @@ pub struct Scene {
     /// Piston, operating point and transient settings, when the scene has all three sections.
     pub simulation: Option<Simulation>,
     pub cavitation: CavitationSpec,
+    pub limits: Limits,
+    /// Values that are accepted but physically doubtful (also logged as warnings on load).
+    pub warnings: Vec<String>,
+}
+
+/// Resource limits of a run (`[limits]`; see [`budget`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Limits {
+    pub max_memory_gb: Option<f64>,
+    pub max_hours: Option<f64>,
+}
+
+/// Most interface harmonics (see `rom.interface_harmonics`).
+pub const MAX_HARMONICS: usize = 64;
+/// Most skirt slices per side (see `piston.slices`).
+pub const MAX_SLICES: usize = 400;
+/// Most guard modes of the Sturm check: it needs a spectral gap among a few extra modes; each
+/// one costs a Lanczos vector of the full model.
+pub const MAX_GUARD_MODES: usize = 200;
+
+fn check_guard_modes(c: &Checker<'_>, g: usize) -> Result<usize, SceneError> {
+    if g > MAX_GUARD_MODES {
+        return Err(c.err(
+            "solver.guard_modes",
+            format!("must be at most {MAX_GUARD_MODES} (a few find the spectral gap), got {g}"),
+        ));
+    }
+    Ok(g)
 }
 
 /// Part names a scene knows.
@@ -230,7 +264,12 @@ impl Scene {
                 key: e.path().to_string(),
                 msg: e.inner().to_string(),
             })?;
-        validate(path, raw)
+        let mut scene = validate(path, raw)?;
+        scene.warnings = sanity::review(&scene)?;
+        for w in &scene.warnings {
+            log::warn!("{}: {w}", path.display());
+        }
+        Ok(scene)
     }
 
     /// The part called `name`.
@@ -259,12 +298,34 @@ impl Checker<'_> {
         if v.is_finite() && v > 0.0 {
             Ok(v)
         } else {
-            Err(self.err(key, format!("must be a positive number, got {v}")))
+            Err(self.err(key, format!("must be a positive number, got {}", num(v))))
         }
     }
     fn mm(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         Ok(self.positive(key, v)? * 1e-3)
     }
+}
+
+/// The analysis points must fit on the liner: first + (n - 1) spacing < length, checked before
+/// their depths are listed (a count of 9e18 was allocated).
+fn check_analysis_points(c: &Checker<'_>, l: &raw::RawLiner) -> Result<(), SceneError> {
+    let spacing = c.positive("liner.analysis_spacing_mm", l.analysis_spacing_mm)?;
+    let first = c.positive("liner.analysis_first_depth_mm", l.analysis_first_depth_mm)?;
+    let fit = ((l.length_mm - first) / spacing).floor() + 1.0;
+    if l.analysis_points as f64 > fit.max(0.0) {
+        return Err(c.err(
+            "liner.analysis_points",
+            format!(
+                "{} points {} mm apart from {} mm below the top do not fit on a {} mm liner (at most {})",
+                l.analysis_points,
+                num(spacing),
+                num(first),
+                num(l.length_mm),
+                num(fit.max(0.0))
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
@@ -325,6 +386,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         })
     };
     let l = &raw.liner;
+    check_analysis_points(&c, l)?;
     let mut geometry = LinerGeometry {
         outer_diameter: c.mm("liner.outer_diameter_mm", l.outer_diameter_mm)?,
         inner_diameter: c.mm("liner.inner_diameter_mm", l.inner_diameter_mm)?,
@@ -440,7 +502,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
     };
     let solver = Solver {
         shift_hz: c.positive("solver.shift_hz", raw.solver.shift_hz)?,
-        guard_modes: raw.solver.guard_modes,
+        guard_modes: check_guard_modes(&c, raw.solver.guard_modes)?,
     };
     let crankcase = match &raw.crankcase {
         None => None,
@@ -458,13 +520,29 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
     if !(r.cutoff_factor.is_finite() && r.cutoff_factor >= 1.0) {
         return Err(c.err(
             "rom.cutoff_factor",
-            format!("must be at least 1, got {}", r.cutoff_factor),
+            format!("must be at least 1, got {}", num(r.cutoff_factor)),
         ));
     }
     if r.interface_harmonics == 0 {
         return Err(c.err(
             "rom.interface_harmonics",
             "must be at least 1 (rigid liner motion needs n = 1)",
+        ));
+    }
+    // a ring of n_c elements carries harmonics up to about n_c before they alias; the
+    // ovalling shapes that couple liner and crankcase are n <= 6
+    let ring = match &liner.source {
+        MeshSource::Liner { meshing, .. } => meshing.circumferential,
+        MeshSource::File(_) => MAX_HARMONICS,
+    };
+    if r.interface_harmonics > ring.min(MAX_HARMONICS) {
+        return Err(c.err(
+            "rom.interface_harmonics",
+            format!(
+                "must be at most {} (the liner ring has {ring} elements; harmonics beyond it alias), got {}",
+                ring.min(MAX_HARMONICS),
+                r.interface_harmonics
+            ),
         ));
     }
     let mut cylinders = if r.cylinders.is_empty() {
@@ -501,6 +579,21 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         rom,
         simulation,
         cavitation,
+        limits: validate_limits(&c, &raw.limits)?,
+        warnings: Vec::new(),
+    })
+}
+
+fn validate_limits(c: &Checker<'_>, l: &raw::RawLimits) -> Result<Limits, SceneError> {
+    if let Some(gb) = l.max_memory_gb {
+        c.positive("limits.max_memory_gb", gb)?;
+    }
+    if let Some(h) = l.max_hours {
+        c.positive("limits.max_hours", h)?;
+    }
+    Ok(Limits {
+        max_memory_gb: l.max_memory_gb,
+        max_hours: l.max_hours,
     })
 }
 
@@ -557,7 +650,7 @@ fn validate_cavitation(
             Some(k) => {
                 return Err(c.err(
                     "cavitation.k_p_pa_per_m_s2",
-                    format!("must be a finite number >= 0, got {k}"),
+                    format!("must be a finite number >= 0, got {}", num(k)),
                 ))
             }
             None => criteria::reference_k_p().expect("reference coolant state is valid"),
@@ -629,14 +722,14 @@ fn validate_simulation(
         if v.is_finite() && v >= 0.0 {
             Ok(v)
         } else {
-            Err(c.err(key, format!("must be a number >= 0, got {v}")))
+            Err(c.err(key, format!("must be a number >= 0, got {}", num(v))))
         }
     };
     let finite = |key: &str, v: f64| -> Result<f64, SceneError> {
         if v.is_finite() {
             Ok(v)
         } else {
-            Err(c.err(key, format!("must be a finite number, got {v}")))
+            Err(c.err(key, format!("must be a finite number, got {}", num(v))))
         }
     };
     let mass = c.positive("piston.mass_kg", p.mass_kg)?;
@@ -668,10 +761,12 @@ fn validate_simulation(
             "the pin at top dead centre would lie below the liner",
         ));
     }
-    if p.slices < 10 {
+    // 10 slices resolve the skirt's barrel and contact patch; beyond a few hundred the
+    // contact cost grows with no change in the answer
+    if !(10..=MAX_SLICES).contains(&p.slices) {
         return Err(c.err(
             "piston.slices",
-            format!("must be at least 10, got {}", p.slices),
+            format!("must lie in [10, {MAX_SLICES}], got {}", p.slices),
         ));
     }
     let th = &p.thermal;
@@ -681,7 +776,7 @@ fn validate_simulation(
         } else {
             Err(c.err(
                 key,
-                format!("must be a temperature in [-50, 400] deg C, got {v}"),
+                format!("must be a temperature in [-50, 400] deg C, got {}", num(v)),
             ))
         }
     };
@@ -689,7 +784,7 @@ fn validate_simulation(
         if v.is_finite() && (0.0..1e-4).contains(&v) {
             Ok(v)
         } else {
-            Err(c.err(key, format!("must be in [0, 1e-4] 1/K, got {v}")))
+            Err(c.err(key, format!("must be in [0, 1e-4] 1/K, got {}", num(v))))
         }
     };
     let skirt = crate::piston::skirt::SkirtSpec {
@@ -746,7 +841,7 @@ fn validate_simulation(
     if !(o.load.is_finite() && (0.0..=1.0).contains(&o.load)) {
         return Err(c.err(
             "operating.load",
-            format!("must be in [0, 1], got {}", o.load),
+            format!("must be in [0, 1], got {}", num(o.load)),
         ));
     }
     let cb = &o.combustion;
@@ -802,7 +897,7 @@ fn validate_simulation(
             if !(t.hht_alpha.is_finite() && (-1.0 / 3.0..=0.0).contains(&t.hht_alpha)) {
                 return Err(c.err(
                     "transient.hht_alpha",
-                    format!("must lie in [-1/3, 0], got {}", t.hht_alpha),
+                    format!("must lie in [-1/3, 0], got {}", num(t.hht_alpha)),
                 ));
             }
             crate::transient::scheme::Scheme::hht(t.hht_alpha)
@@ -816,10 +911,13 @@ fn validate_simulation(
     };
     let step = c.positive("transient.step_deg", t.step_deg)?;
     let n = 720.0 / step;
-    if (n - n.round()).abs() > 1e-9 * n || n.round() < 36.0 {
+    if !n.is_finite() || (n - n.round()).abs() > 1e-9 * n || n.round() < 36.0 {
         return Err(c.err(
             "transient.step_deg",
-            format!("720 must be a whole multiple of the step, with at least 36 steps, got {step}"),
+            format!(
+                "720 must be a whole multiple of the step, with at least 36 steps, got {}",
+                num(step)
+            ),
         ));
     }
     if t.cycles == 0 {
@@ -831,7 +929,7 @@ fn validate_simulation(
     if !(t.damping_ratio.is_finite() && (0.0..1.0).contains(&t.damping_ratio)) {
         return Err(c.err(
             "transient.damping_ratio",
-            format!("must lie in [0, 1), got {}", t.damping_ratio),
+            format!("must lie in [0, 1), got {}", num(t.damping_ratio)),
         ));
     }
     let transient = TransientSpec {
@@ -852,7 +950,10 @@ fn validate_simulation(
         } else {
             return Err(c.err(
                 "transient.tolerance",
-                format!("must lie in (0, 1) (a relative error), got {}", t.tolerance),
+                format!(
+                    "must lie in (0, 1) (a relative error), got {}",
+                    num(t.tolerance)
+                ),
             ));
         },
     };

@@ -36,6 +36,24 @@ pub struct RawScene {
     /// Coolant state and cavitation criteria (risk classes in `simulate`, `sweep`, `report`).
     #[serde(default)]
     pub cavitation: RawCavitation,
+    /// What a run may take: work estimated beyond it is refused before it starts.
+    #[serde(default)]
+    pub limits: RawLimits,
+}
+
+/// Resource limits. Before any work starts, linercav estimates the memory and time the scene
+/// implies (mesh sizes, modes in the band, time steps, sweep runs) and refuses, naming the
+/// estimate and the key that drives it, what exceeds these limits.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawLimits {
+    /// Memory a run may use [GB]; default: 80 % of the memory the machine has available when
+    /// the run starts. Raise it only when the estimate is known to be pessimistic.
+    #[serde(default)]
+    pub max_memory_gb: Option<f64>,
+    /// Wall time a run (a sweep: all its runs) may take on this machine [h]; default 24.
+    #[serde(default)]
+    pub max_hours: Option<f64>,
 }
 
 /// Coolant and cavitation thresholds. Defaults: the reference study's coolant (water at 90 C,

@@ -1,0 +1,196 @@
+//! What a scene will cost, estimated before any work starts, and the refusal of work beyond
+//! the machine (`[limits]`).
+//!
+//! The estimates are deliberately simple and calibrated on the default engine (measured on the
+//! 2-core, 24 GB development machine; see the constants): they need to be right within a factor
+//! of about two, to tell a run that fits from one that cannot (a mistyped `radial = 300`, a
+//! step of 1e-4 deg, a material so soft that every mode lies in the band), not to plan a
+//! schedule. Every refusal names the estimate, the limit and the keys that drive it.
+
+use super::{CrankcaseSource, MeshSource, Scene, SceneError};
+use crate::fem::shape::ElementKind;
+use crate::mesh::crankcase::CrankcaseMeshing;
+use crate::mesh::liner::{LinerGeometry, LinerMeshing};
+use crate::text::num;
+
+/// Full DOFs of the default engine's ROM build (six liners and the crankcase).
+const REF_DOFS: f64 = 367_842.0;
+/// Peak memory of that build [bytes] (`/usr/bin/time -v linercav rom models/engine.toml
+/// --no-cache`).
+const REF_BUILD_BYTES: f64 = 5.0e9;
+/// Wall time of that build [s].
+const REF_BUILD_SECONDS: f64 = 93.0;
+/// Wall time of one transient step per cylinder with 12 slices per side [s] (default engine:
+/// 0.25 s per 2880-step cycle with six cylinders, incl. the step-error windows).
+const STEP_SECONDS_PER_CYLINDER: f64 = 15e-6;
+
+/// An estimate of one piece of work.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    /// What is estimated ("the ROM build", "the transient", ...).
+    pub what: &'static str,
+    /// Peak memory [bytes].
+    pub memory: f64,
+    /// Wall time on this machine [s].
+    pub seconds: f64,
+    /// The keys to change to make it smaller, and the sizes behind the estimate.
+    pub keys: &'static str,
+    pub detail: String,
+}
+
+/// The limits a run must stay within.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    /// [bytes]
+    pub memory: f64,
+    /// [s]
+    pub seconds: f64,
+    /// Whether the memory limit was given in the scene (else it is the machine's).
+    pub memory_from_scene: bool,
+}
+
+impl Limits {
+    /// `limits.max_memory_gb` or 80 % of the memory available now; `limits.max_hours` or 24 h.
+    pub fn of(scene: &Scene) -> Self {
+        let memory = scene.limits.max_memory_gb.map(|gb| gb * 1e9);
+        Self {
+            memory: memory.unwrap_or(0.8 * crate::machine::available_memory() as f64),
+            seconds: scene.limits.max_hours.unwrap_or(24.0) * 3600.0,
+            memory_from_scene: memory.is_some(),
+        }
+    }
+
+    /// Refuses an estimate beyond the limits (exit 2 with the estimate and the keys).
+    pub fn check(&self, scene: &Scene, est: &Estimate) -> Result<(), SceneError> {
+        let gb = |b: f64| format!("{} GB", num(b / 1e9));
+        let hours = |s: f64| format!("{} h", num(s / 3600.0));
+        let (over, limit_text) = if est.memory > self.memory {
+            (
+                format!("needs about {} of memory", gb(est.memory)),
+                if self.memory_from_scene {
+                    format!("limits.max_memory_gb allows {}", gb(self.memory))
+                } else {
+                    format!(
+                        "the machine has {} available (80 % of it is the limit)",
+                        gb(self.memory / 0.8)
+                    )
+                },
+            )
+        } else if est.seconds > self.seconds {
+            (
+                format!("would take about {}", hours(est.seconds)),
+                format!("limits.max_hours allows {}", hours(self.seconds)),
+            )
+        } else {
+            return Ok(());
+        };
+        Err(SceneError::TooLarge {
+            path: scene.path.clone(),
+            msg: format!(
+                "{} {over} ({}), {limit_text}: change {}, or raise limits.max_memory_gb / limits.max_hours if the estimate is known to be pessimistic",
+                est.what, est.detail, est.keys
+            ),
+        })
+    }
+}
+
+/// Nodes per lattice cell of a structured mesh with many cells: one vertex per cell, plus the
+/// edge nodes of the quadratic kinds (three per brick; seven with the face diagonals of the
+/// tetrahedra a brick is split into).
+fn nodes_per_cell(kind: ElementKind) -> f64 {
+    match kind {
+        ElementKind::Hex20 => 4.0,
+        ElementKind::Tet10 => 7.0,
+        ElementKind::Hex8 | ElementKind::Tet4 => 1.0,
+    }
+}
+
+/// Axial element levels of a length `l` at size `h` plus the exact planes (`extra`).
+fn levels(l: f64, h: f64, extra: usize) -> f64 {
+    (l / h).ceil() + extra as f64
+}
+
+/// Estimated lattice cells (bricks) of one generated liner:
+/// n_e = n_c (n_r N_z + n_f N_f), N_z the axial levels of the tube (2 per analysis point and
+/// the guide band's edges extra), N_f those of the flange.
+pub fn liner_elements(g: &LinerGeometry, m: &LinerMeshing) -> f64 {
+    let points = g.analysis_depths.len();
+    let tube = levels(g.length, m.axial_size, 2 * points + 4);
+    let flange = levels(g.flange_height, m.axial_size, 1);
+    m.circumferential as f64 * (m.radial as f64 * tube + m.radial_flange as f64 * flange)
+}
+
+/// Estimated lattice cells of the generated crankcase: per cylinder (1 + wall layers) rings of
+/// 4 s elements around the bore over N_z axial levels (bay, jacket and deck).
+pub fn crankcase_elements(
+    cylinders: usize,
+    height: f64,
+    points: usize,
+    m: &CrankcaseMeshing,
+) -> f64 {
+    let nz = levels(height, m.axial_size, 2 * points + 6);
+    cylinders as f64 * (1 + m.wall_layers) as f64 * 4.0 * m.per_sector as f64 * nz
+}
+
+/// Estimated full DOFs of the engine model (`None` when a mesh comes from a file: the file's
+/// own counts are checked when it is read).
+pub fn engine_dofs(scene: &Scene) -> Option<f64> {
+    let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
+        return None;
+    };
+    let liner = liner_elements(geometry, meshing) * nodes_per_cell(meshing.kind);
+    let cc = match scene.crankcase.as_ref().map(|c| &c.source) {
+        Some(CrankcaseSource::Parametric {
+            geometry: cg,
+            meshing: cm,
+        }) => {
+            crankcase_elements(
+                cg.cylinders,
+                cg.skirt_depth + cg.seat_z,
+                geometry.analysis_depths.len(),
+                cm,
+            ) * nodes_per_cell(cm.kind)
+        }
+        Some(CrankcaseSource::File(_)) => return None,
+        None => 0.0,
+    };
+    Some(3.0 * (cc + scene.rom.cylinders.len() as f64 * liner))
+}
+
+/// The ROM build: memory and time scale with the full DOFs n as nested-dissection fill,
+/// M = M_0 (n / n_0)^{4/3} and t = t_0 (n / n_0)^{3/2}, from the default engine's build.
+pub fn rom_build(scene: &Scene) -> Option<Estimate> {
+    let n = engine_dofs(scene)?;
+    let r = n / REF_DOFS;
+    Some(Estimate {
+        what: "the ROM build",
+        memory: REF_BUILD_BYTES * r.powf(4.0 / 3.0),
+        seconds: REF_BUILD_SECONDS * r.powf(1.5),
+        keys: "liner.mesh.* / crankcase.mesh.* (element counts and sizes), engine.cylinders or rom.cylinders",
+        detail: format!("about {} DOFs", num(n.round())),
+    })
+}
+
+/// The transient of `simulate`: steps N = cycles 720 / step (plus the step-error windows),
+/// t = N n_cyl t_1 max(1, slices / 12); memory: about three cycles of the record, 8 bytes per
+/// cylinder and step for each point's two series and eight piston series.
+pub fn transient(scene: &Scene) -> Option<Estimate> {
+    let sim = scene.simulation.as_ref()?;
+    let t = &sim.transient;
+    let per_cycle = 720.0 / t.step_deg;
+    let steps = per_cycle * t.cycles as f64 * 1.2;
+    let ncyl = scene.rom.cylinders.len() as f64;
+    let slices = sim.piston.skirt.slices as f64;
+    let points = scene.liner_geometry.analysis_depths.len() as f64;
+    Some(Estimate {
+        what: "the transient",
+        memory: 3.0 * per_cycle * ncyl * (2.0 * points + 8.0) * 8.0 + ncyl * slices * 2.0 * 1e4,
+        seconds: steps * ncyl * STEP_SECONDS_PER_CYLINDER * (slices / 12.0).max(1.0),
+        keys: "transient.step_deg, transient.cycles, piston.slices",
+        detail: format!(
+            "{} steps of {} cylinders",
+            num(steps.round()),
+            ncyl as usize
+        ),
+    })
+}

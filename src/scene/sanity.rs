@@ -1,0 +1,109 @@
+//! Values that parse and pass their own range checks but are physically absurd together: the
+//! worst are refused with the reason, the doubtful ones come back as warnings (logged when the
+//! scene is loaded and carried in the JSON reports).
+
+use super::{Scene, SceneError};
+use crate::fem::material::Elastic;
+use crate::piston::skirt::Skirt;
+use crate::text::num;
+
+/// Samples per period at the band's top below which the band is not represented at all
+/// (Nyquist), and below which the average-acceleration rule's period error
+/// (omega dt)^2 / 12 exceeds about 3 %.
+const MIN_SAMPLES: f64 = 2.0;
+const GOOD_SAMPLES: f64 = 10.0;
+/// Coolant gaps [m]: below 0.05 mm no passage can be cast and the cavitation number
+/// Ca ~ 1 / h is singular; below 1 mm the squeeze-film picture of the criterion is doubtful.
+const MIN_GAP: f64 = 0.05e-3;
+const SMALL_GAP: f64 = 1e-3;
+/// Young's moduli of structural metals and composites lie within this range [Pa].
+const YOUNG_RANGE: (f64, f64) = (1e9, 1e12);
+
+/// Refuses the absurd and lists the doubtful.
+pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
+    let mut warnings = Vec::new();
+    let err = |key: &str, msg: String| SceneError::Field {
+        path: scene.path.clone(),
+        key: key.into(),
+        msg,
+    };
+    materials(scene, &mut warnings);
+    let gap = scene.cavitation.gap;
+    if gap < MIN_GAP {
+        return Err(err(
+            "cavitation.gap_mm",
+            format!(
+                "{} mm is no coolant gap (at least {} mm; the cavitation number ~ 1/h is singular as h -> 0)",
+                num(gap * 1e3),
+                num(MIN_GAP * 1e3)
+            ),
+        ));
+    }
+    if gap < SMALL_GAP {
+        warnings.push(format!(
+            "cavitation.gap_mm = {}: a coolant gap under 1 mm is outside the criterion's calibration",
+            num(gap * 1e3)
+        ));
+    }
+    if let Some(sim) = &scene.simulation {
+        let skirt = &sim.piston.skirt;
+        if skirt.length >= scene.liner_geometry.length {
+            return Err(err(
+                "piston.skirt_length_mm",
+                format!(
+                    "{} mm, longer than the {} mm liner",
+                    num(skirt.length * 1e3),
+                    num(scene.liner_geometry.length * 1e3)
+                ),
+            ));
+        }
+        let hot = Skirt::new(skirt).hot_clearance();
+        if hot <= 0.0 {
+            warnings.push(format!(
+                "the hot skirt is {} um (diametral) larger than the bore at piston.clearance_um = {}: an interference fit, the piston runs in permanent contact",
+                num(-hot * 1e6),
+                num(skirt.clearance * 1e6)
+            ));
+        }
+        let t = &sim.transient;
+        let dt = t.step_deg / (6.0 * scene.engine.speed_rpm);
+        let samples = 1.0 / (scene.rom.band_hz * dt);
+        let what = format!(
+            "{} deg ({} us at {} rpm) samples the band's top, {} Hz, {} times per period",
+            num(t.step_deg),
+            num(dt * 1e6),
+            num(scene.engine.speed_rpm),
+            num(scene.rom.band_hz),
+            num(samples)
+        );
+        if samples < MIN_SAMPLES {
+            return Err(err(
+                "transient.step_deg",
+                format!("{what}: at least {MIN_SAMPLES} are needed to represent it (10 for a few percent accuracy)"),
+            ));
+        }
+        if samples < GOOD_SAMPLES {
+            warnings.push(format!(
+                "transient.step_deg = {what}: fewer than {GOOD_SAMPLES}, the band's top is under-resolved"
+            ));
+        }
+    }
+    Ok(warnings)
+}
+
+fn materials(scene: &Scene, warnings: &mut Vec<String>) {
+    let mut check = |what: &str, m: &Elastic| {
+        if !(YOUNG_RANGE.0..=YOUNG_RANGE.1).contains(&m.young) {
+            warnings.push(format!(
+                "{what}: Young's modulus {} Pa is outside the range of structural materials ({}-{} Pa)",
+                num(m.young),
+                num(YOUNG_RANGE.0),
+                num(YOUNG_RANGE.1)
+            ));
+        }
+    };
+    check("liner", &scene.liner.material);
+    if let Some(c) = &scene.crankcase {
+        check("crankcase", &c.material);
+    }
+}
