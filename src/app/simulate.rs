@@ -181,6 +181,8 @@ pub struct SimulateReport {
     pub rom_error_peak_negative: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub speedup: Option<f64>,
+    /// Physically doubtful scene values (also printed on stderr).
+    pub warnings: Vec<String>,
 }
 
 impl SimulateReport {
@@ -202,6 +204,7 @@ impl SimulateReport {
             stats: res.stats.clone(),
             cache,
             tolerance: simulation(scene).map_or(0.0, |s| s.transient.tolerance),
+            warnings: scene.warnings.clone(),
             hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
             peak_pressure_bar: pp / 1e5,
             peak_pressure_deg: pdeg,

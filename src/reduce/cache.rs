@@ -49,7 +49,12 @@ pub fn load(path: &Path, description: &str) -> Result<Lookup, CacheReadError> {
     let limit = crate::machine::available_memory();
     let bytes = match read_regular(path, limit) {
         Ok(b) => b,
-        Err(ReadError::Io(e)) if e.kind() == std::io::ErrorKind::NotFound => {
+        Err(ReadError::Io(e))
+            if matches!(
+                e.kind(),
+                std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory
+            ) =>
+        {
             return Ok(Lookup::Miss)
         }
         Err(ReadError::TooLarge { size, .. }) => {

@@ -123,11 +123,12 @@ pub enum TransientError {
         crank_angle_deg: f64,
         time_s: f64,
     },
-    #[error("the solution is not finite at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s), cylinder {cylinder}: check the pressure curve and the scene's numbers")]
+    #[error("the solution is not finite at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s) in {place}: check the ROM and the scene's numbers (materials, masses, contact stiffness, pressure curve)")]
     NonFinite {
         crank_angle_deg: f64,
         time_s: f64,
-        cylinder: usize,
+        /// "the piston of cylinder 3", "the structure's modal coordinates", ...
+        place: String,
     },
     #[error("energy growth: the structure gained {excess_j:.3e} J more than the contact forces put in (scale {scale_j:.3e} J) by crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s): the integration is unstable (scheme or step)")]
     EnergyGrowth {
@@ -754,7 +755,10 @@ impl<'a> EngineRun<'a> {
                 .iter()
                 .position(|b| !b.q.iter().chain(&b.a).all(|x| x.is_finite()))
                 .unwrap_or(0);
-            return Err(Failure::NonFinite(self.cyls[b].rom.cylinder));
+            return Err(Failure::NonFinite(format!(
+                "the piston of cylinder {}",
+                self.cyls[b].rom.cylinder
+            )));
         }
         // commit
         let fmin = res.forces.iter().copied().fold(f64::INFINITY, f64::min);
@@ -767,7 +771,9 @@ impl<'a> EngineRun<'a> {
         self.energy_now = step.energy;
         // a non-finite modal coordinate makes the energy non-finite
         if !step.energy.is_finite() {
-            return Err(Failure::NonFinite(0));
+            return Err(Failure::NonFinite(
+                "the structure's modal coordinates (the ROM)".into(),
+            ));
         }
         // the damper impulse the step missed at contact onsets, on pistons and structure
         let before: Vec<SliceState> = meta
@@ -1317,7 +1323,7 @@ enum Failure {
         height: f64,
         penetration: f64,
     },
-    NonFinite(usize),
+    NonFinite(String),
 }
 
 impl Failure {
@@ -1353,10 +1359,10 @@ impl Failure {
                 crank_angle_deg,
                 time_s: t,
             },
-            Failure::NonFinite(cylinder) => TransientError::NonFinite {
+            Failure::NonFinite(place) => TransientError::NonFinite {
                 crank_angle_deg,
                 time_s: t,
-                cylinder,
+                place,
             },
         }
     }

@@ -179,7 +179,7 @@ pub fn run(
             return Err(TransientError::NonFinite {
                 crank_angle_deg: deg,
                 time_s,
-                cylinder: 0,
+                place: "the piston of the window's cylinder".into(),
             });
         }
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();

@@ -1,0 +1,547 @@
+//! Hostile input and faults (regression tests of issue 23, and fuzzing): every case exits 2
+//! (bad input, unwritable output) or 1 (numerical or system failure) with one message on
+//! stderr and nothing on stdout, never a panic, an abort or a runaway; outputs are
+//! all-or-nothing, also when a signal stops the process.
+
+use proptest::prelude::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+mod common;
+use common::linercav;
+
+const SMALL: &str = "tests/fixtures/engine_small.toml";
+const MESH: &str = "tests/fixtures/block_tet10.msh";
+const STEEL: [&str; 6] = ["--youngs", "210e9", "--poisson", "0.3", "--density", "7850"];
+
+/// Asserts a refusal: the exit code, one `error:` message, no panic, nothing on stdout.
+fn refused(args: &[&str], code: i32, needle: &str) {
+    let (c, out, err) = linercav(args);
+    assert_eq!(c, code, "{args:?}: exit {c}, stderr: {err}");
+    assert!(err.contains("error: "), "{args:?}: no error message: {err}");
+    assert!(!err.contains("panicked"), "{args:?}: panic: {err}");
+    assert!(out.is_empty(), "{args:?}: stdout not empty: {out}");
+    assert!(
+        err.contains(needle),
+        "{args:?}: message should name '{needle}': {err}"
+    );
+}
+
+/// The fixture mesh with line `line` (1-based) replaced.
+fn mesh_with(dir: &Path, name: &str, line: usize, text: &str) -> PathBuf {
+    let src = std::fs::read_to_string(MESH).unwrap();
+    let mut lines: Vec<&str> = src.lines().collect();
+    lines[line - 1] = text;
+    let p = dir.join(name);
+    std::fs::write(&p, lines.join("\n")).unwrap();
+    p
+}
+
+/// Regression: Gmsh counts that are negative or huge were allocated before they were
+/// checked (capacity overflow, a 24 PB allocation, a slice-index panic); a device was read
+/// until memory ran out; one bad byte was "binary MSH, line 0".
+#[test]
+fn regression_hostile_gmsh_files_are_refused_naming_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases = [
+        (mesh_with(d, "a.msh", 41, "1 -1 1 2618"), ":41", "numNodes"),
+        (
+            mesh_with(d, "b.msh", 41, "1 1000000000000000 1 2618"),
+            ":41",
+            "numNodes",
+        ),
+        (
+            mesh_with(d, "c.msh", 42, "0 1 0 -1"),
+            ":42",
+            "numNodesInBlock",
+        ),
+        (
+            mesh_with(d, "d.msh", 2662, "0 7 15 9223372036854775807"),
+            ":2662",
+            "numElementsInBlock",
+        ),
+        (
+            mesh_with(d, "e.msh", 19, "7 0.2 0.1 0.05 99999999999999 3"),
+            ":19",
+            "the entity record gives 1e14 physical tags",
+        ),
+        (
+            mesh_with(d, "f.msh", 19, "7 0.2 0.1 0.05 1e300 3"),
+            ":19",
+            "the entity record gives 1e300 physical tags",
+        ),
+    ];
+    for (p, line, what) in &cases {
+        let mut args = vec!["modes", "--mesh", p.to_str().unwrap(), "--count", "10"];
+        args.extend(STEEL);
+        refused(&args, 2, &format!("{line}: {what}"));
+    }
+    let bad = d.join("byte.msh");
+    std::fs::write(&bad, b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n\xff\n").unwrap();
+    let zero = d.join("zero.msh");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    for (p, needle) in [(&bad, ":4: byte 0xff"), (&zero, "not a regular file")] {
+        let mut args = vec!["modes", "--mesh", p.to_str().unwrap(), "--count", "10"];
+        args.extend(STEEL);
+        refused(&args, 2, needle);
+    }
+}
+
+/// Regression: scene values that panicked (capacity overflow), allocated until killed, or
+/// were accepted silently. Each is refused before any work (no ROM is built: the cache
+/// directory stays empty) with the key and a number of a few digits.
+#[test]
+fn regression_hostile_scene_values_are_refused_before_work() {
+    let cache = tempfile::tempdir().unwrap();
+    let cache_dir = cache.path().to_str().unwrap();
+    let order: String = (1..=1000)
+        .map(|k| k.to_string())
+        .collect::<Vec<_>>()
+        .join(",");
+    let cyl_order = format!("engine.firing_order=[{order}]");
+    let cases: Vec<(&str, Vec<&str>, &str)> = vec![
+        (
+            "simulate",
+            vec!["transient.step_deg=1e-308"],
+            "transient.step_deg",
+        ),
+        (
+            "simulate",
+            vec!["transient.step_deg=5"],
+            "transient.step_deg",
+        ),
+        (
+            "simulate",
+            vec!["liner.analysis_points=9223372036854775807"],
+            "liner.analysis_points",
+        ),
+        ("simulate", vec!["piston.slices=1000000"], "piston.slices"),
+        (
+            "simulate",
+            vec!["piston.skirt_length_mm=300"],
+            "piston.skirt_length_mm",
+        ),
+        ("simulate", vec!["cavitation.gap_mm=1e-308"], "1e-308 mm"),
+        (
+            "rom",
+            vec!["liner.mesh.radial=9223372036854775807"],
+            "liner.mesh",
+        ),
+        (
+            "rom",
+            vec!["liner.mesh.circumferential=100000"],
+            "GB of memory",
+        ),
+        (
+            "rom",
+            vec!["rom.interface_harmonics=1000000"],
+            "rom.interface_harmonics",
+        ),
+        (
+            "rom",
+            vec!["engine.cylinders=1000", &cyl_order],
+            "GB of memory",
+        ),
+        (
+            "rom",
+            vec!["solver.guard_modes=1000000000"],
+            "solver.guard_modes",
+        ),
+        ("rom", vec!["limits.max_hours=0.000001"], "limits.max_hours"),
+    ];
+    for (cmd, sets, needle) in cases {
+        let mut args = vec![cmd, SMALL, "--cache-dir", cache_dir];
+        for s in &sets {
+            args.extend(["--set", s]);
+        }
+        refused(&args, 2, needle);
+        // numbers the tool computes come with a few digits (1e308 had 309)
+        let (_, _, err) = linercav(&args);
+        let longest = err
+            .split(|c: char| !c.is_ascii_digit())
+            .map(str::len)
+            .max()
+            .unwrap_or(0);
+        assert!(longest <= 20, "{sets:?}: long number: {err}");
+    }
+    assert_eq!(std::fs::read_dir(cache.path()).unwrap().count(), 0);
+}
+
+/// Regression: a ROM whose band holds no mode was cached and `simulate` panicked on it; a
+/// material so soft that every mode falls into the band ran until killed.
+#[test]
+fn regression_a_band_without_modes_or_with_all_of_them_is_refused() {
+    let cache = tempfile::tempdir().unwrap();
+    let dir = cache.path().to_str().unwrap();
+    refused(
+        &[
+            "simulate",
+            SMALL,
+            "--cache-dir",
+            dir,
+            "--set",
+            "rom.band_hz=1e-308",
+        ],
+        2,
+        "rom.band_hz",
+    );
+    refused(
+        &[
+            "rom",
+            SMALL,
+            "--cache-dir",
+            dir,
+            "--set",
+            "materials.boron_cast_iron.youngs_pa=1e3",
+        ],
+        2,
+        "lower rom.band_hz",
+    );
+    let (_, _, err) = linercav(&[
+        "rom",
+        SMALL,
+        "--cache-dir",
+        dir,
+        "--set",
+        "materials.boron_cast_iron.youngs_pa=1e3",
+    ]);
+    assert!(err.contains("warning: ") && err.contains("Young's modulus 1000 Pa"));
+    assert!(!std::fs::read_dir(cache.path()).unwrap().any(|e| e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .ends_with(".bin")));
+}
+
+/// Regression: an unwritable cache directory was found after a full build; an unreadable
+/// cache file was a silent miss. Both exit 2 before any work.
+#[test]
+fn regression_unwritable_cache_and_unreadable_entry_stop_before_the_build() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("plain");
+    std::fs::write(&file, "x").unwrap();
+    // a cache "directory" below a regular file can never be created (also as root)
+    let below = file.join("cache");
+    let t = Instant::now();
+    refused(
+        &["rom", SMALL, "--cache-dir", below.to_str().unwrap()],
+        2,
+        "cannot write",
+    );
+    // the build of the small engine takes seconds; the refusal comes first
+    assert!(t.elapsed() < Duration::from_secs(60));
+    // a directory where the cache file should be
+    let dir = tmp.path().join("c");
+    let key = {
+        let sc = linercav::scene::Scene::load(Path::new(SMALL), &[]).unwrap();
+        linercav::reduce::cache::key_of(&linercav::app::rom::key_description(&sc).unwrap())
+    };
+    std::fs::create_dir_all(dir.join(format!("rom-{key}.bin"))).unwrap();
+    refused(
+        &["rom", SMALL, "--cache-dir", dir.to_str().unwrap()],
+        2,
+        "cannot read the ROM cache file",
+    );
+}
+
+/// Regression: a pressure curve with decimal commas (`369,190,3`) was read as 190 bar.
+#[test]
+fn regression_decimal_comma_csv_is_refused() {
+    let text = "crank_angle_deg,pressure_bar\n0,1.0\n369,190,3\n";
+    let Err(e) = linercav::piston::pressure::PressureCurve::parse(Path::new("p.csv"), text) else {
+        panic!("refused")
+    };
+    let msg = e.to_string();
+    assert!(
+        msg.contains("line 3") && msg.contains("decimal commas"),
+        "{msg}"
+    );
+    let rig = "time_s,acceleration_m_s2,pressure_kpa\n0,1,100\n0.001,2,5,3\n";
+    let Err(e) = linercav::cavitation::calibration::RigData::parse("r.csv", rig) else {
+        panic!("refused")
+    };
+    assert!(e.to_string().contains("decimal commas"), "{e}");
+}
+
+/// Regression: one output name taken by a directory let the other files be written; now
+/// nothing is written and the exit code is 2 (as for every unwritable output).
+#[test]
+fn regression_a_taken_output_name_writes_nothing() {
+    let cache = tempfile::tempdir().unwrap();
+    let out = tempfile::tempdir().unwrap();
+    std::fs::create_dir(out.path().join("simulate.json")).unwrap();
+    refused(
+        &[
+            "simulate",
+            SMALL,
+            "--cache-dir",
+            cache.path().to_str().unwrap(),
+            "--out",
+            out.path().to_str().unwrap(),
+        ],
+        2,
+        "simulate.json",
+    );
+    let names: Vec<String> = std::fs::read_dir(out.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names,
+        vec!["simulate.json".to_string()],
+        "nothing else left"
+    );
+}
+
+/// Names in a directory with their contents (directories as "<dir>").
+fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = match std::fs::read_dir(dir) {
+        Ok(rd) => rd
+            .map(|e| {
+                let e = e.unwrap();
+                let name = e.file_name().to_string_lossy().into_owned();
+                let bytes = std::fs::read(e.path()).unwrap_or_else(|_| b"<dir>".to_vec());
+                (name, bytes)
+            })
+            .collect(),
+        Err(_) => vec![],
+    };
+    v.sort();
+    v
+}
+
+/// A signal at any moment of `simulate --out`, `sweep --out` or `report --out` leaves the
+/// directory as it was, or complete; no temporary file or directory is left behind. The
+/// moments are spread over the whole run (measured first), including the writing at its end.
+#[test]
+fn verification_a_signal_leaves_outputs_as_they_were_or_complete() {
+    let cache = tempfile::tempdir().unwrap();
+    let cache_dir = cache.path().to_str().unwrap().to_string();
+    let (c, _, err) = linercav(&["rom", SMALL, "--cache-dir", &cache_dir]);
+    assert_eq!(c, 0, "{err}");
+    let commands: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (
+            vec!["simulate", SMALL],
+            vec!["simulate.json", "time_series.csv"],
+        ),
+        (
+            vec!["sweep", SMALL, "--vary", "piston.clearance_um=60,100"],
+            vec!["sweep.csv", "sweep.json", "sweep_piston_clearance_um.png"],
+        ),
+        (
+            vec!["report", SMALL],
+            vec!["summary.json", "summary.md", "peaks.png"],
+        ),
+    ];
+    for (args, expected) in commands {
+        let root = tempfile::tempdir().unwrap();
+        let out = root.path().join("out");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("keep.txt"), "a file of the user's").unwrap();
+        for name in &expected {
+            std::fs::write(out.join(name), "old").unwrap();
+        }
+        let before = snapshot(&out);
+        let run = |kill_after: Option<Duration>| {
+            let mut cmd = Command::new(env!("CARGO_BIN_EXE_linercav"));
+            cmd.args(&args)
+                .args(["--cache-dir", &cache_dir, "--out", out.to_str().unwrap()])
+                .env("OPENBLAS_NUM_THREADS", "1")
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::null());
+            let mut child = cmd.spawn().unwrap();
+            let t = Instant::now();
+            if let Some(d) = kill_after {
+                std::thread::sleep(d);
+                // SAFETY: kill(2) on our own child's pid
+                unsafe {
+                    libc::kill(child.id() as i32, libc::SIGTERM);
+                }
+            }
+            let status = child.wait().unwrap();
+            (status, t.elapsed())
+        };
+        let (status, full) = run(None);
+        assert!(status.success(), "{args:?} must run");
+        let complete = snapshot(&out);
+        for name in &expected {
+            let f = complete.iter().find(|(n, _)| n == name).unwrap();
+            assert_ne!(f.1, b"old", "{name} rewritten");
+        }
+        // restore the old state, then stop runs at 12 moments over the run and its end
+        let restore = || {
+            std::fs::remove_dir_all(&out).unwrap();
+            std::fs::create_dir(&out).unwrap();
+            for (name, bytes) in &before {
+                std::fs::write(out.join(name), bytes).unwrap();
+            }
+        };
+        restore();
+        for k in 0..12 {
+            let at = full.mul_f64((k as f64 + 0.5) / 11.0);
+            run(Some(at));
+            let now = snapshot(&out);
+            let same_names = |s: &[(String, Vec<u8>)]| {
+                s.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>()
+                    == now.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>()
+            };
+            let as_before = now == before;
+            let is_complete = same_names(&complete)
+                && expected.iter().all(|name| {
+                    now.iter()
+                        .find(|(n, _)| n == name)
+                        .is_some_and(|(_, b)| b != b"old")
+                });
+            assert!(
+                as_before || is_complete,
+                "{args:?} stopped at {at:?}: left {:?}",
+                now.iter().map(|(n, _)| n).collect::<Vec<_>>()
+            );
+            assert!(
+                std::fs::read_dir(root.path()).unwrap().all(|e| !e
+                    .unwrap()
+                    .file_name()
+                    .to_string_lossy()
+                    .starts_with('.')),
+                "a temporary left beside the output"
+            );
+            if is_complete {
+                restore();
+            }
+        }
+    }
+}
+
+fn fixture_text(p: &str) -> String {
+    std::fs::read_to_string(p).unwrap()
+}
+
+/// A hostile value for a number in a file or a scene.
+fn hostile_number() -> impl Strategy<Value = String> {
+    prop_oneof![
+        Just("-1".to_string()),
+        Just("0".to_string()),
+        Just("9223372036854775807".to_string()),
+        Just("18446744073709551616".to_string()),
+        Just("1e308".to_string()),
+        Just("-1e308".to_string()),
+        Just("1e-308".to_string()),
+        Just("nan".to_string()),
+        Just("inf".to_string()),
+        Just("x".to_string()),
+        Just(String::new()),
+        (-1e6f64..1e6).prop_map(|v| format!("{v}")),
+        (0u64..100_000).prop_map(|v| v.to_string()),
+    ]
+}
+
+/// A mutation of a text: replace a word, delete, duplicate or truncate a line, or insert
+/// bytes.
+#[derive(Clone, Debug)]
+enum Mutation {
+    Word(usize, usize, String),
+    Delete(usize),
+    Duplicate(usize),
+    Truncate(usize),
+    Insert(usize, String),
+}
+
+fn mutation() -> impl Strategy<Value = Mutation> {
+    prop_oneof![
+        4 => (any::<usize>(), any::<usize>(), hostile_number())
+            .prop_map(|(l, w, v)| Mutation::Word(l, w, v)),
+        1 => any::<usize>().prop_map(Mutation::Delete),
+        1 => any::<usize>().prop_map(Mutation::Duplicate),
+        1 => any::<usize>().prop_map(Mutation::Truncate),
+        1 => (any::<usize>(), "[ -~]{0,12}").prop_map(|(l, s)| Mutation::Insert(l, s)),
+    ]
+}
+
+fn apply(text: &str, muts: &[Mutation]) -> String {
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    for m in muts {
+        if lines.is_empty() {
+            break;
+        }
+        let n = lines.len();
+        match m {
+            Mutation::Word(l, w, v) => {
+                let mut words: Vec<String> =
+                    lines[l % n].split_whitespace().map(String::from).collect();
+                if !words.is_empty() {
+                    let k = w % words.len();
+                    words[k] = v.clone();
+                    lines[l % n] = words.join(" ");
+                }
+            }
+            Mutation::Delete(l) => {
+                lines.remove(l % n);
+            }
+            Mutation::Duplicate(l) => {
+                let d = lines[l % n].clone();
+                lines.insert(l % n, d);
+            }
+            Mutation::Truncate(l) => lines.truncate(l % n),
+            Mutation::Insert(l, s) => lines.insert(l % n, s.clone()),
+        }
+    }
+    lines.join("\n")
+}
+
+/// Each case must finish within this time: the fixture parses in milliseconds, so seconds
+/// mean a runaway (a huge count honoured, a loop that does not end).
+const CASE_LIMIT: Duration = Duration::from_secs(5);
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Fuzz (400 cases): mutated Gmsh files are read and checked (`gmsh::parse`, then the
+    /// mesh checks) without a panic and in bounded time.
+    #[test]
+    fn fuzz_mutated_gmsh_files_never_panic(muts in prop::collection::vec(mutation(), 1..4)) {
+        let text = apply(&fixture_text(MESH), &muts);
+        let t = Instant::now();
+        if let Ok(mut mesh) = linercav::mesh::gmsh::parse(Path::new("fuzz.msh"), &text) {
+            let _ = linercav::mesh::checks::check_and_compact(&mut mesh);
+        }
+        prop_assert!(t.elapsed() < CASE_LIMIT);
+    }
+
+    /// Fuzz (400 cases): a hostile value at a random place of the small engine's scene is
+    /// refused or accepted by the loader, and the size estimates of what it accepts are
+    /// finite, without a panic.
+    #[test]
+    fn fuzz_mutated_scenes_never_panic(muts in prop::collection::vec(mutation(), 1..3)) {
+        let text = apply(&fixture_text(SMALL), &muts);
+        let t = Instant::now();
+        let path = Path::new(SMALL);
+        if let Ok(sc) = linercav::scene::Scene::from_str_with(path, &text, &[]) {
+            use linercav::scene::budget;
+            for e in [budget::rom_build(&sc), budget::transient(&sc)].into_iter().flatten() {
+                prop_assert!(!e.memory.is_nan() && !e.seconds.is_nan());
+                let _ = budget::Limits::of(&sc).check(&sc, &e);
+            }
+        }
+        prop_assert!(t.elapsed() < CASE_LIMIT);
+    }
+
+    /// Fuzz (400 cases): mutated pressure curves and rig data CSVs never panic.
+    #[test]
+    fn fuzz_mutated_csvs_never_panic(muts in prop::collection::vec(mutation(), 1..4)) {
+        let pressure: String = std::iter::once("crank_angle_deg,pressure_bar".to_string())
+            .chain((0..72).map(|k| format!("{},{}", k * 10, 1.0 + (k as f64 * 0.3).sin().abs() * 50.0)))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let comma = |s: String| s.replace(' ', ",");
+        let _ = linercav::piston::pressure::PressureCurve::parse(Path::new("p.csv"), &comma(apply(&pressure.replace(',', " "), &muts)));
+        let rig: String = std::iter::once("time_s,acceleration_m_s2,pressure_kpa".to_string())
+            .chain((0..200).map(|k| format!("{},{},{}", k as f64 * 1e-4, (k as f64).sin() * 500.0, 150.0 + (k as f64).cos())))
+            .collect::<Vec<_>>()
+            .join("\n");
+        if let Ok(d) = linercav::cavitation::calibration::RigData::parse("r.csv", &comma(apply(&rig.replace(',', " "), &muts))) {
+            let _ = d;
+        }
+    }
+}
