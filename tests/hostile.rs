@@ -114,6 +114,11 @@ fn regression_hostile_scene_values_are_refused_before_work() {
         ),
         (
             "simulate",
+            vec!["transient.step_deg=1e-4"],
+            "transient.step_deg",
+        ),
+        (
+            "simulate",
             vec!["liner.analysis_points=9223372036854775807"],
             "liner.analysis_points",
         ),

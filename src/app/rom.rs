@@ -84,6 +84,12 @@ pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
         file: cfile,
         source,
     })?;
+    // a mesh from a file is sized only once read: the engine model it makes is checked now
+    if lfile.is_some() || matches!(cc.source, CrankcaseSource::File(_)) {
+        let dofs = 3 * (cm.nodes.len() + scene.rom.cylinders.len() * lm.nodes.len());
+        let est = budget::fe_model(dofs, "the ROM build");
+        Limits::of(scene).check(scene, &est)?;
+    }
     for name in &cc.fix {
         if cm.node_set(name).is_none() {
             return Err(Error::Input(format!(

@@ -217,7 +217,8 @@ fn check_size(req: &SweepRequest, vary: &[Vary]) -> Result<()> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
     let est = crate::scene::budget::Estimate {
         what: "the sweep",
-        memory: one.memory * cores,
+        // runs in parallel, plus each run's scene and results held until the end (~50 kB)
+        memory: one.memory * cores + runs as f64 * 50e3,
         seconds: runs as f64 * one.seconds / cores,
         keys: "the --vary lists (fewer values), transient.step_deg or transient.cycles",
         detail: format!("{runs} runs of {}", one.detail),

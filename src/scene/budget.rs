@@ -50,6 +50,16 @@ pub struct Limits {
 }
 
 impl Limits {
+    /// The machine's limits without a scene (a bare `--mesh`): 80 % of the available memory,
+    /// 24 h.
+    pub fn machine() -> Self {
+        Self {
+            memory: 0.8 * crate::machine::available_memory() as f64,
+            seconds: 24.0 * 3600.0,
+            memory_from_scene: false,
+        }
+    }
+
     /// `limits.max_memory_gb` or 80 % of the memory available now; `limits.max_hours` or 24 h.
     pub fn of(scene: &Scene) -> Self {
         let memory = scene.limits.max_memory_gb.map(|gb| gb * 1e9);
@@ -62,6 +72,11 @@ impl Limits {
 
     /// Refuses an estimate beyond the limits (exit 2 with the estimate and the keys).
     pub fn check(&self, scene: &Scene, est: &Estimate) -> Result<(), SceneError> {
+        self.check_at(&scene.path, est)
+    }
+
+    /// As [`Limits::check`], naming `path` (a scene or a mesh file).
+    pub fn check_at(&self, path: &std::path::Path, est: &Estimate) -> Result<(), SceneError> {
         let gb = |b: f64| format!("{} GB", num(b / 1e9));
         let hours = |s: f64| format!("{} h", num(s / 3600.0));
         let (over, limit_text) = if est.memory > self.memory {
@@ -85,7 +100,7 @@ impl Limits {
             return Ok(());
         };
         Err(SceneError::TooLarge {
-            path: scene.path.clone(),
+            path: path.to_path_buf(),
             msg: format!(
                 "{} {over} ({}), {limit_text}: change {}, or raise limits.max_memory_gb / limits.max_hours if the estimate is known to be pessimistic",
                 est.what, est.detail, est.keys
@@ -157,6 +172,19 @@ pub fn engine_dofs(scene: &Scene) -> Option<f64> {
     Some(3.0 * (cc + scene.rom.cylinders.len() as f64 * liner))
 }
 
+/// A modal solve or ROM build of a model with `dofs` full DOFs (a mesh read from a file, whose
+/// size is known only once read), by the same scaling as [`rom_build`].
+pub fn fe_model(dofs: usize, what: &'static str) -> Estimate {
+    let r = dofs as f64 / REF_DOFS;
+    Estimate {
+        what,
+        memory: REF_BUILD_BYTES * r.powf(4.0 / 3.0),
+        seconds: REF_BUILD_SECONDS * r.powf(1.5),
+        keys: "the mesh (a coarser one)",
+        detail: format!("{} DOFs", num(dofs as f64)),
+    }
+}
+
 /// The ROM build: memory and time scale with the full DOFs n as nested-dissection fill,
 /// M = M_0 (n / n_0)^{4/3} and t = t_0 (n / n_0)^{3/2}, from the default engine's build.
 pub fn rom_build(scene: &Scene) -> Option<Estimate> {
@@ -172,8 +200,9 @@ pub fn rom_build(scene: &Scene) -> Option<Estimate> {
 }
 
 /// The transient of `simulate`: steps N = cycles 720 / step (plus the step-error windows),
-/// t = N n_cyl t_1 max(1, slices / 12); memory: about three cycles of the record, 8 bytes per
-/// cylinder and step for each point's two series and eight piston series.
+/// t = N n_cyl t_1 max(1, slices / 12); memory per cylinder and step of a cycle, 8 bytes each:
+/// the points' two rolling series (up to twice their length while they grow) and three cycles
+/// of the eight piston series.
 pub fn transient(scene: &Scene) -> Option<Estimate> {
     let sim = scene.simulation.as_ref()?;
     let t = &sim.transient;
@@ -184,7 +213,7 @@ pub fn transient(scene: &Scene) -> Option<Estimate> {
     let points = scene.liner_geometry.analysis_depths.len() as f64;
     Some(Estimate {
         what: "the transient",
-        memory: 3.0 * per_cycle * ncyl * (2.0 * points + 8.0) * 8.0 + ncyl * slices * 2.0 * 1e4,
+        memory: per_cycle * ncyl * (4.0 * points + 24.0) * 8.0 + ncyl * slices * 2.0 * 1e4,
         seconds: steps * ncyl * STEP_SECONDS_PER_CYLINDER * (slices / 12.0).max(1.0),
         keys: "transient.step_deg, transient.cycles, piston.slices",
         detail: format!(

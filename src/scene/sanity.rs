@@ -12,6 +12,9 @@ use crate::text::num;
 /// (omega dt)^2 / 12 exceeds about 3 %.
 const MIN_SAMPLES: f64 = 2.0;
 const GOOD_SAMPLES: f64 = 10.0;
+/// Samples per period beyond any convergence need: the step-converged reference of
+/// `benches/convergence.sh` (1/64 of the default step) takes about 1,000.
+const MAX_SAMPLES: f64 = 1e4;
 /// Coolant gaps [m]: below 0.05 mm no passage can be cast and the cavitation number
 /// Ca ~ 1 / h is singular; below 1 mm the squeeze-film picture of the criterion is doubtful.
 const MIN_GAP: f64 = 0.05e-3;
@@ -80,6 +83,12 @@ pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
             return Err(err(
                 "transient.step_deg",
                 format!("{what}: at least {MIN_SAMPLES} are needed to represent it (10 for a few percent accuracy)"),
+            ));
+        }
+        if samples > MAX_SAMPLES {
+            return Err(err(
+                "transient.step_deg",
+                format!("{what}: more than {} is finer than any convergence study needs (the step-converged reference takes about 1000) and only costs time and memory", num(MAX_SAMPLES)),
             ));
         }
         if samples < GOOD_SAMPLES {
