@@ -43,6 +43,7 @@ impl Error {
             Error::Write(_) | Error::Cache(_) => 2,
             Error::Model(ModelError::Set(_)) | Error::Model(ModelError::NoDofs) => 2,
             Error::Model(ModelError::Eigen(crate::eigen::EigenError::TooMany { .. })) => 2,
+            Error::Model(ModelError::Eigen(crate::eigen::EigenError::TooLarge { .. })) => 2,
             Error::Rom(e) => e.exit_code(),
             Error::Model(_) | Error::Failure(_) => 1,
         }

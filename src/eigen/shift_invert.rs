@@ -78,6 +78,13 @@ impl Modes {
 pub enum EigenError {
     #[error("requested {count} modes but the model has only {n} DOFs")]
     TooMany { count: usize, n: usize },
+    #[error("{count} modes of {n} DOFs need a Lanczos basis of about {gb} GB, more than the {available_gb} GB available: ask for fewer modes")]
+    TooLarge {
+        count: usize,
+        n: usize,
+        gb: String,
+        available_gb: String,
+    },
     #[error("ARPACK dsaupd failed (info = {info}): {msg}")]
     Saupd { info: i32, msg: &'static str },
     #[error("ARPACK converged only {converged} of {wanted} eigenpairs after {restarts} restarts ({msg})")]
@@ -125,6 +132,17 @@ pub fn solve_modes(
     } else {
         settings.ncv.clamp(nev + 1, n)
     };
+    // the Lanczos basis n x ncv, the eigenvectors n x nev and ARPACK's workspace
+    let need = 8.0 * (n as f64 * (ncv + nev) as f64 + (ncv * (ncv + 8)) as f64);
+    let available = crate::machine::available_memory() as f64;
+    if need > 0.8 * available {
+        return Err(EigenError::TooLarge {
+            count: nev,
+            n,
+            gb: crate::text::num(need / 1e9),
+            available_gb: crate::text::num(available / 1e9),
+        });
+    }
     let lworkl = ncv * (ncv + 8);
     let mut resid = start_vector(n);
     let mut v = vec![0.0; n * ncv];
