@@ -550,3 +550,67 @@ proptest! {
         }
     }
 }
+
+/// Keys of the small engine's scene that do not change the ROM (so each run reuses the cached
+/// one), with their values there.
+const RUN_KEYS: [(&str, f64); 24] = [
+    ("engine.speed_rpm", 1900.0),
+    ("piston.mass_kg", 2.6),
+    ("piston.pin_mass_kg", 0.9),
+    ("piston.tilt_inertia_kg_m2", 4.0e-3),
+    ("piston.cg_above_pin_mm", 12.0),
+    ("piston.pin_offset_mm", 0.0),
+    ("piston.compression_height_mm", 72.0),
+    ("piston.skirt_length_mm", 65.0),
+    ("piston.pin_below_skirt_top_mm", 20.0),
+    ("piston.clearance_um", 80.0),
+    ("piston.barrel_um", 12.0),
+    ("piston.ovality_um", 30.0),
+    ("piston.contact_stiffness_n_per_m", 3.0e8),
+    ("piston.contact_damping_n_s_per_m", 3000.0),
+    ("piston.thermal.skirt_top_temp_c", 150.0),
+    ("operating.load", 1.0),
+    ("operating.combustion.intake_bar", 2.8),
+    ("operating.combustion.start_deg", 353.0),
+    ("operating.combustion.heat_release_j", 5800.0),
+    ("operating.combustion.polytropic", 1.35),
+    ("transient.step_deg", 0.25),
+    ("transient.damping_ratio", 0.02),
+    ("transient.max_penetration_um", 50.0),
+    ("cavitation.gap_mm", 4.0),
+];
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Fuzz through the whole `simulate` command (24 cases, a few seconds each): a key scaled
+    /// by a hostile factor exits 0 with its JSON, or 2 / 1 with one message, never a panic
+    /// and within a minute (the small engine's run takes about a second).
+    #[test]
+    fn fuzz_simulate_with_hostile_values_exits_cleanly(
+        key in 0..RUN_KEYS.len(),
+        factor in prop_oneof![Just(0.0), Just(-1.0), Just(1e-3), Just(0.5), Just(2.0), Just(10.0), Just(1e3), Just(1e300)],
+    ) {
+        static CACHE: std::sync::OnceLock<tempfile::TempDir> = std::sync::OnceLock::new();
+        let cache = CACHE.get_or_init(|| tempfile::tempdir().unwrap());
+        let (name, base) = RUN_KEYS[key];
+        let set = format!("{name}={}", if base == 0.0 { factor } else { base * factor });
+        let t = Instant::now();
+        let out = Command::new(env!("CARGO_BIN_EXE_linercav"))
+            .args(["simulate", SMALL, "--json", "--cache-dir", cache.path().to_str().unwrap(), "--set", &set])
+            .env("OPENBLAS_NUM_THREADS", "1")
+            .output()
+            .unwrap();
+        let code = out.status.code();
+        let err = String::from_utf8_lossy(&out.stderr);
+        prop_assert!(matches!(code, Some(0 | 1 | 2)), "{set}: {code:?} {err}");
+        prop_assert!(!err.contains("panicked"), "{set}: {err}");
+        if code == Some(0) {
+            let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+            prop_assert!(v["cylinders"].as_array().is_some_and(|c| !c.is_empty()), "{set}");
+        } else {
+            prop_assert!(err.contains("error: ") && out.stdout.is_empty(), "{set}: {err}");
+        }
+        prop_assert!(t.elapsed() < Duration::from_secs(60), "{set}: {:?}", t.elapsed());
+    }
+}

@@ -19,6 +19,9 @@ const MAX_SAMPLES: f64 = 1e4;
 /// Ca ~ 1 / h is singular; below 1 mm the squeeze-film picture of the criterion is doubtful.
 const MIN_GAP: f64 = 0.05e-3;
 const SMALL_GAP: f64 = 1e-3;
+/// Lowest useful response band [Hz]: the engine orders lie below, the structure's modes far
+/// above.
+const MIN_BAND_HZ: f64 = 100.0;
 /// Young's moduli of structural metals and composites lie within this range [Pa].
 const YOUNG_RANGE: (f64, f64) = (1e9, 1e12);
 
@@ -31,6 +34,15 @@ pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
         msg,
     };
     materials(scene, &mut warnings);
+    if scene.rom.band_hz < MIN_BAND_HZ {
+        return Err(err(
+            "rom.band_hz",
+            format!(
+                "{} Hz: below {MIN_BAND_HZ} Hz no liner or crankcase mode lies in the band (piston slap rings them at 1-10 kHz)",
+                num(scene.rom.band_hz)
+            ),
+        ));
+    }
     let gap = scene.cavitation.gap;
     if gap < MIN_GAP {
         return Err(err(
