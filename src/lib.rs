@@ -1,6 +1,6 @@
 //! linercav: piston-slap-induced cavitation risk of wet cylinder liners.
 //!
-//! The pipeline (see ARCHITECTURE in the README): scene -> mesh -> FE matrices -> modal bases
+//! The pipeline (docs/physics.md): scene -> mesh -> FE matrices -> modal bases
 //! -> reduced engine model -> slap transient -> analysis -> cavitation risk -> reports.
 //! This crate is the library; `src/main.rs` is a thin command-line front end.
 

@@ -146,7 +146,7 @@ fn default_engine_peaks_match_the_baseline() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Trends of the reference study on the default engine (reports/README.md lists each with the
+// Trends of the reference study on the default engine (docs/validation.md lists each with the
 // paper's number beside ours). Each runs the default scene with one what-if override.
 
 fn run_scene(sets: &[&str]) -> (Scene, CycleResult) {
@@ -290,7 +290,7 @@ fn evaluated() -> &'static linercav::app::evaluate::Evaluation {
 /// Study: the dominant response lies in the kHz range of the crankcase's thrust-side family
 /// (~1850 Hz there, next to a crankcase mode at 1874 Hz). Ours: the dominant frequency (peak of
 /// the RMS-averaged spectrum) lies within 5 % of the study's 1850 Hz (1869-1874 Hz over four
-/// realisations of the non-periodic slap, reports/README.md), and a system mode lies within
+/// realisations of the non-periodic slap, docs/validation.md), and a system mode lies within
 /// 2 % of it (1870 Hz; the next at 1855 and 1889 Hz). The second check is weak on its own: the
 /// system modes lie 5-40 Hz apart there, so some mode is nearly always that close; it guards
 /// against a response between families (the 1.72-1.84 kHz gap), the first check carries the trend.
@@ -316,7 +316,7 @@ fn trend_dominant_response_near_the_study_s() {
 /// per-cylinder coefficients correlate with the per-cylinder peak negative acceleration with
 /// Pearson r > 0.7 (six cylinders: r > 0.7 has p < 0.06 for uncorrelated data). On the default
 /// engine (CGI crankcase, 14 mm liner wall and jacket, since 2026-11-23) r = 0.81-0.91 at
-/// 1855 Hz in four realisations of the non-periodic slap (reports/README.md); the earlier
+/// 1855 Hz in four realisations of the non-periodic slap (docs/validation.md); the earlier
 /// defaults gave 0.88-0.96 at 1591/1622 Hz (grey-iron crankcase, 13 mm wall, 9 mm jacket) and
 /// 0.58 (liner guided at its bottom, 10 mm wall; this test was ignored then).
 #[test]
@@ -339,7 +339,7 @@ fn trend_cylinder_differences_follow_a_crankcase_mode() {
 /// 2.5 % (at 0.25 deg steps, 21.9 us, omega dt <= 0.30 up to 2.2 kHz: the trapezoid's amplitude
 /// error (omega dt)^2 / 12 <= 0.8 %, the sampled peak's (omega dt)^2 / 8 <= 1.2 %); that the
 /// default engine rings above f* (so a ring at the threshold would be missed); and what the
-/// engine's points show (reports/README.md): the points with Ca < 1 peak at 1.0-1.7x the
+/// engine's points show (docs/validation.md): the points with Ca < 1 peak at 1.0-1.7x the
 /// threshold, and their peak velocity over the cycle carries more than the dominant ring
 /// (v_max 1.02-1.36x a / omega), so none of them has CSF > 1: on the default engine the classic
 /// criterion flags every point the acceleration criterion flags, and more.
@@ -393,7 +393,7 @@ fn trend_classic_criterion_against_the_acceleration_number() {
 /// the lowest point 4, 5-30 mm above the guide band, the least or tied with the least within
 /// two combined uncertainties (standard error and estimated step error of each mean): on the
 /// converged transient cylinder 1's point 1 (718 +- 20 m/s^2) and point 4 (741 +- 14) are tied
-/// (default engine: point 3 most, 1202-1672 m/s^2, point 4 702-871, reports/README.md).
+/// (default engine: point 3 most, 1202-1672 m/s^2, point 4 702-871, docs/validation.md).
 #[test]
 fn trend_interior_point_most_active() {
     let ev = evaluated();

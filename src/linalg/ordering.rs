@@ -1,6 +1,6 @@
 //! Fill-reducing ordering by METIS nested dissection (`METIS_NodeND`, Debian `libmetis-dev`)
 //! on the node graph, expanded to DOFs node by node. On 3-D solids nested dissection gives
-//! about half the fill of minimum degree (STACK_NOTES.md), which is what makes the sparse
+//! about half the fill of minimum degree (measured on the default meshes), which is what makes the sparse
 //! Cholesky of a 250k-DOF model fit in memory and time.
 
 use std::os::raw::c_int;
