@@ -135,6 +135,31 @@ pub fn read(path: &Path) -> Result<Mesh, MshError> {
     parse(path, &text)
 }
 
+/// What the sections of a file hold, before the mesh is assembled from them.
+#[derive(Default)]
+struct Sections {
+    /// (dim, physical tag) -> name
+    names: HashMap<(i32, i32), String>,
+    /// (dim, entity tag) -> physical tags
+    entity_phys: HashMap<(i32, i32), Vec<i32>>,
+    /// Gmsh node tag -> our node index
+    node_id: HashMap<usize, usize>,
+    nodes: Vec<[f64; 3]>,
+    blocks: Vec<Block>,
+    saw_format: bool,
+    saw_nodes: bool,
+    saw_elements: bool,
+}
+
+/// One element block: entity dimension and tag, Gmsh type, node indices, nodes per element.
+struct Block {
+    dim: i32,
+    entity: i32,
+    gmsh_type: u32,
+    conn: Vec<usize>,
+    nodes_per: usize,
+}
+
 /// Parses MSH 4.1 ASCII text; `path` is used in messages only.
 pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
     let mut lines = Lines {
@@ -143,183 +168,21 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
         line: 0,
         total: text.lines().count(),
     };
-    let mut names: HashMap<(i32, i32), String> = HashMap::new();
-    // (dim, entity tag) -> physical tags
-    let mut entity_phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
-    let mut node_id: HashMap<usize, usize> = HashMap::new();
-    let mut nodes: Vec<[f64; 3]> = Vec::new();
-    // element blocks: (dim, entity, gmsh type, flattened node tags)
-    let mut elem_blocks: Vec<(i32, i32, u32, Vec<usize>, usize)> = Vec::new();
-    let mut saw_format = false;
-    let mut saw_nodes = false;
-    let mut saw_elements = false;
+    let mut s = Sections::default();
     while let Ok(l) = lines.next_line() {
         match l {
-            "$MeshFormat" => {
-                let h = lines.next_line()?;
-                let f: Vec<&str> = h.split_whitespace().collect();
-                if f.len() < 3 {
-                    return Err(lines.err("expected 'version file-type data-size'"));
-                }
-                if f[0] != "4.1" {
-                    return Err(lines.err(format!(
-                        "MSH version {} is not supported: save the mesh as MSH 4.1 (Gmsh: -format msh41)",
-                        f[0]
-                    )));
-                }
-                if f[1] != "0" {
-                    return Err(lines.err(
-                        "binary MSH is not supported: save the mesh as ASCII MSH 4.1 (Mesh.Binary = 0)",
-                    ));
-                }
-                lines.expect("$EndMeshFormat")?;
-                saw_format = true;
+            "$MeshFormat" => read_format(&mut lines, &mut s)?,
+            "$PhysicalNames" => read_physical_names(&mut lines, &mut s)?,
+            "$Entities" => read_entities(&mut lines, &mut s)?,
+            "$Nodes" => read_nodes(&mut lines, &mut s)?,
+            "$Elements" => read_elements(&mut lines, &mut s)?,
+            h if h.starts_with("$End") => {
+                return Err(lines.err(format!("unexpected '{h}'")));
             }
-            "$PhysicalNames" => {
-                let n = lines.numbers::<i64>("number of physical names")?;
-                need(&n, 1, &lines, "count")?;
-                for _ in 0..lines.count(n[0], 1, "the number of physical names")? {
-                    let l = lines.next_line()?;
-                    let mut it = l.splitn(3, char::is_whitespace);
-                    let dim = it.next().and_then(|w| w.parse::<i32>().ok());
-                    let tag = it.next().and_then(|w| w.parse::<i32>().ok());
-                    let name = it.next().map(|w| w.trim().trim_matches('"').to_string());
-                    match (dim, tag, name) {
-                        (Some(d), Some(t), Some(nm)) => {
-                            names.insert((d, t), nm);
-                        }
-                        _ => return Err(lines.err("expected 'dim tag \"name\"'")),
-                    }
-                }
-                lines.expect("$EndPhysicalNames")?;
-            }
-            "$Entities" => {
-                let c = lines.numbers::<i64>("entity counts")?;
-                need(&c, 4, &lines, "numPoints numCurves numSurfaces numVolumes")?;
-                for (dim, &count) in c.iter().take(4).enumerate() {
-                    for _ in 0..lines.count(count, 1, "an entity count")? {
-                        let v = lines.numbers::<f64>("entity record")?;
-                        // points: tag x y z nphys phys...; others: tag 6 bbox nphys phys...
-                        let at = if dim == 0 { 4 } else { 7 };
-                        need(&v, at + 1, &lines, "entity record")?;
-                        let np = v[at];
-                        if !(np >= 0.0 && np.fract() == 0.0 && np <= (v.len() - at - 1) as f64) {
-                            return Err(lines.err(format!(
-                                "the entity record gives {} physical tags but holds {} numbers after the count",
-                                crate::text::num(np),
-                                v.len() - at - 1
-                            )));
-                        }
-                        let np = np as usize;
-                        let tags = v[at + 1..at + 1 + np].iter().map(|&t| t as i32).collect();
-                        entity_phys.insert((dim as i32, v[0] as i32), tags);
-                    }
-                }
-                lines.expect("$EndEntities")?;
-            }
-            "$Nodes" => {
-                let h = lines.numbers::<i64>("'numEntityBlocks numNodes minTag maxTag'")?;
-                need(
-                    &h,
-                    4,
-                    &lines,
-                    "numEntityBlocks numNodes minNodeTag maxNodeTag",
-                )?;
-                // each node takes two lines (its tag, its coordinates); each block one more
-                let total_nodes = lines.count(h[1], 2, "numNodes")?;
-                nodes.reserve(total_nodes);
-                for _ in 0..lines.count(h[0], 1, "numEntityBlocks")? {
-                    let b = lines.numbers::<i64>("node block header")?;
-                    need(
-                        &b,
-                        4,
-                        &lines,
-                        "entityDim entityTag parametric numNodesInBlock",
-                    )?;
-                    let parametric = b[2] != 0;
-                    let count = lines.count(b[3], 2, "numNodesInBlock")?;
-                    let mut tags = Vec::with_capacity(count);
-                    for _ in 0..count {
-                        let t = lines.numbers::<usize>("node tag")?;
-                        need(&t, 1, &lines, "node tag")?;
-                        tags.push(t[0]);
-                    }
-                    for tag in tags {
-                        let x = lines.numbers::<f64>("node coordinates")?;
-                        need(&x, if parametric { 4 } else { 3 }, &lines, "x y z")?;
-                        if x.iter().any(|v| !v.is_finite()) {
-                            return Err(lines.err("node coordinate is not finite"));
-                        }
-                        if node_id.insert(tag, nodes.len()).is_some() {
-                            return Err(lines.err(format!("node tag {tag} defined twice")));
-                        }
-                        nodes.push([x[0], x[1], x[2]]);
-                    }
-                }
-                lines.expect("$EndNodes")?;
-                saw_nodes = true;
-            }
-            "$Elements" => {
-                let h = lines.numbers::<i64>("'numEntityBlocks numElements minTag maxTag'")?;
-                need(
-                    &h,
-                    4,
-                    &lines,
-                    "numEntityBlocks numElements minElementTag maxElementTag",
-                )?;
-                lines.count(h[1], 1, "numElements")?;
-                for _ in 0..lines.count(h[0], 1, "numEntityBlocks")? {
-                    let b = lines.numbers::<i64>("element block header")?;
-                    need(
-                        &b,
-                        4,
-                        &lines,
-                        "entityDim entityTag elementType numElementsInBlock",
-                    )?;
-                    let count = lines.count(b[3], 1, "numElementsInBlock")?;
-                    let (dim, ent) = (b[0] as i32, b[1] as i32);
-                    let et = u32::try_from(b[2]).map_err(|_| {
-                        lines.err(format!("element type {} is not a Gmsh element type", b[2]))
-                    })?;
-                    let nn = nodes_per_type(et)
-                        .ok_or_else(|| lines.err(format!("unsupported element type {et}")))?;
-                    if dim == 3 && ElementKind::from_gmsh_type(et).is_none() {
-                        return Err(lines.err(format!(
-                            "solid element type {et} is not supported: use 4- or 10-node tetrahedra (4, 11) or 8- or 20-node hexahedra (5, 17)"
-                        )));
-                    }
-                    let mut conn = Vec::with_capacity(count * nn);
-                    for _ in 0..count {
-                        let v = lines.numbers::<usize>("element record")?;
-                        if v.len() != nn + 1 {
-                            return Err(lines.err(format!(
-                                "element of type {et} needs a tag and {nn} node tags, found {} numbers",
-                                v.len()
-                            )));
-                        }
-                        for &t in &v[1..] {
-                            let id = *node_id.get(&t).ok_or_else(|| {
-                                lines.err(format!("element refers to undefined node tag {t}"))
-                            })?;
-                            conn.push(id);
-                        }
-                    }
-                    elem_blocks.push((dim, ent, et, conn, nn));
-                }
-                lines.expect("$EndElements")?;
-                saw_elements = true;
-            }
-            s if s.starts_with("$End") => {
-                return Err(lines.err(format!("unexpected '{s}'")));
-            }
-            s if s.starts_with('$') => {
+            h if h.starts_with('$') => {
                 // skip an unknown section
-                let end = format!("$End{}", &s[1..]);
-                loop {
-                    if lines.next_line()? == end {
-                        break;
-                    }
-                }
+                let end = format!("$End{}", &h[1..]);
+                while lines.next_line()? != end {}
             }
             other => {
                 return Err(lines.err(format!(
@@ -333,54 +196,238 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
         line: 0,
         msg: msg.into(),
     };
-    if !saw_format {
+    if !s.saw_format {
         return Err(whole("no $MeshFormat section: not a Gmsh MSH file"));
     }
-    if !saw_nodes || !saw_elements {
+    if !s.saw_nodes || !s.saw_elements {
         return Err(whole("the file needs both $Nodes and $Elements sections"));
     }
-    let mut mesh = Mesh {
+    Ok(assemble(s))
+}
+
+fn read_format(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+    let h = lines.next_line()?;
+    let f: Vec<&str> = h.split_whitespace().collect();
+    if f.len() < 3 {
+        return Err(lines.err("expected 'version file-type data-size'"));
+    }
+    if f[0] != "4.1" {
+        return Err(lines.err(format!(
+            "MSH version {} is not supported: save the mesh as MSH 4.1 (Gmsh: -format msh41)",
+            f[0]
+        )));
+    }
+    if f[1] != "0" {
+        return Err(lines
+            .err("binary MSH is not supported: save the mesh as ASCII MSH 4.1 (Mesh.Binary = 0)"));
+    }
+    lines.expect("$EndMeshFormat")?;
+    s.saw_format = true;
+    Ok(())
+}
+
+fn read_physical_names(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+    let n = lines.numbers::<i64>("number of physical names")?;
+    need(&n, 1, lines, "count")?;
+    for _ in 0..lines.count(n[0], 1, "the number of physical names")? {
+        let l = lines.next_line()?;
+        let mut it = l.splitn(3, char::is_whitespace);
+        let dim = it.next().and_then(|w| w.parse::<i32>().ok());
+        let tag = it.next().and_then(|w| w.parse::<i32>().ok());
+        let name = it.next().map(|w| w.trim().trim_matches('"').to_string());
+        match (dim, tag, name) {
+            (Some(d), Some(t), Some(nm)) => {
+                s.names.insert((d, t), nm);
+            }
+            _ => return Err(lines.err("expected 'dim tag \"name\"'")),
+        }
+    }
+    lines.expect("$EndPhysicalNames")
+}
+
+fn read_entities(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+    let c = lines.numbers::<i64>("entity counts")?;
+    need(&c, 4, lines, "numPoints numCurves numSurfaces numVolumes")?;
+    for (dim, &count) in c.iter().take(4).enumerate() {
+        for _ in 0..lines.count(count, 1, "an entity count")? {
+            let v = lines.numbers::<f64>("entity record")?;
+            // points: tag x y z nphys phys...; others: tag 6 bbox nphys phys...
+            let at = if dim == 0 { 4 } else { 7 };
+            need(&v, at + 1, lines, "entity record")?;
+            let np = v[at];
+            if !(np >= 0.0 && np.fract() == 0.0 && np <= (v.len() - at - 1) as f64) {
+                return Err(lines.err(format!(
+                    "the entity record gives {} physical tags but holds {} numbers after the count",
+                    crate::text::num(np),
+                    v.len() - at - 1
+                )));
+            }
+            let np = np as usize;
+            let tags = v[at + 1..at + 1 + np].iter().map(|&t| t as i32).collect();
+            s.entity_phys.insert((dim as i32, v[0] as i32), tags);
+        }
+    }
+    lines.expect("$EndEntities")
+}
+
+fn read_nodes(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+    let h = lines.numbers::<i64>("'numEntityBlocks numNodes minTag maxTag'")?;
+    need(
+        &h,
+        4,
+        lines,
+        "numEntityBlocks numNodes minNodeTag maxNodeTag",
+    )?;
+    // each node takes two lines (its tag, its coordinates); each block one more
+    let total_nodes = lines.count(h[1], 2, "numNodes")?;
+    s.nodes.reserve(total_nodes);
+    for _ in 0..lines.count(h[0], 1, "numEntityBlocks")? {
+        let b = lines.numbers::<i64>("node block header")?;
+        need(
+            &b,
+            4,
+            lines,
+            "entityDim entityTag parametric numNodesInBlock",
+        )?;
+        let parametric = b[2] != 0;
+        let count = lines.count(b[3], 2, "numNodesInBlock")?;
+        let mut tags = Vec::with_capacity(count);
+        for _ in 0..count {
+            let t = lines.numbers::<usize>("node tag")?;
+            need(&t, 1, lines, "node tag")?;
+            tags.push(t[0]);
+        }
+        for tag in tags {
+            let x = lines.numbers::<f64>("node coordinates")?;
+            need(&x, if parametric { 4 } else { 3 }, lines, "x y z")?;
+            if x.iter().any(|v| !v.is_finite()) {
+                return Err(lines.err("node coordinate is not finite"));
+            }
+            if s.node_id.insert(tag, s.nodes.len()).is_some() {
+                return Err(lines.err(format!("node tag {tag} defined twice")));
+            }
+            s.nodes.push([x[0], x[1], x[2]]);
+        }
+    }
+    lines.expect("$EndNodes")?;
+    s.saw_nodes = true;
+    Ok(())
+}
+
+fn read_elements(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+    let h = lines.numbers::<i64>("'numEntityBlocks numElements minTag maxTag'")?;
+    need(
+        &h,
+        4,
+        lines,
+        "numEntityBlocks numElements minElementTag maxElementTag",
+    )?;
+    lines.count(h[1], 1, "numElements")?;
+    for _ in 0..lines.count(h[0], 1, "numEntityBlocks")? {
+        let b = lines.numbers::<i64>("element block header")?;
+        need(
+            &b,
+            4,
+            lines,
+            "entityDim entityTag elementType numElementsInBlock",
+        )?;
+        let count = lines.count(b[3], 1, "numElementsInBlock")?;
+        let (dim, entity) = (b[0] as i32, b[1] as i32);
+        let et = u32::try_from(b[2])
+            .map_err(|_| lines.err(format!("element type {} is not a Gmsh element type", b[2])))?;
+        let nn = nodes_per_type(et)
+            .ok_or_else(|| lines.err(format!("unsupported element type {et}")))?;
+        if dim == 3 && ElementKind::from_gmsh_type(et).is_none() {
+            return Err(lines.err(format!(
+                "solid element type {et} is not supported: use 4- or 10-node tetrahedra (4, 11) or 8- or 20-node hexahedra (5, 17)"
+            )));
+        }
+        let mut conn = Vec::with_capacity(count * nn);
+        for _ in 0..count {
+            let v = lines.numbers::<usize>("element record")?;
+            if v.len() != nn + 1 {
+                return Err(lines.err(format!(
+                    "element of type {et} needs a tag and {nn} node tags, found {} numbers",
+                    v.len()
+                )));
+            }
+            for &t in &v[1..] {
+                let id = *s.node_id.get(&t).ok_or_else(|| {
+                    lines.err(format!("element refers to undefined node tag {t}"))
+                })?;
+                conn.push(id);
+            }
+        }
+        s.blocks.push(Block {
+            dim,
+            entity,
+            gmsh_type: et,
+            conn,
+            nodes_per: nn,
+        });
+    }
+    lines.expect("$EndElements")?;
+    s.saw_elements = true;
+    Ok(())
+}
+
+/// The mesh of the sections: solid blocks grouped by kind (global element numbering in kind
+/// order), every physical group a node set, volume groups also element sets.
+fn assemble(s: Sections) -> Mesh {
+    let Sections {
+        names,
+        entity_phys,
         nodes,
-        ..Default::default()
+        blocks,
+        ..
+    } = s;
+    let name_of = |dim: i32, p: i32| {
+        names
+            .get(&(dim, p))
+            .cloned()
+            .unwrap_or_else(|| format!("{dim}:{p}"))
     };
     let mut by_kind: BTreeMap<ElementKind, Vec<usize>> = BTreeMap::new();
     let mut set_nodes: BTreeMap<String, BTreeSet<usize>> = BTreeMap::new();
     let mut vol_blocks: Vec<(ElementKind, i32, usize, usize)> = Vec::new(); // kind, entity, start, count
-    for (dim, ent, et, conn, nn) in &elem_blocks {
-        let phys = entity_phys.get(&(*dim, *ent)).cloned().unwrap_or_default();
+    for b in &blocks {
+        let phys = entity_phys
+            .get(&(b.dim, b.entity))
+            .cloned()
+            .unwrap_or_default();
         for p in &phys {
-            let name = names
-                .get(&(*dim, *p))
-                .cloned()
-                .unwrap_or_else(|| format!("{dim}:{p}"));
             set_nodes
-                .entry(name)
+                .entry(name_of(b.dim, *p))
                 .or_default()
-                .extend(conn.iter().copied());
+                .extend(b.conn.iter().copied());
         }
-        if *dim == 3 {
-            let kind = ElementKind::from_gmsh_type(*et).expect("checked above");
+        if b.dim == 3 {
+            let kind = ElementKind::from_gmsh_type(b.gmsh_type).expect("checked on reading");
             let list = by_kind.entry(kind).or_default();
-            vol_blocks.push((kind, *ent, list.len() / nn, conn.len() / nn));
-            list.extend_from_slice(conn);
+            vol_blocks.push((
+                kind,
+                b.entity,
+                list.len() / b.nodes_per,
+                b.conn.len() / b.nodes_per,
+            ));
+            list.extend_from_slice(&b.conn);
         }
     }
-    // global element numbering: blocks in kind order
     let mut offset: BTreeMap<ElementKind, usize> = BTreeMap::new();
     let mut acc = 0;
     for (kind, conn) in &by_kind {
         offset.insert(*kind, acc);
         acc += conn.len() / kind.num_nodes();
     }
+    let mut mesh = Mesh {
+        nodes,
+        ..Default::default()
+    };
     for (kind, ent, start, count) in vol_blocks {
         for p in entity_phys.get(&(3, ent)).cloned().unwrap_or_default() {
-            let name = names
-                .get(&(3, p))
-                .cloned()
-                .unwrap_or_else(|| format!("3:{p}"));
             let o = offset[&kind] + start;
             mesh.element_sets
-                .entry(name)
+                .entry(name_of(3, p))
                 .or_default()
                 .extend(o..o + count);
         }
@@ -393,7 +440,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
         .into_iter()
         .map(|(k, v)| (k, v.into_iter().collect()))
         .collect();
-    Ok(mesh)
+    mesh
 }
 
 /// Writes a mesh as MSH 4.1 ASCII: one volume entity per element block, one point entity per
