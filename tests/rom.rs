@@ -4,12 +4,12 @@
 
 mod common;
 use common::linercav_output as linercav;
+use linercav::app::full_modes as full;
 use linercav::app::rom::{
     build_rom, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
 };
 use linercav::app::rom_tradeoff;
 use linercav::reduce::craig_bampton::{reduce, CbSettings, InterfaceBlock};
-use linercav::reduce::full;
 use linercav::reduce::interface::{self, Direction, InterfaceShape};
 use linercav::scene::Scene;
 use std::path::Path;

@@ -4,6 +4,7 @@
 pub mod cavitation;
 pub mod evaluate;
 pub mod export;
+pub mod full_modes;
 pub mod full_order;
 pub mod modes;
 pub mod progress;

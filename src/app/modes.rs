@@ -241,7 +241,7 @@ pub fn run_assembly(
         return Err(Error::Input("--count must be at least 1".into()));
     }
     if full {
-        let r = crate::reduce::full::run(scene, count, vtu_path)?;
+        let r = super::full_modes::run(scene, count, vtu_path)?;
         return Ok(AssemblyReport {
             frequencies_hz: r.frequencies_hz,
             dofs: r.dofs,
@@ -257,7 +257,7 @@ pub fn run_assembly(
         // mode shapes on the meshes need the full bases: build in this run
         let (b, lm, cm) = super::rom::build_rom(scene, true)?;
         let n = count.min(b.rom.frequencies_hz.len());
-        crate::reduce::full::write_vtu(path, scene, &lm, &cm, &b, n)?;
+        super::full_modes::write_vtu(path, scene, &lm, &cm, &b, n)?;
         (b.rom, "bypassed")
     } else {
         let l = super::rom::get_rom(scene, cache)?;

@@ -9,10 +9,11 @@
 //! among ROM modes within 1 % in frequency (close pairs may swap order). A Ritz reduction can
 //! only raise frequencies, so a ROM mode below its full counterpart flags a bug.
 
+use super::full_modes as full;
 use super::rom::build_rom;
 use crate::error::{Error, Result};
 use crate::files::write_all_atomic;
-use crate::reduce::full::{self, FullModes};
+use crate::reduce::full::FullModes;
 use crate::reduce::rom::RomBuild;
 use crate::report::png::{write_png, Chart, Mark, Rule, Series};
 use crate::scene::Scene;
@@ -45,7 +46,8 @@ pub fn compare(b: &RomBuild, reference: &FullModes, n: usize) -> Result<ModeComp
         .min(reference.frequencies_hz.len())
         .min(b.rom.frequencies_hz.len());
     let extra = (n + 2).min(b.rom.frequencies_hz.len());
-    let rom_shapes: Vec<Vec<f64>> = full::recover_shapes(b, extra)?
+    let rom_shapes: Vec<Vec<f64>> = full::recover_shapes(b, extra)
+        .ok_or_else(|| crate::error::Error::Failure("the ROM build did not keep its bases".into()))?
         .iter()
         .map(|m| m.concat())
         .collect();

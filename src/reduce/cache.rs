@@ -1,7 +1,7 @@
 //! On-disk cache of engine ROMs.
 //!
 //! File `rom-<key>.bin` in the cache directory, `key` the BLAKE3 hash of the canonical JSON of
-//! everything the reduction depends on (see [`crate::app::rom`]). Layout: magic `LCAVROM\0`,
+//! everything the reduction depends on (its description is made by the `rom` command). Layout: magic `LCAVROM\0`,
 //! format version (u32 LE), payload length (u64 LE), BLAKE3 hash of the payload (32 bytes),
 //! payload (bincode of the key description and the [`EngineRom`]). A file is trusted only when
 //! it is a regular file whose magic, version, length and hash match, whose stored key

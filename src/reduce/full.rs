@@ -14,21 +14,17 @@
 //! node graph) with q last, factorised once and solved by the certified ARPACK driver.
 
 use super::craig_bampton::Load;
+use super::craig_bampton::ReduceError;
+use super::rom::RomError;
 use super::rom::{RomBuild, RomInputs};
-use crate::app::rom::{load_meshes, rom_inputs};
-use crate::error::{Error, Result};
 use crate::fem::assembly::NodeGraph;
 use crate::fem::dofs::{DofMap, FIXED};
-use crate::fem::model::{certified_modes, FeModel};
-use crate::files as atomic;
+use crate::fem::model::{FeModel, ModelError};
 use crate::linalg::factor::Analysis;
 use crate::linalg::ordering;
 use crate::linalg::sparse::{Pattern, StiffnessMass};
 use crate::mesh::Mesh;
-use crate::report::vtu;
-use crate::scene::Scene;
 use std::collections::{BTreeMap, HashMap};
-use std::path::Path;
 
 /// Result of the full coupled modal solve.
 pub struct FullModes {
@@ -64,12 +60,11 @@ fn prepare(
     surface: &[crate::fem::surface::SurfaceMass],
     fix: &[String],
     blocks: &[super::craig_bampton::InterfaceBlock],
-) -> Result<PartData> {
+) -> Result<PartData, ModelError> {
     let model = FeModel::build_with(mesh.clone(), material, fix, surface)?;
     let mut sets = fix.to_vec();
     sets.extend(blocks.iter().map(|b| b.set.clone()));
-    let inner =
-        DofMap::with_fixed_sets(mesh, &sets).map_err(crate::fem::model::ModelError::from)?;
+    let inner = DofMap::with_fixed_sets(mesh, &sets).map_err(ModelError::from)?;
     let na = model.n_free();
     let mut a_to_b = vec![FIXED; na];
     for (slot, &a) in model.dofs.dof.iter().enumerate() {
@@ -133,8 +128,7 @@ fn prepare(
     let node_dofs = inner.node_dofs();
     let keep: Vec<bool> = node_dofs.iter().map(|d| !d.is_empty()).collect();
     let (xadj, adjncy, ids) = graph.without_self_loops(&keep);
-    let order_nodes = ordering::nested_dissection(&xadj, &adjncy)
-        .map_err(|e| Error::Failure(format!("ordering: {e}")))?;
+    let order_nodes = ordering::nested_dissection(&xadj, &adjncy).map_err(ModelError::Ordering)?;
     let node_perm: Vec<usize> = order_nodes.iter().map(|&v| ids[v]).collect();
     let (order, _) = ordering::expand_to_dofs(&node_perm, &node_dofs, inner.n_free);
     Ok(PartData {
@@ -168,22 +162,28 @@ pub struct FullSystem {
 impl FullSystem {
     /// Assembles the full coupled model of the scene's meshes (the same interface fields as
     /// the ROM) and analyses its pattern.
-    pub fn build(inp: &RomInputs<'_>) -> Result<Self> {
-        let (liner_blocks, cc_blocks) = super::rom::interface_blocks(inp).map_err(Error::from)?;
+    pub fn build(inp: &RomInputs<'_>) -> Result<Self, RomError> {
+        let (liner_blocks, cc_blocks) = super::rom::interface_blocks(inp)?;
+        let in_part = |part: &str| {
+            let part = part.to_string();
+            move |source| RomError::Reduce(ReduceError::Model { part, source })
+        };
         let liner = prepare(
             inp.liner,
             &inp.liner_material,
             &inp.liner_surface_mass,
             &[],
             &liner_blocks,
-        )?;
+        )
+        .map_err(in_part("liner"))?;
         let cc = prepare(
             inp.crankcase,
             &inp.crankcase_material,
             &[],
             &inp.crankcase_fix,
             &cc_blocks,
-        )?;
+        )
+        .map_err(in_part("crankcase"))?;
         let cols = |blocks: &[super::craig_bampton::InterfaceBlock]| {
             let mut v = Vec::new();
             let mut c0 = 0;
@@ -305,8 +305,8 @@ impl FullSystem {
         for (new, &old) in fwd.iter().enumerate() {
             inv[old] = new;
         }
-        let analysis =
-            Analysis::new(&km.pattern, &fwd, &inv).map_err(crate::fem::model::ModelError::from)?;
+        let analysis = Analysis::new(&km.pattern, &fwd, &inv)
+            .map_err(|e| in_part("engine")(ModelError::from(e)))?;
         Ok(Self {
             km,
             analysis,
@@ -404,163 +404,13 @@ impl FullSystem {
     }
 }
 
-/// Builds and solves the full coupled model of a scene for `count` modes.
-pub fn run(scene: &Scene, count: usize, vtu_path: Option<&Path>) -> Result<FullModes> {
-    let (lm, cm) = load_meshes(scene)?;
-    let inp = rom_inputs(scene, &lm, &cm, false);
-    let sys = FullSystem::build(&inp)?;
-    let sigma = scene.solver.sigma();
-    let (sol, _) = certified_modes(
-        &sys.km,
-        &sys.analysis,
-        count,
-        sigma,
-        scene.solver.guard_modes,
-    )?;
-    let shapes: Vec<Vec<Vec<f64>>> = (0..sol.modes.count())
-        .map(|j| sys.part_displacements(sol.modes.vector(j)))
-        .collect();
-    let out = FullModes {
-        frequencies_hz: (0..sol.modes.count())
-            .map(|j| sol.modes.frequency_hz(j))
-            .collect(),
-        residuals: sol.residuals.clone(),
-        sturm_ok: sol.sturm.as_ref().map(|s| s.ok).unwrap_or(false),
-        dofs: sys.dofs(),
-        shapes,
-    };
-    if let Some(path) = vtu_path {
-        write_engine_vtu(
-            path,
-            &inp.cylinders,
-            &inp.axis_x,
-            &lm,
-            &cm,
-            &sys.dof_maps(),
-            &out.shapes,
-            &out.frequencies_hz,
-        )?;
-    }
-    Ok(out)
-}
-
-/// Writes coupled mode shapes on the placed meshes (liners of the modelled cylinders, then the
-/// crankcase) as one VTU file. `shapes[mode][instance]` are in each instance's free-DOF order.
-#[allow(clippy::too_many_arguments)]
-fn write_engine_vtu(
-    path: &Path,
-    cylinders: &[usize],
-    axis_x: &[f64],
-    lm: &Mesh,
-    cm: &Mesh,
-    dofs: &[&DofMap],
-    shapes: &[Vec<Vec<f64>>],
-    freqs: &[f64],
-) -> Result<()> {
-    let mut meshes = Vec::new();
-    for &cyl in cylinders {
-        let mut m = lm.clone();
-        for p in m.nodes.iter_mut() {
-            p[0] += axis_x[cyl - 1];
-        }
-        m.node_sets.clear();
-        m.element_sets.clear();
-        meshes.push(m);
-    }
-    let mut c = cm.clone();
-    c.node_sets.clear();
-    c.element_sets.clear();
-    meshes.push(c);
-    // concatenate without merging (parts touch but are separate bodies)
-    let mut all = Mesh::default();
-    let mut node_off = Vec::new();
-    for m in &meshes {
-        node_off.push(all.nodes.len());
-        let off = all.nodes.len();
-        all.nodes.extend_from_slice(&m.nodes);
-        for b in &m.blocks {
-            let conn = b.conn.iter().map(|&n| n + off);
-            match all.blocks.iter_mut().find(|x| x.kind == b.kind) {
-                Some(x) => x.conn.extend(conn),
-                None => all.blocks.push(crate::mesh::ElementBlock {
-                    kind: b.kind,
-                    conn: conn.collect(),
-                }),
-            }
-        }
-    }
-    let fields: Vec<Vec<f64>> = shapes
-        .iter()
-        .map(|per| {
-            let mut v = vec![0.0; 3 * all.nodes.len()];
-            for (inst, u) in per.iter().enumerate() {
-                let full = dofs[inst].expand(u);
-                let o = 3 * node_off[inst];
-                v[o..o + full.len()].copy_from_slice(&full);
-            }
-            v
-        })
-        .collect();
-    let named: Vec<vtu::Field<'_>> = fields
-        .iter()
-        .zip(freqs)
-        .enumerate()
-        .map(|(j, (v, f))| vtu::Field {
-            name: format!("mode_{:02}_{:.1}Hz", j + 1, f),
-            values: v,
-        })
-        .collect();
-    atomic::write_atomic(path, |w| vtu::write(&all, &named, w))?;
-    Ok(())
-}
-
-/// Writes the first `count` ROM system modes recovered on the meshes.
-pub fn write_vtu(
-    path: &Path,
-    scene: &Scene,
-    lm: &Mesh,
-    cm: &Mesh,
-    b: &RomBuild,
-    count: usize,
-) -> Result<()> {
-    let axis_x: Vec<f64> = (0..scene.engine.cylinders)
-        .map(|c| {
-            (c as f64 - (scene.engine.cylinders as f64 - 1.0) / 2.0) * scene.engine.cylinder_pitch
-        })
-        .collect();
-    let shapes = recover_shapes(b, count)?;
-    let dofs: Vec<&DofMap> = b
-        .liner_maps
-        .iter()
-        .map(|_| &b.liner.dofs)
-        .chain(std::iter::once(&b.crankcase.dofs))
-        .collect();
-    let cyls: Vec<usize> = b.rom.cylinders.iter().map(|c| c.cylinder).collect();
-    write_engine_vtu(
-        path,
-        &cyls,
-        &axis_x,
-        lm,
-        cm,
-        &dofs,
-        &shapes,
-        &b.rom.frequencies_hz[..count],
-    )
-}
-
 /// The first `count` ROM system modes on the parts' free DOFs (instance-major: liners of the
 /// modelled cylinders, then the crankcase), from a build that kept its bases.
-pub fn recover_shapes(b: &RomBuild, count: usize) -> Result<Vec<Vec<Vec<f64>>>> {
-    let lb = b
-        .liner
-        .basis
-        .as_ref()
-        .ok_or_else(|| Error::Failure("liner basis not kept".into()))?;
-    let cb = b
-        .crankcase
-        .basis
-        .as_ref()
-        .ok_or_else(|| Error::Failure("crankcase basis not kept".into()))?;
+///
+/// `None` when the build did not keep its bases.
+pub fn recover_shapes(b: &RomBuild, count: usize) -> Option<Vec<Vec<Vec<f64>>>> {
+    let lb = b.liner.basis.as_ref()?;
+    let cb = b.crankcase.basis.as_ref()?;
     let mut shapes = Vec::new();
     for j in 0..count {
         let y = b.system.vectors.as_ref().col(j);
@@ -583,5 +433,5 @@ pub fn recover_shapes(b: &RomBuild, count: usize) -> Result<Vec<Vec<Vec<f64>>>> 
         per.push(recover(cb, &b.crankcase_map));
         shapes.push(per);
     }
-    Ok(shapes)
+    Some(shapes)
 }
