@@ -31,6 +31,8 @@ pub enum Error {
     Rom(#[from] crate::reduce::rom::RomError),
     #[error(transparent)]
     Cache(#[from] crate::reduce::cache::CacheReadError),
+    #[error(transparent)]
+    Modal(#[from] crate::eigen::modal::ModalError),
 }
 
 impl Error {
@@ -42,8 +44,7 @@ impl Error {
             // to fix (a path, a permission, a full disk)
             Error::Write(_) | Error::Cache(_) => 2,
             Error::Model(ModelError::Set(_)) | Error::Model(ModelError::NoDofs) => 2,
-            Error::Model(ModelError::Eigen(crate::eigen::EigenError::TooMany { .. })) => 2,
-            Error::Model(ModelError::Eigen(crate::eigen::EigenError::TooLarge { .. })) => 2,
+            Error::Modal(e) => e.exit_code(),
             Error::Rom(e) => e.exit_code(),
             Error::Model(_) | Error::Failure(_) => 1,
         }

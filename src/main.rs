@@ -21,6 +21,9 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
     about = "Piston-slap-induced cavitation risk of wet cylinder liners"
 )]
 struct Cli {
+    /// Print the phases of long computations (ROM build, system modes) on stderr.
+    #[arg(long, short, global = true)]
+    verbose: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -535,15 +538,20 @@ struct StderrLog {
 
 impl log::Log for StderrLog {
     fn enabled(&self, m: &log::Metadata) -> bool {
-        m.level() <= log::Level::Warn
+        m.level() <= log::max_level()
     }
     fn log(&self, r: &log::Record) {
-        if self.enabled(r.metadata()) {
-            let msg = r.args().to_string();
-            let mut said = self.said.lock().unwrap_or_else(|p| p.into_inner());
-            if said.insert(msg.clone()) {
-                eprintln!("warning: {msg}");
-            }
+        if !self.enabled(r.metadata()) {
+            return;
+        }
+        let msg = r.args().to_string();
+        if r.level() > log::Level::Warn {
+            eprintln!("{msg}");
+            return;
+        }
+        let mut said = self.said.lock().unwrap_or_else(|p| p.into_inner());
+        if said.insert(msg.clone()) {
+            eprintln!("warning: {msg}");
         }
     }
     fn flush(&self) {}
@@ -556,11 +564,15 @@ fn main() {
     let logger = LOG.get_or_init(|| StderrLog {
         said: Default::default(),
     });
-    if log::set_logger(logger).is_ok() {
-        log::set_max_level(log::LevelFilter::Warn);
-    }
     let started = Instant::now();
     let cli = Cli::parse();
+    if log::set_logger(logger).is_ok() {
+        log::set_max_level(if cli.verbose {
+            log::LevelFilter::Info
+        } else {
+            log::LevelFilter::Warn
+        });
+    }
     if let Err(e) = run(cli, started) {
         let mut said = e.to_string();
         eprint!("error: {said}");

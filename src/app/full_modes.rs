@@ -2,9 +2,9 @@
 //! --full` and `rom-tradeoff`), and engine mode shapes written as VTU for ParaView.
 
 use super::rom::{load_meshes, rom_inputs};
+use crate::eigen::modal::certified_modes;
 use crate::error::{Error, Result};
 use crate::fem::dofs::DofMap;
-use crate::fem::model::certified_modes;
 use crate::files::write_atomic;
 use crate::mesh::Mesh;
 pub use crate::reduce::full::recover_shapes;

@@ -3,6 +3,7 @@
 
 pub mod arpack;
 pub mod certify;
+pub mod modal;
 pub mod shift_invert;
 
 pub use shift_invert::{solve_modes, EigenError, EigenSettings, Modes};

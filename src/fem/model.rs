@@ -5,8 +5,6 @@ use super::assembly::{Assembler, AssemblyError};
 use super::dofs::{DofMap, UnknownSet};
 use super::material::Elastic;
 use super::surface::{self, SurfaceMass};
-use crate::eigen::certify::{self, SturmCheck};
-use crate::eigen::{solve_modes, EigenError, EigenSettings, Modes};
 use crate::linalg::factor::{Analysis, FactorError};
 use crate::linalg::ordering;
 use crate::linalg::sparse::StiffnessMass;
@@ -24,15 +22,13 @@ pub enum ModelError {
     Ordering(String),
     #[error(transparent)]
     Factor(#[from] FactorError),
-    #[error(transparent)]
-    Eigen(#[from] EigenError),
     #[error("the model has no free DOFs")]
     NoDofs,
     #[error(transparent)]
     Surface(#[from] super::surface::SurfaceError),
 }
 
-/// Wall-clock seconds of each phase.
+/// Wall-clock seconds of each phase (the modal phases filled by `eigen::modal`).
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct Timings {
     pub assembly: f64,
@@ -49,15 +45,6 @@ pub struct FeModel {
     pub km: StiffnessMass,
     pub analysis: Analysis,
     pub timings: Timings,
-}
-
-/// Modal solution with its certificate.
-pub struct ModalSolution {
-    pub modes: Modes,
-    pub residuals: Vec<f64>,
-    pub m_orthogonality: f64,
-    pub sturm: Option<SturmCheck>,
-    pub sigma: f64,
 }
 
 impl FeModel {
@@ -111,79 +98,4 @@ impl FeModel {
     pub fn n_free(&self) -> usize {
         self.dofs.n_free
     }
-
-    /// The lowest `count` modes with shift `sigma`, certified (residuals, M-orthogonality,
-    /// Sturm count). `guard` extra modes are computed to locate a spectral gap for the check.
-    pub fn modes(
-        &mut self,
-        count: usize,
-        sigma: f64,
-        guard: usize,
-    ) -> Result<ModalSolution, ModelError> {
-        let (sol, t) = certified_modes(&self.km, &self.analysis, count, sigma, guard)?;
-        self.timings.factorisation = t.factorisation;
-        self.timings.eigen = t.eigen;
-        self.timings.certification = t.certification;
-        Ok(sol)
-    }
-}
-
-/// The lowest `count` modes of (K, M) on an analysed pattern, certified: shift-invert ARPACK
-/// with K - sigma M = L L^T, residuals, M-orthogonality, and a Sturm count at a shift placed in
-/// a spectral gap found among `guard` extra modes.
-pub fn certified_modes(
-    km: &StiffnessMass,
-    analysis: &Analysis,
-    count: usize,
-    sigma: f64,
-    guard: usize,
-) -> Result<(ModalSolution, Timings), ModelError> {
-    let mut timings = Timings::default();
-    let n = km.pattern.n;
-    let nev = (count + guard).min(n.saturating_sub(1)).max(count);
-    let t = Instant::now();
-    let shifted = km.shifted(sigma);
-    let llt = analysis.llt(&km.pattern, &shifted)?;
-    drop(shifted);
-    timings.factorisation = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let pattern = &km.pattern;
-    let m = &km.m;
-    let all = solve_modes(
-        n,
-        &EigenSettings::new(nev, sigma),
-        |x, y| pattern.matvec(m, x, y),
-        |x| llt.solve_vec(x),
-    )?;
-    drop(llt);
-    timings.eigen = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let sturm = match certify::sturm_shift(&all.eigenvalues, count, 1e-4) {
-        Some((sigma_c, expected)) => {
-            let found = analysis.negative_pivots(&km.pattern, &km.shifted(sigma_c))?;
-            Some(SturmCheck {
-                shift_hz: sigma_c.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
-                expected,
-                found,
-                ok: found == expected,
-            })
-        }
-        None => None,
-    };
-    let mut modes = all;
-    modes.eigenvalues.truncate(count);
-    modes.vectors.truncate(count * n);
-    let residuals = certify::residuals(km, &modes, sigma);
-    let m_orthogonality = certify::m_orthogonality_error(km, &modes);
-    timings.certification = t.elapsed().as_secs_f64();
-    Ok((
-        ModalSolution {
-            modes,
-            residuals,
-            m_orthogonality,
-            sturm,
-            sigma,
-        },
-        timings,
-    ))
 }

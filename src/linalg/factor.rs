@@ -37,12 +37,10 @@ pub struct Analysis {
     n: usize,
 }
 
+/// Parallelism of the numeric factorisation: rayon's pool (RAYON_NUM_THREADS=1 makes it
+/// sequential).
 fn par() -> Par {
-    if std::env::var_os("LINERCAV_SEQ").is_some() {
-        Par::Seq
-    } else {
-        Par::rayon(0)
-    }
+    Par::rayon(0)
 }
 
 impl Analysis {

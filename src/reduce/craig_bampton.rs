@@ -64,6 +64,12 @@ pub enum ReduceError {
     },
     #[error("part '{part}': {msg}")]
     Other { part: String, msg: String },
+    #[error("part '{part}': {source}")]
+    Eigen {
+        part: String,
+        #[source]
+        source: crate::eigen::EigenError,
+    },
     /// More modes below the cut-off than the machine can hold (a material far too soft, a
     /// cut-off far too high): found by the Sturm count, before the eigen-solve.
     #[error("part '{part}': {count} of its {dofs} interior DOFs' modes lie below the cut-off {cutoff_hz} Hz (basis about {gb} GB, {available_gb} GB available; more than a quarter of the spectrum is beyond what the mesh resolves): lower rom.band_hz or rom.cutoff_factor, or check the material (Young's modulus, density)")]
@@ -148,12 +154,7 @@ pub fn reduce(
     settings: &CbSettings,
 ) -> Result<PartReduction, ReduceError> {
     let t0 = Instant::now();
-    let verbose = std::env::var_os("LINERCAV_VERBOSE").is_some();
-    let tick = |what: &str| {
-        if verbose {
-            eprintln!("[{part}] {:7.2} s  {what}", t0.elapsed().as_secs_f64());
-        }
-    };
+    let tick = |what: &str| log::info!("[{part}] {:7.2} s  {what}", t0.elapsed().as_secs_f64());
     let err_model = |source| ReduceError::Model {
         part: part.to_string(),
         source,
@@ -226,7 +227,10 @@ pub fn reduce(
             |x, y| pattern.matvec(m, x, y),
             |x| llt.solve_vec(x),
         )
-        .map_err(|e| err_model(e.into()))?;
+        .map_err(|source| ReduceError::Eigen {
+            part: part.to_string(),
+            source,
+        })?;
         let k = modes.count();
         let mat = Mat::from_fn(nb, k, |i, j| modes.vectors[j * nb + i]);
         (modes.eigenvalues.clone(), mat)
@@ -406,7 +410,7 @@ pub fn reduce(
     symmetrise(&mut k);
     symmetrise(&mut m);
     tick(&format!("projected onto {nr} coordinates"));
-    if verbose {
+    if log::log_enabled!(log::Level::Info) {
         let d: Vec<f64> = (0..nr)
             .map(|i| 1.0 / m[(i, i)].max(1e-300).sqrt())
             .collect();
@@ -418,7 +422,7 @@ pub fn reduce(
         let em = ms
             .self_adjoint_eigenvalues(faer::Side::Lower)
             .unwrap_or_default();
-        eprintln!(
+        log::info!(
             "[{part}] scaled K_r eigenvalues {:?} .. {:?}; M_r {:?} .. {:?}",
             &ek[..ek.len().min(8)],
             ek.last(),

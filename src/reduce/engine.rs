@@ -180,11 +180,11 @@ pub fn system_modes(
             }
         }
         y.as_mut().subcols_mut(0, p).copy_from(&ys);
-        if std::env::var_os("LINERCAV_VERBOSE").is_some() {
+        if log::log_enabled!(log::Level::Info) {
             let change = (0..p)
                 .map(|i| ((lambdas[i] - before[i]) / before[i]).abs())
                 .fold(0.0f64, f64::max);
-            eprintln!("system: refined {p} modes, largest relative eigenvalue change {change:e}");
+            log::info!("system: refined {p} modes, largest relative eigenvalue change {change:e}");
         }
     }
     for i in 0..n {
@@ -192,12 +192,10 @@ pub fn system_modes(
             y[(i, j)] *= d[i];
         }
     }
-    if std::env::var_os("LINERCAV_VERBOSE").is_some() {
-        eprintln!(
-            "system: n = {n}, lowest eigenvalues {:?}",
-            &lambdas[..n.min(4)]
-        );
-    }
+    log::info!(
+        "system: n = {n}, lowest eigenvalues {:?}",
+        &lambdas[..n.min(4)]
+    );
     if lambdas.first().is_some_and(|&l| l <= 0.0) {
         return Err(SystemError::StiffnessSingular);
     }
