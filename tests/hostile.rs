@@ -509,7 +509,7 @@ proptest! {
         let text = apply(&fixture_text(MESH), &muts);
         let t = Instant::now();
         if let Ok(mut mesh) = linercav::mesh::gmsh::parse(Path::new("fuzz.msh"), &text) {
-            let _ = linercav::mesh::checks::check_and_compact(&mut mesh);
+            let _ = linercav::fem::element::check_mesh(&mut mesh);
         }
         prop_assert!(t.elapsed() < CASE_LIMIT);
     }

@@ -10,7 +10,7 @@ use libfuzzer_sys::fuzz_target;
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
         if let Ok(mut mesh) = linercav::mesh::gmsh::parse(std::path::Path::new("fuzz.msh"), text) {
-            let _ = linercav::mesh::checks::check_and_compact(&mut mesh);
+            let _ = linercav::fem::element::check_mesh(&mut mesh);
         }
     }
 });

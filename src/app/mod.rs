@@ -15,8 +15,9 @@ pub mod summary;
 pub mod sweep;
 
 use crate::error::{Error, Result};
+use crate::fem::element::check_mesh as check_and_compact;
 use crate::fem::material::Elastic;
-use crate::mesh::checks::{check_and_compact, CheckReport};
+use crate::mesh::checks::CheckReport;
 use crate::mesh::{gmsh, liner, Mesh};
 use crate::scene::{MeshSource, Scene, PARTS};
 use std::path::PathBuf;

@@ -8,8 +8,8 @@
 
 use super::progress::Progress;
 use crate::error::{Error, Result};
+use crate::fem::element::check_mesh as check_and_compact;
 use crate::fem::surface::SurfaceMass;
-use crate::mesh::checks::check_and_compact;
 use crate::mesh::{crankcase, gmsh, liner, Mesh};
 use crate::reduce::cache::{self, Lookup};
 use crate::reduce::rom::{build, EngineRom, RomBuild, RomInputs, ROM_FORMAT};

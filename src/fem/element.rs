@@ -269,6 +269,14 @@ pub fn volume(kind: ElementKind, coords: &[[f64; 3]]) -> f64 {
         .sum()
 }
 
+/// Checks a mesh (inverted elements by [`min_jacobian_ratio`], displaced mid-edge nodes,
+/// duplicate and unused nodes) and compacts away unused nodes.
+pub fn check_mesh(
+    mesh: &mut crate::mesh::Mesh,
+) -> Result<crate::mesh::checks::CheckReport, crate::mesh::checks::MeshError> {
+    crate::mesh::checks::check_and_compact(mesh, min_jacobian_ratio)
+}
+
 /// Smallest det J over the stiffness points and the nodes, relative to the mean (a shape check).
 pub fn min_jacobian_ratio(kind: ElementKind, coords: &[[f64; 3]]) -> f64 {
     let nn = kind.num_nodes();

@@ -2,8 +2,8 @@
 //! nodes are errors; unused nodes are removed with a warning (they would make K and M
 //! singular); disconnected pieces are reported as a warning (each adds six rigid-body modes).
 
+use super::element::ElementKind;
 use super::Mesh;
-use crate::fem::element::min_jacobian_ratio;
 
 /// A mesh defect that makes the model unusable.
 #[derive(Debug, thiserror::Error)]
@@ -41,8 +41,16 @@ fn find(parent: &mut [usize], mut x: usize) -> usize {
     x
 }
 
-/// Checks the mesh and compacts away unused nodes (renumbering elements and sets).
-pub fn check_and_compact(mesh: &mut Mesh) -> Result<CheckReport, MeshError> {
+/// Smallest Jacobian determinant of an element relative to its mean (the FE stage's
+/// `fem::element::min_jacobian_ratio`, which knows the shape functions).
+pub type JacobianRatio = fn(ElementKind, &[[f64; 3]]) -> f64;
+
+/// Checks the mesh and compacts away unused nodes (renumbering elements and sets);
+/// `min_jacobian_ratio` rates each element's shape (use `fem::element::check_mesh`).
+pub fn check_and_compact(
+    mesh: &mut Mesh,
+    min_jacobian_ratio: JacobianRatio,
+) -> Result<CheckReport, MeshError> {
     if mesh.num_elements() == 0 {
         return Err(MeshError::Empty);
     }

@@ -31,10 +31,10 @@
 //! r = r_o, over the guide band), `point_c_k` (jacket wall, thrust side, at the liner's
 //! analysis heights, top to bottom), `deck_top`, `pan_rail` (bottom face, z = -skirt_depth).
 
+use super::element::ElementKind;
 use super::lattice::{level_at, subdivide, Key, Lattice};
 use super::merge::merge;
 use super::Mesh;
-use crate::fem::shape::ElementKind;
 use std::f64::consts::PI;
 
 /// Crankcase geometry, SI (metres).

@@ -7,8 +7,8 @@
 //! when unnamed; volume groups also become element sets. Unknown sections are skipped.
 //! Binary files and older format versions are refused with a message saying what to do.
 
+use super::element::ElementKind;
 use super::{ElementBlock, Mesh};
-use crate::fem::shape::ElementKind;
 use crate::files::{read_text, ReadError, LIMIT_MESH};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};

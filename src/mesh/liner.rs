@@ -22,8 +22,8 @@ use super::lattice::{level_at, subdivide, Key, Lattice};
 
 /// Name of the node set of the liner's wet outer surface (the coolant layer's mass acts there).
 pub const COOLANT_WETTED: &str = "coolant_wetted";
+use super::element::ElementKind;
 use super::Mesh;
-use crate::fem::shape::ElementKind;
 use std::f64::consts::PI;
 
 /// Liner geometry, SI units (metres).

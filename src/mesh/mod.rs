@@ -5,12 +5,13 @@
 
 pub mod checks;
 pub mod crankcase;
+pub mod element;
 pub mod gmsh;
 pub mod lattice;
 pub mod liner;
 pub mod merge;
 
-use crate::fem::shape::ElementKind;
+pub use element::ElementKind;
 use std::collections::BTreeMap;
 
 /// A block of elements of one kind, connectivity flattened (`kind.num_nodes()` per element).
