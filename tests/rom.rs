@@ -9,7 +9,7 @@ use linercav::app::rom::{
     build_rom, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
 };
 use linercav::app::rom_tradeoff;
-use linercav::reduce::craig_bampton::{reduce, CbSettings, InterfaceBlock};
+use linercav::reduce::craig_bampton::{reduce, CbSettings, InterfaceBlock, Part};
 use linercav::reduce::interface::{self, Direction, InterfaceShape};
 use linercav::scene::Scene;
 use std::path::Path;
@@ -115,32 +115,32 @@ fn reused_liner_reduction_equals_reducing_a_placed_copy() {
             ),
         ]
     };
-    let local = reduce(
-        "liner",
-        &lm,
-        &inp.liner_material,
-        &[],
-        &[],
-        &blocks(&lm, 0.0),
-        &[],
-        &[],
-        &settings,
-    )
-    .unwrap();
+    fn part<'a>(
+        mesh: &'a linercav::mesh::Mesh,
+        material: &'a linercav::fem::material::Elastic,
+        interfaces: &'a [InterfaceBlock],
+    ) -> Part<'a> {
+        Part {
+            name: "liner",
+            mesh,
+            material,
+            surface: &[],
+            fix: &[],
+            interfaces,
+            loads: &[],
+            outputs: &[],
+        }
+    }
+    let local_blocks = blocks(&lm, 0.0);
+    let local = reduce(&part(&lm, &inp.liner_material, &local_blocks), &settings).unwrap();
     let x = inp.axis_x[1];
     let mut placed_mesh = lm.clone();
     for p in placed_mesh.nodes.iter_mut() {
         p[0] += x;
     }
+    let placed_blocks = blocks(&placed_mesh, x);
     let placed = reduce(
-        "liner",
-        &placed_mesh,
-        &inp.liner_material,
-        &[],
-        &[],
-        &blocks(&placed_mesh, x),
-        &[],
-        &[],
+        &part(&placed_mesh, &inp.liner_material, &placed_blocks),
         &settings,
     )
     .unwrap();

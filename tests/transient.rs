@@ -353,17 +353,14 @@ fn impact(
 }
 
 /// Reference for [`impact`] that shares no code with the tool: the same body, slice law and
-/// structure as ODEs, x_b'' = -F / m, x_s'' = (F - k_s x_s) / m_s, F = max(0, k p + c p') for
+/// structure as ODEs (body mass, slice stiffness and damping (m, k, c); structure (m_s, k_s)), x_b'' = -F / m, x_s'' = (F - k_s x_s) / m_s, F = max(0, k p + c p') for
 /// p = x_b - x_s > 0, from the same start (p = -gap_time v0), by classical Runge-Kutta on the
 /// grid dt / `sub` (the onset, where the force jumps, located inside its step by bisection and
 /// the step finished from there, so the grid stays on the coarse nodes). The peak is taken at
 /// the coarse nodes t_k = k dt, as the tool samples it, so the comparison measures the
 /// integration error, not where the samples fall.
-#[allow(clippy::too_many_arguments)]
 fn impact_reference(
-    m: f64,
-    k: f64,
-    c: f64,
+    (m, k, c): (f64, f64, f64),
     v0: f64,
     gap_time: f64,
     (ms, ks): (f64, f64),
@@ -547,7 +544,7 @@ fn verification_one_mode_impact_converges_at_second_order() {
     let period = 2.0 * std::f64::consts::PI / (k / m).sqrt();
     let (oe_all, op_all) = observed_orders(period, |dt, gap_time| {
         let sub = (40_000.0 * dt / period).round() as usize;
-        let reference = impact_reference(m, k, c, v0, gap_time, (ms, ks), dt, sub);
+        let reference = impact_reference((m, k, c), v0, gap_time, (ms, ks), dt, sub);
         let r = impact(m, k, c, v0, gap_time, Some((ms, ks)), dt);
         (
             (r.restitution - reference.restitution).abs() / reference.restitution,

@@ -138,21 +138,37 @@ fn columns_solve(llt: &crate::linalg::factor::Llt<'_>, mut rhs: Mat<f64>) -> Mat
     rhs
 }
 
-/// Reduces one part. `fix` are the sets held fixed for good (e.g. the engine mounts),
-/// `surface` the normal surface masses its M carries (coolant layer), `interfaces` the coupled
-/// boundaries, `loads` the attachment load patterns.
-#[allow(clippy::too_many_arguments)]
-pub fn reduce(
-    part: &str,
-    mesh: &Mesh,
-    material: &Elastic,
-    surface: &[SurfaceMass],
-    fix: &[String],
-    interfaces: &[InterfaceBlock],
-    loads: &[Load],
-    outputs: &[Output],
-    settings: &CbSettings,
-) -> Result<PartReduction, ReduceError> {
+/// One part to reduce.
+#[derive(Clone, Copy)]
+pub struct Part<'a> {
+    /// Name in messages ("liner", "crankcase").
+    pub name: &'a str,
+    pub mesh: &'a Mesh,
+    pub material: &'a Elastic,
+    /// Normal surface masses its M carries (the coolant layer).
+    pub surface: &'a [SurfaceMass],
+    /// Sets held fixed for good (e.g. the engine mounts).
+    pub fix: &'a [String],
+    /// The coupled boundaries.
+    pub interfaces: &'a [InterfaceBlock],
+    /// Attachment load patterns.
+    pub loads: &'a [Load],
+    /// Output DOFs whose rows the reduction returns.
+    pub outputs: &'a [Output],
+}
+
+/// Reduces one part.
+pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, ReduceError> {
+    let Part {
+        name: part,
+        mesh,
+        material,
+        surface,
+        fix,
+        interfaces,
+        loads,
+        outputs,
+    } = *p;
     let t0 = Instant::now();
     let tick = |what: &str| log::info!("[{part}] {:7.2} s  {what}", t0.elapsed().as_secs_f64());
     let err_model = |source| ReduceError::Model {

@@ -3,7 +3,7 @@
 //! correction and preload.
 
 use super::craig_bampton::{
-    reduce, CbSettings, CbStats, InterfaceBlock, Load, Output, PartReduction,
+    reduce, CbSettings, CbStats, InterfaceBlock, Load, Output, Part, PartReduction,
 };
 use super::engine::{
     self, assemble, hz, residual_flexibility, static_solve, Dense, Placement, SystemModes,
@@ -553,14 +553,16 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         keep_basis: inp.keep_bases,
     };
     let liner = reduce(
-        "liner",
-        lm,
-        &inp.liner_material,
-        &inp.liner_surface_mass,
-        &[],
-        &liner_blocks,
-        &loads,
-        &outputs,
+        &Part {
+            name: "liner",
+            mesh: lm,
+            material: &inp.liner_material,
+            surface: &inp.liner_surface_mass,
+            fix: &[],
+            interfaces: &liner_blocks,
+            loads: &loads,
+            outputs: &outputs,
+        },
         &settings,
     )?;
     drop(liner_blocks);
@@ -582,14 +584,16 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     }
     let cc_loads = preload.crankcase;
     let crankcase = reduce(
-        "crankcase",
-        cm,
-        &inp.crankcase_material,
-        &[],
-        &inp.crankcase_fix,
-        &cc_blocks,
-        &cc_loads,
-        &cc_outputs,
+        &Part {
+            name: "crankcase",
+            mesh: cm,
+            material: &inp.crankcase_material,
+            surface: &[],
+            fix: &inp.crankcase_fix,
+            interfaces: &cc_blocks,
+            loads: &cc_loads,
+            outputs: &cc_outputs,
+        },
         &settings,
     )?;
     drop(cc_blocks);

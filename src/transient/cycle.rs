@@ -454,20 +454,32 @@ pub(crate) struct BoreLines<'a> {
     pub first: usize,
 }
 
+/// Piston `body` in its bore at this step: its loads (pin depth) and the bore lines it can
+/// touch, `liner_top` the height of the liner's top.
+pub(crate) struct PistonInBore<'a, 'p> {
+    pub piston: &'p Piston,
+    pub loads: &'a crate::piston::PistonLoads,
+    pub liner_top: f64,
+    pub bore: &'a BoreLines<'a>,
+    pub body: usize,
+}
+
 /// Appends the slices of piston `body` that lie on the bore lines at this step's pin depth, and
 /// their (body, thrust side, slice, height) to `meta`. A slice at height
 /// z = liner_top - pin_depth + h_i outside the bore line's node range has no liner to touch.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn push_slices<'p>(
-    piston: &'p Piston,
-    loads: &crate::piston::PistonLoads,
-    liner_top: f64,
-    bore: &BoreLines<'_>,
-    body: usize,
+    at: &PistonInBore<'_, 'p>,
     prev_penetration: &dyn Fn(bool, usize) -> f64,
     slices: &mut Vec<Slice<'p>>,
     meta: &mut Vec<(usize, bool, usize, f64)>,
 ) {
+    let PistonInBore {
+        piston,
+        loads,
+        liner_top,
+        bore,
+        body,
+    } = *at;
     let skirt = &piston.skirt;
     let nt = bore.thrust_z.len();
     for (side, zs, first) in [
@@ -618,11 +630,13 @@ impl<'a> EngineRun<'a> {
                 first: cyl.rom.contact_offset,
             };
             push_slices(
-                piston,
-                &loads,
-                self.setup.liner_top,
-                &bore,
-                b,
+                &PistonInBore {
+                    piston,
+                    loads: &loads,
+                    liner_top: self.setup.liner_top,
+                    bore: &bore,
+                    body: b,
+                },
                 &|side, i| self.prev_state[pen_index(b, side, i)].penetration,
                 &mut slices,
                 &mut meta,

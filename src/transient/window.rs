@@ -10,7 +10,7 @@
 //! comparisons run both without it.
 
 use super::contact::{self, dot, Body, Location, Structure};
-use super::cycle::{push_slices, BoreLines, TransientError};
+use super::cycle::{push_slices, BoreLines, PistonInBore, TransientError};
 use super::modal::ModalStructure;
 use super::scheme::Scheme;
 use crate::piston::Piston;
@@ -125,11 +125,13 @@ pub fn run(
         let mut meta = Vec::with_capacity(2 * ns);
         let pen_of = |side: bool, i: usize| prev[usize::from(!side) * ns + i].penetration;
         push_slices(
-            piston,
-            &loads,
-            window.liner_top,
-            &bore,
-            0,
+            &PistonInBore {
+                piston,
+                loads: &loads,
+                liner_top: window.liner_top,
+                bore: &bore,
+                body: 0,
+            },
             &pen_of,
             &mut slices,
             &mut meta,
