@@ -27,6 +27,17 @@ pub fn simulation(scene: &Scene) -> Result<&Simulation> {
 }
 
 /// The piston model of a scene (reads the pressure file when one is given).
+/// The warning for a hot skirt larger than the bore (`hot` < 0, the hot diametral clearance).
+fn interference_warning(hot: f64, cold: f64) -> Option<String> {
+    (hot <= 0.0).then(|| {
+        format!(
+            "the hot skirt is {} um (diametral) larger than the bore at piston.clearance_um = {}: an interference fit, the piston runs in permanent contact",
+            crate::text::num(-hot * 1e6),
+            crate::text::num(cold * 1e6)
+        )
+    })
+}
+
 pub fn piston_of(scene: &Scene) -> Result<Piston> {
     let sim = simulation(scene)?;
     let p = &sim.piston;
@@ -46,6 +57,9 @@ pub fn piston_of(scene: &Scene) -> Result<Piston> {
     };
     let skirt = Skirt::new(&p.skirt);
     let hot = skirt.hot_clearance();
+    if let Some(w) = interference_warning(hot, p.skirt.clearance) {
+        log::warn!("{}: {w}", scene.path.display());
+    }
     if hot < -sim.transient.max_penetration {
         return Err(Error::Input(format!(
             "{}: the hot skirt is {:.1} um (diametral) larger than the bore: piston.clearance_um is too small for the temperatures in [piston.thermal] (the piston would seize)",
@@ -75,7 +89,7 @@ pub fn piston_of(scene: &Scene) -> Result<Piston> {
 pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
     let t = &sim.transient;
     CycleSettings {
-        scheme: t.scheme,
+        scheme: t.scheme.into(),
         step_deg: t.step_deg,
         cycles: t.cycles,
         averaged_cycles: t.averaged_cycles,
@@ -204,7 +218,15 @@ impl SimulateReport {
             stats: res.stats.clone(),
             cache,
             tolerance: simulation(scene).map_or(0.0, |s| s.transient.tolerance),
-            warnings: scene.warnings.clone(),
+            warnings: scene
+                .warnings
+                .iter()
+                .cloned()
+                .chain(interference_warning(
+                    piston.skirt.hot_clearance(),
+                    simulation(scene).map_or(0.0, |s| s.piston.skirt.clearance),
+                ))
+                .collect(),
             hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
             peak_pressure_bar: pp / 1e5,
             peak_pressure_deg: pdeg,

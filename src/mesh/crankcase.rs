@@ -31,50 +31,14 @@
 //! r = r_o, over the guide band), `point_c_k` (jacket wall, thrust side, at the liner's
 //! analysis heights, top to bottom), `deck_top`, `pan_rail` (bottom face, z = -skirt_depth).
 
-use super::element::ElementKind;
 use super::lattice::{level_at, subdivide, Key, Lattice};
 use super::merge::merge;
 use super::Mesh;
 use std::f64::consts::PI;
 
-/// Crankcase geometry, SI (metres).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct CrankcaseGeometry {
-    pub cylinders: usize,
-    pub pitch: f64,
-    /// Liner outer radius r_o: bore of the deck ledge and of the lower support.
-    pub liner_outer_radius: f64,
-    /// Flange radius r_f: outer edge of the seat annulus, inner face of the jacket wall.
-    pub flange_radius: f64,
-    /// Height of the flange seat (deck top face) above the liner bottom.
-    pub seat_z: f64,
-    pub guide_height: f64,
-    /// Height of the guide band's lower edge above the liner bottom.
-    pub guide_bottom: f64,
-    pub deck_thickness: f64,
-    /// Thrust/anti-thrust jacket wall thickness t_w at the cylinder centre line.
-    pub jacket_wall: f64,
-    /// Depth of the crank bay below the liner bottom (bottom face at z = -skirt_depth).
-    pub skirt_depth: f64,
-    pub front_wall: f64,
-    pub rear_wall: f64,
-    pub rail_width: f64,
-    pub rail_height: f64,
-    /// Heights of the analysis points (z), top to bottom.
-    pub analysis_z: Vec<f64>,
-}
+pub use crate::scene::spec::CrankcaseGeometry;
 
-/// Mesh density of the generated crankcase.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct CrankcaseMeshing {
-    pub kind: ElementKind,
-    /// Elements per quarter sector of the circumference (even).
-    pub per_sector: usize,
-    /// Element rings through the jacket wall.
-    pub wall_layers: usize,
-    /// Target axial element size [m].
-    pub axial_size: f64,
-}
+pub use crate::scene::spec::CrankcaseMeshing;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Zone {

@@ -12,17 +12,7 @@
 //!   corner N = (1+xi xi_a)(1+eta eta_a)(1+zeta zeta_a)(xi xi_a + eta eta_a + zeta zeta_a - 2)/8,
 //!   mid-edge (xi_a = 0) N = (1 - xi^2)(1 + eta eta_a)(1 + zeta zeta_a)/4, likewise per axis.
 
-use serde::{Deserialize, Serialize};
-
-/// Supported 3-D solid element kinds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
-#[serde(rename_all = "lowercase")]
-pub enum ElementKind {
-    Tet4,
-    Tet10,
-    Hex8,
-    Hex20,
-}
+pub use crate::scene::spec::ElementKind;
 
 pub(crate) const TET10_EDGES: [(usize, usize); 6] =
     [(0, 1), (1, 2), (2, 0), (3, 0), (3, 2), (3, 1)];

@@ -22,39 +22,12 @@ use super::lattice::{level_at, subdivide, Key, Lattice};
 
 /// Name of the node set of the liner's wet outer surface (the coolant layer's mass acts there).
 pub const COOLANT_WETTED: &str = "coolant_wetted";
-use super::element::ElementKind;
 use super::Mesh;
 use std::f64::consts::PI;
 
-/// Liner geometry, SI units (metres).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct LinerGeometry {
-    pub outer_diameter: f64,
-    pub inner_diameter: f64,
-    pub length: f64,
-    pub flange_outer_diameter: f64,
-    pub flange_height: f64,
-    pub guide_height: f64,
-    /// Height z of the guide band's lower edge above the liner bottom (0: the band ends the
-    /// liner).
-    pub guide_bottom: f64,
-    /// Depths of the analysis points below the liner top, top to bottom.
-    pub analysis_depths: Vec<f64>,
-}
+pub use crate::scene::spec::LinerGeometry;
 
-/// Mesh density and element kind of the generated liner.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct LinerMeshing {
-    pub kind: ElementKind,
-    /// Elements around the circumference (multiple of 4).
-    pub circumferential: usize,
-    /// Elements through the wall.
-    pub radial: usize,
-    /// Elements across the flange overhang.
-    pub radial_flange: usize,
-    /// Target axial element size [m].
-    pub axial_size: f64,
-}
+pub use crate::scene::spec::LinerMeshing;
 
 /// Generates the liner mesh with its named node sets.
 pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {

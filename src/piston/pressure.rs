@@ -16,30 +16,7 @@
 use super::kinematics::CrankSlider;
 use std::path::{Path, PathBuf};
 
-/// Parameters of the built-in Wiebe curve at full load (SI, angles in degrees).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Wiebe {
-    /// Geometric compression ratio eps.
-    pub compression_ratio: f64,
-    /// Intake (boost) pressure at full load, absolute [Pa]; falls linearly to 1 bar at no load.
-    pub intake_pa: f64,
-    /// Exhaust back-pressure above the intake pressure [Pa].
-    pub exhaust_over_intake_pa: f64,
-    /// Start of combustion [deg] and its duration [deg].
-    pub start_deg: f64,
-    pub duration_deg: f64,
-    /// Wiebe efficiency and shape parameters a, m.
-    pub a: f64,
-    pub m: f64,
-    /// Heat released per cycle at full load [J] (net of wall losses).
-    pub heat_j: f64,
-    /// Polytropic exponent n of the closed cycle.
-    pub polytropic: f64,
-    /// Exhaust valve opening [deg].
-    pub evo_deg: f64,
-    /// Load fraction in [0, 1].
-    pub load: f64,
-}
+pub use crate::scene::spec::Wiebe;
 
 /// A pressure curve that cannot be used.
 #[derive(Debug, thiserror::Error)]

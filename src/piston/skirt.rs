@@ -118,31 +118,7 @@ pub struct Skirt {
     pub laws: Vec<SliceLaw>,
 }
 
-/// Skirt geometry and thermal state, SI.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SkirtSpec {
-    pub bore: f64,
-    pub length: f64,
-    /// Skirt top above the pin [m].
-    pub top_above_pin: f64,
-    pub slices: usize,
-    /// Cold diametral clearance at the widest height [m].
-    pub clearance: f64,
-    /// Radial barrel drop at the farther skirt end [m] and the widest height below the pin [m].
-    pub barrel: f64,
-    pub barrel_max_below_pin: f64,
-    /// Ovality (thrust-axis minus pin-axis diameter) [m].
-    pub ovality: f64,
-    /// Thermal expansion of piston and liner [1/K], temperatures [deg C].
-    pub piston_expansion: f64,
-    pub skirt_top_temp_c: f64,
-    pub skirt_bottom_temp_c: f64,
-    pub liner_expansion: f64,
-    pub liner_temp_c: f64,
-    pub reference_temp_c: f64,
-    /// Contact stiffness per slice [N/m].
-    pub stiffness: f64,
-}
+pub use crate::scene::spec::SkirtSpec;
 
 impl Skirt {
     /// Slices, hot gaps and contact laws of `s`.

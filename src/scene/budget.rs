@@ -7,10 +7,10 @@
 //! step of 1e-4 deg, a material so soft that every mode lies in the band), not to plan a
 //! schedule. Every refusal names the estimate, the limit and the keys that drive it.
 
+use super::spec::CrankcaseMeshing;
+use super::spec::ElementKind;
+use super::spec::{LinerGeometry, LinerMeshing};
 use super::{CrankcaseSource, MeshSource, Scene, SceneError};
-use crate::fem::shape::ElementKind;
-use crate::mesh::crankcase::CrankcaseMeshing;
-use crate::mesh::liner::{LinerGeometry, LinerMeshing};
 use crate::text::num;
 
 /// Full DOFs of the default engine's ROM build (six liners and the crankcase).

@@ -7,13 +7,14 @@ pub mod budget;
 pub mod overrides;
 pub mod raw;
 pub mod sanity;
+pub mod spec;
 
-use crate::fem::material::Elastic;
-use crate::fem::shape::ElementKind;
-use crate::mesh::crankcase::{CrankcaseGeometry, CrankcaseMeshing};
-use crate::mesh::liner::{LinerGeometry, LinerMeshing};
 use crate::text::num;
 use raw::RawScene;
+use spec::Elastic;
+use spec::ElementKind;
+use spec::{CrankcaseGeometry, CrankcaseMeshing};
+use spec::{LinerGeometry, LinerMeshing};
 use std::path::{Path, PathBuf};
 
 /// A scene that cannot be used, with the file and key at fault.
@@ -122,7 +123,7 @@ pub struct Rom {
 #[derive(Clone, Debug, PartialEq)]
 pub enum PressureSource {
     File(PathBuf),
-    Wiebe(crate::piston::pressure::Wiebe),
+    Wiebe(spec::Wiebe),
 }
 
 /// Piston data, SI (see [`raw::RawPiston`] for the meaning of each field).
@@ -137,7 +138,7 @@ pub struct PistonSpec {
     pub crank_offset: f64,
     pub compression_height: f64,
     pub crown_depth_at_tdc: f64,
-    pub skirt: crate::piston::skirt::SkirtSpec,
+    pub skirt: spec::SkirtSpec,
     pub contact_damping: f64,
     pub friction: f64,
 }
@@ -153,7 +154,7 @@ pub struct Operating {
 /// Transient settings, SI.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransientSpec {
-    pub scheme: crate::transient::scheme::Scheme,
+    pub scheme: spec::SchemeChoice,
     pub step_deg: f64,
     pub cycles: usize,
     /// The last this many cycles are averaged.
@@ -787,7 +788,7 @@ fn validate_simulation(
             Err(c.err(key, format!("must be in [0, 1e-4] 1/K, got {}", num(v))))
         }
     };
-    let skirt = crate::piston::skirt::SkirtSpec {
+    let skirt = spec::SkirtSpec {
         bore: engine.bore,
         length: skirt_length,
         top_above_pin,
@@ -866,7 +867,7 @@ fn validate_simulation(
             "must lie between 180 deg and evo_deg",
         ));
     }
-    let wiebe = crate::piston::pressure::Wiebe {
+    let wiebe = spec::Wiebe {
         compression_ratio: cb.compression_ratio,
         intake_pa: cb.intake_bar * 1e5,
         exhaust_over_intake_pa: nonneg(
@@ -892,7 +893,7 @@ fn validate_simulation(
             * 1e5,
     };
     let scheme = match t.scheme.as_str() {
-        "newmark" => crate::transient::scheme::Scheme::average_acceleration(),
+        "newmark" => spec::SchemeChoice::AverageAcceleration,
         "hht" => {
             if !(t.hht_alpha.is_finite() && (-1.0 / 3.0..=0.0).contains(&t.hht_alpha)) {
                 return Err(c.err(
@@ -900,7 +901,7 @@ fn validate_simulation(
                     format!("must lie in [-1/3, 0], got {}", num(t.hht_alpha)),
                 ));
             }
-            crate::transient::scheme::Scheme::hht(t.hht_alpha)
+            spec::SchemeChoice::Hht { alpha: t.hht_alpha }
         }
         other => {
             return Err(c.err(

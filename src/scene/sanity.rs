@@ -2,9 +2,8 @@
 //! worst are refused with the reason, the doubtful ones come back as warnings (logged when the
 //! scene is loaded and carried in the JSON reports).
 
+use super::spec::Elastic;
 use super::{Scene, SceneError};
-use crate::fem::material::Elastic;
-use crate::piston::skirt::Skirt;
 use crate::text::num;
 
 /// Samples per period at the band's top below which the band is not represented at all
@@ -70,14 +69,6 @@ pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
                     num(skirt.length * 1e3),
                     num(scene.liner_geometry.length * 1e3)
                 ),
-            ));
-        }
-        let hot = Skirt::new(skirt).hot_clearance();
-        if hot <= 0.0 {
-            warnings.push(format!(
-                "the hot skirt is {} um (diametral) larger than the bore at piston.clearance_um = {}: an interference fit, the piston runs in permanent contact",
-                num(-hot * 1e6),
-                num(skirt.clearance * 1e6)
             ));
         }
         let t = &sim.transient;

@@ -18,6 +18,16 @@ pub struct Scheme {
     pub alpha: f64,
 }
 
+impl From<crate::scene::spec::SchemeChoice> for Scheme {
+    fn from(c: crate::scene::spec::SchemeChoice) -> Self {
+        use crate::scene::spec::SchemeChoice;
+        match c {
+            SchemeChoice::AverageAcceleration => Self::average_acceleration(),
+            SchemeChoice::Hht { alpha } => Self::hht(alpha),
+        }
+    }
+}
+
 impl Scheme {
     /// Newmark average acceleration (trapezoidal rule).
     pub fn average_acceleration() -> Self {

@@ -1,0 +1,189 @@
+//! The scene's description of each stage's input as plain data: materials, element kinds,
+//! the generated parts' geometry and meshing, the skirt and the combustion model. The stages
+//! that use them (`mesh`, `fem`, `piston`) add their behaviour; the scene only describes.
+
+use serde::{Deserialize, Serialize};
+
+/// Isotropic elastic solid, SI units.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Elastic {
+    /// Young's modulus E [Pa], > 0.
+    pub young: f64,
+    /// Poisson's ratio nu [-], in (-1, 0.5).
+    pub poisson: f64,
+    /// Density rho [kg/m^3], > 0.
+    pub density: f64,
+}
+
+impl Elastic {
+    /// Checks the physical bounds; the message names the offending quantity and its bound.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.young.is_finite() && self.young > 0.0) {
+            return Err(format!(
+                "Young's modulus must be a positive number of Pa, got {}",
+                self.young
+            ));
+        }
+        if !(self.poisson.is_finite() && self.poisson > -1.0 && self.poisson < 0.5) {
+            return Err(format!(
+                "Poisson's ratio must lie in (-1, 0.5), got {}",
+                self.poisson
+            ));
+        }
+        if !(self.density.is_finite() && self.density > 0.0) {
+            return Err(format!(
+                "density must be a positive number of kg/m^3, got {}",
+                self.density
+            ));
+        }
+        Ok(())
+    }
+    /// First Lame constant lambda [Pa].
+    pub fn lambda(&self) -> f64 {
+        self.young * self.poisson / ((1.0 + self.poisson) * (1.0 - 2.0 * self.poisson))
+    }
+    /// Shear modulus mu [Pa].
+    pub fn mu(&self) -> f64 {
+        self.young / (2.0 * (1.0 + self.poisson))
+    }
+}
+
+/// Supported 3-D solid element kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
+#[serde(rename_all = "lowercase")]
+pub enum ElementKind {
+    Tet4,
+    Tet10,
+    Hex8,
+    Hex20,
+}
+
+/// Liner geometry, SI units (metres).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct LinerGeometry {
+    pub outer_diameter: f64,
+    pub inner_diameter: f64,
+    pub length: f64,
+    pub flange_outer_diameter: f64,
+    pub flange_height: f64,
+    pub guide_height: f64,
+    /// Height z of the guide band's lower edge above the liner bottom (0: the band ends the
+    /// liner).
+    pub guide_bottom: f64,
+    /// Depths of the analysis points below the liner top, top to bottom.
+    pub analysis_depths: Vec<f64>,
+}
+
+/// Mesh density and element kind of the generated liner.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct LinerMeshing {
+    pub kind: ElementKind,
+    /// Elements around the circumference (multiple of 4).
+    pub circumferential: usize,
+    /// Elements through the wall.
+    pub radial: usize,
+    /// Elements across the flange overhang.
+    pub radial_flange: usize,
+    /// Target axial element size [m].
+    pub axial_size: f64,
+}
+
+/// Crankcase geometry, SI (metres).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CrankcaseGeometry {
+    pub cylinders: usize,
+    pub pitch: f64,
+    /// Liner outer radius r_o: bore of the deck ledge and of the lower support.
+    pub liner_outer_radius: f64,
+    /// Flange radius r_f: outer edge of the seat annulus, inner face of the jacket wall.
+    pub flange_radius: f64,
+    /// Height of the flange seat (deck top face) above the liner bottom.
+    pub seat_z: f64,
+    pub guide_height: f64,
+    /// Height of the guide band's lower edge above the liner bottom.
+    pub guide_bottom: f64,
+    pub deck_thickness: f64,
+    /// Thrust/anti-thrust jacket wall thickness t_w at the cylinder centre line.
+    pub jacket_wall: f64,
+    /// Depth of the crank bay below the liner bottom (bottom face at z = -skirt_depth).
+    pub skirt_depth: f64,
+    pub front_wall: f64,
+    pub rear_wall: f64,
+    pub rail_width: f64,
+    pub rail_height: f64,
+    /// Heights of the analysis points (z), top to bottom.
+    pub analysis_z: Vec<f64>,
+}
+
+/// Mesh density of the generated crankcase.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CrankcaseMeshing {
+    pub kind: ElementKind,
+    /// Elements per quarter sector of the circumference (even).
+    pub per_sector: usize,
+    /// Element rings through the jacket wall.
+    pub wall_layers: usize,
+    /// Target axial element size [m].
+    pub axial_size: f64,
+}
+
+/// Skirt geometry and thermal state, SI.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkirtSpec {
+    pub bore: f64,
+    pub length: f64,
+    /// Skirt top above the pin [m].
+    pub top_above_pin: f64,
+    pub slices: usize,
+    /// Cold diametral clearance at the widest height [m].
+    pub clearance: f64,
+    /// Radial barrel drop at the farther skirt end [m] and the widest height below the pin [m].
+    pub barrel: f64,
+    pub barrel_max_below_pin: f64,
+    /// Ovality (thrust-axis minus pin-axis diameter) [m].
+    pub ovality: f64,
+    /// Thermal expansion of piston and liner [1/K], temperatures [deg C].
+    pub piston_expansion: f64,
+    pub skirt_top_temp_c: f64,
+    pub skirt_bottom_temp_c: f64,
+    pub liner_expansion: f64,
+    pub liner_temp_c: f64,
+    pub reference_temp_c: f64,
+    /// Contact stiffness per slice [N/m].
+    pub stiffness: f64,
+}
+
+/// Parameters of the built-in Wiebe curve at full load (SI, angles in degrees).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wiebe {
+    /// Geometric compression ratio eps.
+    pub compression_ratio: f64,
+    /// Intake (boost) pressure at full load, absolute [Pa]; falls linearly to 1 bar at no load.
+    pub intake_pa: f64,
+    /// Exhaust back-pressure above the intake pressure [Pa].
+    pub exhaust_over_intake_pa: f64,
+    /// Start of combustion [deg] and its duration [deg].
+    pub start_deg: f64,
+    pub duration_deg: f64,
+    /// Wiebe efficiency and shape parameters a, m.
+    pub a: f64,
+    pub m: f64,
+    /// Heat released per cycle at full load [J] (net of wall losses).
+    pub heat_j: f64,
+    /// Polytropic exponent n of the closed cycle.
+    pub polytropic: f64,
+    /// Exhaust valve opening [deg].
+    pub evo_deg: f64,
+    /// Load fraction in [0, 1].
+    pub load: f64,
+}
+
+/// The time-integration rule of the transient (`transient.scheme`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum SchemeChoice {
+    /// Newmark's average acceleration (beta 1/4, gamma 1/2): second order, no numerical
+    /// damping.
+    AverageAcceleration,
+    /// Hilber-Hughes-Taylor alpha in [-1/3, 0]: damps the high modes.
+    Hht { alpha: f64 },
+}
