@@ -302,6 +302,22 @@ impl Checker<'_> {
             Err(self.err(key, format!("must be a positive number, got {}", num(v))))
         }
     }
+    /// A finite value >= 0.
+    fn nonneg(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("must be a number >= 0, got {}", num(v))))
+        }
+    }
+    /// A finite value.
+    fn finite(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("must be a finite number, got {}", num(v))))
+        }
+    }
     fn mm(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         Ok(self.positive(key, v)? * 1e-3)
     }
@@ -719,22 +735,23 @@ fn validate_simulation(
             ))
         }
     };
-    let nonneg = |key: &str, v: f64| -> Result<f64, SceneError> {
-        if v.is_finite() && v >= 0.0 {
-            Ok(v)
-        } else {
-            Err(c.err(key, format!("must be a number >= 0, got {}", num(v))))
-        }
-    };
-    let finite = |key: &str, v: f64| -> Result<f64, SceneError> {
-        if v.is_finite() {
-            Ok(v)
-        } else {
-            Err(c.err(key, format!("must be a finite number, got {}", num(v))))
-        }
-    };
+    Ok(Some(Simulation {
+        piston: validate_piston(c, p, engine, liner)?,
+        operating: validate_operating(c, base, o)?,
+        transient: validate_transient(c, t)?,
+    }))
+}
+
+/// `[piston]`: masses, geometry (the pin inside the liner at TDC, the offset within the rod's
+/// reach), skirt profile, slices and thermal state.
+fn validate_piston(
+    c: &Checker<'_>,
+    p: &raw::RawPiston,
+    engine: &Engine,
+    liner: &LinerGeometry,
+) -> Result<PistonSpec, SceneError> {
     let mass = c.positive("piston.mass_kg", p.mass_kg)?;
-    let cg_above_pin = finite("piston.cg_above_pin_mm", p.cg_above_pin_mm)? * 1e-3;
+    let cg_above_pin = c.finite("piston.cg_above_pin_mm", p.cg_above_pin_mm)? * 1e-3;
     let tilt_inertia = c.positive("piston.tilt_inertia_kg_m2", p.tilt_inertia_kg_m2)?;
     if tilt_inertia <= mass * cg_above_pin * cg_above_pin {
         return Err(c.err(
@@ -747,7 +764,7 @@ fn validate_simulation(
     }
     let compression_height = c.mm("piston.compression_height_mm", p.compression_height_mm)?;
     let skirt_length = c.mm("piston.skirt_length_mm", p.skirt_length_mm)?;
-    let top_above_pin = finite("piston.pin_below_skirt_top_mm", p.pin_below_skirt_top_mm)? * 1e-3;
+    let top_above_pin = c.finite("piston.pin_below_skirt_top_mm", p.pin_below_skirt_top_mm)? * 1e-3;
     if top_above_pin >= compression_height || top_above_pin <= 0.0 || top_above_pin >= skirt_length
     {
         return Err(c.err(
@@ -755,7 +772,7 @@ fn validate_simulation(
             "the pin must lie within the skirt, and the skirt top below the crown",
         ));
     }
-    let crown_depth = nonneg("piston.crown_depth_at_tdc_mm", p.crown_depth_at_tdc_mm)? * 1e-3;
+    let crown_depth = c.nonneg("piston.crown_depth_at_tdc_mm", p.crown_depth_at_tdc_mm)? * 1e-3;
     if crown_depth + compression_height >= liner.length {
         return Err(c.err(
             "piston.compression_height_mm",
@@ -793,11 +810,12 @@ fn validate_simulation(
         length: skirt_length,
         top_above_pin,
         slices: p.slices,
-        clearance: nonneg("piston.clearance_um", p.clearance_um)? * 1e-6,
-        barrel: nonneg("piston.barrel_um", p.barrel_um)? * 1e-6,
-        barrel_max_below_pin: finite("piston.barrel_max_below_pin_mm", p.barrel_max_below_pin_mm)?
+        clearance: c.nonneg("piston.clearance_um", p.clearance_um)? * 1e-6,
+        barrel: c.nonneg("piston.barrel_um", p.barrel_um)? * 1e-6,
+        barrel_max_below_pin: c
+            .finite("piston.barrel_max_below_pin_mm", p.barrel_max_below_pin_mm)?
             * 1e-3,
-        ovality: nonneg("piston.ovality_um", p.ovality_um)? * 1e-6,
+        ovality: c.nonneg("piston.ovality_um", p.ovality_um)? * 1e-6,
         piston_expansion: expansion(
             "piston.thermal.piston_expansion_per_k",
             th.piston_expansion_per_k,
@@ -817,20 +835,20 @@ fn validate_simulation(
     };
     let piston = PistonSpec {
         mass,
-        pin_mass: nonneg("piston.pin_mass_kg", p.pin_mass_kg)?,
+        pin_mass: c.nonneg("piston.pin_mass_kg", p.pin_mass_kg)?,
         tilt_inertia,
         cg_above_pin,
-        cg_lateral: finite("piston.cg_offset_mm", p.cg_offset_mm)? * 1e-3,
-        pin_offset: finite("piston.pin_offset_mm", p.pin_offset_mm)? * 1e-3,
-        crank_offset: finite("piston.crank_offset_mm", p.crank_offset_mm)? * 1e-3,
+        cg_lateral: c.finite("piston.cg_offset_mm", p.cg_offset_mm)? * 1e-3,
+        pin_offset: c.finite("piston.pin_offset_mm", p.pin_offset_mm)? * 1e-3,
+        crank_offset: c.finite("piston.crank_offset_mm", p.crank_offset_mm)? * 1e-3,
         compression_height,
         crown_depth_at_tdc: crown_depth,
         skirt,
-        contact_damping: nonneg(
+        contact_damping: c.nonneg(
             "piston.contact_damping_n_s_per_m",
             p.contact_damping_n_s_per_m,
         )?,
-        friction: nonneg("piston.friction", p.friction)?,
+        friction: c.nonneg("piston.friction", p.friction)?,
     };
     let offset = (piston.pin_offset - piston.crank_offset).abs();
     if offset + engine.stroke / 2.0 >= engine.rod_length {
@@ -839,6 +857,15 @@ fn validate_simulation(
             "the offset is too large for the rod",
         ));
     }
+    Ok(piston)
+}
+
+/// `[operating]`: load, combustion model (Wiebe) or measured pressure curve.
+fn validate_operating(
+    c: &Checker<'_>,
+    base: &Path,
+    o: &raw::RawOperating,
+) -> Result<Operating, SceneError> {
     if !(o.load.is_finite() && (0.0..=1.0).contains(&o.load)) {
         return Err(c.err(
             "operating.load",
@@ -870,15 +897,15 @@ fn validate_simulation(
     let wiebe = spec::Wiebe {
         compression_ratio: cb.compression_ratio,
         intake_pa: cb.intake_bar * 1e5,
-        exhaust_over_intake_pa: nonneg(
+        exhaust_over_intake_pa: c.nonneg(
             "operating.combustion.exhaust_over_intake_bar",
             cb.exhaust_over_intake_bar,
         )? * 1e5,
         start_deg: cb.start_deg,
         duration_deg: c.positive("operating.combustion.duration_deg", cb.duration_deg)?,
         a: c.positive("operating.combustion.wiebe_a", cb.wiebe_a)?,
-        m: nonneg("operating.combustion.wiebe_m", cb.wiebe_m)?,
-        heat_j: nonneg("operating.combustion.heat_release_j", cb.heat_release_j)?,
+        m: c.nonneg("operating.combustion.wiebe_m", cb.wiebe_m)?,
+        heat_j: c.nonneg("operating.combustion.heat_release_j", cb.heat_release_j)?,
         polytropic: cb.polytropic,
         evo_deg: cb.evo_deg,
         load: o.load,
@@ -892,6 +919,12 @@ fn validate_simulation(
         crankcase_pa: c.positive("operating.crankcase_pressure_bar", o.crankcase_pressure_bar)?
             * 1e5,
     };
+    Ok(operating)
+}
+
+/// `[transient]`: scheme, step (a whole number of steps per cycle), cycles, damping,
+/// tolerance.
+fn validate_transient(c: &Checker<'_>, t: &raw::RawTransient) -> Result<TransientSpec, SceneError> {
     let scheme = match t.scheme.as_str() {
         "newmark" => spec::SchemeChoice::AverageAcceleration,
         "hht" => {
@@ -958,11 +991,7 @@ fn validate_simulation(
             ));
         },
     };
-    Ok(Some(Simulation {
-        piston,
-        operating,
-        transient,
-    }))
+    Ok(transient)
 }
 
 fn validate_crankcase(
