@@ -347,7 +347,83 @@ fn check_analysis_points(c: &Checker<'_>, l: &raw::RawLiner) -> Result<(), Scene
 
 fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
     let c = Checker { path };
-    let e = &raw.engine;
+    let engine = validate_engine(&c, &raw.engine)?;
+    for (name, m) in &raw.materials {
+        let el = Elastic {
+            young: m.youngs_pa,
+            poisson: m.poisson,
+            density: m.density_kg_m3,
+        };
+        el.validate()
+            .map_err(|msg| c.err(&format!("materials.{name}"), msg))?;
+    }
+    let material = |key: &str, name: &str| -> Result<Elastic, SceneError> {
+        let m = raw.materials.get(name).ok_or_else(|| {
+            c.err(
+                key,
+                format!(
+                    "unknown material '{name}'; [materials] defines: {}",
+                    raw.materials.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })?;
+        Ok(Elastic {
+            young: m.youngs_pa,
+            poisson: m.poisson,
+            density: m.density_kg_m3,
+        })
+    };
+    let l = &raw.liner;
+    let geometry = validate_liner_geometry(&c, l, &engine)?;
+    let meshing = validate_liner_meshing(&c, l)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let liner_geometry = geometry.clone();
+    let source = match &l.mesh_file {
+        Some(f) => MeshSource::File(base.join(f)),
+        None => MeshSource::Liner { geometry, meshing },
+    };
+    let liner = Part {
+        name: "liner".into(),
+        source,
+        material: material("liner.material", &l.material)?,
+        fix: l.fix.clone(),
+    };
+    let solver = Solver {
+        shift_hz: c.positive("solver.shift_hz", raw.solver.shift_hz)?,
+        guard_modes: check_guard_modes(&c, raw.solver.guard_modes)?,
+    };
+    let crankcase = match &raw.crankcase {
+        None => None,
+        Some(cc) => Some(validate_crankcase(
+            &c,
+            base,
+            cc,
+            &engine,
+            &liner_geometry,
+            &material,
+        )?),
+    };
+    let rom = validate_rom(&c, &raw.rom, base, &engine, &liner)?;
+    let simulation = validate_simulation(&c, base, &raw, &engine, &liner_geometry)?;
+    let cavitation = validate_cavitation(&c, base, &raw.cavitation)?;
+    Ok(Scene {
+        path: path.to_path_buf(),
+        title: raw.title,
+        engine,
+        liner,
+        liner_geometry,
+        crankcase,
+        solver,
+        rom,
+        simulation,
+        cavitation,
+        limits: validate_limits(&c, &raw.limits)?,
+        warnings: Vec::new(),
+    })
+}
+
+/// `[engine]`: cylinders, firing order (a permutation), crank train.
+fn validate_engine(c: &Checker<'_>, e: &raw::RawEngine) -> Result<Engine, SceneError> {
     if e.cylinders == 0 {
         return Err(c.err("engine.cylinders", "must be at least 1"));
     }
@@ -377,33 +453,16 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
             "must exceed half the stroke (crank radius), or the crank cannot turn",
         ));
     }
-    for (name, m) in &raw.materials {
-        let el = Elastic {
-            young: m.youngs_pa,
-            poisson: m.poisson,
-            density: m.density_kg_m3,
-        };
-        el.validate()
-            .map_err(|msg| c.err(&format!("materials.{name}"), msg))?;
-    }
-    let material = |key: &str, name: &str| -> Result<Elastic, SceneError> {
-        let m = raw.materials.get(name).ok_or_else(|| {
-            c.err(
-                key,
-                format!(
-                    "unknown material '{name}'; [materials] defines: {}",
-                    raw.materials.keys().cloned().collect::<Vec<_>>().join(", ")
-                ),
-            )
-        })?;
-        Ok(Elastic {
-            young: m.youngs_pa,
-            poisson: m.poisson,
-            density: m.density_kg_m3,
-        })
-    };
-    let l = &raw.liner;
-    check_analysis_points(&c, l)?;
+    Ok(engine)
+}
+
+/// `[liner]` geometry: diameters, flange, guide band, analysis points in the coolant zone.
+fn validate_liner_geometry(
+    c: &Checker<'_>,
+    l: &raw::RawLiner,
+    engine: &Engine,
+) -> Result<LinerGeometry, SceneError> {
+    check_analysis_points(c, l)?;
     let mut geometry = LinerGeometry {
         outer_diameter: c.mm("liner.outer_diameter_mm", l.outer_diameter_mm)?,
         inner_diameter: c.mm("liner.inner_diameter_mm", l.inner_diameter_mm)?,
@@ -426,7 +485,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
     if (geometry.inner_diameter - engine.bore).abs() > 1e-9 {
         return Err(c.err(
             "liner.inner_diameter_mm",
-            format!("must equal engine.bore_mm ({} mm)", e.bore_mm),
+            format!("must equal engine.bore_mm ({} mm)", num(engine.bore * 1e3)),
         ));
     }
     if geometry.flange_outer_diameter < geometry.outer_diameter {
@@ -476,6 +535,11 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
             "analysis points must lie in the coolant zone, between the flange and the lower guide band",
         ));
     }
+    Ok(geometry)
+}
+
+/// `[liner.mesh]`: element kind and divisions of the generated liner.
+fn validate_liner_meshing(c: &Checker<'_>, l: &raw::RawLiner) -> Result<LinerMeshing, SceneError> {
     let mesh = &l.mesh;
     let kind = match mesh.element.as_str() {
         "hex20" => ElementKind::Hex20,
@@ -505,34 +569,17 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         radial_flange: mesh.radial_flange,
         axial_size: c.mm("liner.mesh.axial_size_mm", mesh.axial_size_mm)?,
     };
-    let base = path.parent().unwrap_or(Path::new("."));
-    let liner_geometry = geometry.clone();
-    let source = match &l.mesh_file {
-        Some(f) => MeshSource::File(base.join(f)),
-        None => MeshSource::Liner { geometry, meshing },
-    };
-    let liner = Part {
-        name: "liner".into(),
-        source,
-        material: material("liner.material", &l.material)?,
-        fix: l.fix.clone(),
-    };
-    let solver = Solver {
-        shift_hz: c.positive("solver.shift_hz", raw.solver.shift_hz)?,
-        guard_modes: check_guard_modes(&c, raw.solver.guard_modes)?,
-    };
-    let crankcase = match &raw.crankcase {
-        None => None,
-        Some(cc) => Some(validate_crankcase(
-            &c,
-            base,
-            cc,
-            &engine,
-            &liner_geometry,
-            &material,
-        )?),
-    };
-    let r = &raw.rom;
+    Ok(meshing)
+}
+
+/// `[rom]`: band, cut-off, interface harmonics (resolved by the liner ring), cylinders, cache.
+fn validate_rom(
+    c: &Checker<'_>,
+    r: &raw::RawRom,
+    base: &Path,
+    engine: &Engine,
+    liner: &Part,
+) -> Result<Rom, SceneError> {
     let band_hz = c.positive("rom.band_hz", r.band_hz)?;
     if !(r.cutoff_factor.is_finite() && r.cutoff_factor >= 1.0) {
         return Err(c.err(
@@ -583,22 +630,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
         cylinders,
         cache_dir: base.join(&r.cache_dir),
     };
-    let simulation = validate_simulation(&c, base, &raw, &engine, &liner_geometry)?;
-    let cavitation = validate_cavitation(&c, base, &raw.cavitation)?;
-    Ok(Scene {
-        path: path.to_path_buf(),
-        title: raw.title,
-        engine,
-        liner,
-        liner_geometry,
-        crankcase,
-        solver,
-        rom,
-        simulation,
-        cavitation,
-        limits: validate_limits(&c, &raw.limits)?,
-        warnings: Vec::new(),
-    })
+    Ok(rom)
 }
 
 fn validate_limits(c: &Checker<'_>, l: &raw::RawLimits) -> Result<Limits, SceneError> {
