@@ -322,49 +322,19 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             full,
             rom: _,
             cache,
-        } => {
-            if assembly {
-                let scene_path = model
-                    .scene
-                    .clone()
-                    .ok_or_else(|| Error::Input("--assembly needs a scene file".into()))?;
-                let scene = Scene::load(&scene_path, &model.sets)?;
-                let report = modes::run_assembly(
-                    &scene,
-                    count,
-                    full,
-                    vtu.as_deref(),
-                    &cache.options(),
-                    started,
-                )?;
-                print_report(json, &report, || report.to_text());
-                if report.sturm_count_ok == Some(false) {
-                    return Err(Error::Failure(
-                        "certification failed: the Sturm count found more eigenvalues below the check's shift than were computed (a mode was missed)".into(),
-                    ));
-                }
-                return Ok(());
-            }
-            let req = modes::ModesRequest {
-                input: model.input()?,
+        } => modes_command(
+            &model,
+            ModesOptions {
                 count,
-                extra_fix: if model.scene.is_some() || model.mesh.is_some() {
-                    model.fix.clone()
-                } else {
-                    vec![]
-                },
-                vtu,
                 shift_hz,
-            };
-            let report = modes::run(&req, started)?;
-            print_report(json, &report, || report.to_text());
-            if let Some(st) = report.sturm.as_ref().filter(|st| !st.ok) {
-                return Err(Error::Failure(format!(
-                    "certification failed: the Sturm count at {:.1} Hz found {} eigenvalues below, {} were computed (a mode was missed; raise --count or lower --shift-hz)",
-                    st.shift_hz, st.found, st.expected
-                )));
-            }
-        }
+                json,
+                vtu,
+                assembly,
+                full,
+            },
+            &cache,
+            started,
+        )?,
         Command::ExportMatrices { model, out } => {
             let r = export::export_matrices(&model.input()?, &model.fix, &out)?;
             println!(
@@ -494,6 +464,76 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             let n = export::export_mesh(&model.input()?, &out)?;
             println!("wrote {} ({n} nodes)", out.display());
         }
+    }
+    Ok(())
+}
+
+/// Options of the `modes` command besides the model and the cache.
+struct ModesOptions {
+    count: usize,
+    shift_hz: Option<f64>,
+    json: bool,
+    vtu: Option<PathBuf>,
+    assembly: bool,
+    full: bool,
+}
+
+/// `modes`: a part's certified modes, or the coupled engine's (`--assembly`); a failed Sturm
+/// certification exits 1.
+fn modes_command(
+    model: &ModelArgs,
+    o: ModesOptions,
+    cache: &CacheArgs,
+    started: Instant,
+) -> Result<(), Error> {
+    let ModesOptions {
+        count,
+        shift_hz,
+        json,
+        vtu,
+        assembly,
+        full,
+    } = o;
+    if assembly {
+        let scene_path = model
+            .scene
+            .clone()
+            .ok_or_else(|| Error::Input("--assembly needs a scene file".into()))?;
+        let scene = Scene::load(&scene_path, &model.sets)?;
+        let report = modes::run_assembly(
+            &scene,
+            count,
+            full,
+            vtu.as_deref(),
+            &cache.options(),
+            started,
+        )?;
+        print_report(json, &report, || report.to_text());
+        if report.sturm_count_ok == Some(false) {
+            return Err(Error::Failure(
+                        "certification failed: the Sturm count found more eigenvalues below the check's shift than were computed (a mode was missed)".into(),
+                    ));
+        }
+        return Ok(());
+    }
+    let req = modes::ModesRequest {
+        input: model.input()?,
+        count,
+        extra_fix: if model.scene.is_some() || model.mesh.is_some() {
+            model.fix.clone()
+        } else {
+            vec![]
+        },
+        vtu,
+        shift_hz,
+    };
+    let report = modes::run(&req, started)?;
+    print_report(json, &report, || report.to_text());
+    if let Some(st) = report.sturm.as_ref().filter(|st| !st.ok) {
+        return Err(Error::Failure(format!(
+                    "certification failed: the Sturm count at {:.1} Hz found {} eigenvalues below, {} were computed (a mode was missed; raise --count or lower --shift-hz)",
+                    st.shift_hz, st.found, st.expected
+                )));
     }
     Ok(())
 }
