@@ -349,7 +349,7 @@ impl Figures<'_> {
             .collect()
     }
 
-    /// Figure(s): pressure and side force.
+    /// `pressure.png`: cylinder pressure and side force over the cycle.
     fn pressure(&self) -> Result<Vec<PathBuf>> {
         let Self { out, piston, .. } = *self;
         let mut files = Vec::new();
@@ -414,7 +414,7 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// Figure(s): acceleration time series per cylinder, around firing.
+    /// `acceleration.png`: each cylinder's point accelerations around its firing.
     fn acceleration(&self) -> Result<Vec<PathBuf>> {
         let Self { out, base, ev, .. } = *self;
         let t = ev.thresholds;
@@ -482,7 +482,7 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// Figure(s): spectra of each cylinder's worst point.
+    /// `spectra.png`: the spectrum of each cylinder's worst point.
     fn spectra(&self) -> Result<Vec<PathBuf>> {
         let Self {
             out,
@@ -552,7 +552,7 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// Figure(s): FRFs of the liner points from the modal model: inertance from the thrust bore line at.
+    /// `frf.png`: inertance of each cylinder's worst point from the modal model.
     fn frf(&self) -> Result<Vec<PathBuf>> {
         let Self {
             out,
@@ -626,7 +626,7 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// Figure(s): peaks per cylinder and point with thresholds.
+    /// `peaks.png`: mean peaks per cylinder and point with their uncertainty and thresholds.
     fn peaks(&self) -> Result<Vec<PathBuf>> {
         let Self { out, base, ev, .. } = *self;
         let t = ev.thresholds;
@@ -705,7 +705,7 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// Figure(s): mode-shape coefficients beside risk.
+    /// `modes_risk.png`: mode-shape coefficients of the modes near the response beside risk.
     fn modes_risk(&self) -> Result<Vec<PathBuf>> {
         let Self { out, ev, rom, .. } = *self;
         let t = ev.thresholds;
@@ -783,7 +783,7 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// Figure(s): sweeps.
+    /// `sweep_clearance.png`, `sweep_pin_offset.png`: the report's two sweeps.
     fn sweeps(&self) -> Result<Vec<PathBuf>> {
         let Self {
             out,
@@ -874,7 +874,7 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// Figure(s): CSF against Ca.
+    /// `criteria.png`: the cavitation safety factor against the acceleration number.
     fn criteria(&self) -> Result<Vec<PathBuf>> {
         let Self { out, ev, .. } = *self;
         let mut files = Vec::new();
@@ -919,7 +919,7 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// Figure(s): speed against error.
+    /// `speed_error.png`: wall time against error on the reference window.
     fn speed_error(&self) -> Result<Vec<PathBuf>> {
         let Self { out, trade, .. } = *self;
         let mut files = Vec::new();
