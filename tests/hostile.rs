@@ -614,3 +614,24 @@ proptest! {
         prop_assert!(t.elapsed() < Duration::from_secs(60), "{set}: {:?}", t.elapsed());
     }
 }
+
+/// Regression (found by the fuzz above): at twice the rated speed the output filter spans
+/// more crank angle than the step-error window held, and the window's peak panicked on an
+/// empty slice; the window now widens and the run completes with its estimate.
+#[test]
+fn regression_step_error_window_at_high_speed() {
+    let cache = tempfile::tempdir().unwrap();
+    let (code, out, err) = linercav(&[
+        "simulate",
+        SMALL,
+        "--json",
+        "--cache-dir",
+        cache.path().to_str().unwrap(),
+        "--set",
+        "engine.speed_rpm=3800",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let e = v["stats"]["step_error_estimate"].as_f64().unwrap();
+    assert!(e.is_finite() && e > 0.0, "estimate {e}");
+}

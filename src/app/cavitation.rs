@@ -6,6 +6,7 @@ use crate::cavitation::coolant::Coolant;
 use crate::cavitation::criteria;
 use crate::error::{Error, Result};
 use crate::report::png::{write_png, Chart, Mark, Rule, Series};
+use crate::text::num;
 use std::path::PathBuf;
 
 /// What `coolant` prints.
@@ -38,7 +39,10 @@ pub struct CoolantReport {
 pub fn coolant_of(temp_c: f64, static_kpa: f64, glycol: f64) -> Result<Coolant> {
     Coolant::new(temp_c, glycol, static_kpa * 1e3).map_err(|e| {
         Error::Input(format!(
-            "--temp-c {temp_c} --static-kpa {static_kpa} --glycol {glycol}: {e}"
+            "--temp-c {} --static-kpa {} --glycol {}: {e}",
+            num(temp_c),
+            num(static_kpa),
+            num(glycol)
         ))
     })
 }
@@ -48,7 +52,8 @@ fn gap_of(gap_mm: f64) -> Result<f64> {
         Ok(gap_mm * 1e-3)
     } else {
         Err(Error::Input(format!(
-            "--gap-mm {gap_mm}: must be a positive number of millimetres"
+            "--gap-mm {}: must be a positive number of millimetres",
+            num(gap_mm)
         )))
     }
 }

@@ -51,9 +51,11 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
     progress.phase("reading mesh");
     let part = load_part(&req.input, &req.extra_fix)?;
     let shift_hz = req.shift_hz.unwrap_or(part.shift_hz);
-    if !(shift_hz.is_finite() && shift_hz > 0.0) {
+    // above 1e9 Hz sigma = -(2 pi f)^2 swamps K: no structural spectrum lies there
+    if !(shift_hz.is_finite() && shift_hz > 0.0 && shift_hz <= 1e9) {
         return Err(crate::error::Error::Input(format!(
-            "--shift-hz must be a positive number, got {shift_hz}"
+            "--shift-hz must be a positive number up to 1e9, got {}",
+            crate::text::num(shift_hz)
         )));
     }
     if req.count == 0 {

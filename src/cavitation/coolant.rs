@@ -13,6 +13,8 @@
 //!   speed of sound, with pure ethylene glycol taken as rho = 1127 - 0.70 t kg/m^3 and
 //!   c = 1658 - 2.1 (t - 25) m/s (t in C; handbook values, 20-100 C).
 
+use crate::text::num;
+
 /// Molar masses of water and ethylene glycol [kg/mol].
 const M_WATER: f64 = 0.018_015;
 const M_GLYCOL: f64 = 0.062_068;
@@ -33,13 +35,13 @@ pub struct Coolant {
 /// Why a coolant state cannot be evaluated.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum CoolantError {
-    #[error("temperature {0} C is outside 0-150 C (range of the water correlations)")]
+    #[error("temperature {} C is outside 0-150 C (range of the water correlations)", num(*.0))]
     Temperature(f64),
-    #[error("glycol mass fraction {0} is outside [0, 0.8]")]
+    #[error("glycol mass fraction {} is outside [0, 0.8]", num(*.0))]
     Glycol(f64),
-    #[error("static pressure {0} kPa must be positive")]
+    #[error("static pressure {} kPa must be positive", num(*.0))]
     Pressure(f64),
-    #[error("static pressure {static_kpa} kPa is not above the vapour pressure {vapour_kpa:.2} kPa: the coolant boils")]
+    #[error("static pressure {} kPa is not above the vapour pressure {vapour_kpa:.2} kPa: the coolant boils", num(*static_kpa))]
     Boiling { static_kpa: f64, vapour_kpa: f64 },
 }
 

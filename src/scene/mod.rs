@@ -427,9 +427,10 @@ fn validate_engine(c: &Checker<'_>, e: &raw::RawEngine) -> Result<Engine, SceneE
     if e.cylinders == 0 {
         return Err(c.err("engine.cylinders", "must be at least 1"));
     }
+    // the count is compared first: 1..=cylinders is never listed for a huge count
     let mut fo = e.firing_order.clone();
     fo.sort_unstable();
-    if fo != (1..=e.cylinders).collect::<Vec<_>>() {
+    if fo.len() != e.cylinders || fo.iter().enumerate().any(|(i, &k)| k != i + 1) {
         return Err(c.err(
             "engine.firing_order",
             format!(
@@ -447,6 +448,17 @@ fn validate_engine(c: &Checker<'_>, e: &raw::RawEngine) -> Result<Engine, SceneE
         cylinder_pitch: c.mm("engine.cylinder_pitch_mm", e.cylinder_pitch_mm)?,
         speed_rpm: c.positive("engine.speed_rpm", e.speed_rpm)?,
     };
+    // reciprocating engines run below ~10,000 rpm; far above, the step check would blame the
+    // step for what is a mistyped speed
+    if engine.speed_rpm > 1e5 {
+        return Err(c.err(
+            "engine.speed_rpm",
+            format!(
+                "{} rpm is no engine speed (at most 1e5)",
+                num(engine.speed_rpm)
+            ),
+        ));
+    }
     if engine.rod_length <= engine.stroke / 2.0 {
         return Err(c.err(
             "engine.rod_length_mm",

@@ -17,23 +17,26 @@ pub struct Elastic {
 
 impl Elastic {
     /// Checks the physical bounds; the message names the offending quantity and its bound.
+    /// Upper bounds: 100 times the stiffest (diamond, 1.2e12 Pa) and 4 times the densest
+    /// (osmium, 22,600 kg/m^3) solid; beyond them the matrices overflow or are no solid's.
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.young.is_finite() && self.young > 0.0) {
+        use crate::text::num;
+        if !(self.young.is_finite() && self.young > 0.0 && self.young <= 1e14) {
             return Err(format!(
-                "Young's modulus must be a positive number of Pa, got {}",
-                self.young
+                "Young's modulus must be a positive number of Pa up to 1e14, got {}",
+                num(self.young)
             ));
         }
         if !(self.poisson.is_finite() && self.poisson > -1.0 && self.poisson < 0.5) {
             return Err(format!(
                 "Poisson's ratio must lie in (-1, 0.5), got {}",
-                self.poisson
+                num(self.poisson)
             ));
         }
-        if !(self.density.is_finite() && self.density > 0.0) {
+        if !(self.density.is_finite() && self.density > 0.0 && self.density <= 1e5) {
             return Err(format!(
-                "density must be a positive number of kg/m^3, got {}",
-                self.density
+                "density must be a positive number of kg/m^3 up to 1e5, got {}",
+                num(self.density)
             ));
         }
         Ok(())

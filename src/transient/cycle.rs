@@ -329,6 +329,9 @@ impl StepError {
 
 /// The firing-slap window of the step-error estimate, in the cylinder's own crank angle [deg].
 pub const STEP_ERROR_WINDOW_DEG: (f64, f64) = (320.0, 430.0);
+/// How much of each end of the window the output filter may take before the window is
+/// widened (the compared part keeps covering 355-395 deg, the firing slap) [deg].
+const SLAP_MARGIN_DEG: f64 = 35.0;
 
 /// Estimated relative step error of the mean of all peaks: 2 |sum (P_h - P_{h/2})| / sum P_h
 /// over every cylinder and point.
@@ -949,15 +952,28 @@ impl<'a> EngineRun<'a> {
         let mut building: Option<Series> = None;
         let mut pending: Option<(usize, Series)> = None;
         let piston = self.setup.piston;
-        // where each cylinder's step-error window starts in the last cycle (global step)
-        let window_steps = ((STEP_ERROR_WINDOW_DEG.1 - STEP_ERROR_WINDOW_DEG.0)
-            / self.settings.step_deg)
-            .round() as usize;
+        // where each cylinder's step-error window starts in the last cycle (global step). The
+        // peaks are compared away from the output filter's ends; where the filter spans more
+        // than the window's first and last 35 deg (high speed: at 3800 rpm a 110 deg window
+        // was shorter than the filter and panicked), the window is widened at both ends so the
+        // compared part still covers the slap at 355-395 deg
+        let filter_steps = self
+            .settings
+            .output_band_hz
+            .map_or(0, |band| super::window::fir_half_length(dt, band))
+            + 1;
+        let step_deg = self.settings.step_deg;
+        let lead_steps = ((filter_steps as f64 * step_deg - SLAP_MARGIN_DEG).max(0.0) / step_deg)
+            .ceil() as usize;
+        let window_steps = ((STEP_ERROR_WINDOW_DEG.1 - STEP_ERROR_WINDOW_DEG.0) / step_deg).round()
+            as usize
+            + 2 * lead_steps;
+        let lead_deg = lead_steps as f64 * step_deg;
         let starts: Vec<usize> = self
             .cyls
             .iter()
             .map(|c| {
-                let own = (STEP_ERROR_WINDOW_DEG.0 + c.phase).rem_euclid(720.0);
+                let own = (STEP_ERROR_WINDOW_DEG.0 - lead_deg + c.phase).rem_euclid(720.0);
                 (cycles - 1) * spc + (own / self.settings.step_deg).round() as usize % spc
             })
             .collect();
@@ -1129,7 +1145,8 @@ impl<'a> EngineRun<'a> {
                     Some(band) => low_pass(&acc, h, band, false).0,
                     None => acc,
                 };
-                let core = &y[half.min(y.len())..y.len().saturating_sub(half)];
+                let lo = half.min(y.len());
+                let core = &y[lo..y.len().saturating_sub(half).max(lo)];
                 core.iter().fold(0.0f64, |m, &a| m.max(-a))
             })
             .collect())
