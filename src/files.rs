@@ -208,6 +208,12 @@ impl OutputDir {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
+        if let Some(file) = parent.ancestors().find(|a| a.exists() && !a.is_dir()) {
+            return Err(fail(std::io::Error::new(
+                std::io::ErrorKind::NotADirectory,
+                format!("{} is a file, not a directory", file.display()),
+            )));
+        }
         std::fs::create_dir_all(&parent).map_err(fail)?;
         let staging = if target.is_dir() {
             target.join(format!(".linercav-staging.{}", std::process::id()))
