@@ -62,11 +62,12 @@ impl Limits {
 
     /// `limits.max_memory_gb` or 80 % of the memory available now; `limits.max_hours` or 24 h.
     pub fn of(scene: &Scene) -> Self {
-        let memory = scene.limits.max_memory_gb.map(|gb| gb * 1e9);
+        let m = Self::machine();
+        let l = &scene.limits;
         Self {
-            memory: memory.unwrap_or(0.8 * crate::machine::available_memory() as f64),
-            seconds: scene.limits.max_hours.unwrap_or(24.0) * 3600.0,
-            memory_from_scene: memory.is_some(),
+            memory: l.max_memory_gb.map_or(m.memory, |gb| gb * 1e9),
+            seconds: l.max_hours.map_or(m.seconds, |h| h * 3600.0),
+            memory_from_scene: l.max_memory_gb.is_some(),
         }
     }
 
@@ -172,8 +173,9 @@ pub fn engine_dofs(scene: &Scene) -> Option<f64> {
     Some(3.0 * (cc + scene.rom.cylinders.len() as f64 * liner))
 }
 
-/// A modal solve or ROM build of a model with `dofs` full DOFs (a mesh read from a file, whose
-/// size is known only once read), by the same scaling as [`rom_build`].
+/// A modal solve or ROM build of a model with `dofs` full DOFs n: memory and time scale as
+/// nested-dissection fill, M = M_0 (n / n_0)^{4/3} and t = t_0 (n / n_0)^{3/2}, from the
+/// default engine's build (also for a mesh read from a file, sized once read).
 pub fn fe_model(dofs: usize, what: &'static str) -> Estimate {
     let r = dofs as f64 / REF_DOFS;
     Estimate {
@@ -185,17 +187,12 @@ pub fn fe_model(dofs: usize, what: &'static str) -> Estimate {
     }
 }
 
-/// The ROM build: memory and time scale with the full DOFs n as nested-dissection fill,
-/// M = M_0 (n / n_0)^{4/3} and t = t_0 (n / n_0)^{3/2}, from the default engine's build.
+/// The ROM build of a scene with generated meshes, from its estimated DOFs ([`fe_model`]).
 pub fn rom_build(scene: &Scene) -> Option<Estimate> {
     let n = engine_dofs(scene)?;
-    let r = n / REF_DOFS;
     Some(Estimate {
-        what: "the ROM build",
-        memory: REF_BUILD_BYTES * r.powf(4.0 / 3.0),
-        seconds: REF_BUILD_SECONDS * r.powf(1.5),
         keys: "liner.mesh.* / crankcase.mesh.* (element counts and sizes), engine.cylinders or rom.cylinders",
-        detail: format!("about {} DOFs", num(n.round())),
+        ..fe_model(n.round() as usize, "the ROM build")
     })
 }
 
