@@ -7,6 +7,7 @@
 pub mod analysis;
 pub mod app;
 pub mod cavitation;
+pub mod coolant;
 pub mod eigen;
 pub mod error;
 pub mod fem;

@@ -5,7 +5,6 @@ use clap::{Args, Parser, Subcommand};
 use linercav::app::{cavitation, export, modes, rom, simulate, sweep, ModelInput};
 use linercav::error::Error;
 use linercav::fem::material::Elastic;
-use linercav::scene::Scene;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -361,7 +360,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             json,
             cache,
         } => {
-            let sc = Scene::load(&scene, &sets)?;
+            let sc = linercav::app::load_scene(&scene, &sets)?;
             let loaded = rom::get_rom(&sc, &cache.options())?;
             let mut report = rom::RomReport::new(&loaded);
             report.seconds = started.elapsed().as_secs_f64();
@@ -383,10 +382,10 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             json,
             cache,
         } => {
-            let sc = Scene::load(&scene, &sets)?;
+            let sc = linercav::app::load_scene(&scene, &sets)?;
             let loaded = rom::get_rom(&sc, &cache.options())?;
             let report = rom::ShapesReport {
-                modes: rom::shapes(&loaded.rom),
+                modes: loaded.rom.shapes(),
                 cylinders: loaded.rom.cylinders.iter().map(|c| c.cylinder).collect(),
                 cache: loaded.cache,
             };
@@ -499,7 +498,7 @@ fn modes_command(
             .scene
             .clone()
             .ok_or_else(|| Error::Input("--assembly needs a scene file".into()))?;
-        let scene = Scene::load(&scene_path, &model.sets)?;
+        let scene = linercav::app::load_scene(&scene_path, &model.sets)?;
         let report = modes::run_assembly(
             &scene,
             count,

@@ -19,10 +19,10 @@
 //!   LINERCAV_UPDATE_BASELINE=1 cargo test --release --test baseline
 //! and commit the file with the reason.
 
-use linercav::app::evaluate::evaluate;
 use linercav::app::rom::{get_rom, CacheOptions};
 use linercav::app::simulate::{piston_of, run_cycle, settings_of, simulation};
 use linercav::app::simulate::{run, SimulateRequest};
+use linercav::cavitation::evaluate::evaluate;
 use linercav::scene::Scene;
 use linercav::transient::cycle::CycleResult;
 use std::path::Path;
@@ -186,7 +186,9 @@ fn engine_peak(r: &CycleResult) -> f64 {
 #[test]
 fn trend_reference_thresholds() {
     let scene = Scene::load(Path::new(SCENE), &[]).unwrap();
-    let t = scene.cavitation.thresholds;
+    let t = linercav::cavitation::Setup::new(&scene.cavitation)
+        .unwrap()
+        .thresholds;
     assert!(
         (t.high_risk_m_s2 - 1189.0).abs() < 0.5,
         "{}",
@@ -213,7 +215,10 @@ fn trend_clearance_raises_acceleration() {
     let (a40, a80, a120) = (engine_peak(&r40), engine_peak(r80), engine_peak(&r120));
     assert!(a40 < a80 && a80 < a120, "{a40} {a80} {a120}");
     assert!(a120 > 2.0 * a40, "not a strong rise: {a40} -> {a120}");
-    let high = scene.cavitation.thresholds.high_risk_m_s2;
+    let high = linercav::cavitation::Setup::new(&scene.cavitation)
+        .unwrap()
+        .thresholds
+        .high_risk_m_s2;
     let cyl6 = |r: &CycleResult| -> Vec<f64> {
         let c = r
             .peaks
@@ -273,14 +278,14 @@ fn trend_pin_offset() {
 }
 
 /// The run and its evaluation on the default scene, once for every test that reads it.
-fn evaluated() -> &'static linercav::app::evaluate::Evaluation {
-    static EV: OnceLock<linercav::app::evaluate::Evaluation> = OnceLock::new();
+fn evaluated() -> &'static linercav::cavitation::evaluate::Evaluation {
+    static EV: OnceLock<linercav::cavitation::evaluate::Evaluation> = OnceLock::new();
     EV.get_or_init(|| {
         let (scene, r) = default_run();
         evaluate(
             r,
             default_rom(),
-            &scene.cavitation,
+            &linercav::cavitation::Setup::new(&scene.cavitation).unwrap(),
             &scene.engine.firing_order,
             scene.rom.band_hz,
         )
@@ -345,11 +350,14 @@ fn trend_cylinder_differences_follow_a_crankcase_mode() {
 /// criterion flags every point the acceleration criterion flags, and more.
 #[test]
 fn trend_classic_criterion_against_the_acceleration_number() {
-    use linercav::app::evaluate::peak_velocity;
     use linercav::cavitation::criteria::safety_factor;
+    use linercav::cavitation::evaluate::peak_velocity;
     let scene = Scene::load(Path::new(SCENE), &[]).unwrap();
     let coolant = &scene.cavitation.coolant;
-    let a_star = scene.cavitation.thresholds.high_risk_m_s2;
+    let a_star = linercav::cavitation::Setup::new(&scene.cavitation)
+        .unwrap()
+        .thresholds
+        .high_risk_m_s2;
     let dt = 0.25 / (6.0 * scene.engine.speed_rpm); // 0.25 deg at the default speed [s]
     let csf_of_ring = |f: f64| {
         // 20 whole periods of the ring, sampled near the transient's step

@@ -2,8 +2,8 @@
 //! the calibration of the acceleration criterion from rig data.
 
 use crate::cavitation::calibration::{self, Calibration, RigData};
-use crate::cavitation::coolant::Coolant;
 use crate::cavitation::criteria;
+use crate::coolant::Coolant;
 use crate::error::{Error, Result};
 use crate::report::png::{write_png, Chart, Mark, Rule, Series};
 use crate::text::num;

@@ -2,7 +2,7 @@
 //! serialisable report, and writes its files atomically.
 
 pub mod cavitation;
-pub mod evaluate;
+
 pub mod export;
 pub mod full_modes;
 pub mod full_order;
@@ -49,6 +49,21 @@ pub struct LoadedPart {
     pub guard_modes: usize,
 }
 
+/// Loads and validates a scene with its `--set` overrides, and resolves its cavitation
+/// thresholds, so that thresholds out of order are refused (exit 2, naming the file) before
+/// any work starts.
+pub fn load_scene(path: &std::path::Path, sets: &[String]) -> Result<Scene> {
+    let scene = Scene::load(path, sets)?;
+    crate::cavitation::Setup::new(&scene.cavitation).map_err(|e| {
+        crate::scene::SceneError::Field {
+            path: path.to_path_buf(),
+            key: "cavitation".into(),
+            msg: e.to_string(),
+        }
+    })?;
+    Ok(scene)
+}
+
 fn read_mesh(source: &MeshSource) -> Result<(Mesh, Option<String>)> {
     Ok(match source {
         MeshSource::Liner { geometry, meshing } => (liner::generate(geometry, meshing), None),
@@ -60,7 +75,7 @@ fn read_mesh(source: &MeshSource) -> Result<(Mesh, Option<String>)> {
 pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart> {
     let (mesh, file, material, mut fix, label, shift_hz, guard_modes) = match input {
         ModelInput::Scene { scene, part, sets } => {
-            let sc = Scene::load(scene, sets)?;
+            let sc = load_scene(scene, sets)?;
             let p = sc.part(part).ok_or_else(|| {
                 Error::Input(format!(
                     "{}: unknown part '{part}'; the scene has: {}",

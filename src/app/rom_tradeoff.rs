@@ -137,7 +137,7 @@ pub fn run(
             "--factors: cut-off factors must be numbers >= 1, got {factors:?}"
         )));
     }
-    let base = Scene::load(scene_path, sets)?;
+    let base = super::load_scene(scene_path, sets)?;
     let band = base.rom.band_hz;
     // validate every factor's scene before the long solves
     let scenes: Vec<Scene> = factors
@@ -145,7 +145,7 @@ pub fn run(
         .map(|f| {
             let mut s = sets.to_vec();
             s.push(format!("rom.cutoff_factor={f}"));
-            Scene::load(scene_path, &s)
+            super::load_scene(scene_path, &s)
         })
         .collect::<std::result::Result<_, _>>()?;
     let mut rows = Vec::new();

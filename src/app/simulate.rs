@@ -393,7 +393,7 @@ pub struct SimulateRequest {
 
 /// Runs `simulate`.
 pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
-    let scene = Scene::load(&req.scene, &req.sets)?;
+    let scene = super::load_scene(&req.scene, &req.sets)?;
     let sim = simulation(&scene)?;
     let piston = piston_of(&scene)?;
     // refused before any work: a transient beyond the limits, an output that cannot be written

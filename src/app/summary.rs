@@ -9,11 +9,11 @@
 //! `sweep_pin_offset.png`, `criteria.png` (CSF against Ca), `speed_error.png`, `frf.png`
 //! (inertance from the slap location to each cylinder's worst point, from the modal model).
 
-use super::evaluate::{evaluate, spectra, Evaluation};
 use super::full_order::{peak_negative, rom_window};
 use super::rom::{get_rom, CacheOptions};
 use super::simulate::{piston_of, run_cycle, settings_of, simulation, SimulateReport};
 use crate::analysis::spectrum::{rms_average, Spectrum};
+use crate::cavitation::evaluate::{evaluate, spectra, Evaluation};
 use crate::error::{Error, Result};
 use crate::files::write_all_atomic;
 use crate::piston::Piston;
@@ -110,7 +110,7 @@ fn run_with(
 ) -> Result<CycleResult> {
     let mut sets = base_sets.to_vec();
     sets.push(extra.to_string());
-    let sc = Scene::load(path, &sets)?;
+    let sc = super::load_scene(path, &sets)?;
     let sim = simulation(&sc)?;
     let piston = piston_of(&sc)?;
     run_cycle(&sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None)
@@ -169,7 +169,7 @@ pub fn tradeoff(scene: &Scene, rom: &EngineRom, piston: &Piston) -> Result<Vec<T
 /// Writes the report of `scene` into `out`.
 pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions) -> Result<Report> {
     let started = Instant::now();
-    let scene = Scene::load(scene_path, sets)?;
+    let scene = super::load_scene(scene_path, sets)?;
     let sim = simulation(&scene)?;
     let piston = piston_of(&scene)?;
     // about ten transients (the scene and its two sweeps): refused before any work when beyond
@@ -234,7 +234,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     let ev = evaluate(
         base,
         rom,
-        &scene.cavitation,
+        &crate::cavitation::Setup::new(&scene.cavitation)?,
         &scene.engine.firing_order,
         scene.rom.band_hz,
     );
@@ -522,7 +522,7 @@ impl Figures<'_> {
                     })
                 })
                 .collect();
-            // the engine-wide dominant response is the peak of this average (evaluate::evaluate)
+            // the engine-wide dominant response is the peak of this average (cavitation::evaluate::evaluate)
             let all: Vec<&Spectrum> = sp.iter().flatten().collect();
             if let Some(avg) = rms_average(&all) {
                 series.push(Series {
@@ -719,7 +719,7 @@ impl Figures<'_> {
             .iter()
             .map(|c| format!("cyl {}", c.cylinder))
             .collect();
-        let shapes = super::rom::shapes(rom);
+        let shapes = rom.shapes();
         write_png(&p, (1500, 600), |root| {
             let (a, b) = root.split_horizontally(750);
             // of the modes nearest the dominant response, the one whose coefficients follow the

@@ -2,11 +2,11 @@
 //! cached ROM; a tidy CSV (one row per run, cylinder and analysis point) and PNGs of every
 //! varied key (slap force, piston tilt, peak negative acceleration per cylinder).
 
-use super::evaluate::{evaluate, CylinderRisk};
 use super::rom::{get_rom, key_description, CacheOptions, LoadedRom};
 use super::simulate::{
     piston_of, run_cycle, settings_of, simulation, CylinderReport, SimulateReport,
 };
+use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
 use crate::files::{write_all_atomic, Filler, OutputDir};
 use crate::report::png::{write_png, Chart, Mark, Series};
@@ -113,7 +113,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         .map(|c| {
             let mut sets = req.sets.clone();
             sets.extend(vary.iter().zip(c).map(|(v, x)| format!("{}={x}", v.key)));
-            let sc = Scene::load(&req.scene, &sets)?;
+            let sc = super::load_scene(&req.scene, &sets)?;
             simulation(&sc)?;
             Ok(sc)
         })
@@ -158,7 +158,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
             let ev = evaluate(
                 &res,
                 rom,
-                &sc.cavitation,
+                &crate::cavitation::Setup::new(&sc.cavitation)?,
                 &sc.engine.firing_order,
                 sc.rom.band_hz,
             );
@@ -210,7 +210,7 @@ fn check_size(req: &SweepRequest, vary: &[Vary]) -> Result<()> {
         .iter()
         .try_fold(1usize, |n, v| n.checked_mul(v.values.len()))
         .unwrap_or(usize::MAX);
-    let base = Scene::load(&req.scene, &req.sets)?;
+    let base = super::load_scene(&req.scene, &req.sets)?;
     let Some(one) = crate::scene::budget::transient(&base) else {
         return Ok(());
     };

@@ -22,7 +22,7 @@
 //!    the thresholds bracket the gap: onset = the largest safe event, high = the smallest
 //!    cavitating one.
 
-use super::coolant::Coolant;
+use crate::coolant::Coolant;
 use std::path::Path;
 
 /// Rig data: time [s], acceleration [m/s^2], pressure [Pa].

@@ -20,7 +20,9 @@
 //! reference state and kept when a scene changes the coolant state: a lower static pressure
 //! or a hotter coolant then lowers the threshold, as it should.
 
-use super::coolant::{Coolant, CoolantError};
+use crate::coolant::{Coolant, CoolantError};
+use crate::scene::ThresholdSpec;
+use crate::text::num;
 
 /// Reference study's coolant state and thresholds.
 pub const REFERENCE_STATIC_PA: f64 = 240e3;
@@ -96,7 +98,63 @@ pub struct Thresholds {
     pub source: &'static str,
 }
 
+/// Resolved thresholds out of order.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("need 0 < onset ({}) <= high risk ({}) m/s^2", num(*.onset), num(*.high))]
+pub struct ThresholdError {
+    pub onset: f64,
+    pub high: f64,
+}
+
 impl Thresholds {
+    /// The scene's thresholds with the missing ones derived: k_p = [`reference_k_p`], the
+    /// high-risk threshold |a|* = (p_s - p_v) / (k_p + rho h) ([`threshold`]), the onset
+    /// |a|* 917 / 1189 (the reference study's proportion).
+    pub fn resolve(
+        spec: &ThresholdSpec,
+        coolant: &Coolant,
+        gap: f64,
+    ) -> Result<Self, ThresholdError> {
+        let t = match *spec {
+            ThresholdSpec::Calibrated {
+                onset_m_s2,
+                high_risk_m_s2,
+                k_p_pa_per_m_s2,
+            } => Thresholds {
+                onset_m_s2,
+                high_risk_m_s2,
+                k_p_pa_per_m_s2,
+                source: "calibration file",
+            },
+            ThresholdSpec::Scene {
+                onset_m_s2,
+                high_risk_m_s2,
+                k_p_pa_per_m_s2,
+            } => {
+                let k_p = k_p_pa_per_m_s2
+                    .unwrap_or_else(|| reference_k_p().expect("reference coolant state is valid"));
+                let high = high_risk_m_s2.unwrap_or_else(|| threshold(coolant, k_p, gap));
+                let onset = onset_m_s2.unwrap_or(high * REFERENCE_ONSET / REFERENCE_HIGH_RISK);
+                Thresholds {
+                    onset_m_s2: onset,
+                    high_risk_m_s2: high,
+                    k_p_pa_per_m_s2: k_p,
+                    source: "scene",
+                }
+            }
+        };
+        if !(t.onset_m_s2.is_finite() && t.high_risk_m_s2.is_finite())
+            || t.onset_m_s2 <= 0.0
+            || t.onset_m_s2 > t.high_risk_m_s2
+        {
+            return Err(ThresholdError {
+                onset: t.onset_m_s2,
+                high: t.high_risk_m_s2,
+            });
+        }
+        Ok(t)
+    }
+
     pub fn classify(&self, a_neg: f64) -> Risk {
         let a = a_neg.abs();
         if a >= self.high_risk_m_s2 {

@@ -845,3 +845,41 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         system: sys,
     })
 }
+
+/// One system mode, the normalised thrust-side radial amplitude at each
+/// cylinder's analysis points (cylinder-major, points top to bottom).
+#[derive(serde::Serialize)]
+pub struct ShapeMode {
+    pub frequency_hz: f64,
+    pub coefficients: Vec<Vec<f64>>,
+}
+
+impl EngineRom {
+    /// Mode-shape coefficients: c_{cyl,p} = phi(point) / max |phi(points)| over all cylinders and
+    /// points of that mode (so the largest is +-1; the sign shows the phase between cylinders).
+    pub fn shapes(&self) -> Vec<ShapeMode> {
+        let rom = self;
+        (0..rom.frequencies_hz.len())
+            .map(|j| {
+                let raw: Vec<Vec<f64>> = rom
+                    .cylinders
+                    .iter()
+                    .map(|c| {
+                        (0..c.point_modes.rows)
+                            .map(|p| c.point_modes.at(p, j))
+                            .collect()
+                    })
+                    .collect();
+                let max = raw.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+                let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
+                ShapeMode {
+                    frequency_hz: rom.frequencies_hz[j],
+                    coefficients: raw
+                        .into_iter()
+                        .map(|r| r.into_iter().map(|v| v * scale).collect())
+                        .collect(),
+                }
+            })
+            .collect()
+    }
+}

@@ -13,6 +13,7 @@ use crate::text::num;
 use raw::RawScene;
 use spec::Elastic;
 use spec::ElementKind;
+pub use spec::ThresholdSpec;
 use spec::{CrankcaseGeometry, CrankcaseMeshing};
 use spec::{LinerGeometry, LinerMeshing};
 use std::path::{Path, PathBuf};
@@ -178,9 +179,10 @@ pub struct Simulation {
 /// Coolant state, gap and risk thresholds, SI.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CavitationSpec {
-    pub coolant: crate::cavitation::coolant::Coolant,
+    pub coolant: crate::coolant::Coolant,
     pub gap: f64,
-    pub thresholds: crate::cavitation::criteria::Thresholds,
+    /// The thresholds as the scene gives them; [`crate::cavitation::Setup`] resolves them.
+    pub thresholds: ThresholdSpec,
     /// The coolant layer's normal mass on the liner's wet surface [kg/m^2] (rho h), when the
     /// scene models it (`coolant_mass = "layer"`).
     pub layer_mass_per_area: Option<f64>,
@@ -671,8 +673,7 @@ fn validate_cavitation(
     base: &Path,
     r: &raw::RawCavitation,
 ) -> Result<CavitationSpec, SceneError> {
-    use crate::cavitation::coolant::Coolant;
-    use crate::cavitation::criteria::{self, Thresholds};
+    use crate::coolant::Coolant;
     let coolant = Coolant::new(r.coolant_temp_c, r.glycol, r.static_pressure_kpa * 1e3)
         .map_err(|e| c.err("cavitation", e.to_string()))?;
     let gap = c.mm("cavitation.gap_mm", r.gap_mm)?;
@@ -683,67 +684,30 @@ fn validate_cavitation(
                 "give either a calibration file or k_p_pa_per_m_s2/onset_m_s2/high_risk_m_s2, not both",
             ));
         }
-        let path = base.join(f);
-        let text = crate::files::read_text(&path, crate::files::LIMIT_TEXT).map_err(|e| {
-            c.err(
-                "cavitation.calibration_file",
-                format!("cannot read {}: {e}", path.display()),
-            )
-        })?;
-        let t: CalibrationThresholds = serde_json::from_str(&text).map_err(|e| {
-            c.err(
-                "cavitation.calibration_file",
-                format!(
-                    "{}: not a calibration JSON (need onset_m_s2, high_risk_m_s2, k_p_pa_per_m_s2): {e}",
-                    path.display()
-                ),
-            )
-        })?;
-        Thresholds {
-            onset_m_s2: t.onset_m_s2,
-            high_risk_m_s2: t.high_risk_m_s2,
-            k_p_pa_per_m_s2: t.k_p_pa_per_m_s2,
-            source: "calibration file",
-        }
+        calibration_thresholds(c, &base.join(f))?
     } else {
-        let k_p = match r.k_p_pa_per_m_s2 {
-            Some(k) if k.is_finite() && k >= 0.0 => k,
-            Some(k) => {
+        if let Some(k) = r.k_p_pa_per_m_s2 {
+            if !(k.is_finite() && k >= 0.0) {
                 return Err(c.err(
                     "cavitation.k_p_pa_per_m_s2",
                     format!("must be a finite number >= 0, got {}", num(k)),
-                ))
+                ));
             }
-            None => criteria::reference_k_p().expect("reference coolant state is valid"),
-        };
-        let high = match r.high_risk_m_s2 {
-            Some(v) => c.positive("cavitation.high_risk_m_s2", v)?,
-            None => criteria::threshold(&coolant, k_p, gap),
-        };
-        let onset = match r.onset_m_s2 {
-            Some(v) => c.positive("cavitation.onset_m_s2", v)?,
-            None => high * criteria::REFERENCE_ONSET / criteria::REFERENCE_HIGH_RISK,
-        };
-        Thresholds {
+        }
+        let high = r
+            .high_risk_m_s2
+            .map(|v| c.positive("cavitation.high_risk_m_s2", v))
+            .transpose()?;
+        let onset = r
+            .onset_m_s2
+            .map(|v| c.positive("cavitation.onset_m_s2", v))
+            .transpose()?;
+        ThresholdSpec::Scene {
             onset_m_s2: onset,
             high_risk_m_s2: high,
-            k_p_pa_per_m_s2: k_p,
-            source: "scene",
+            k_p_pa_per_m_s2: r.k_p_pa_per_m_s2,
         }
     };
-    let t = &thresholds;
-    if !(t.onset_m_s2.is_finite() && t.high_risk_m_s2.is_finite() && t.k_p_pa_per_m_s2.is_finite())
-        || t.onset_m_s2 <= 0.0
-        || t.onset_m_s2 > t.high_risk_m_s2
-    {
-        return Err(c.err(
-            "cavitation",
-            format!(
-                "need 0 < onset ({}) <= high risk ({}) m/s^2",
-                t.onset_m_s2, t.high_risk_m_s2
-            ),
-        ));
-    }
     let layer_mass_per_area = match r.coolant_mass.as_str() {
         "none" => None,
         "layer" => Some(coolant.density_kg_m3 * gap),
@@ -754,11 +718,76 @@ fn validate_cavitation(
             ))
         }
     };
-    Ok(CavitationSpec {
+    let spec = CavitationSpec {
         coolant,
         gap,
         thresholds,
         layer_mass_per_area,
+    };
+    // the order of given thresholds; derived ones are checked when the cavitation stage
+    // resolves them (`cavitation::Setup::new`, right after the scene is loaded)
+    let given = match spec.thresholds {
+        ThresholdSpec::Calibrated {
+            onset_m_s2,
+            high_risk_m_s2,
+            ..
+        } => Some((onset_m_s2, high_risk_m_s2)),
+        ThresholdSpec::Scene {
+            onset_m_s2: Some(o),
+            high_risk_m_s2: Some(h),
+            ..
+        } => Some((o, h)),
+        ThresholdSpec::Scene { .. } => None,
+    };
+    if let Some((onset, high)) = given {
+        if !(onset > 0.0 && onset <= high) {
+            return Err(c.err(
+                "cavitation",
+                format!(
+                    "need 0 < onset ({}) <= high risk ({}) m/s^2",
+                    num(onset),
+                    num(high)
+                ),
+            ));
+        }
+    }
+    Ok(spec)
+}
+
+/// The thresholds of a calibration file written by `linercav calibrate --json`.
+fn calibration_thresholds(c: &Checker<'_>, path: &Path) -> Result<ThresholdSpec, SceneError> {
+    let key = "cavitation.calibration_file";
+    let text = crate::files::read_text(path, crate::files::LIMIT_TEXT)
+        .map_err(|e| c.err(key, format!("cannot read {}: {e}", path.display())))?;
+    let t: CalibrationThresholds = serde_json::from_str(&text).map_err(|e| {
+        c.err(
+            key,
+            format!(
+                "{}: not a calibration JSON (need onset_m_s2, high_risk_m_s2, k_p_pa_per_m_s2): {e}",
+                path.display()
+            ),
+        )
+    })?;
+    for (name, v) in [
+        ("onset_m_s2", t.onset_m_s2),
+        ("high_risk_m_s2", t.high_risk_m_s2),
+        ("k_p_pa_per_m_s2", t.k_p_pa_per_m_s2),
+    ] {
+        if !v.is_finite() || v < 0.0 {
+            return Err(c.err(
+                key,
+                format!(
+                    "{}: {name} must be a finite number >= 0, got {}",
+                    path.display(),
+                    num(v)
+                ),
+            ));
+        }
+    }
+    Ok(ThresholdSpec::Calibrated {
+        onset_m_s2: t.onset_m_s2,
+        high_risk_m_s2: t.high_risk_m_s2,
+        k_p_pa_per_m_s2: t.k_p_pa_per_m_s2,
     })
 }
 

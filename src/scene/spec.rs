@@ -190,3 +190,22 @@ pub enum SchemeChoice {
     /// Hilber-Hughes-Taylor alpha in [-1/3, 0]: damps the high modes.
     Hht { alpha: f64 },
 }
+
+/// Where the risk thresholds come from, as the scene states them; the cavitation stage
+/// resolves them against the coolant ([`crate::cavitation::criteria::Thresholds::resolve`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ThresholdSpec {
+    /// From a calibration file (`linercav calibrate --json`): all three given [m/s^2, Pa/(m/s^2)].
+    Calibrated {
+        onset_m_s2: f64,
+        high_risk_m_s2: f64,
+        k_p_pa_per_m_s2: f64,
+    },
+    /// From the scene's keys; each one left out is derived (k_p from the reference engine,
+    /// the high-risk threshold from Ca = 1, the onset in the reference study's proportion).
+    Scene {
+        onset_m_s2: Option<f64>,
+        high_risk_m_s2: Option<f64>,
+        k_p_pa_per_m_s2: Option<f64>,
+    },
+}

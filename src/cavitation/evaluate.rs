@@ -4,12 +4,11 @@
 //! the system modes nearest to it with each cylinder's mode-shape coefficient, and the
 //! correlation of those coefficients with the per-cylinder peak negative acceleration.
 
-use super::rom::shapes;
+use super::criteria::{self, Risk, Thresholds};
+use super::Setup;
 use crate::analysis::correlation::{pearson, spearman};
 use crate::analysis::spectrum::{amplitude_spectrum, rms_average, Spectrum};
-use crate::cavitation::criteria::{self, Risk, Thresholds};
 use crate::reduce::rom::EngineRom;
-use crate::scene::CavitationSpec;
 use crate::transient::cycle::{CycleResult, Series};
 
 /// Lowest frequency searched for the dominant response [Hz] (below it: the quasi-static
@@ -134,7 +133,7 @@ pub fn peak_velocity(a: &[f64], dt: f64) -> f64 {
 pub fn evaluate(
     res: &CycleResult,
     rom: &EngineRom,
-    cav: &CavitationSpec,
+    cav: &Setup,
     firing_order: &[usize],
     band_hz: f64,
 ) -> Evaluation {
@@ -199,7 +198,7 @@ pub fn evaluate(
     ranking.sort_by(|a, b| b.peak_negative_m_s2.total_cmp(&a.peak_negative_m_s2));
     let ranking: Vec<usize> = ranking.iter().map(|c| c.cylinder).collect();
     let per_cyl: Vec<f64> = cylinders.iter().map(|c| c.peak_negative_m_s2).collect();
-    let modes = shapes(rom);
+    let modes = rom.shapes();
     let mut order: Vec<usize> = (0..modes.len())
         .filter(|&j| rom.frequencies_hz[j] <= band_hz * 1.5)
         .collect();
