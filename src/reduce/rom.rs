@@ -506,104 +506,80 @@ pub fn hat_patterns(sides: &[usize], cylinders: usize, spacing: usize) -> Mat<f6
     p
 }
 
-/// Builds the engine ROM.
-pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, RomError> {
-    let t0 = Instant::now();
-    check_fit(inp)?;
-    let nh = inp.harmonics;
-    progress("reducing the liner");
-    let lm = inp.liner;
-    let (liner_blocks, cc_blocks) = interface_blocks(inp)?;
-    let thrust = set(lm, "liner", "bore_thrust")?.to_vec();
-    let anti = set(lm, "liner", "bore_antithrust")?.to_vec();
-    let mut points = Vec::new();
-    for k in 1..=inp.analysis_points {
-        points.push(set(lm, "liner", &format!("point_{k}"))?[0]);
+/// The liner's rows of the reduction: one unit load per bore node (thrust +y, anti-thrust
+/// -y) and the clamp load; outputs at the bore nodes and the analysis points.
+struct LinerRows {
+    thrust: Vec<usize>,
+    anti: Vec<usize>,
+    points: Vec<usize>,
+    loads: Vec<Load>,
+    /// Column of the clamp load among `loads`.
+    clamp_load: usize,
+    outputs: Vec<Output>,
+}
+
+impl LinerRows {
+    fn new(inp: &RomInputs<'_>, clamp: Load) -> Result<Self, RomError> {
+        let lm = inp.liner;
+        let thrust = set(lm, "liner", "bore_thrust")?.to_vec();
+        let anti = set(lm, "liner", "bore_antithrust")?.to_vec();
+        let points = (1..=inp.analysis_points)
+            .map(|k| Ok(set(lm, "liner", &format!("point_{k}"))?[0]))
+            .collect::<Result<Vec<_>, RomError>>()?;
+        let radial = |nodes: &[usize], name: &str, dir: [f64; 3]| -> Vec<Load> {
+            nodes
+                .iter()
+                .map(|&n| Load {
+                    name: format!("{name}_{n}"),
+                    entries: vec![(n, dir)],
+                })
+                .collect()
+        };
+        let mut loads = radial(&thrust, "thrust", [0.0, 1.0, 0.0]);
+        loads.extend(radial(&anti, "antithrust", [0.0, -1.0, 0.0]));
+        loads.push(clamp);
+        let clamp_load = loads.len() - 1;
+        let output = |dir: [f64; 3]| move |&node: &usize| Output { node, dir };
+        let mut outputs: Vec<Output> = thrust.iter().map(output([0.0, 1.0, 0.0])).collect();
+        outputs.extend(anti.iter().map(output([0.0, -1.0, 0.0])));
+        outputs.extend(points.iter().map(output([0.0, 1.0, 0.0])));
+        Ok(LinerRows {
+            thrust,
+            anti,
+            points,
+            loads,
+            clamp_load,
+            outputs,
+        })
     }
-    let preload = preload_loads(inp)?;
-    let mut loads: Vec<Load> = Vec::new();
-    for (name, nodes, dir) in [
-        ("thrust", &thrust, [0.0, 1.0, 0.0]),
-        ("antithrust", &anti, [0.0, -1.0, 0.0]),
-    ] {
-        for &n in nodes.iter() {
-            loads.push(Load {
-                name: format!("{name}_{n}"),
-                entries: vec![(n, dir)],
-            });
-        }
-    }
-    loads.push(preload.liner);
-    let clamp_load = loads.len() - 1;
-    let mut outputs: Vec<Output> = Vec::new();
-    outputs.extend(thrust.iter().map(|&n| Output {
-        node: n,
-        dir: [0.0, 1.0, 0.0],
-    }));
-    outputs.extend(anti.iter().map(|&n| Output {
-        node: n,
-        dir: [0.0, -1.0, 0.0],
-    }));
-    outputs.extend(points.iter().map(|&n| Output {
-        node: n,
-        dir: [0.0, 1.0, 0.0],
-    }));
-    let settings = CbSettings {
-        cutoff_hz: inp.cutoff_hz,
-        keep_basis: inp.keep_bases,
-    };
-    let liner = reduce(
-        &Part {
-            name: "liner",
-            mesh: lm,
-            material: &inp.liner_material,
-            surface: &inp.liner_surface_mass,
-            fix: &[],
-            interfaces: &liner_blocks,
-            loads: &loads,
-            outputs: &outputs,
-        },
-        &settings,
-    )?;
-    drop(liner_blocks);
-    // crankcase
-    progress("reducing the crankcase");
-    let cm = inp.crankcase;
-    let ncyl = inp.axis_x.len();
-    let mut cc_outputs = Vec::new();
-    let deck = cm.node_set("deck_top");
-    for c in 0..inp.axis_x.len() {
-        let k = c + 1;
+}
+
+/// The crankcase's outputs: the radial (y) acceleration points of every cylinder,
+/// cylinder-major.
+fn crankcase_outputs(inp: &RomInputs<'_>) -> Result<Vec<Output>, RomError> {
+    let mut out = Vec::new();
+    for k in 1..=inp.axis_x.len() {
         for p in 1..=inp.analysis_points {
-            let n = set(cm, "crankcase", &format!("point_{k}_{p}"))?[0];
-            cc_outputs.push(Output {
-                node: n,
+            out.push(Output {
+                node: set(inp.crankcase, "crankcase", &format!("point_{k}_{p}"))?[0],
                 dir: [0.0, 1.0, 0.0],
             });
         }
     }
-    let cc_loads = preload.crankcase;
-    let crankcase = reduce(
-        &Part {
-            name: "crankcase",
-            mesh: cm,
-            material: &inp.crankcase_material,
-            surface: &[],
-            fix: &inp.crankcase_fix,
-            interfaces: &cc_blocks,
-            loads: &cc_loads,
-            outputs: &cc_outputs,
-        },
-        &settings,
-    )?;
-    drop(cc_blocks);
-    progress("assembling the engine");
-    // global layout
+    Ok(out)
+}
+
+/// Global layout of the engine's reduced coordinates: the crankcase first, then per modelled
+/// cylinder the liner's coordinates, its interface columns shared with the crankcase's.
+fn layout(
+    liner: &PartReduction,
+    crankcase: &PartReduction,
+    cylinders: &[usize],
+) -> (Vec<usize>, Vec<Vec<usize>>, usize) {
     let n_c = crankcase.size();
-    let crankcase_map: Vec<usize> = (0..n_c).collect();
     let mut next = n_c;
     let mut liner_maps = Vec::new();
-    for &cyl in &inp.cylinders {
+    for &cyl in cylinders {
         let c = cyl - 1;
         let mut map = vec![usize::MAX; liner.size()];
         for (b, cc_b) in [(0usize, 3 * c), (1, 3 * c + 1)] {
@@ -622,194 +598,329 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         }
         liner_maps.push(map);
     }
-    let n_g = next;
+    ((0..n_c).collect(), liner_maps, next)
+}
+
+/// Rows `r0..r0 + nr` of a part's output matrix in global coordinates (columns scattered
+/// through `map`).
+fn scatter_rows(rows: &Mat<f64>, map: &[usize], r0: usize, nr: usize, n_g: usize) -> Mat<f64> {
+    let mut g = Mat::<f64>::zeros(nr, n_g);
+    for i in 0..nr {
+        for j in 0..rows.ncols() {
+            g[(i, map[j])] += rows[(r0 + i, j)];
+        }
+    }
+    g
+}
+
+/// The engine's modal basis: the `kept` system modes below the cut-off, then the residual
+/// vectors of the contact load patterns (pseudo-modes above it) with their eigenvalues `mu`.
+struct Basis {
+    kept: usize,
+    mu: Vec<f64>,
+    /// Global coordinates x (kept + residual) modes.
+    modes: Mat<f64>,
+    /// The residual vectors scaled by mu^-1/2: their static flexibility is (G Ys)(G Ys)^T.
+    ys: Mat<f64>,
+}
+
+fn basis(
+    sys: &SystemModes,
+    kept: usize,
+    gc: &Mat<f64>,
+    patterns: &Mat<f64>,
+) -> Result<Basis, RomError> {
+    let n_g = sys.vectors.nrows();
+    let (ya, mu) = engine::residual_vectors(sys, kept, gc, patterns)?;
+    let mut modes = Mat::<f64>::zeros(n_g, kept + mu.len());
+    modes
+        .as_mut()
+        .subcols_mut(0, kept)
+        .copy_from(sys.vectors.as_ref().subcols(0, kept));
+    modes.as_mut().subcols_mut(kept, mu.len()).copy_from(&ya);
+    let ys = Mat::from_fn(n_g, mu.len(), |i, j| ya[(i, j)] / mu[j].sqrt());
+    Ok(Basis {
+        kept,
+        mu,
+        modes,
+        ys,
+    })
+}
+
+/// The preload in global coordinates: the liners' clamp loads and the bolts' reactions.
+fn preload_vector(
+    liner: &PartReduction,
+    clamp_load: usize,
+    liner_maps: &[Vec<usize>],
+    crankcase: &PartReduction,
+    n_g: usize,
+) -> Mat<f64> {
+    let mut f = Mat::<f64>::zeros(n_g, 1);
+    for map in liner_maps {
+        for j in 0..liner.size() {
+            f[(map[j], 0)] += liner.loads[(j, clamp_load)];
+        }
+    }
+    for l in 0..crankcase.loads.ncols() {
+        for j in 0..crankcase.size() {
+            f[(j, 0)] += crankcase.loads[(j, l)];
+        }
+    }
+    f
+}
+
+/// Residual cross flexibility points x contact not carried by the modes:
+/// (G_p Y_d L_d^-1/2)(G_c Y_d L_d^-1/2)^T - (G_p Ys)(G_c Ys)^T, Y_d the dropped system modes
+/// (eigenvalues L_d), G_p / G_c the point / contact rows of `g_all` (contact rows first).
+fn point_residual(g_all: &Mat<f64>, sys: &SystemModes, b: &Basis, ncon: usize) -> Dense {
+    let (kept, np) = (b.kept, g_all.nrows() - ncon);
+    let nd = sys.lambdas.len() - kept;
+    let mut gy = g_all * sys.vectors.as_ref().subcols(kept, nd);
+    for j in 0..nd {
+        let sc = 1.0 / sys.lambdas[kept + j].sqrt();
+        for i in 0..gy.nrows() {
+            gy[(i, j)] *= sc;
+        }
+    }
+    let gys = g_all * &b.ys;
+    let r = gy.as_ref().subrows(ncon, np) * gy.as_ref().subrows(0, ncon).transpose()
+        - gys.as_ref().subrows(ncon, np) * gys.as_ref().subrows(0, ncon).transpose();
+    Dense::from_mat(&r)
+}
+
+/// What [`cylinder_rom`] needs of the assembled engine.
+struct Assembled<'a> {
+    inp: &'a RomInputs<'a>,
+    rows: &'a LinerRows,
+    crankcase: &'a PartReduction,
+    crankcase_map: &'a [usize],
+    sys: &'a SystemModes,
+    basis: &'a Basis,
+    /// The static preload displacement (global coordinates x 1).
+    u0: &'a Mat<f64>,
+}
+
+/// One modelled cylinder's rows of the ROM: its liner's contact and point rows `g_all` (global
+/// coordinates) projected on the modes, the crankcase's point rows, the preload.
+fn cylinder_rom(a: &Assembled<'_>, cyl: usize, g_all: &Mat<f64>, offset: usize) -> CylinderRom {
+    let (inp, r) = (a.inp, a.rows);
+    let (nt, na, np) = (r.thrust.len(), r.anti.len(), r.points.len());
+    let modes_rows = g_all * &a.basis.modes;
+    let pre = g_all * a.u0;
+    let c = cyl - 1;
+    let n_g = a.sys.vectors.nrows();
+    let g_cc = scatter_rows(
+        &a.crankcase.outputs,
+        a.crankcase_map,
+        c * inp.analysis_points,
+        inp.analysis_points,
+        n_g,
+    );
+    let cc_modes = &g_cc * &a.basis.modes;
+    let sub =
+        |r0: usize, nr: usize| Dense::from_mat(&modes_rows.as_ref().subrows(r0, nr).to_owned());
+    let zs = |nodes: &[usize]| {
+        nodes
+            .iter()
+            .map(|&n| inp.liner.nodes[n][2])
+            .collect::<Vec<_>>()
+    };
+    let column = |r0: usize, nr: usize| (0..nr).map(|i| pre[(r0 + i, 0)]).collect();
+    CylinderRom {
+        cylinder: cyl,
+        axis_x: inp.axis_x[c],
+        thrust_z: zs(&r.thrust),
+        antithrust_z: zs(&r.anti),
+        thrust_modes: sub(0, nt),
+        antithrust_modes: sub(nt, na),
+        point_modes: sub(nt + na, np),
+        crankcase_point_modes: Dense::from_mat(&cc_modes),
+        preload_thrust: column(0, nt),
+        preload_antithrust: column(nt, na),
+        preload_points: column(nt + na, np),
+        point_residual: point_residual(g_all, a.sys, a.basis, nt + na),
+        contact_offset: offset,
+    }
+}
+
+/// Error estimate of the Craig-Bampton truncation: the largest relative change of the system
+/// frequencies in the band when the parts' mode cut-off is lowered to 2/3 (NaN when that
+/// smaller system cannot be solved).
+fn truncation_error(
+    inp: &RomInputs<'_>,
+    parts: &[(&PartReduction, &[usize])],
+    kg: &Mat<f64>,
+    mg: &Mat<f64>,
+    sys: &SystemModes,
+) -> f64 {
+    let limit = inp.cutoff_hz * 2.0 / 3.0;
+    let mut keep = vec![true; kg.nrows()];
+    for (p, map) in parts {
+        for (j, f) in p.modes.clone().zip(&p.mode_frequencies_hz) {
+            if *f > limit {
+                keep[map[j]] = false;
+            }
+        }
+    }
+    let idx: Vec<usize> = (0..kg.nrows()).filter(|&i| keep[i]).collect();
+    let kk = Mat::from_fn(idx.len(), idx.len(), |i, j| kg[(idx[i], idx[j])]);
+    let mm = Mat::from_fn(idx.len(), idx.len(), |i, j| mg[(idx[i], idx[j])]);
+    let band = (2.0 * std::f64::consts::PI * inp.band_hz).powi(2);
+    match engine::system_modes(kk, &mm, band) {
+        Ok(s2) => sys
+            .lambdas
+            .iter()
+            .zip(&s2.lambdas)
+            .take_while(|(l, _)| **l <= band)
+            .map(|(a, b)| (hz(*b) - hz(*a)).abs() / hz(*a))
+            .fold(0.0, f64::max),
+        Err(_) => f64::NAN,
+    }
+}
+
+/// What the ROM leaves out, in words for the report.
+fn left_out(inp: &RomInputs<'_>, n_g: usize, b: &Basis) -> Vec<String> {
+    let mut out = Vec::new();
+    let missing: Vec<String> = (1..=inp.axis_x.len())
+        .filter(|c| !inp.cylinders.contains(c))
+        .map(|c| c.to_string())
+        .collect();
+    if !missing.is_empty() {
+        out.push(format!(
+            "liners of cylinders {} (their bores are free; rom.cylinders)",
+            missing.join(", ")
+        ));
+    }
+    out.push(format!(
+        "system modes above the cut-off {:.0} Hz ({} of {}), represented {} at the contact DOFs",
+        inp.cutoff_hz,
+        n_g - b.kept,
+        n_g,
+        if b.mu.is_empty() {
+            "statically".to_string()
+        } else {
+            format!("by {} residual vectors (static part exact)", b.mu.len())
+        }
+    ));
+    if inp.crankcase.node_set("deck_top").is_none() {
+        out.push(
+            "head-bolt reaction on the deck (the crankcase mesh has no 'deck_top' set)".into(),
+        );
+    }
+    out
+}
+
+/// Builds the engine ROM: Craig-Bampton reductions of the liner and the crankcase, their
+/// assembly over the modelled cylinders, the system modes below the cut-off with residual
+/// vectors of the contact load patterns, the preload, and per cylinder the rows the transient
+/// needs.
+pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, RomError> {
+    let t0 = Instant::now();
+    check_fit(inp)?;
+    progress("reducing the liner");
+    let (liner_blocks, cc_blocks) = interface_blocks(inp)?;
+    let preload = preload_loads(inp)?;
+    let rows = LinerRows::new(inp, preload.liner)?;
+    let settings = CbSettings {
+        cutoff_hz: inp.cutoff_hz,
+        keep_basis: inp.keep_bases,
+    };
+    let liner = reduce(
+        &Part {
+            name: "liner",
+            mesh: inp.liner,
+            material: &inp.liner_material,
+            surface: &inp.liner_surface_mass,
+            fix: &[],
+            interfaces: &liner_blocks,
+            loads: &rows.loads,
+            outputs: &rows.outputs,
+        },
+        &settings,
+    )?;
+    drop(liner_blocks);
+    progress("reducing the crankcase");
+    let crankcase = reduce(
+        &Part {
+            name: "crankcase",
+            mesh: inp.crankcase,
+            material: &inp.crankcase_material,
+            surface: &[],
+            fix: &inp.crankcase_fix,
+            interfaces: &cc_blocks,
+            loads: &preload.crankcase,
+            outputs: &crankcase_outputs(inp)?,
+        },
+        &settings,
+    )?;
+    drop(cc_blocks);
+    progress("assembling the engine");
+    let (crankcase_map, liner_maps, n_g) = layout(&liner, &crankcase, &inp.cylinders);
     let mut placements = vec![Placement {
         part: &crankcase,
         map: crankcase_map.clone(),
     }];
-    for map in &liner_maps {
-        placements.push(Placement {
-            part: &liner,
-            map: map.clone(),
-        });
-    }
+    placements.extend(liner_maps.iter().map(|map| Placement {
+        part: &liner,
+        map: map.clone(),
+    }));
     let (kg, mg) = assemble(n_g, &placements);
     progress("system modes");
     let omega_c2 = (2.0 * std::f64::consts::PI * inp.cutoff_hz).powi(2);
     let sys = engine::system_modes(kg.clone(), &mg, omega_c2)?;
     let kept = sys.lambdas.iter().take_while(|&&l| l <= omega_c2).count();
-    // output rows in global coordinates
+    // contact and point rows of every modelled cylinder; the contact rows stacked in `gc`
     let n_lout = liner.outputs.nrows();
-    let (nt, na, np) = (thrust.len(), anti.len(), points.len());
-    let scatter_rows = |rows: &Mat<f64>, map: &[usize], r0: usize, nr: usize| -> Mat<f64> {
-        let mut g = Mat::<f64>::zeros(nr, n_g);
-        for i in 0..nr {
-            for j in 0..rows.ncols() {
-                g[(i, map[j])] += rows[(r0 + i, j)];
-            }
-        }
-        g
-    };
-    // contact rows of every modelled cylinder, stacked (thrust, then anti-thrust nodes)
+    let ncon = rows.thrust.len() + rows.anti.len();
     let g_rows: Vec<Mat<f64>> = liner_maps
         .iter()
-        .map(|map| scatter_rows(&liner.outputs, map, 0, n_lout))
+        .map(|map| scatter_rows(&liner.outputs, map, 0, n_lout, n_g))
         .collect();
-    let ncon = nt + na;
     let mut gc = Mat::<f64>::zeros(ncon * g_rows.len(), n_g);
     for (i, g) in g_rows.iter().enumerate() {
         gc.as_mut()
             .subrows_mut(i * ncon, ncon)
             .copy_from(g.as_ref().subrows(0, ncon));
     }
-    // residual vectors of the contact load patterns: pseudo-modes above the cut-off
     progress("residual vectors");
-    let patterns = hat_patterns(&[nt, na], g_rows.len(), inp.residual_vector_spacing);
-    let (ya, mu) = engine::residual_vectors(&sys, kept, &gc, &patterns)?;
-    let nmodes = kept + mu.len();
-    let mut ymodes = Mat::<f64>::zeros(n_g, nmodes);
-    ymodes
-        .as_mut()
-        .subcols_mut(0, kept)
-        .copy_from(sys.vectors.as_ref().subcols(0, kept));
-    ymodes.as_mut().subcols_mut(kept, mu.len()).copy_from(&ya);
-    // the residual vectors scaled by mu^-1/2: their static flexibility is (G Ys)(G Ys)^T
-    let ys = Mat::from_fn(n_g, mu.len(), |i, j| ya[(i, j)] / mu[j].sqrt());
-    // preload: liner clamp + bolt reactions
-    let mut f = Mat::<f64>::zeros(n_g, 1);
-    for map in &liner_maps {
-        for j in 0..liner.size() {
-            f[(map[j], 0)] += liner.loads[(j, clamp_load)];
-        }
-    }
-    for l in 0..crankcase.loads.ncols() {
-        for j in 0..n_c {
-            f[(j, 0)] += crankcase.loads[(j, l)];
-        }
-    }
+    let patterns = hat_patterns(
+        &[rows.thrust.len(), rows.anti.len()],
+        g_rows.len(),
+        inp.residual_vector_spacing,
+    );
+    let basis = basis(&sys, kept, &gc, &patterns)?;
+    let f = preload_vector(&liner, rows.clamp_load, &liner_maps, &crankcase, n_g);
     let u0 = static_solve(&sys, &f)?;
-    let mut cylinders = Vec::new();
-    let mut offset = 0;
-    for (idx, &cyl) in inp.cylinders.iter().enumerate() {
-        let g_all = &g_rows[idx];
-        let modes_rows = g_all * &ymodes;
-        let pre = g_all * &u0;
-        let c = cyl - 1;
-        let g_cc = scatter_rows(
-            &crankcase.outputs,
-            &crankcase_map,
-            c * inp.analysis_points,
-            inp.analysis_points,
-        );
-        let cc_modes = &g_cc * &ymodes;
-        // residual cross flexibility points x contact not carried by the modes:
-        // (G_p Y_d L^-1/2)(G_c Y_d L^-1/2)^T - (G_p Ys)(G_c Ys)^T
-        let point_residual = {
-            let nd = sys.lambdas.len() - kept;
-            let mut gy = g_all * sys.vectors.as_ref().subcols(kept, nd);
-            for j in 0..nd {
-                let sc = 1.0 / sys.lambdas[kept + j].sqrt();
-                for i in 0..gy.nrows() {
-                    gy[(i, j)] *= sc;
-                }
-            }
-            let gys = g_all * &ys;
-            let gp = gy.as_ref().subrows(nt + na, np);
-            let gcy = gy.as_ref().subrows(0, nt + na);
-            let r = gp * gcy.transpose()
-                - gys.as_ref().subrows(nt + na, np) * gys.as_ref().subrows(0, nt + na).transpose();
-            Dense::from_mat(&r)
-        };
-        let sub =
-            |r0: usize, nr: usize| Dense::from_mat(&modes_rows.as_ref().subrows(r0, nr).to_owned());
-        let zs = |nodes: &[usize]| nodes.iter().map(|&n| lm.nodes[n][2]).collect::<Vec<_>>();
-        cylinders.push(CylinderRom {
-            cylinder: cyl,
-            axis_x: inp.axis_x[c],
-            thrust_z: zs(&thrust),
-            antithrust_z: zs(&anti),
-            thrust_modes: sub(0, nt),
-            antithrust_modes: sub(nt, na),
-            point_modes: sub(nt + na, np),
-            crankcase_point_modes: Dense::from_mat(&cc_modes),
-            preload_thrust: (0..nt).map(|i| pre[(i, 0)]).collect(),
-            preload_antithrust: (0..na).map(|i| pre[(nt + i, 0)]).collect(),
-            preload_points: (0..np).map(|i| pre[(nt + na + i, 0)]).collect(),
-            point_residual,
-            contact_offset: offset,
-        });
-        offset += nt + na;
-    }
-    let gcs = &gc * &ys;
-    let rflex = residual_flexibility(&gc, &sys, kept) - &gcs * gcs.transpose();
-    // error estimate: lower the part-mode cut-off to 2/3 and compare frequencies in the band
-    progress("error estimate");
-    let estimated_error = {
-        let limit = inp.cutoff_hz * 2.0 / 3.0;
-        let drop_cols = |p: &PartReduction, map: &[usize], out: &mut Vec<bool>| {
-            for (j, f) in p.modes.clone().zip(&p.mode_frequencies_hz) {
-                if *f > limit {
-                    out[map[j]] = false;
-                }
-            }
-        };
-        let mut keep = vec![true; n_g];
-        drop_cols(&crankcase, &crankcase_map, &mut keep);
-        for map in &liner_maps {
-            drop_cols(&liner, map, &mut keep);
-        }
-        let idx: Vec<usize> = (0..n_g).filter(|&i| keep[i]).collect();
-        let kk = Mat::from_fn(idx.len(), idx.len(), |i, j| kg[(idx[i], idx[j])]);
-        let mm = Mat::from_fn(idx.len(), idx.len(), |i, j| mg[(idx[i], idx[j])]);
-        let band = (2.0 * std::f64::consts::PI * inp.band_hz).powi(2);
-        match engine::system_modes(kk, &mm, band) {
-            Ok(s2) => sys
-                .lambdas
-                .iter()
-                .zip(&s2.lambdas)
-                .take_while(|(l, _)| **l <= band)
-                .map(|(a, b)| (hz(*b) - hz(*a)).abs() / hz(*a))
-                .fold(0.0, f64::max),
-            Err(_) => f64::NAN,
-        }
+    let assembled = Assembled {
+        inp,
+        rows: &rows,
+        crankcase: &crankcase,
+        crankcase_map: &crankcase_map,
+        sys: &sys,
+        basis: &basis,
+        u0: &u0,
     };
-    let mut left_out = Vec::new();
-    let modelled: Vec<usize> = inp.cylinders.clone();
-    let missing: Vec<String> = (1..=ncyl)
-        .filter(|c| !modelled.contains(c))
-        .map(|c| c.to_string())
+    let cylinders = inp
+        .cylinders
+        .iter()
+        .zip(&g_rows)
+        .enumerate()
+        .map(|(idx, (&cyl, g_all))| cylinder_rom(&assembled, cyl, g_all, idx * ncon))
         .collect();
-    if !missing.is_empty() {
-        left_out.push(format!(
-            "liners of cylinders {} (their bores are free; rom.cylinders)",
-            missing.join(", ")
-        ));
-    }
-    left_out.push(format!(
-        "system modes above the cut-off {:.0} Hz ({} of {}), represented {} at the contact DOFs",
-        inp.cutoff_hz,
-        n_g - kept,
-        n_g,
-        if mu.is_empty() {
-            "statically".to_string()
-        } else {
-            format!("by {} residual vectors (static part exact)", mu.len())
-        }
-    ));
-    if deck.is_none() {
-        left_out.push(
-            "head-bolt reaction on the deck (the crankcase mesh has no 'deck_top' set)".into(),
-        );
-    }
-    let full_dofs = crankcase.stats.full_dofs + inp.cylinders.len() * liner.stats.full_dofs;
+    let gcs = &gc * &basis.ys;
+    let rflex = residual_flexibility(&gc, &sys, kept) - &gcs * gcs.transpose();
+    progress("error estimate");
+    let mut parts: Vec<(&PartReduction, &[usize])> = vec![(&crankcase, &crankcase_map)];
+    parts.extend(liner_maps.iter().map(|m| (&liner, m.as_slice())));
+    let estimated_error = truncation_error(inp, &parts, &kg, &mg, &sys);
     let info = RomInfo {
-        full_dofs,
+        full_dofs: crankcase.stats.full_dofs + inp.cylinders.len() * liner.stats.full_dofs,
         reduced_dofs: n_g,
         system_modes: kept,
-        residual_vectors: mu.len(),
+        residual_vectors: basis.mu.len(),
         band_hz: inp.band_hz,
         cutoff_hz: inp.cutoff_hz,
-        interface_harmonics: nh,
+        interface_harmonics: inp.harmonics,
         parts: vec![
             PartInfo {
                 name: "liner".into(),
@@ -824,12 +935,12 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         ],
         build_seconds: t0.elapsed().as_secs_f64(),
         estimated_error,
-        left_out,
+        left_out: left_out(inp, n_g, &basis),
     };
     let rom = EngineRom {
         frequencies_hz: sys.lambdas[..kept]
             .iter()
-            .chain(&mu)
+            .chain(&basis.mu)
             .map(|&l| hz(l))
             .collect(),
         cylinders,
