@@ -933,50 +933,13 @@ impl<'a> EngineRun<'a> {
             .map_or(0, |band| super::window::fir_half_length(dt, band))
             + 1;
         let total = cycles * spc + margin;
-        let ncyl = self.cyls.len();
-        let npts: Vec<usize> = self.cyls.iter().map(|c| c.rom.point_modes.rows).collect();
-        // rolling record from sample `rec_start` on: per cylinder and point the modal
-        // acceleration, the residual displacement and (last cycle only) the crankcase's
-        let mut rec_start = 0usize;
-        let mut raw: Vec<Vec<Vec<f64>>> = npts.iter().map(|&n| vec![Vec::new(); n]).collect();
-        let mut res: Vec<Vec<Vec<f64>>> = raw.clone();
-        let mut wall: Vec<Vec<Vec<f64>>> = self
-            .cyls
-            .iter()
-            .map(|c| vec![Vec::new(); c.rom.crankcase_point_modes.rows])
-            .collect();
-        let wall_from = ((cycles - 1) * spc).saturating_sub(margin);
+        let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
         let mut prev_peaks: Option<Vec<CylinderPeaks>> = None;
         let mut kept: Vec<Vec<CylinderPeaks>> = Vec::with_capacity(averaged);
         let mut last_series = None;
         let mut building: Option<Series> = None;
         let mut pending: Option<(usize, Series)> = None;
-        let piston = self.setup.piston;
-        // where each cylinder's step-error window starts in the last cycle (global step). The
-        // peaks are compared away from the output filter's ends; where the filter spans more
-        // than the window's first and last 35 deg (high speed: at 3800 rpm a 110 deg window
-        // was shorter than the filter and panicked), the window is widened at both ends so the
-        // compared part still covers the slap at 355-395 deg
-        let filter_steps = self
-            .settings
-            .output_band_hz
-            .map_or(0, |band| super::window::fir_half_length(dt, band))
-            + 1;
-        let step_deg = self.settings.step_deg;
-        let lead_steps = ((filter_steps as f64 * step_deg - SLAP_MARGIN_DEG).max(0.0) / step_deg)
-            .ceil() as usize;
-        let window_steps = ((STEP_ERROR_WINDOW_DEG.1 - STEP_ERROR_WINDOW_DEG.0) / step_deg).round()
-            as usize
-            + 2 * lead_steps;
-        let lead_deg = lead_steps as f64 * step_deg;
-        let starts: Vec<usize> = self
-            .cyls
-            .iter()
-            .map(|c| {
-                let own = (STEP_ERROR_WINDOW_DEG.0 - lead_deg + c.phase).rem_euclid(720.0);
-                (cycles - 1) * spc + (own / self.settings.step_deg).round() as usize % spc
-            })
-            .collect();
+        let (starts, window_steps) = self.step_error_plan(cycles, spc, margin);
         let mut snapshots: Vec<(usize, EngineRun<'a>)> = Vec::new();
         for g in 0..total {
             for (c, &g0) in starts.iter().enumerate() {
@@ -991,47 +954,10 @@ impl<'a> EngineRun<'a> {
                 }
                 building = Some(self.empty_series(spc));
             }
-            let target = ((g + 1) as f64) * dt;
-            let h = target - self.time;
-            self.advance(h)?;
-            let (err, scale) = self.energy_balance();
-            if scale > 1e-12 && err > self.structure.integrator.scheme.energy_tolerance() * scale {
-                return Err(TransientError::EnergyGrowth {
-                    excess_j: err,
-                    scale_j: scale,
-                    crank_angle_deg: self.angle_at(self.time),
-                    time_s: self.time,
-                });
-            }
-            for c in 0..ncyl {
-                for (p, a) in self.point_accelerations(c, false).into_iter().enumerate() {
-                    raw[c][p].push(a);
-                }
-                for (p, r) in self.point_residual(c).into_iter().enumerate() {
-                    res[c][p].push(r);
-                }
-                if g >= wall_from {
-                    for (p, a) in self.point_accelerations(c, true).into_iter().enumerate() {
-                        wall[c][p].push(a);
-                    }
-                }
-            }
-            if cycle < cycles {
-                let theta = self.angle_at(self.time);
-                let series = building.as_mut().expect("a cycle is being built");
-                series.crank_angle_deg.push(theta - 720.0 * cycle as f64);
-                series.time_s.push(self.time);
-                for (c, cs) in series.cylinders.iter_mut().enumerate() {
-                    let q = self.cyls[c].body.q;
-                    cs.lateral_m.push(q[0]);
-                    cs.tilt_rad.push(q[1]);
-                    let (ft, fa) = self.last_forces.get(c).copied().unwrap_or((0.0, 0.0));
-                    cs.thrust_force_n.push(ft);
-                    cs.antithrust_force_n.push(fa);
-                    let loads = piston.loads(theta - self.cyls[c].phase);
-                    cs.side_force_n.push(loads.side_force);
-                    cs.pressure_pa.push(loads.pressure);
-                }
+            self.checked_step(((g + 1) as f64) * dt)?;
+            record.push(&self, g);
+            if let Some(series) = building.as_mut().filter(|_| cycle < cycles) {
+                self.sample(series, cycle);
             }
             on_step(g + 1, total);
             if g + 1 == total {
@@ -1047,39 +973,10 @@ impl<'a> EngineRun<'a> {
                 continue;
             }
             let (k, mut series) = pending.take().expect("ready");
-            let lo = (k * spc) as isize - margin as isize;
-            let len = spc + 2 * margin;
-            for c in 0..ncyl {
-                let cs = &mut series.cylinders[c];
-                for p in 0..npts[c] {
-                    let mut acc = record_segment(&raw[c][p], rec_start, lo, len);
-                    let r = record_segment(&res[c][p], rec_start, lo, len);
-                    let d2 = second_difference(&r, dt, false);
-                    acc.iter_mut().zip(d2).for_each(|(a, d)| *a += d);
-                    cs.acceleration[p] = self.output_filter(&acc, dt, margin, spc);
-                }
-                if k + 1 == cycles {
-                    for p in 0..wall[c].len() {
-                        let w = record_segment(&wall[c][p], wall_from, lo, len);
-                        cs.crankcase_acceleration[p] = self.output_filter(&w, dt, margin, spc);
-                    }
-                }
-            }
-            // drop what no later cycle needs
-            let keep_from = ((k + 1) * spc).saturating_sub(margin).max(rec_start);
-            for v in raw.iter_mut().chain(res.iter_mut()).flatten() {
-                v.drain(..keep_from - rec_start);
-            }
-            rec_start = keep_from;
+            record.outputs(&self, &mut series, k, k + 1 == cycles, (spc, margin, dt));
             let peaks = self.peaks(&series);
             if let Some(prev) = &prev_peaks {
-                let mut change: f64 = 0.0;
-                for (a, b) in peaks.iter().zip(prev) {
-                    for (x, y) in a.peak_negative.iter().zip(&b.peak_negative) {
-                        change = change.max((x.value - y.value).abs() / x.value.abs().max(1e-9));
-                    }
-                }
-                self.stats.cycle_change = change;
+                self.stats.cycle_change = largest_change(&peaks, prev);
             }
             if k + averaged >= cycles {
                 kept.push(peaks.clone());
@@ -1111,6 +1008,71 @@ impl<'a> EngineRun<'a> {
             stats: self.stats,
             step_error,
         })
+    }
+
+    /// Advances to time `target` and checks the energy balance (growth beyond the scheme's
+    /// tolerance is a numerical failure, named with its crank angle).
+    fn checked_step(&mut self, target: f64) -> Result<(), TransientError> {
+        let h = target - self.time;
+        self.advance(h)?;
+        let (err, scale) = self.energy_balance();
+        if scale > 1e-12 && err > self.structure.integrator.scheme.energy_tolerance() * scale {
+            return Err(TransientError::EnergyGrowth {
+                excess_j: err,
+                scale_j: scale,
+                crank_angle_deg: self.angle_at(self.time),
+                time_s: self.time,
+            });
+        }
+        Ok(())
+    }
+
+    /// Appends the current state to cycle `cycle`'s series: crank angle within the cycle,
+    /// time, piston coordinates, slice forces, side force and cylinder pressure.
+    fn sample(&self, series: &mut Series, cycle: usize) {
+        let theta = self.angle_at(self.time);
+        series.crank_angle_deg.push(theta - 720.0 * cycle as f64);
+        series.time_s.push(self.time);
+        for (c, cs) in series.cylinders.iter_mut().enumerate() {
+            let q = self.cyls[c].body.q;
+            cs.lateral_m.push(q[0]);
+            cs.tilt_rad.push(q[1]);
+            let (ft, fa) = self.last_forces.get(c).copied().unwrap_or((0.0, 0.0));
+            cs.thrust_force_n.push(ft);
+            cs.antithrust_force_n.push(fa);
+            let loads = self.setup.piston.loads(theta - self.cyls[c].phase);
+            cs.side_force_n.push(loads.side_force);
+            cs.pressure_pa.push(loads.pressure);
+        }
+    }
+
+    /// Where each cylinder's step-error window starts in the last cycle (global step) and its
+    /// length in steps. The peaks are compared away from the output filter's ends; where the
+    /// filter spans more than the window's first and last 35 deg (high speed: at 3800 rpm a
+    /// 110 deg window was shorter than the filter), the window is widened at both ends so the
+    /// compared part still covers the slap at 355-395 deg.
+    fn step_error_plan(
+        &self,
+        cycles: usize,
+        spc: usize,
+        filter_steps: usize,
+    ) -> (Vec<usize>, usize) {
+        let step_deg = self.settings.step_deg;
+        let lead_steps = ((filter_steps as f64 * step_deg - SLAP_MARGIN_DEG).max(0.0) / step_deg)
+            .ceil() as usize;
+        let window_steps = ((STEP_ERROR_WINDOW_DEG.1 - STEP_ERROR_WINDOW_DEG.0) / step_deg).round()
+            as usize
+            + 2 * lead_steps;
+        let lead_deg = lead_steps as f64 * step_deg;
+        let starts = self
+            .cyls
+            .iter()
+            .map(|c| {
+                let own = (STEP_ERROR_WINDOW_DEG.0 - lead_deg + c.phase).rem_euclid(720.0);
+                (cycles - 1) * spc + (own / step_deg).round() as usize % spc
+            })
+            .collect();
+        (starts, window_steps)
     }
 
     /// Runs `steps` steps of `h` from the current state and returns the peak negative
@@ -1208,6 +1170,103 @@ impl<'a> EngineRun<'a> {
             })
             .collect()
     }
+}
+
+/// The rolling record of the run from sample `start` on: per cylinder and point the modal
+/// acceleration and the residual displacement, and (from `wall_from` on, the last cycle) the
+/// crankcase's. Only what a cycle not yet output needs is kept.
+struct Record {
+    start: usize,
+    raw: Vec<Vec<Vec<f64>>>,
+    res: Vec<Vec<Vec<f64>>>,
+    wall: Vec<Vec<Vec<f64>>>,
+    wall_from: usize,
+}
+
+impl Record {
+    fn new(run: &EngineRun<'_>, wall_from: usize) -> Self {
+        let raw: Vec<Vec<Vec<f64>>> = run
+            .cyls
+            .iter()
+            .map(|c| vec![Vec::new(); c.rom.point_modes.rows])
+            .collect();
+        let wall = run
+            .cyls
+            .iter()
+            .map(|c| vec![Vec::new(); c.rom.crankcase_point_modes.rows])
+            .collect();
+        Record {
+            start: 0,
+            res: raw.clone(),
+            raw,
+            wall,
+            wall_from,
+        }
+    }
+
+    /// Appends global sample `g` of the run.
+    fn push(&mut self, run: &EngineRun<'_>, g: usize) {
+        for c in 0..run.cyls.len() {
+            for (p, a) in run.point_accelerations(c, false).into_iter().enumerate() {
+                self.raw[c][p].push(a);
+            }
+            for (p, r) in run.point_residual(c).into_iter().enumerate() {
+                self.res[c][p].push(r);
+            }
+            if g >= self.wall_from {
+                for (p, a) in run.point_accelerations(c, true).into_iter().enumerate() {
+                    self.wall[c][p].push(a);
+                }
+            }
+        }
+    }
+
+    /// Cycle `k`'s point accelerations, a = modal part + second difference of the residual
+    /// displacement, filtered over the record [k N - margin, (k + 1) N + margin) (N = `spc`
+    /// steps per cycle), into `series`; the crankcase's too when `last`. Then drops what no
+    /// later cycle needs.
+    fn outputs(
+        &mut self,
+        run: &EngineRun<'_>,
+        series: &mut Series,
+        k: usize,
+        last: bool,
+        (spc, margin, dt): (usize, usize, f64),
+    ) {
+        let lo = (k * spc) as isize - margin as isize;
+        let len = spc + 2 * margin;
+        for (c, cs) in series.cylinders.iter_mut().enumerate() {
+            for p in 0..self.raw[c].len() {
+                let mut acc = record_segment(&self.raw[c][p], self.start, lo, len);
+                let r = record_segment(&self.res[c][p], self.start, lo, len);
+                let d2 = second_difference(&r, dt, false);
+                acc.iter_mut().zip(d2).for_each(|(a, d)| *a += d);
+                cs.acceleration[p] = run.output_filter(&acc, dt, margin, spc);
+            }
+            if last {
+                for p in 0..self.wall[c].len() {
+                    let w = record_segment(&self.wall[c][p], self.wall_from, lo, len);
+                    cs.crankcase_acceleration[p] = run.output_filter(&w, dt, margin, spc);
+                }
+            }
+        }
+        let keep_from = ((k + 1) * spc).saturating_sub(margin).max(self.start);
+        for v in self.raw.iter_mut().chain(self.res.iter_mut()).flatten() {
+            v.drain(..keep_from - self.start);
+        }
+        self.start = keep_from;
+    }
+}
+
+/// Largest relative change of any point's peak negative acceleration from `prev` to `peaks`.
+fn largest_change(peaks: &[CylinderPeaks], prev: &[CylinderPeaks]) -> f64 {
+    let mut change: f64 = 0.0;
+    for (a, b) in peaks.iter().zip(prev) {
+        for (x, y) in a.peak_negative.iter().zip(&b.peak_negative) {
+            change = change.max((x.value - y.value).abs() / x.value.abs().max(1e-9));
+        }
+    }
+    change
 }
 
 /// Samples [lo, lo + len) of a record whose element 0 is sample `start`; samples before t = 0
