@@ -34,6 +34,7 @@
 use super::lattice::{level_at, subdivide, Key, Lattice};
 use super::merge::merge;
 use super::Mesh;
+use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
 pub use crate::scene::spec::CrankcaseGeometry;
@@ -87,16 +88,11 @@ fn rect_point(th: f64, a: f64, b: f64) -> [f64; 2] {
     [t * c, t * s]
 }
 
-/// Generates the crankcase mesh with its named node sets.
-pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
-    let (ro, rf) = (geo.liner_outer_radius, geo.flange_radius);
-    let (a, b) = (geo.pitch / 2.0, geo.half_width());
-    let alpha = geo.corner_angle();
-    let s = meshing.per_sector;
-    let nw = meshing.wall_layers;
+/// The z levels of the crankcase's cells: the rail, then the zone limits and the analysis
+/// heights as exact levels, subdivided to at most the axial size.
+fn z_levels(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Vec<f64> {
     let z_bot = -geo.skirt_depth;
     let z_deck = geo.seat_z - geo.deck_thickness;
-    // z planes: zone limits and the analysis heights are exact levels
     let mut z_levels = vec![z_bot, z_bot + geo.rail_height];
     subdivide(
         &mut z_levels,
@@ -113,64 +109,86 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
         subdivide(&mut z_levels, w[0], w[1], meshing.axial_size);
     }
     subdivide(&mut z_levels, z_deck, geo.seat_z, meshing.axial_size);
-    let nz = z_levels.len() - 1;
-    let zone = |k: usize| -> Zone {
-        let zm = 0.5 * (z_levels[k] + z_levels[k + 1]);
-        if k == 0 {
-            Zone::Rail
-        } else if zm < 0.0 {
-            Zone::Bay
-        } else if zm < geo.guide_bottom {
-            Zone::Hanging
-        } else if zm < guide_top {
-            Zone::Support
-        } else if zm < z_deck {
-            Zone::Jacket
-        } else {
-            Zone::Deck
+    z_levels
+}
+
+/// The zone of cell layer `k` (by its mid-height).
+fn zone(geo: &CrankcaseGeometry, z_levels: &[f64], k: usize) -> Zone {
+    let zm = 0.5 * (z_levels[k] + z_levels[k + 1]);
+    if k == 0 {
+        Zone::Rail
+    } else if zm < 0.0 {
+        Zone::Bay
+    } else if zm < geo.guide_bottom {
+        Zone::Hanging
+    } else if zm < geo.guide_bottom + geo.guide_height {
+        Zone::Support
+    } else if zm < geo.seat_z - geo.deck_thickness {
+        Zone::Jacket
+    } else {
+        Zone::Deck
+    }
+}
+
+/// Cylinder `c`'s cell: rings from the liner's outer radius to the flange radius, then the
+/// wall out to the cell's rectangle; the jacket and the hanging zone leave the coolant ring
+/// (i = 0) open, the bays the y sides.
+fn cylinder_cell(
+    geo: &CrankcaseGeometry,
+    meshing: &CrankcaseMeshing,
+    z_levels: &[f64],
+    c: usize,
+) -> Mesh {
+    let (ro, rf) = (geo.liner_outer_radius, geo.flange_radius);
+    let (a, b) = (geo.pitch / 2.0, geo.half_width());
+    let (alpha, s, nw) = (geo.corner_angle(), meshing.per_sector, meshing.wall_layers);
+    let xc = geo.axis_x(c);
+    let active = |i: usize, j: usize, k: usize| -> bool {
+        let x_side = (j / s) % 2 == 0;
+        match zone(geo, z_levels, k) {
+            Zone::Deck | Zone::Support => true,
+            Zone::Jacket | Zone::Hanging => i >= 1,
+            Zone::Bay | Zone::Rail => x_side || i >= 1,
         }
     };
-    let kind = meshing.kind;
-    let mut parts: Vec<Mesh> = Vec::new();
-    // cylinder cells
-    for c in 0..geo.cylinders {
-        let xc = geo.axis_x(c);
-        let active = |i: usize, j: usize, k: usize| -> bool {
-            let x_side = (j / s) % 2 == 0;
-            match zone(k) {
-                Zone::Deck | Zone::Support => true,
-                Zone::Jacket | Zone::Hanging => i >= 1,
-                Zone::Bay | Zone::Rail => x_side || i >= 1,
-            }
+    let coord = |key: Key| -> [f64; 3] {
+        let th = sector_angle(key[1], s, alpha);
+        let z = level_at(z_levels, key[2]);
+        let (x, y) = if key[0] <= 2 {
+            let r = ro + (rf - ro) * key[0] as f64 / 2.0;
+            (r * th.cos(), r * th.sin())
+        } else {
+            let t = (key[0] - 2) as f64 / (2 * nw) as f64;
+            let p = rect_point(th, a, b);
+            (
+                (1.0 - t) * rf * th.cos() + t * p[0],
+                (1.0 - t) * rf * th.sin() + t * p[1],
+            )
         };
-        let coord = |key: Key| -> [f64; 3] {
-            let th = sector_angle(key[1], s, alpha);
-            let z = level_at(&z_levels, key[2]);
-            let (x, y) = if key[0] <= 2 {
-                let r = ro + (rf - ro) * key[0] as f64 / 2.0;
-                (r * th.cos(), r * th.sin())
-            } else {
-                let t = (key[0] - 2) as f64 / (2 * nw) as f64;
-                let p = rect_point(th, a, b);
-                (
-                    (1.0 - t) * rf * th.cos() + t * p[0],
-                    (1.0 - t) * rf * th.sin() + t * p[1],
-                )
-            };
-            [xc + x, y, z]
-        };
-        let lat = Lattice {
-            cells: [1 + nw, 4 * s, nz],
-            periodic_j: true,
-            active: &active,
-            coord: &coord,
-        };
-        parts.push(lat.generate(kind).mesh);
-    }
-    // end walls: front (-x; i -> -x, j -> -y) and rear (+x; i -> +x, j -> +y)
+        [xc + x, y, z]
+    };
+    let lat = Lattice {
+        cells: [1 + nw, 4 * s, z_levels.len() - 1],
+        periodic_j: true,
+        active: &active,
+        coord: &coord,
+    };
+    lat.generate(meshing.kind).mesh
+}
+
+/// x of the front and rear end walls' inner faces.
+fn end_faces(geo: &CrankcaseGeometry) -> (f64, f64) {
+    let a = geo.pitch / 2.0;
+    (geo.axis_x(0) - a, geo.axis_x(geo.cylinders - 1) + a)
+}
+
+/// The end walls: front (-x; i -> -x, j -> -y) and rear (+x; i -> +x, j -> +y).
+fn end_walls(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing, z_levels: &[f64]) -> Vec<Mesh> {
+    let (a, b) = (geo.pitch / 2.0, geo.half_width());
+    let (alpha, s) = (geo.corner_angle(), meshing.per_sector);
+    let (x_front, x_rear) = end_faces(geo);
     let all = |_: usize, _: usize, _: usize| true;
-    let x_front = geo.axis_x(0) - a;
-    let x_rear = geo.axis_x(geo.cylinders - 1) + a;
+    let mut out = Vec::new();
     for (x0, dir, t, sector) in [
         (x_front, -1.0, geo.front_wall, 2usize),
         (x_rear, 1.0, geo.rear_wall, 0usize),
@@ -181,18 +199,26 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
             [
                 x0 + dir * t * key[0] as f64 / 2.0,
                 y,
-                level_at(&z_levels, key[2]),
+                level_at(z_levels, key[2]),
             ]
         };
         let lat = Lattice {
-            cells: [1, s, nz],
+            cells: [1, s, z_levels.len() - 1],
             periodic_j: false,
             active: &all,
             coord: &coord,
         };
-        parts.push(lat.generate(kind).mesh);
+        out.push(lat.generate(meshing.kind).mesh);
     }
-    // oil-pan rails: x stations along the side, front end wall to rear end wall (doubled)
+    out
+}
+
+/// The oil-pan rails along both sides: x stations from the front end wall to the rear end
+/// wall, matching the cells' nodes (doubled for quadratic elements).
+fn rails(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing, z_levels: &[f64]) -> Vec<Mesh> {
+    let (a, b) = (geo.pitch / 2.0, geo.half_width());
+    let (alpha, s) = (geo.corner_angle(), meshing.per_sector);
+    let (x_front, x_rear) = end_faces(geo);
     let mut xs: Vec<f64> = vec![x_front - geo.front_wall, x_front - geo.front_wall / 2.0];
     for c in 0..geo.cylinders {
         let xc = geo.axis_x(c);
@@ -206,6 +232,8 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
     xs.push(x_rear + geo.rear_wall / 2.0);
     xs.push(x_rear + geo.rear_wall);
     let nx = (xs.len() - 1) / 2;
+    let all = |_: usize, _: usize, _: usize| true;
+    let mut out = Vec::new();
     for side in [-1.0f64, 1.0] {
         // -y side: i -> -y, j -> +x; +y side: i -> +y, j -> -x (right-handed with k -> z)
         let coord = |key: Key| -> [f64; 3] {
@@ -215,7 +243,7 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
                 xs[xs.len() - 1 - key[1]]
             };
             let y = side * (b + geo.rail_width * key[0] as f64 / 2.0);
-            [x, y, level_at(&z_levels, key[2])]
+            [x, y, level_at(z_levels, key[2])]
         };
         let lat = Lattice {
             cells: [1, nx, 1],
@@ -223,13 +251,18 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
             active: &all,
             coord: &coord,
         };
-        parts.push(lat.generate(kind).mesh);
+        out.push(lat.generate(meshing.kind).mesh);
     }
-    let mut mesh = merge(parts, 1e-7 * geo.pitch);
-    // named sets
+    out
+}
+
+/// The named node sets: per cylinder the seat, the guide and the analysis points; the deck
+/// top and the pan rail.
+fn named_sets(nodes: &[[f64; 3]], geo: &CrankcaseGeometry) -> BTreeMap<String, Vec<usize>> {
+    let (ro, rf) = (geo.liner_outer_radius, geo.flange_radius);
+    let guide_top = geo.guide_bottom + geo.guide_height;
     let tol = 1e-6 * geo.pitch;
-    let nodes = &mesh.nodes;
-    let mut sets = std::collections::BTreeMap::new();
+    let mut sets = BTreeMap::new();
     let select = |pred: &dyn Fn(&[f64; 3]) -> bool| -> Vec<usize> {
         (0..nodes.len()).filter(|&n| pred(&nodes[n])).collect()
     };
@@ -259,7 +292,21 @@ pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
         "deck_top".into(),
         select(&|p| (p[2] - geo.seat_z).abs() < tol),
     );
+    let z_bot = -geo.skirt_depth;
     sets.insert("pan_rail".into(), select(&|p| (p[2] - z_bot).abs() < tol));
-    mesh.node_sets = sets;
+    sets
+}
+
+/// Generates the crankcase mesh with its named node sets: the cylinder cells, the end walls
+/// and the rails, merged.
+pub fn generate(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing) -> Mesh {
+    let z = z_levels(geo, meshing);
+    let mut parts: Vec<Mesh> = (0..geo.cylinders)
+        .map(|c| cylinder_cell(geo, meshing, &z, c))
+        .collect();
+    parts.extend(end_walls(geo, meshing, &z));
+    parts.extend(rails(geo, meshing, &z));
+    let mut mesh = merge(parts, 1e-7 * geo.pitch);
+    mesh.node_sets = named_sets(&mesh.nodes, geo);
     mesh
 }
