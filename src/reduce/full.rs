@@ -159,6 +159,153 @@ pub struct FullSystem {
     qmaps: Vec<Vec<usize>>,
 }
 
+/// Global numbering of the interface coordinates: per modelled cylinder the liner's map (its
+/// interface columns shared with the crankcase's blocks 3c and 3c + 1, the rest new), then the
+/// crankcase's identity map; and their count.
+fn interface_maps(
+    liner: &PartData,
+    liner_blocks: &[super::craig_bampton::InterfaceBlock],
+    cc: &PartData,
+    cc_blocks: &[super::craig_bampton::InterfaceBlock],
+    cylinders: &[usize],
+) -> (Vec<Vec<usize>>, usize) {
+    let cols = |blocks: &[super::craig_bampton::InterfaceBlock]| {
+        let mut v = Vec::new();
+        let mut c0 = 0;
+        for b in blocks {
+            v.push(c0..c0 + b.psi.ncols());
+            c0 += b.psi.ncols();
+        }
+        v
+    };
+    let (cc_cols, liner_cols) = (cols(cc_blocks), cols(liner_blocks));
+    let mut nq_total = cc.nq;
+    let mut qmaps: Vec<Vec<usize>> = Vec::new();
+    for &cyl in cylinders {
+        let c = cyl - 1;
+        let mut map = vec![usize::MAX; liner.nq];
+        for (lb, cb) in [(0usize, 3 * c), (1, 3 * c + 1)] {
+            for (lj, gj) in liner_cols[lb].clone().zip(cc_cols[cb].clone()) {
+                map[lj] = gj;
+            }
+        }
+        for slot in map.iter_mut() {
+            if *slot == usize::MAX {
+                *slot = nq_total;
+                nq_total += 1;
+            }
+        }
+        qmaps.push(map);
+    }
+    qmaps.push((0..cc.nq).collect());
+    (qmaps, nq_total)
+}
+
+/// The coupled model's unknowns: each part instance's interior DOFs from `offsets[inst]`,
+/// then the `nq_total` interface coordinates from `n_int_total`.
+struct Layout<'a> {
+    parts: &'a [&'a PartData],
+    offsets: &'a [usize],
+    qmaps: &'a [Vec<usize>],
+    n_int_total: usize,
+    nq_total: usize,
+}
+
+impl Layout<'_> {
+    /// Assembles K and M (lower and upper parts, column-compressed): per part instance its
+    /// interior block and its interior-interface coupling rows, then the interface columns
+    /// summed over the parts.
+    fn assemble(&self) -> StiffnessMass {
+        let n = self.n_int_total + self.nq_total;
+        let mut col_ptr = vec![0usize; n + 1];
+        let mut row_idx: Vec<usize> = Vec::new();
+        let mut kv: Vec<f64> = Vec::new();
+        let mut mv: Vec<f64> = Vec::new();
+        let mut qcols: Vec<BTreeMap<usize, (f64, f64)>> = vec![BTreeMap::new(); self.nq_total];
+        let mut col = 0;
+        for (inst, part) in self.parts.iter().enumerate() {
+            let off = self.offsets[inst];
+            let qmap = &self.qmaps[inst];
+            let p = &part.model.km.pattern;
+            let mut b_to_a = vec![0; part.n_int];
+            for (a, &b) in part.a_to_b.iter().enumerate() {
+                if b != FIXED {
+                    b_to_a[b] = a;
+                }
+            }
+            for (b, &a) in b_to_a.iter().enumerate() {
+                debug_assert_eq!(col, off + b);
+                let mut entries: Vec<(usize, f64, f64)> = Vec::new();
+                for q in p.col_ptr[a]..p.col_ptr[a + 1] {
+                    let r = part.a_to_b[p.row_idx[q]];
+                    if r != FIXED {
+                        entries.push((off + r, part.model.km.k[q], part.model.km.m[q]));
+                    }
+                }
+                if let Some((kr, mr)) = part.kg.get(&a) {
+                    for j in 0..part.nq {
+                        entries.push((self.n_int_total + qmap[j], kr[j], mr[j]));
+                        let e = qcols[qmap[j]].entry(off + b).or_insert((0.0, 0.0));
+                        e.0 += kr[j];
+                        e.1 += mr[j];
+                    }
+                }
+                entries.sort_by_key(|e| e.0);
+                for (r, k, m) in entries {
+                    row_idx.push(r);
+                    kv.push(k);
+                    mv.push(m);
+                }
+                col += 1;
+                col_ptr[col] = row_idx.len();
+            }
+            for i in 0..part.nq {
+                for j in 0..part.nq {
+                    let e = qcols[qmap[j]]
+                        .entry(self.n_int_total + qmap[i])
+                        .or_insert((0.0, 0.0));
+                    e.0 += part.qq_k[i * part.nq + j];
+                    e.1 += part.qq_m[i * part.nq + j];
+                }
+            }
+        }
+        for qc in &qcols {
+            for (&r, &(k, m)) in qc {
+                row_idx.push(r);
+                kv.push(k);
+                mv.push(m);
+            }
+            col += 1;
+            col_ptr[col] = row_idx.len();
+        }
+        StiffnessMass {
+            pattern: Pattern {
+                n,
+                col_ptr,
+                row_idx,
+            },
+            k: kv,
+            m: mv,
+        }
+    }
+
+    /// The fill-reducing order: each part's own order of its interior DOFs, the interface
+    /// coordinates last; (forward, inverse).
+    fn ordering(&self) -> (Vec<usize>, Vec<usize>) {
+        let n = self.n_int_total + self.nq_total;
+        let mut fwd: Vec<usize> = Vec::with_capacity(n);
+        for (inst, part) in self.parts.iter().enumerate() {
+            fwd.extend(part.order.iter().map(|&b| self.offsets[inst] + b));
+        }
+        fwd.extend(self.n_int_total..n);
+        let mut inv = vec![0; n];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old] = new;
+        }
+        (fwd, inv)
+    }
+}
+
 impl FullSystem {
     /// Assembles the full coupled model of the scene's meshes (the same interface fields as
     /// the ROM) and analyses its pattern.
@@ -184,127 +331,24 @@ impl FullSystem {
             &cc_blocks,
         )
         .map_err(in_part("crankcase"))?;
-        let cols = |blocks: &[super::craig_bampton::InterfaceBlock]| {
-            let mut v = Vec::new();
-            let mut c0 = 0;
-            for b in blocks {
-                v.push(c0..c0 + b.psi.ncols());
-                c0 += b.psi.ncols();
-            }
-            v
-        };
-        let cc_cols = cols(&cc_blocks);
-        let liner_cols = cols(&liner_blocks);
         let nl = inp.cylinders.len();
+        let (qmaps, nq_total) =
+            interface_maps(&liner, &liner_blocks, &cc, &cc_blocks, &inp.cylinders);
         let n_int_total = nl * liner.n_int + cc.n_int;
-        let mut nq_total = cc.nq;
-        let mut qmaps: Vec<Vec<usize>> = Vec::new();
-        for &cyl in &inp.cylinders {
-            let c = cyl - 1;
-            let mut map = vec![usize::MAX; liner.nq];
-            for (lb, cb) in [(0usize, 3 * c), (1, 3 * c + 1)] {
-                for (lj, gj) in liner_cols[lb].clone().zip(cc_cols[cb].clone()) {
-                    map[lj] = gj;
-                }
-            }
-            for slot in map.iter_mut() {
-                if *slot == usize::MAX {
-                    *slot = nq_total;
-                    nq_total += 1;
-                }
-            }
-            qmaps.push(map);
-        }
-        qmaps.push((0..cc.nq).collect());
-        let n = n_int_total + nq_total;
         let offsets: Vec<usize> = (0..=nl).map(|i| i * liner.n_int).collect();
         let parts: Vec<&PartData> = (0..nl)
             .map(|_| &liner)
             .chain(std::iter::once(&cc))
             .collect();
-        // columns
-        let mut col_ptr = vec![0usize; n + 1];
-        let mut row_idx: Vec<usize> = Vec::new();
-        let mut kv: Vec<f64> = Vec::new();
-        let mut mv: Vec<f64> = Vec::new();
-        let mut qcols: Vec<BTreeMap<usize, (f64, f64)>> = vec![BTreeMap::new(); nq_total];
-        let mut col = 0;
-        for (inst, part) in parts.iter().enumerate() {
-            let off = offsets[inst];
-            let qmap = &qmaps[inst];
-            let p = &part.model.km.pattern;
-            let mut b_to_a = vec![0; part.n_int];
-            for (a, &b) in part.a_to_b.iter().enumerate() {
-                if b != FIXED {
-                    b_to_a[b] = a;
-                }
-            }
-            for (b, &a) in b_to_a.iter().enumerate() {
-                debug_assert_eq!(col, off + b);
-                let mut entries: Vec<(usize, f64, f64)> = Vec::new();
-                for q in p.col_ptr[a]..p.col_ptr[a + 1] {
-                    let r = part.a_to_b[p.row_idx[q]];
-                    if r != FIXED {
-                        entries.push((off + r, part.model.km.k[q], part.model.km.m[q]));
-                    }
-                }
-                if let Some((kr, mr)) = part.kg.get(&a) {
-                    for j in 0..part.nq {
-                        let gq = n_int_total + qmap[j];
-                        entries.push((gq, kr[j], mr[j]));
-                        let e = qcols[qmap[j]].entry(off + b).or_insert((0.0, 0.0));
-                        e.0 += kr[j];
-                        e.1 += mr[j];
-                    }
-                }
-                entries.sort_by_key(|e| e.0);
-                for (r, k, m) in entries {
-                    row_idx.push(r);
-                    kv.push(k);
-                    mv.push(m);
-                }
-                col += 1;
-                col_ptr[col] = row_idx.len();
-            }
-            for i in 0..part.nq {
-                for j in 0..part.nq {
-                    let e = qcols[qmap[j]]
-                        .entry(n_int_total + qmap[i])
-                        .or_insert((0.0, 0.0));
-                    e.0 += part.qq_k[i * part.nq + j];
-                    e.1 += part.qq_m[i * part.nq + j];
-                }
-            }
-        }
-        for qc in &qcols {
-            for (&r, &(k, m)) in qc {
-                row_idx.push(r);
-                kv.push(k);
-                mv.push(m);
-            }
-            col += 1;
-            col_ptr[col] = row_idx.len();
-        }
-        drop(qcols);
-        let pattern = Pattern {
-            n,
-            col_ptr,
-            row_idx,
+        let layout = Layout {
+            parts: &parts,
+            offsets: &offsets,
+            qmaps: &qmaps,
+            n_int_total,
+            nq_total,
         };
-        let km = StiffnessMass {
-            pattern,
-            k: kv,
-            m: mv,
-        };
-        let mut fwd: Vec<usize> = Vec::with_capacity(n);
-        for (inst, part) in parts.iter().enumerate() {
-            fwd.extend(part.order.iter().map(|&b| offsets[inst] + b));
-        }
-        fwd.extend(n_int_total..n);
-        let mut inv = vec![0; n];
-        for (new, &old) in fwd.iter().enumerate() {
-            inv[old] = new;
-        }
+        let km = layout.assemble();
+        let (fwd, inv) = layout.ordering();
         let analysis = Analysis::new(&km.pattern, &fwd, &inv)
             .map_err(|e| in_part("engine")(ModelError::from(e)))?;
         Ok(Self {
