@@ -108,27 +108,8 @@ enum Command {
     Modes {
         #[command(flatten)]
         model: ModelArgs,
-        /// Number of modes (rigid-body modes included).
-        #[arg(long)]
-        count: usize,
-        /// Shift frequency f_s of sigma = -(2 pi f_s)^2 [Hz] (default: the scene's, or 100).
-        #[arg(long, value_name = "HZ")]
-        shift_hz: Option<f64>,
-        /// Print JSON on stdout.
-        #[arg(long)]
-        json: bool,
-        /// Write the mode shapes to a VTU file for ParaView.
-        #[arg(long, value_name = "FILE.vtu")]
-        vtu: Option<PathBuf>,
-        /// Coupled engine modes (crankcase + liners) instead of one part.
-        #[arg(long)]
-        assembly: bool,
-        /// With --assembly: the full FE model (the reference).
-        #[arg(long, requires = "assembly", conflicts_with = "rom")]
-        full: bool,
-        /// With --assembly: the engine ROM.
-        #[arg(long, requires = "assembly")]
-        rom: bool,
+        #[command(flatten)]
+        options: ModesOptions,
         #[command(flatten)]
         cache: CacheArgs,
     },
@@ -313,27 +294,9 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
     match cli.command {
         Command::Modes {
             model,
-            count,
-            shift_hz,
-            json,
-            vtu,
-            assembly,
-            full,
-            rom: _,
+            options,
             cache,
-        } => modes_command(
-            &model,
-            ModesOptions {
-                count,
-                shift_hz,
-                json,
-                vtu,
-                assembly,
-                full,
-            },
-            &cache,
-            started,
-        )?,
+        } => modes_command(&model, options, &cache, started)?,
         Command::ExportMatrices { model, out } => {
             let r = export::export_matrices(&model.input()?, &model.fix, &out)?;
             println!(
@@ -359,13 +322,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             sets,
             json,
             cache,
-        } => {
-            let sc = linercav::app::load_scene(&scene, &sets)?;
-            let loaded = rom::get_rom(&sc, &cache.options())?;
-            let mut report = rom::RomReport::new(&loaded);
-            report.seconds = started.elapsed().as_secs_f64();
-            print_report(json, &report, || report.to_text());
-        }
+        } => rom_command(&scene, &sets, json, &cache, started)?,
         Command::RomTradeoff {
             scene,
             sets,
@@ -381,16 +338,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             sets,
             json,
             cache,
-        } => {
-            let sc = linercav::app::load_scene(&scene, &sets)?;
-            let loaded = rom::get_rom(&sc, &cache.options())?;
-            let report = rom::ShapesReport {
-                modes: loaded.rom.shapes(),
-                cylinders: loaded.rom.cylinders.iter().map(|c| c.cylinder).collect(),
-                cache: loaded.cache,
-            };
-            print_report(json, &report, || report.to_text());
-        }
+        } => shapes_command(&scene, &sets, json, &cache)?,
         Command::Simulate {
             scene,
             sets,
@@ -467,14 +415,64 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
     Ok(())
 }
 
-/// Options of the `modes` command besides the model and the cache.
-struct ModesOptions {
-    count: usize,
-    shift_hz: Option<f64>,
+/// `rom`: the engine ROM from the cache or built, described.
+fn rom_command(
+    scene: &std::path::Path,
+    sets: &[String],
     json: bool,
+    cache: &CacheArgs,
+    started: Instant,
+) -> Result<(), Error> {
+    let sc = linercav::app::load_scene(scene, sets)?;
+    let loaded = rom::get_rom(&sc, &cache.options())?;
+    let mut report = rom::RomReport::new(&loaded);
+    report.seconds = started.elapsed().as_secs_f64();
+    print_report(json, &report, || report.to_text());
+    Ok(())
+}
+
+/// `shapes`: the mode-shape coefficients of the engine ROM's system modes.
+fn shapes_command(
+    scene: &std::path::Path,
+    sets: &[String],
+    json: bool,
+    cache: &CacheArgs,
+) -> Result<(), Error> {
+    let sc = linercav::app::load_scene(scene, sets)?;
+    let loaded = rom::get_rom(&sc, &cache.options())?;
+    let report = rom::ShapesReport {
+        modes: loaded.rom.shapes(),
+        cylinders: loaded.rom.cylinders.iter().map(|c| c.cylinder).collect(),
+        cache: loaded.cache,
+    };
+    print_report(json, &report, || report.to_text());
+    Ok(())
+}
+
+/// Options of the `modes` command besides the model and the cache.
+#[derive(Args)]
+struct ModesOptions {
+    /// Number of modes (rigid-body modes included).
+    #[arg(long)]
+    count: usize,
+    /// Shift frequency f_s of sigma = -(2 pi f_s)^2 [Hz] (default: the scene's, or 100).
+    #[arg(long, value_name = "HZ")]
+    shift_hz: Option<f64>,
+    /// Print JSON on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Write the mode shapes to a VTU file for ParaView.
+    #[arg(long, value_name = "FILE.vtu")]
     vtu: Option<PathBuf>,
+    /// Coupled engine modes (crankcase + liners) instead of one part.
+    #[arg(long)]
     assembly: bool,
+    /// With --assembly: the full FE model (the reference).
+    #[arg(long, requires = "assembly", conflicts_with = "rom")]
     full: bool,
+    /// With --assembly: the engine ROM.
+    #[arg(long, requires = "assembly")]
+    rom: bool,
 }
 
 /// `modes`: a part's certified modes, or the coupled engine's (`--assembly`); a failed Sturm
@@ -492,6 +490,7 @@ fn modes_command(
         vtu,
         assembly,
         full,
+        rom: _,
     } = o;
     if assembly {
         let scene_path = model

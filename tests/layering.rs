@@ -127,3 +127,77 @@ fn verification_no_module_imports_a_later_stage() {
         "back-edges removed: strike them from KNOWN: {gone:?}"
     );
 }
+
+/// Numerical kernels allowed past 150 lines (issue 24: "kernels with an equation may be
+/// longer when splitting would hide it"), each with the equation its doc comment carries.
+const KERNELS: [(&str, &str); 4] = [
+    // Craig-Bampton reduction: constraint modes, fixed-interface modes below the cut-off,
+    // the projected K and M, one pass over the factorised interior
+    ("src/reduce/craig_bampton.rs", "reduce"),
+    // one implicit step of the pistons in penalty contact with the condensed structure:
+    // W F_A = r0 + (K_t + kappa C_d) S q and the bodies' Newmark rows, Newton on the pieces
+    ("src/transient/contact.rs", "step"),
+    // one engine step: modal predictor, contact step, modal corrector, onset impulses
+    ("src/transient/cycle.rs", "try_step"),
+    // shift-invert Lanczos (ARPACK reverse communication) with its certification hooks
+    ("src/eigen/shift_invert.rs", "solve_modes"),
+];
+
+/// Lengths of the functions of one source file: (name, lines from `fn` to its closing brace
+/// at the same indentation).
+fn function_lengths(text: &str) -> Vec<(String, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        let t = l.trim_start();
+        let indent = l.len() - t.len();
+        let t = t.strip_prefix("pub(crate) ").unwrap_or(t);
+        let t = t.strip_prefix("pub ").unwrap_or(t);
+        let t = t.strip_prefix("const ").unwrap_or(t);
+        let t = t.strip_prefix("unsafe ").unwrap_or(t);
+        let t = t.strip_prefix("extern \"C\" ").unwrap_or(t);
+        let Some(rest) = t.strip_prefix("fn ") else {
+            continue;
+        };
+        if l.trim_end().ends_with(';') {
+            continue; // a declaration
+        }
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect();
+        let close = " ".repeat(indent) + "}";
+        let end = (i..lines.len())
+            .find(|&j| lines[j].starts_with(&close) && !lines[j][indent..].starts_with("} else"))
+            .unwrap_or(lines.len() - 1);
+        out.push((name, end - i + 1));
+    }
+    out
+}
+
+#[test]
+fn verification_function_length_scanner() {
+    let text = "fn a() {\n    x;\n}\n\n    pub fn b(\n        y: u8,\n    ) {\n    }\n";
+    assert_eq!(
+        function_lengths(text),
+        [("a".to_string(), 3), ("b".to_string(), 4)]
+    );
+}
+
+#[test]
+fn verification_no_function_over_150_lines_outside_the_kernels() {
+    let mut files = Vec::new();
+    sources(Path::new("src"), &mut files);
+    let mut long = Vec::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        for (name, n) in function_lengths(&text) {
+            let path = f.to_string_lossy().replace('\\', "/");
+            let kernel = KERNELS.iter().any(|(p, k)| path == *p && name == *k);
+            if n > 150 && !kernel {
+                long.push(format!("{path}: {name} ({n} lines)"));
+            }
+        }
+    }
+    assert!(long.is_empty(), "functions over 150 lines: {long:?}");
+}

@@ -16,7 +16,7 @@ use crate::app::rom::{load_meshes, rom_inputs};
 use crate::error::{Error, Result};
 use crate::piston::Piston;
 use crate::reduce::full::FullSystem;
-use crate::reduce::rom::{preload_loads, EngineRom};
+use crate::reduce::rom::{preload_loads, EngineRom, RomInputs};
 use crate::scene::Scene;
 use crate::transient::cycle::CycleSettings;
 use crate::transient::full_order::{FullLiner, Row};
@@ -81,6 +81,67 @@ pub struct FullOrderReport {
     pub dt: f64,
 }
 
+/// The full model's rows of liner instance `inst`: its `nc` bore-line contact DOFs (thrust
+/// +y, then anti-thrust -y; the ROM's count, else the cache is stale) and its `np` analysis
+/// points (+y).
+fn liner_rows(
+    sys: &FullSystem,
+    lm: &crate::mesh::Mesh,
+    inst: usize,
+    nc: usize,
+    np: usize,
+) -> Result<(Vec<Row>, Vec<Row>)> {
+    let set = |name: &str| -> Result<Vec<usize>> {
+        lm.node_set(name)
+            .map(|s| s.to_vec())
+            .ok_or_else(|| Error::Input(format!("liner mesh: node set '{name}' is missing")))
+    };
+    let mut contact: Vec<Row> = Vec::with_capacity(nc);
+    for (name, dir) in [
+        ("bore_thrust", [0.0, 1.0, 0.0]),
+        ("bore_antithrust", [0.0, -1.0, 0.0]),
+    ] {
+        for n in set(name)? {
+            contact.push(sys.node_row(inst, n, dir));
+        }
+    }
+    if contact.len() != nc {
+        return Err(Error::Failure(format!(
+            "full-order window: {} bore-line DOFs in the mesh, {nc} in the ROM (stale cache?)",
+            contact.len()
+        )));
+    }
+    let mut points: Vec<Row> = Vec::new();
+    for k in 1..=np {
+        let n = set(&format!("point_{k}"))?[0];
+        points.push(sys.node_row(inst, n, [0.0, 1.0, 0.0]));
+    }
+    Ok((contact, points))
+}
+
+/// The preload displacement at the contact rows: K u = f (liner clamps and bolt reactions)
+/// solved on the full model.
+fn full_preload(sys: &FullSystem, inp: &RomInputs<'_>, contact: &[Row]) -> Result<Vec<f64>> {
+    let nl = inp.cylinders.len();
+    let pre = preload_loads(inp).map_err(Error::from)?;
+    let mut f = vec![0.0; sys.dofs()];
+    for i in 0..nl {
+        sys.add_load(i, &pre.liner, &mut f);
+    }
+    for l in &pre.crankcase {
+        sys.add_load(nl, l, &mut f);
+    }
+    let llt = sys
+        .analysis
+        .llt(&sys.km.pattern, &sys.km.k)
+        .map_err(|e| Error::Failure(format!("full-order preload: {e}")))?;
+    llt.solve_vec(&mut f);
+    Ok(contact
+        .iter()
+        .map(|r| r.iter().map(|&(k, v)| v * f[k]).sum())
+        .collect())
+}
+
 /// Runs the comparison on the scene's meshes.
 pub fn compare(
     scene: &Scene,
@@ -123,58 +184,14 @@ pub fn compare(
     let (lm, cm) = load_meshes(scene)?;
     let inp = rom_inputs(scene, &lm, &cm, false);
     let sys = FullSystem::build(&inp)?;
-    let nl = inp.cylinders.len();
     let inst = inp
         .cylinders
         .iter()
         .position(|&c| c == cylinder)
         .expect("ROM and scene model the same cylinders");
-    let set = |name: &str| -> Result<Vec<usize>> {
-        lm.node_set(name)
-            .map(|s| s.to_vec())
-            .ok_or_else(|| Error::Input(format!("liner mesh: node set '{name}' is missing")))
-    };
-    let mut contact: Vec<Row> = Vec::with_capacity(nc);
-    for (name, dir) in [
-        ("bore_thrust", [0.0, 1.0, 0.0]),
-        ("bore_antithrust", [0.0, -1.0, 0.0]),
-    ] {
-        for n in set(name)? {
-            contact.push(sys.node_row(inst, n, dir));
-        }
-    }
-    if contact.len() != nc {
-        return Err(Error::Failure(format!(
-            "full-order window: {} bore-line DOFs in the mesh, {nc} in the ROM (stale cache?)",
-            contact.len()
-        )));
-    }
-    let mut points: Vec<Row> = Vec::new();
-    for k in 1..=crom.point_modes.rows {
-        let n = set(&format!("point_{k}"))?[0];
-        points.push(sys.node_row(inst, n, [0.0, 1.0, 0.0]));
-    }
+    let (contact, points) = liner_rows(&sys, &lm, inst, nc, crom.point_modes.rows)?;
     progress("full-order window: preload (static solve)");
-    let pre = preload_loads(&inp).map_err(Error::from)?;
-    let mut f = vec![0.0; sys.dofs()];
-    for i in 0..nl {
-        sys.add_load(i, &pre.liner, &mut f);
-    }
-    for l in &pre.crankcase {
-        sys.add_load(nl, l, &mut f);
-    }
-    {
-        let llt = sys
-            .analysis
-            .llt(&sys.km.pattern, &sys.km.k)
-            .map_err(|e| Error::Failure(format!("full-order preload: {e}")))?;
-        llt.solve_vec(&mut f);
-    }
-    let preload: Vec<f64> = contact
-        .iter()
-        .map(|r| r.iter().map(|&(k, v)| v * f[k]).sum())
-        .collect();
-    drop(f);
+    let preload = full_preload(&sys, &inp, &contact)?;
     let pre_scale = preload.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let preload_error = preload
         .iter()
