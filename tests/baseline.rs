@@ -44,7 +44,7 @@ fn default_rom() -> &'static linercav::reduce::rom::EngineRom {
 }
 
 #[test]
-fn default_engine_peaks_match_the_baseline() {
+fn regression_default_engine_peaks_match_the_baseline() {
     default_rom(); // fills the cache; simulate::run below then loads it
     let req = SimulateRequest {
         scene: PathBuf::from("models/engine.toml"),
@@ -219,7 +219,7 @@ fn verification_thresholds_follow_the_static_pressure() {
 /// front-loaded, the 40 um case having 8 um of hot clearance left, so the criterion now spans
 /// the whole sweep (4.2x here).
 #[test]
-fn trend_clearance_raises_acceleration() {
+fn validation_clearance_raises_acceleration() {
     let (_, r40) = run_scene(&["piston.clearance_um=40"]);
     let r80 = &default_run().1;
     let (scene, r120) = run_scene(&["piston.clearance_um=120"]);
@@ -266,7 +266,7 @@ fn trend_clearance_raises_acceleration() {
 /// lies within their combined step-error and statistical uncertainty, ~3.5 %/sigma), so it is
 /// not asserted; before it, with the first-order damper bias, +1 mm was the lowest.
 #[test]
-fn trend_pin_offset() {
+fn validation_pin_offset() {
     let (_, minus) = run_scene(&["piston.pin_offset_mm=-1"]);
     let (_, plus) = run_scene(&["piston.pin_offset_mm=1"]);
     let runs = [&minus, &default_run().1, &plus];
@@ -311,7 +311,7 @@ fn evaluated() -> &'static linercav::cavitation::evaluate::Evaluation {
 /// system modes lie 5-40 Hz apart there, so some mode is nearly always that close; it guards
 /// against a response between families (the 1.72-1.84 kHz gap), the first check carries the trend.
 #[test]
-fn trend_dominant_response_near_the_study_s() {
+fn validation_dominant_response_near_the_study_s() {
     let ev = evaluated();
     assert!(
         (ev.dominant_hz / 1850.0 - 1.0).abs() < 0.05,
@@ -336,7 +336,7 @@ fn trend_dominant_response_near_the_study_s() {
 /// defaults gave 0.88-0.96 at 1591/1622 Hz (grey-iron crankcase, 13 mm wall, 9 mm jacket) and
 /// 0.58 (liner guided at its bottom, 10 mm wall; this test was ignored then).
 #[test]
-fn trend_cylinder_differences_follow_a_crankcase_mode() {
+fn validation_cylinder_differences_follow_a_crankcase_mode() {
     let ev = evaluated();
     let best = ev
         .nearest_modes
@@ -360,7 +360,7 @@ fn trend_cylinder_differences_follow_a_crankcase_mode() {
 /// (v_max 1.02-1.36x a / omega), so none of them has CSF > 1: on the default engine the classic
 /// criterion flags every point the acceleration criterion flags, and more.
 #[test]
-fn trend_classic_criterion_against_the_acceleration_number() {
+fn validation_classic_criterion_against_the_acceleration_number() {
     use linercav::cavitation::criteria::safety_factor;
     use linercav::cavitation::evaluate::peak_velocity;
     let scene = Scene::load(Path::new(SCENE), &[]).unwrap();
@@ -414,7 +414,7 @@ fn trend_classic_criterion_against_the_acceleration_number() {
 /// converged transient cylinder 1's point 1 (718 +- 20 m/s^2) and point 4 (741 +- 14) are tied
 /// (default engine: point 3 most, 1202-1672 m/s^2, point 4 702-871, docs/validation.md).
 #[test]
-fn trend_interior_point_most_active() {
+fn validation_interior_point_most_active() {
     let ev = evaluated();
     let r = &default_run().1;
     for c in &ev.cylinders {
@@ -468,7 +468,7 @@ fn trend_interior_point_most_active() {
 ///   (rho R^2 / (n^2 h), 2.6 times the wall's for ovalling, n = 2) would pull the
 ///   liner-dominated band modes down by tens of percent.
 #[test]
-fn trend_leaving_out_the_coolant_costs_a_few_percent() {
+fn validation_leaving_out_the_coolant_costs_a_few_percent() {
     let sets = vec!["cavitation.coolant_mass=layer".to_string()];
     let wet_scene = Scene::load(Path::new(SCENE), &sets).unwrap();
     let mu = wet_scene.cavitation.layer_mass_per_area.unwrap();

@@ -47,7 +47,7 @@ fn added_mass_along(dry: &FeModel, wet: &FeModel, dir: usize) -> f64 {
 /// The 20-node faces put every node on the circle; the quadratic arc between them deviates
 /// from the circle by O((pi/48)^4) ~ 2e-5 relative at 48 elements around, so 1e-4.
 #[test]
-fn rigid_motion_of_the_default_liner_sees_mu_pi_r_l() {
+fn verification_rigid_motion_of_the_default_liner_sees_mu_pi_r_l() {
     let scene = Scene::load(Path::new("models/engine.toml"), &[]).unwrap();
     let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
         panic!("default liner is parametric")
@@ -80,7 +80,7 @@ fn rigid_motion_of_the_default_liner_sees_mu_pi_r_l() {
 /// inertia, terms of relative size (t/R)^2 / 12 ~ 5e-4 at t/R = 0.08 in each energy; the
 /// mesh's own error largely cancels in the ratio. Tolerance 0.3 % on a ratio of about 0.75.
 #[test]
-fn ovalling_of_a_wet_ring_follows_ring_theory() {
+fn verification_ovalling_of_a_wet_ring_follows_ring_theory() {
     let (ro, ri, length) = (0.065, 0.060, 0.02);
     let geo = LinerGeometry {
         outer_diameter: 2.0 * ro,

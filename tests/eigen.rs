@@ -18,7 +18,7 @@ const SIGMA: f64 = -(2.0 * std::f64::consts::PI * 100.0) * (2.0 * std::f64::cons
 /// model; ARPACK's must agree to 1e-9 relative (both are backward stable; the dense path loses
 /// ~cond(M) * eps ~ 1e-12, ARPACK's tolerance is machine epsilon).
 #[test]
-fn shift_invert_matches_dense_oracle() {
+fn verification_shift_invert_matches_dense_oracle() {
     for kind in [ElementKind::Hex20, ElementKind::Tet10] {
         let mesh = box_mesh(kind, [3, 2, 1], [0.3, 0.2, 0.1], 0.2);
         let mut model = FeModel::build(mesh, &STEEL, &["x0".to_string()]).unwrap();
@@ -42,7 +42,7 @@ fn shift_invert_matches_dense_oracle() {
 /// A free-free block has exactly six rigid-body modes: six eigenvalues at zero (to 1e-9 of the
 /// first elastic one), then a clear gap; residuals below 1e-8, M-orthonormal to 1e-10.
 #[test]
-fn free_free_block_has_six_rigid_modes() {
+fn verification_free_free_block_has_six_rigid_modes() {
     let mesh = box_mesh(ElementKind::Hex20, [6, 3, 2], [0.3, 0.15, 0.1], 0.1);
     let mut model = FeModel::build(mesh, &STEEL, &[]).unwrap();
     let sol = model.modes(12, SIGMA, 4).unwrap();
@@ -68,7 +68,7 @@ fn free_free_block_has_six_rigid_modes() {
 /// The Sturm check can fail: a count that includes a mode the solver did not return is seen.
 /// Remove one computed eigenvalue from the list and the inertia count disagrees.
 #[test]
-fn sturm_count_detects_a_missed_mode() {
+fn verification_sturm_count_detects_a_missed_mode() {
     use linercav::eigen::certify::sturm_shift;
     let mesh = box_mesh(ElementKind::Hex20, [4, 2, 1], [0.3, 0.15, 0.1], 0.0);
     let mut model = FeModel::build(mesh, &STEEL, &["x0".to_string()]).unwrap();

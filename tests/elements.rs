@@ -37,7 +37,7 @@ fn linear_field(x: [f64; 3]) -> [f64; 3] {
 /// strain exactly, on distorted and curved elements too). Tolerance 1e-8 relative: the
 /// condition number of the small interior system is ~1e4, times machine epsilon.
 #[test]
-fn patch_test_on_distorted_meshes() {
+fn verification_patch_test_on_distorted_meshes() {
     for kind in KINDS {
         let mesh = box_mesh(kind, [3, 3, 3], [0.1, 0.08, 0.06], 0.35);
         let dofs = DofMap::free(mesh.nodes.len());
@@ -158,7 +158,7 @@ proptest! {
 /// deflection P L^3/(3 E I) + P L/(k G A) (k = 5/6). One element through the depth; 3 %
 /// covers the clamp's local 3-D stiffening, which beam theory ignores.
 #[test]
-fn thin_bending_without_locking() {
+fn verification_thin_bending_without_locking() {
     use linercav::fem::model::FeModel;
     use linercav::fem::statics;
     let (l, h) = (1.0, 0.1);

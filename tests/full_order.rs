@@ -44,7 +44,7 @@ fn print_points(c: &linercav::app::full_order::FullOrderReport) {
 }
 
 #[test]
-fn rom_matches_the_full_order_model_on_the_window() {
+fn verification_rom_matches_the_full_order_model_on_the_window() {
     let c = comparison(&["rom.residual_vector_spacing=1"]);
     // The preload is one static solve in both models (the ROM's is exact for its loads through
     // the attachment modes): equal to solver roundoff.
