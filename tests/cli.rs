@@ -417,3 +417,22 @@ fn a_missed_mode_exits_non_zero() {
         "{err}"
     );
 }
+
+/// Thresholds out of order, given or derived (the high-risk threshold derived from the coolant
+/// is 1189 m/s^2 on the default engine), are refused before any work: exit 2 naming the scene
+/// file and the key.
+#[test]
+fn thresholds_out_of_order_are_refused() {
+    for sets in [
+        &["cavitation.onset_m_s2=2000"][..],
+        &["cavitation.onset_m_s2=900", "cavitation.high_risk_m_s2=800"][..],
+    ] {
+        let mut a = vec!["simulate"];
+        a.extend(small_scene_args());
+        for s in sets {
+            a.extend(["--set", s]);
+        }
+        refused(&a, "models/engine.toml: key 'cavitation'", None);
+        refused(&a, "need 0 < onset", None);
+    }
+}

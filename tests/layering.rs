@@ -189,6 +189,7 @@ fn verification_no_function_over_150_lines_outside_the_kernels() {
     let mut files = Vec::new();
     sources(Path::new("src"), &mut files);
     let mut long = Vec::new();
+    let mut exempted = BTreeSet::new();
     for f in &files {
         let text = std::fs::read_to_string(f).unwrap();
         for (name, n) in function_lengths(&text) {
@@ -197,7 +198,16 @@ fn verification_no_function_over_150_lines_outside_the_kernels() {
             if n > 150 && !kernel {
                 long.push(format!("{path}: {name} ({n} lines)"));
             }
+            if n > 150 && kernel {
+                exempted.insert((path, name));
+            }
         }
     }
     assert!(long.is_empty(), "functions over 150 lines: {long:?}");
+    // an exemption no longer needed (the kernel split or renamed) is struck from the list
+    let stale: Vec<_> = KERNELS
+        .iter()
+        .filter(|(p, k)| !exempted.contains(&(p.to_string(), k.to_string())))
+        .collect();
+    assert!(stale.is_empty(), "strike from KERNELS: {stale:?}");
 }

@@ -718,40 +718,14 @@ fn validate_cavitation(
             ))
         }
     };
-    let spec = CavitationSpec {
+    // their order is checked where the cavitation stage resolves them (`cavitation::Setup`,
+    // called by `app::load_scene` right after loading)
+    Ok(CavitationSpec {
         coolant,
         gap,
         thresholds,
         layer_mass_per_area,
-    };
-    // the order of given thresholds; derived ones are checked when the cavitation stage
-    // resolves them (`cavitation::Setup::new`, right after the scene is loaded)
-    let given = match spec.thresholds {
-        ThresholdSpec::Calibrated {
-            onset_m_s2,
-            high_risk_m_s2,
-            ..
-        } => Some((onset_m_s2, high_risk_m_s2)),
-        ThresholdSpec::Scene {
-            onset_m_s2: Some(o),
-            high_risk_m_s2: Some(h),
-            ..
-        } => Some((o, h)),
-        ThresholdSpec::Scene { .. } => None,
-    };
-    if let Some((onset, high)) = given {
-        if !(onset > 0.0 && onset <= high) {
-            return Err(c.err(
-                "cavitation",
-                format!(
-                    "need 0 < onset ({}) <= high risk ({}) m/s^2",
-                    num(onset),
-                    num(high)
-                ),
-            ));
-        }
-    }
-    Ok(spec)
+    })
 }
 
 /// The thresholds of a calibration file written by `linercav calibrate --json`.
