@@ -208,13 +208,33 @@ enum Command {
     Sweep {
         /// Scene file (TOML).
         scene: PathBuf,
-        /// A varied key and its values: --vary piston.clearance_um=40,80,120 (repeatable).
-        #[arg(long = "vary", value_name = "KEY=V1,V2,...", required = true)]
+        /// A varied key and its values: --vary piston.clearance_um=40,80,120 (repeatable; the
+        /// runs are the Cartesian grid).
+        #[arg(long = "vary", value_name = "KEY=V1,V2,...")]
         vary: Vec<String>,
+        /// A random design instead of a grid: Latin hypercube or Monte Carlo with N runs over
+        /// the --range keys.
+        #[arg(long, value_name = "lhs:N|mc:N")]
+        sample: Option<String>,
+        /// A sampled key, uniform over [LO, HI] (repeatable; with --sample).
+        #[arg(long = "range", value_name = "KEY=LO:HI", allow_hyphen_values = true)]
+        ranges: Vec<String>,
+        /// Seed of the sample (default 1): the same seed gives the same runs everywhere.
+        #[arg(long, value_name = "S")]
+        seed: Option<u64>,
+        /// Run only shard I of N (1-based) and write its part into --out PART_DIR; without it,
+        /// taken from a Slurm job array (SLURM_ARRAY_TASK_ID/MIN/MAX) or a Kubernetes Indexed
+        /// Job (JOB_COMPLETION_INDEX with --shards).
+        #[arg(long, value_name = "I/N")]
+        shard: Option<String>,
+        /// Number of shards of a Kubernetes Indexed Job (its completions).
+        #[arg(long, value_name = "N")]
+        shards: Option<usize>,
         /// Fixed overrides for every run (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
-        /// Output directory (sweep.csv, sweep.json, PNGs); without it only the summary prints.
+        /// Output directory (sweep.csv, sweep.json, PNGs; a sample adds probabilities.csv and
+        /// sweep_statistics.png); a shard's part directory. Without it only the summary prints.
         #[arg(long, value_name = "DIR")]
         out: Option<PathBuf>,
         /// Print JSON on stdout.
@@ -222,6 +242,19 @@ enum Command {
         json: bool,
         #[command(flatten)]
         cache: CacheArgs,
+    },
+    /// Merges the parts of a sharded sweep (checked: one study, every run exactly once) into
+    /// the outputs of the unsharded sweep.
+    SweepMerge {
+        /// Part directories (their part-*.json) or part files.
+        #[arg(required = true, value_name = "PART_DIR")]
+        parts: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Print JSON on stdout.
+        #[arg(long)]
+        json: bool,
     },
     /// Coolant properties at a state: vapour pressure, density, speed of sound, Vccv and (with
     /// a gap) the acceleration thresholds.
@@ -360,6 +393,11 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
         Command::Sweep {
             scene,
             vary,
+            sample,
+            ranges,
+            seed,
+            shard,
+            shards,
             sets,
             out,
             json,
@@ -369,10 +407,19 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 scene,
                 sets,
                 vary,
+                sample,
+                ranges,
+                seed,
+                shard,
+                shards,
                 out,
                 cache: cache.options(),
             };
             let r = sweep::run(&req, started)?;
+            print_report(json, &r, || r.to_text());
+        }
+        Command::SweepMerge { parts, out, json } => {
+            let r = sweep::merge(&parts, &out, started)?;
             print_report(json, &r, || r.to_text());
         }
         Command::Coolant {

@@ -4,3 +4,4 @@
 pub mod correlation;
 pub mod frf;
 pub mod spectrum;
+pub mod study;

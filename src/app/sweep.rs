@@ -1,15 +1,25 @@
-//! `sweep`: what-if runs over the Cartesian product of varied scene keys, in parallel on the
-//! cached ROM; a tidy CSV (one row per run, cylinder and analysis point) and PNGs of every
-//! varied key (slap force, piston tilt, peak negative acceleration per cylinder).
+//! `sweep` and `sweep-merge`: what-if runs of a design ([`crate::scene::design`]: a Cartesian
+//! grid or a Latin hypercube / Monte Carlo sample) in parallel on the cached ROM, on one
+//! machine or split into shards of a batch scheduler's array job; a tidy CSV (one row per
+//! run, cylinder and analysis point), the JSON and pictures; for a sample also the probability
+//! of every risk class and the rank sensitivity of the peaks to every varied key.
+//!
+//! A shard writes `part-I-of-N.json` into its part directory: the scene (path and BLAKE3 of
+//! its text), the overrides, the design, the tool version and its runs (their CSV rows as
+//! text, what the pictures need, and the full results). `sweep-merge` checks that all parts
+//! come from the same study and hold every run exactly once, then writes what the unsharded
+//! sweep writes, from the same code: the CSV rows are identical.
 
 use super::rom::{get_rom, key_description, CacheOptions, LoadedRom};
 use super::simulate::{
     piston_of, run_cycle, settings_of, simulation, CylinderReport, SimulateReport,
 };
+use crate::analysis::study::{rank_sensitivities, Proportion};
 use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
-use crate::files::{write_all_atomic, Filler, OutputDir};
+use crate::files::{write_all_atomic, write_atomic, Filler, OutputDir};
 use crate::report::png::{write_png, Chart, Mark, Series};
+use crate::scene::design::{Design, Shard};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -17,32 +27,10 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// One varied key and its values (as written, TOML literals).
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct Vary {
-    pub key: String,
-    pub values: Vec<String>,
-}
+/// Format tag of a shard's part file.
+const PART_FORMAT: &str = "linercav-sweep-part 1";
 
-/// Parses `KEY=V1,V2,...`.
-pub fn parse_vary(arg: &str) -> Result<Vary> {
-    let bad = |msg: &str| Error::Input(format!("--vary '{arg}': {msg} (expected KEY=V1,V2,...)"));
-    let (k, v) = arg.split_once('=').ok_or_else(|| bad("no '='"))?;
-    let key = k.trim();
-    if key.is_empty() {
-        return Err(bad("empty key"));
-    }
-    let values: Vec<String> = v.split(',').map(|s| s.trim().to_string()).collect();
-    if values.iter().any(|s| s.is_empty()) {
-        return Err(bad("empty value"));
-    }
-    Ok(Vary {
-        key: key.to_string(),
-        values,
-    })
-}
-
-/// One run of the sweep.
+/// One run of the sweep: its full results (in `sweep.json`).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SweepRun {
     /// Value of each varied key (same order as the sweep's keys).
@@ -54,14 +42,66 @@ pub struct SweepRun {
     pub seconds: f64,
 }
 
-/// What `sweep` returns.
+/// What the tables and pictures need of one run (kept in shard parts).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct RunLine {
+    /// Index of the run in the design (0-based).
+    pub index: usize,
+    pub values: Vec<String>,
+    /// The run's rows of `sweep.csv` (no header).
+    pub csv: String,
+    pub cylinders: Vec<CylinderLine>,
+}
+
+/// One cylinder of a [`RunLine`].
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct CylinderLine {
+    pub cylinder: usize,
+    pub slap_force_n: f64,
+    pub tilt_rad: f64,
+    /// Per analysis point: mean peak negative acceleration [m/s^2] and risk class.
+    pub peak_negative_m_s2: Vec<f64>,
+    pub risk: Vec<String>,
+}
+
+/// One row of `probabilities.csv`.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ProbabilityRow {
+    pub cylinder: usize,
+    pub point: usize,
+    pub class: &'static str,
+    #[serde(flatten)]
+    pub p: Proportion,
+}
+
+/// Spearman rank correlation of each cylinder's worst-point peak negative acceleration (and
+/// the engine's largest) with each varied key over the runs of a sample.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Sensitivities {
+    pub keys: Vec<String>,
+    pub cylinders: Vec<usize>,
+    /// rho[key][cylinder] (None: constant), then the engine's largest peak as the last column.
+    pub spearman: Vec<Vec<Option<f64>>>,
+}
+
+/// What `sweep` and `sweep-merge` return.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SweepReport {
     pub scene: String,
     pub keys: Vec<String>,
-    pub runs: Vec<SweepRun>,
+    pub design: Design,
+    /// Full results of every run, in design order.
+    pub runs: Vec<serde_json::Value>,
+    #[serde(skip)]
+    pub lines: Vec<RunLine>,
     /// ROMs used (distinct reduction inputs) and whether each was a cache hit.
-    pub roms: Vec<&'static str>,
+    pub roms: Vec<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub probabilities: Option<Vec<ProbabilityRow>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensitivities: Option<Sensitivities>,
     pub seconds: f64,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub files: Vec<String>,
@@ -71,48 +111,146 @@ pub struct SweepRequest {
     pub scene: PathBuf,
     pub sets: Vec<String>,
     pub vary: Vec<String>,
+    pub sample: Option<String>,
+    pub ranges: Vec<String>,
+    pub seed: Option<u64>,
+    /// `I/N`; None: from the scheduler's environment, else unsharded.
+    pub shard: Option<String>,
+    /// Number of shards for a Kubernetes Indexed Job (JOB_COMPLETION_INDEX).
+    pub shards: Option<usize>,
     pub out: Option<PathBuf>,
     pub cache: CacheOptions,
 }
 
-/// Runs the sweep.
+/// A shard's part file.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Part {
+    format: String,
+    tool: String,
+    scene: String,
+    scene_blake3: String,
+    sets: Vec<String>,
+    design: Design,
+    shard: Shard,
+    roms: Vec<String>,
+    seconds: f64,
+    runs: Vec<PartRun>,
+}
+
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PartRun {
+    line: RunLine,
+    run: serde_json::Value,
+}
+
+/// Runs the sweep, or its shard.
 pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
-    let vary: Vec<Vary> = req
-        .vary
-        .iter()
-        .map(|v| parse_vary(v))
-        .collect::<Result<_>>()?;
-    if vary.is_empty() {
+    let design = Design::from_args(&req.vary, req.sample.as_deref(), &req.ranges, req.seed)?;
+    let shard = match &req.shard {
+        Some(s) => Some(Shard::parse(s)?),
+        None => Shard::from_env(&|k| std::env::var(k).ok(), req.shards)?,
+    };
+    let indices: Vec<usize> = match shard {
+        Some(s) => s.runs(design.len()),
+        None => (0..design.len()).collect(),
+    };
+    if shard.is_some() && req.out.is_none() {
         return Err(Error::Input(
-            "sweep: give at least one --vary KEY=V1,V2,...".into(),
+            "sweep: a shard writes its part into a directory: give --out PART_DIR".into(),
         ));
     }
-    let mut seen = std::collections::HashSet::new();
-    if let Some(d) = vary.iter().find(|v| !seen.insert(v.key.clone())) {
-        return Err(Error::Input(format!("--vary: key '{}' given twice", d.key)));
+    check_size(req, indices.len())?;
+    let scene_text = std::fs::read(&req.scene).map_err(|e| {
+        Error::Input(format!(
+            "{}: cannot read the scene: {e}",
+            req.scene.display()
+        ))
+    })?;
+    // the part directory is shared by the shards (one file each); a whole sweep's output
+    // directory is staged and renamed into place
+    let stage = match (&req.out, shard) {
+        (Some(o), None) => Some(OutputDir::create(o)?),
+        _ => None,
+    };
+    let all = design.runs();
+    let (lines, runs, roms) = execute(req, &design, &all, &indices)?;
+    let mut report = SweepReport {
+        scene: req.scene.display().to_string(),
+        keys: design.keys(),
+        design,
+        runs,
+        lines,
+        roms,
+        shard,
+        probabilities: None,
+        sensitivities: None,
+        seconds: 0.0,
+        files: vec![],
+    };
+    if let (Some(s), Some(dir)) = (shard, &req.out) {
+        std::fs::create_dir_all(dir).map_err(|e| crate::files::WriteError {
+            path: dir.clone(),
+            source: e,
+        })?;
+        let path = dir.join(format!("part-{:05}-of-{:05}.json", s.index, s.count));
+        let part = Part {
+            format: PART_FORMAT.into(),
+            tool: tool_version(),
+            scene: report.scene.clone(),
+            scene_blake3: blake3::hash(&scene_text).to_hex().to_string(),
+            sets: req.sets.clone(),
+            design: report.design.clone(),
+            shard: s,
+            roms: report.roms.clone(),
+            seconds: started.elapsed().as_secs_f64(),
+            runs: report
+                .lines
+                .iter()
+                .cloned()
+                .zip(report.runs.iter().cloned())
+                .map(|(line, run)| PartRun { line, run })
+                .collect(),
+        };
+        let text = serde_json::to_string(&part).expect("serialisable");
+        write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        report.files = vec![path.display().to_string()];
+    } else {
+        add_statistics(&mut report);
+        if let Some(stage) = stage {
+            let files = write_outputs(stage.path(), &report)?;
+            report.files = files
+                .iter()
+                .map(|f| stage.final_path(Path::new(f)).display().to_string())
+                .collect();
+            stage.commit()?;
+        }
     }
-    check_size(req, &vary)?;
-    let stage = req.out.as_deref().map(OutputDir::create).transpose()?;
-    // the Cartesian product, last key fastest
-    let mut combos: Vec<Vec<String>> = vec![vec![]];
-    for v in &vary {
-        combos = combos
-            .into_iter()
-            .flat_map(|c| {
-                v.values.iter().map(move |x| {
-                    let mut c = c.clone();
-                    c.push(x.clone());
-                    c
-                })
-            })
-            .collect();
-    }
+    report.seconds = started.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+fn tool_version() -> String {
+    format!("linercav {}", env!("CARGO_PKG_VERSION"))
+}
+
+/// Runs `indices` of the design's runs `all`: their lines, full results and the ROMs used.
+fn execute(
+    req: &SweepRequest,
+    design: &Design,
+    all: &[Vec<String>],
+    indices: &[usize],
+) -> Result<(Vec<RunLine>, Vec<serde_json::Value>, Vec<String>)> {
+    let keys = design.keys();
     // load and validate every scene first: a bad value stops the sweep before any run
-    let scenes: Vec<Scene> = combos
+    let scenes: Vec<Scene> = indices
         .iter()
-        .map(|c| {
+        .map(|&k| {
             let mut sets = req.sets.clone();
-            sets.extend(vary.iter().zip(c).map(|(v, x)| format!("{}={x}", v.key)));
+            sets.extend(
+                keys.iter()
+                    .zip(&all[k])
+                    .map(|(key, x)| format!("{key}={x}")),
+            );
             let sc = super::load_scene(&req.scene, &sets)?;
             simulation(&sc)?;
             Ok(sc)
@@ -120,15 +258,15 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         .collect::<Result<_>>()?;
     // one ROM per distinct reduction input, loaded or built one after the other
     let mut roms: Vec<LoadedRom> = Vec::new();
-    let mut keys: BTreeMap<String, usize> = BTreeMap::new();
+    let mut rom_keys: BTreeMap<String, usize> = BTreeMap::new();
     let mut which = Vec::with_capacity(scenes.len());
     for sc in &scenes {
         let k = key_description(sc)?;
-        let idx = match keys.get(&k) {
+        let idx = match rom_keys.get(&k) {
             Some(&i) => i,
             None => {
                 roms.push(get_rom(sc, &req.cache)?);
-                keys.insert(k, roms.len() - 1);
+                rom_keys.insert(k, roms.len() - 1);
                 roms.len() - 1
             }
         };
@@ -144,72 +282,65 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         );
         b
     });
-    let runs: Vec<SweepRun> = scenes
+    let done: Vec<(RunLine, serde_json::Value)> = scenes
         .par_iter()
-        .zip(combos.par_iter())
+        .zip(indices.par_iter())
         .zip(which.par_iter())
-        .map(|((sc, values), &ri)| {
-            let t = Instant::now();
-            let sim = simulation(sc)?;
-            let piston = piston_of(sc)?;
-            let rom = &roms[ri].rom;
-            let res = run_cycle(sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None)
-                .map_err(|e| Error::Failure(format!("run {}: {e}", label(&vary, values))))?;
-            let ev = evaluate(
-                &res,
-                rom,
-                &crate::cavitation::Setup::new(&sc.cavitation)?,
-                &sc.engine.firing_order,
-                sc.rom.band_hz,
-            );
+        .map(|((sc, &k), &ri)| {
+            let run = one_run(sc, &roms[ri], &keys, &all[k])?;
             if let Some(b) = &bar {
                 b.inc(1);
             }
-            Ok(SweepRun {
-                values: values.clone(),
-                cylinders: SimulateReport::cylinders_of(&res),
-                risk: ev.cylinders,
-                peak_tilt_rad: res
-                    .series
-                    .cylinders
-                    .iter()
-                    .map(|c| c.tilt_rad.iter().fold(0.0f64, |m, v| m.max(v.abs())))
-                    .collect(),
-                seconds: t.elapsed().as_secs_f64(),
-            })
+            Ok((
+                line_of(k, &run),
+                serde_json::to_value(&run).expect("serialisable"),
+            ))
         })
         .collect::<Result<_>>()?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let mut report = SweepReport {
-        scene: req.scene.display().to_string(),
-        keys: vary.iter().map(|v| v.key.clone()).collect(),
+    let (lines, runs) = done.into_iter().unzip();
+    Ok((
+        lines,
         runs,
-        roms: roms.iter().map(|r| r.cache).collect(),
-        seconds: 0.0,
-        files: vec![],
-    };
-    if let Some(stage) = stage {
-        let files = write_outputs(stage.path(), &vary, &report)?;
-        report.files = files
-            .iter()
-            .map(|f| stage.final_path(Path::new(f)).display().to_string())
-            .collect();
-        stage.commit()?;
-    }
-    report.seconds = started.elapsed().as_secs_f64();
-    Ok(report)
+        roms.iter().map(|r| r.cache.to_string()).collect(),
+    ))
 }
 
-/// Refuses, before any scene is loaded for each run, a sweep whose runs would take longer
+/// One run of the sweep on its ROM.
+fn one_run(sc: &Scene, rom: &LoadedRom, keys: &[String], values: &[String]) -> Result<SweepRun> {
+    let t = Instant::now();
+    let sim = simulation(sc)?;
+    let piston = piston_of(sc)?;
+    let rom = &rom.rom;
+    let res = run_cycle(sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None)
+        .map_err(|e| Error::Failure(format!("run {}: {e}", label(keys, values))))?;
+    let ev = evaluate(
+        &res,
+        rom,
+        &crate::cavitation::Setup::new(&sc.cavitation)?,
+        &sc.engine.firing_order,
+        sc.rom.band_hz,
+    );
+    Ok(SweepRun {
+        values: values.to_vec(),
+        cylinders: SimulateReport::cylinders_of(&res),
+        risk: ev.cylinders,
+        peak_tilt_rad: res
+            .series
+            .cylinders
+            .iter()
+            .map(|c| c.tilt_rad.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+            .collect(),
+        seconds: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// Refuses, before any scene is loaded for each run, a sweep whose `runs` would take longer
 /// than `limits.max_hours` on this machine: runs x the base scene's transient estimate /
 /// cores.
-fn check_size(req: &SweepRequest, vary: &[Vary]) -> Result<()> {
-    let runs = vary
-        .iter()
-        .try_fold(1usize, |n, v| n.checked_mul(v.values.len()))
-        .unwrap_or(usize::MAX);
+fn check_size(req: &SweepRequest, runs: usize) -> Result<()> {
     let base = super::load_scene(&req.scene, &req.sets)?;
     let Some(one) = crate::scene::budget::transient(&base) else {
         return Ok(());
@@ -220,58 +351,166 @@ fn check_size(req: &SweepRequest, vary: &[Vary]) -> Result<()> {
         // runs in parallel, plus each run's scene and results held until the end (~50 kB)
         memory: one.memory * cores + runs as f64 * 50e3,
         seconds: runs as f64 * one.seconds / cores,
-        keys: "the --vary lists (fewer values), transient.step_deg or transient.cycles",
+        keys: "the design (fewer values or runs, or more shards), transient.step_deg or transient.cycles",
         detail: format!("{runs} runs of {}", one.detail),
     };
     crate::scene::budget::Limits::of(&base).check(&base, &est)?;
     Ok(())
 }
 
-fn label(vary: &[Vary], values: &[String]) -> String {
-    vary.iter()
+fn label(keys: &[String], values: &[String]) -> String {
+    keys.iter()
         .zip(values)
-        .map(|(v, x)| format!("{}={x}", v.key))
+        .map(|(k, x)| format!("{k}={x}"))
         .collect::<Vec<_>>()
         .join(" ")
 }
 
-/// Tidy CSV text: one row per run, cylinder and point.
-pub fn csv(report: &SweepReport) -> String {
+/// The header of `sweep.csv` for `keys`.
+fn csv_header(keys: &[String]) -> String {
+    let mut s: String = keys.iter().map(|k| format!("{k},")).collect();
+    s.push_str("cylinder,point,peak_negative_m_s2,peak_slap_force_n,peak_positive_m_s2,crank_angle_deg,peak_side_force_n,side_force_crank_angle_deg,peak_tilt_mrad,ca,risk,peak_negative_std_m_s2,peak_negative_max_m_s2\n");
+    s
+}
+
+/// The line of run `index`: its CSV rows (one per cylinder and point) and plotted values.
+fn line_of(index: usize, r: &SweepRun) -> RunLine {
     use std::fmt::Write;
     let mut s = String::new();
-    for k in &report.keys {
-        let _ = write!(s, "{k},");
+    for (ci, c) in r.cylinders.iter().enumerate() {
+        for (pi, p) in c.points.iter().enumerate() {
+            for v in &r.values {
+                let _ = write!(s, "{v},");
+            }
+            let risk = r.risk.get(ci).and_then(|x| x.points.get(pi));
+            let _ = writeln!(
+                s,
+                "{},{},{:.3},{:.2},{:.3},{:.3},{:.2},{:.3},{:.5},{:.4},{},{:.3},{:.3}",
+                c.cylinder,
+                p.point,
+                p.peak_negative_m_s2,
+                c.peak_slap_force_n,
+                p.peak_positive_m_s2,
+                p.crank_angle_deg,
+                c.peak_side_force_n,
+                c.side_force_crank_angle_deg,
+                r.peak_tilt_rad.get(ci).copied().unwrap_or(0.0) * 1e3,
+                risk.map(|x| x.ca).unwrap_or(f64::NAN),
+                risk.map(|x| x.risk.label()).unwrap_or("-"),
+                p.peak_negative_std_m_s2,
+                p.peak_negative_max_m_s2,
+            );
+        }
     }
-    let _ = writeln!(
-        s,
-        "cylinder,point,peak_negative_m_s2,peak_slap_force_n,peak_positive_m_s2,crank_angle_deg,peak_side_force_n,side_force_crank_angle_deg,peak_tilt_mrad,ca,risk,peak_negative_std_m_s2,peak_negative_max_m_s2"
-    );
-    for r in &report.runs {
-        for (ci, c) in r.cylinders.iter().enumerate() {
-            for (pi, p) in c.points.iter().enumerate() {
-                for v in &r.values {
-                    let _ = write!(s, "{v},");
-                }
-                let risk = r.risk.get(ci).and_then(|x| x.points.get(pi));
-                let _ = writeln!(
-                    s,
-                    "{},{},{:.3},{:.2},{:.3},{:.3},{:.2},{:.3},{:.5},{:.4},{},{:.3},{:.3}",
-                    c.cylinder,
-                    p.point,
-                    p.peak_negative_m_s2,
-                    c.peak_slap_force_n,
-                    p.peak_positive_m_s2,
-                    p.crank_angle_deg,
-                    c.peak_side_force_n,
-                    c.side_force_crank_angle_deg,
-                    r.peak_tilt_rad.get(ci).copied().unwrap_or(0.0) * 1e3,
-                    risk.map(|x| x.ca).unwrap_or(f64::NAN),
-                    risk.map(|x| x.risk.label()).unwrap_or("-"),
-                    p.peak_negative_std_m_s2,
-                    p.peak_negative_max_m_s2,
-                );
+    RunLine {
+        index,
+        values: r.values.clone(),
+        csv: s,
+        cylinders: r
+            .cylinders
+            .iter()
+            .enumerate()
+            .map(|(ci, c)| CylinderLine {
+                cylinder: c.cylinder,
+                slap_force_n: c.peak_slap_force_n,
+                tilt_rad: r.peak_tilt_rad.get(ci).copied().unwrap_or(0.0),
+                peak_negative_m_s2: c.points.iter().map(|p| p.peak_negative_m_s2).collect(),
+                risk: (0..c.points.len())
+                    .map(|pi| {
+                        r.risk
+                            .get(ci)
+                            .and_then(|x| x.points.get(pi))
+                            .map_or("-", |x| x.risk.label())
+                            .to_string()
+                    })
+                    .collect(),
+            })
+            .collect(),
+    }
+}
+
+/// Tidy CSV text: one row per run, cylinder and point.
+pub fn csv(report: &SweepReport) -> String {
+    let mut s = csv_header(&report.keys);
+    for l in &report.lines {
+        s.push_str(&l.csv);
+    }
+    s
+}
+
+/// For a sampled design: the probability of every risk class at every point
+/// ([`Proportion::wilson`]) and the rank sensitivities of the peaks to the keys.
+fn add_statistics(report: &mut SweepReport) {
+    if !report.design.is_sample() || report.lines.is_empty() {
+        return;
+    }
+    let n = report.lines.len();
+    let first = &report.lines[0];
+    let mut rows = Vec::new();
+    for (ci, c) in first.cylinders.iter().enumerate() {
+        for pi in 0..c.risk.len() {
+            for class in ["safe", "transitional", "high"] {
+                let k = report
+                    .lines
+                    .iter()
+                    .filter(|l| l.cylinders[ci].risk[pi] == class)
+                    .count();
+                rows.push(ProbabilityRow {
+                    cylinder: c.cylinder,
+                    point: pi + 1,
+                    class,
+                    p: Proportion::wilson(k, n),
+                });
             }
         }
+    }
+    let x: Vec<Vec<f64>> = (0..report.keys.len())
+        .map(|j| {
+            report
+                .lines
+                .iter()
+                .map(|l| l.values[j].parse::<f64>().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let mut y: Vec<Vec<f64>> = (0..first.cylinders.len())
+        .map(|ci| report.lines.iter().map(|l| worst(l, ci)).collect())
+        .collect();
+    y.push(
+        report
+            .lines
+            .iter()
+            .map(|l| {
+                (0..l.cylinders.len())
+                    .map(|ci| worst(l, ci))
+                    .fold(0.0, f64::max)
+            })
+            .collect(),
+    );
+    report.sensitivities = Some(Sensitivities {
+        keys: report.keys.clone(),
+        cylinders: first.cylinders.iter().map(|c| c.cylinder).collect(),
+        spearman: rank_sensitivities(&x, &y),
+    });
+    report.probabilities = Some(rows);
+}
+
+/// Largest mean peak negative acceleration over cylinder `ci`'s points in run `l`.
+fn worst(l: &RunLine, ci: usize) -> f64 {
+    l.cylinders[ci]
+        .peak_negative_m_s2
+        .iter()
+        .fold(0.0, |m: f64, &v| m.max(v))
+}
+
+/// `probabilities.csv`: cylinder,point,class,probability,ci_low,ci_high.
+pub fn probabilities_csv(rows: &[ProbabilityRow]) -> String {
+    let mut s = String::from("cylinder,point,class,probability,ci_low,ci_high\n");
+    for r in rows {
+        s.push_str(&format!(
+            "{},{},{},{:.4},{:.4},{:.4}\n",
+            r.cylinder, r.point, r.class, r.p.probability, r.p.ci_low, r.p.ci_high
+        ));
     }
     s
 }
@@ -282,21 +521,23 @@ fn numeric(v: &str) -> Option<f64> {
 }
 
 /// The three-panel figure of one varied key: per cylinder, slap force, peak tilt and peak
-/// negative acceleration (largest over the points) against the key, the other keys held at
-/// their first value.
+/// negative acceleration (largest over the points) against the key; for a grid the other
+/// keys held at their first value (lines), for a sample every run (dots).
 pub fn draw_key(path: &Path, report: &SweepReport, key: usize) -> Result<()> {
-    let runs: Vec<&SweepRun> = report
-        .runs
+    let sample = report.design.is_sample();
+    let runs: Vec<&RunLine> = report
+        .lines
         .iter()
         .filter(|r| {
-            r.values
-                .iter()
-                .enumerate()
-                .all(|(j, v)| j == key || *v == report.runs[0].values[j])
+            sample
+                || r.values
+                    .iter()
+                    .enumerate()
+                    .all(|(j, v)| j == key || *v == report.lines[0].values[j])
         })
         .collect();
     let ncyl = runs.first().map(|r| r.cylinders.len()).unwrap_or(0);
-    let series = |f: &dyn Fn(&SweepRun, usize) -> f64| -> Vec<Series> {
+    let series = |f: &dyn Fn(&RunLine, usize) -> f64| -> Vec<Series> {
         (0..ncyl)
             .map(|c| Series {
                 name: format!("cylinder {}", runs[0].cylinders[c].cylinder),
@@ -304,48 +545,37 @@ pub fn draw_key(path: &Path, report: &SweepReport, key: usize) -> Result<()> {
                     .iter()
                     .filter_map(|r| Some((numeric(&r.values[key])?, f(r, c))))
                     .collect(),
-                mark: Mark::LineDots,
+                mark: if sample { Mark::Dots } else { Mark::LineDots },
                 color: c,
             })
             .collect()
     };
     let k = &report.keys[key];
-    let slap = series(&|r, c| r.cylinders[c].peak_slap_force_n / 1e3);
-    let tilt = series(&|r, c| r.peak_tilt_rad[c] * 1e3);
-    let acc = series(&|r, c| {
-        r.cylinders[c]
-            .points
-            .iter()
-            .fold(0.0f64, |m, p| m.max(p.peak_negative_m_s2))
-    });
+    let chart = |title, y_label, series| Chart {
+        title,
+        x_label: k,
+        y_label,
+        series,
+        rules: vec![],
+        x_range: None,
+        y_range: None,
+    };
     let charts = [
-        Chart {
-            title: "Dynamic slap force",
-            x_label: k,
-            y_label: "peak slap force [kN]",
-            series: slap,
-            rules: vec![],
-            x_range: None,
-            y_range: None,
-        },
-        Chart {
-            title: "Piston tilt",
-            x_label: k,
-            y_label: "peak |tilt| [mrad]",
-            series: tilt,
-            rules: vec![],
-            x_range: None,
-            y_range: None,
-        },
-        Chart {
-            title: "Liner acceleration",
-            x_label: k,
-            y_label: "peak negative acceleration [m/s^2]",
-            series: acc,
-            rules: vec![],
-            x_range: None,
-            y_range: None,
-        },
+        chart(
+            "Dynamic slap force",
+            "peak slap force [kN]",
+            series(&|r, c| r.cylinders[c].slap_force_n / 1e3),
+        ),
+        chart(
+            "Piston tilt",
+            "peak |tilt| [mrad]",
+            series(&|r, c| r.cylinders[c].tilt_rad * 1e3),
+        ),
+        chart(
+            "Liner acceleration",
+            "peak negative acceleration [m/s^2]",
+            series(&|r, c| worst(r, c)),
+        ),
     ];
     write_png(path, (1800, 560), |root| {
         let areas = root.split_evenly((1, 3));
@@ -357,7 +587,98 @@ pub fn draw_key(path: &Path, report: &SweepReport, key: usize) -> Result<()> {
     Ok(())
 }
 
-fn write_outputs(dir: &Path, vary: &[Vary], report: &SweepReport) -> Result<Vec<String>> {
+/// The sample's picture: per cylinder the probability of each risk class at its worst point
+/// (the point most often high) with its 95 % interval, and the rank correlation of the
+/// cylinder's peak with every varied key (x: key number, named in the title).
+fn draw_statistics(path: &Path, report: &SweepReport) -> Result<()> {
+    let (Some(rows), Some(sens)) = (&report.probabilities, &report.sensitivities) else {
+        return Ok(());
+    };
+    let mut prob = Vec::new();
+    for (ci, class) in ["safe", "transitional", "high"].iter().enumerate() {
+        // per cylinder, the point with the largest probability of the high class
+        let mut pts = Vec::new();
+        for &cyl in &sens.cylinders {
+            let of_cyl = |cl: &'static str| {
+                rows.iter()
+                    .filter(move |r| r.cylinder == cyl && r.class == cl)
+            };
+            let point = of_cyl("high")
+                .max_by(|a, b| a.p.probability.total_cmp(&b.p.probability))
+                .map_or(1, |r| r.point);
+            if let Some(r) = of_cyl(class).find(|r| r.point == point) {
+                // the classes side by side around the cylinder's number
+                let x = cyl as f64 + 0.15 * (ci as f64 - 1.0);
+                pts.push((x, r.p.probability));
+                prob.push(Series {
+                    name: String::new(),
+                    points: vec![(x, r.p.ci_low), (x, r.p.ci_high)],
+                    mark: Mark::Line,
+                    color: ci + 3,
+                });
+            }
+        }
+        prob.push(Series {
+            name: format!("{class} (95 % interval)"),
+            points: pts,
+            mark: Mark::Dots,
+            color: ci + 3,
+        });
+    }
+    let mut sensitivity = Vec::new();
+    for (c, &cyl) in sens.cylinders.iter().enumerate() {
+        sensitivity.push(Series {
+            name: format!("cylinder {cyl}"),
+            points: sens
+                .spearman
+                .iter()
+                .enumerate()
+                .filter_map(|(k, row)| Some((k as f64 + 1.0 + 0.08 * c as f64 - 0.2, row[c]?)))
+                .collect(),
+            mark: Mark::Dots,
+            color: c,
+        });
+    }
+    let names: Vec<String> = sens
+        .keys
+        .iter()
+        .enumerate()
+        .map(|(k, n)| format!("{} {n}", k + 1))
+        .collect();
+    let x_label = format!("varied key: {}", names.join(", "));
+    let lo = sens.cylinders.iter().min().copied().unwrap_or(1) as f64 - 0.5;
+    let hi = sens.cylinders.iter().max().copied().unwrap_or(1) as f64 + 0.5;
+    let charts = [
+        Chart {
+            title: "Risk class probability at each cylinder's worst point",
+            x_label: "cylinder",
+            y_label: "probability over the sample",
+            series: prob,
+            rules: vec![],
+            x_range: Some((lo, hi)),
+            y_range: Some((0.0, 1.0)),
+        },
+        Chart {
+            title: "Rank correlation of each cylinder's peak with the keys",
+            x_label: &x_label,
+            y_label: "Spearman rho",
+            series: sensitivity,
+            rules: vec![],
+            x_range: Some((0.5, sens.keys.len() as f64 + 0.5)),
+            y_range: Some((-1.0, 1.0)),
+        },
+    ];
+    write_png(path, (1600, 600), |root| {
+        let areas = root.split_evenly((1, 2));
+        for (a, c) in areas.iter().zip(&charts) {
+            c.draw(a)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn write_outputs(dir: &Path, report: &SweepReport) -> Result<Vec<String>> {
     let csv_text = csv(report);
     let json = serde_json::to_string_pretty(report).expect("serialisable");
     let mut files: Vec<(PathBuf, Filler<'_>)> = vec![
@@ -370,15 +691,29 @@ fn write_outputs(dir: &Path, vary: &[Vary], report: &SweepReport) -> Result<Vec<
             Box::new(move |w| w.write_all(json.as_bytes())),
         ),
     ];
+    if let Some(rows) = &report.probabilities {
+        let text = probabilities_csv(rows);
+        files.push((
+            dir.join("probabilities.csv"),
+            Box::new(move |w| w.write_all(text.as_bytes())),
+        ));
+    }
     let mut names: Vec<String> = files.iter().map(|f| f.0.display().to_string()).collect();
     // PNGs first (each atomic), then the tables: a failure leaves no table behind
     let mut pngs = Vec::new();
-    for (j, v) in vary.iter().enumerate() {
-        if v.values.len() < 2 || v.values.iter().any(|x| numeric(x).is_none()) {
+    for (j, key) in report.keys.iter().enumerate() {
+        let values: std::collections::BTreeSet<&str> =
+            report.lines.iter().map(|l| l.values[j].as_str()).collect();
+        if values.len() < 2 || values.iter().any(|x| numeric(x).is_none()) {
             continue;
         }
-        let p = dir.join(format!("sweep_{}.png", v.key.replace('.', "_")));
+        let p = dir.join(format!("sweep_{}.png", key.replace('.', "_")));
         draw_key(&p, report, j)?;
+        pngs.push(p.display().to_string());
+    }
+    if report.probabilities.is_some() {
+        let p = dir.join("sweep_statistics.png");
+        draw_statistics(&p, report)?;
         pngs.push(p.display().to_string());
     }
     write_all_atomic(std::mem::take(&mut files))?;
@@ -386,41 +721,236 @@ fn write_outputs(dir: &Path, vary: &[Vary], report: &SweepReport) -> Result<Vec<
     Ok(names)
 }
 
+/// Part files named on the command line: directories (their `part-*.json`) or files.
+fn part_files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for p in inputs {
+        if p.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(p)
+                .map_err(|e| Error::Input(format!("{}: cannot list the parts: {e}", p.display())))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| {
+                    f.file_name()
+                        .and_then(|n| n.to_str())
+                        .is_some_and(|n| n.starts_with("part-") && n.ends_with(".json"))
+                })
+                .collect();
+            if found.is_empty() {
+                return Err(Error::Input(format!(
+                    "{}: no part-*.json in this directory (expected the --out PART_DIR of sweep shards)",
+                    p.display()
+                )));
+            }
+            found.sort();
+            files.extend(found);
+        } else {
+            files.push(p.clone());
+        }
+    }
+    Ok(files)
+}
+
+fn read_part(path: &Path) -> Result<Part> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Error::Input(format!("{}: cannot read the part: {e}", path.display())))?;
+    let part: Part = serde_json::from_str(&text).map_err(|e| {
+        Error::Input(format!(
+            "{}: not a sweep part ({e}; expected the part-I-of-N.json a `sweep --shard` writes)",
+            path.display()
+        ))
+    })?;
+    if part.format != PART_FORMAT {
+        return Err(Error::Input(format!(
+            "{}: part format '{}' (expected '{PART_FORMAT}')",
+            path.display(),
+            part.format
+        )));
+    }
+    Ok(part)
+}
+
+/// `sweep-merge`: checks that the parts come from one study (tool, scene text, overrides,
+/// design, shard count), that every shard and every run is present exactly once and each
+/// run is the design's, then writes the outputs of the unsharded sweep into `out`.
+pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepReport> {
+    let files = part_files(inputs)?;
+    let stage = OutputDir::create(out)?;
+    let mut parts: Vec<(PathBuf, Part)> = Vec::new();
+    for f in files {
+        let p = read_part(&f)?;
+        parts.push((f, p));
+    }
+    let (first_path, first) = &parts[0];
+    let total = first.design.len();
+    let design_runs = first.design.runs();
+    let mut shard_seen = vec![None::<PathBuf>; first.shard.count];
+    let mut lines: Vec<Option<(RunLine, serde_json::Value)>> = vec![None; total];
+    for (path, p) in &parts {
+        let differ = |what: &str, a: &dyn std::fmt::Debug, b: &dyn std::fmt::Debug| {
+            Error::Input(format!(
+                "{}: {what} {a:?} differs from {}'s {b:?}: the parts are not one study",
+                path.display(),
+                first_path.display()
+            ))
+        };
+        if p.tool != first.tool {
+            return Err(differ("tool", &p.tool, &first.tool));
+        }
+        if p.scene_blake3 != first.scene_blake3 {
+            return Err(differ(
+                "scene text (BLAKE3)",
+                &p.scene_blake3,
+                &first.scene_blake3,
+            ));
+        }
+        if p.sets != first.sets {
+            return Err(differ("--set overrides", &p.sets, &first.sets));
+        }
+        if p.design != first.design {
+            return Err(differ("design", &p.design, &first.design));
+        }
+        if p.shard.count != first.shard.count {
+            return Err(differ("shard count", &p.shard.count, &first.shard.count));
+        }
+        let slot = &mut shard_seen[p.shard.index - 1];
+        if let Some(other) = slot {
+            return Err(Error::Input(format!(
+                "{}: shard {}/{} given twice (also {})",
+                path.display(),
+                p.shard.index,
+                p.shard.count,
+                other.display()
+            )));
+        }
+        *slot = Some(path.clone());
+        let expected = p.shard.runs(total);
+        let got: Vec<usize> = p.runs.iter().map(|r| r.line.index).collect();
+        if got != expected {
+            return Err(Error::Input(format!(
+                "{}: shard {}/{} holds runs {} (expected {} runs, {}..)",
+                path.display(),
+                p.shard.index,
+                p.shard.count,
+                got.len(),
+                expected.len(),
+                expected
+                    .first()
+                    .map_or(String::from("none"), |k| k.to_string())
+            )));
+        }
+        for r in &p.runs {
+            if r.line.values != design_runs[r.line.index] {
+                return Err(Error::Input(format!(
+                    "{}: run {} has values {:?}, the design gives {:?}",
+                    path.display(),
+                    r.line.index,
+                    r.line.values,
+                    design_runs[r.line.index]
+                )));
+            }
+            lines[r.line.index] = Some((r.line.clone(), r.run.clone()));
+        }
+    }
+    let missing: Vec<String> = shard_seen
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.is_none())
+        .map(|(i, _)| format!("{}/{}", i + 1, first.shard.count))
+        .collect();
+    if !missing.is_empty() {
+        return Err(Error::Input(format!(
+            "sweep-merge: shard(s) {} missing (their part-I-of-N.json files)",
+            missing.join(", ")
+        )));
+    }
+    let (lines, runs): (Vec<RunLine>, Vec<serde_json::Value>) = lines
+        .into_iter()
+        .map(|l| l.expect("every shard present"))
+        .unzip();
+    let mut roms: Vec<String> = parts.iter().flat_map(|(_, p)| p.roms.clone()).collect();
+    roms.dedup();
+    let mut report = SweepReport {
+        scene: first.scene.clone(),
+        keys: first.design.keys(),
+        design: first.design.clone(),
+        runs,
+        lines,
+        roms,
+        shard: None,
+        probabilities: None,
+        sensitivities: None,
+        seconds: 0.0,
+        files: vec![],
+    };
+    add_statistics(&mut report);
+    let files = write_outputs(stage.path(), &report)?;
+    report.files = files
+        .iter()
+        .map(|f| stage.final_path(Path::new(f)).display().to_string())
+        .collect();
+    stage.commit()?;
+    report.seconds = started.elapsed().as_secs_f64();
+    Ok(report)
+}
+
 impl SweepReport {
     pub fn to_text(&self) -> String {
         use std::fmt::Write;
         let mut s = format!(
-            "{} runs of {} in {:.1} s (ROM: {:?})\n",
-            self.runs.len(),
+            "{} runs of {} in {:.1} s (ROM: {:?}){}\n",
+            self.lines.len(),
             self.scene,
             self.seconds,
-            self.roms
+            self.roms,
+            self.shard
+                .map(|s| format!(
+                    ", shard {}/{} of {} runs",
+                    s.index,
+                    s.count,
+                    self.design.len()
+                ))
+                .unwrap_or_default()
         );
-        for r in &self.runs {
-            let _ = write!(
-                s,
-                "  {:<40}",
-                self.keys
-                    .iter()
-                    .zip(&r.values)
-                    .map(|(k, v)| format!("{k}={v}"))
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            );
-            for c in &r.cylinders {
-                let a = c
-                    .points
-                    .iter()
-                    .fold(0.0f64, |m, p| m.max(p.peak_negative_m_s2));
+        let many = self.lines.len() > 40;
+        for r in self.lines.iter().take(if many { 20 } else { usize::MAX }) {
+            let _ = write!(s, "  {:<40}", label(&self.keys, &r.values));
+            for (ci, c) in r.cylinders.iter().enumerate() {
                 let _ = write!(
                     s,
                     " c{} {:>5.0}/{:>5.1}kN",
                     c.cylinder,
-                    a,
-                    c.peak_slap_force_n / 1e3
+                    worst(r, ci),
+                    c.slap_force_n / 1e3
                 );
             }
             let _ = writeln!(s);
+        }
+        if many {
+            let _ = writeln!(
+                s,
+                "  ... ({} more runs in the outputs)",
+                self.lines.len() - 20
+            );
+        }
+        if let Some(rows) = &self.probabilities {
+            let _ = writeln!(
+                s,
+                "probability of the high-risk class (worst point, 95 % interval):"
+            );
+            let cyls: std::collections::BTreeSet<usize> = rows.iter().map(|r| r.cylinder).collect();
+            for c in cyls {
+                if let Some(r) = rows
+                    .iter()
+                    .filter(|r| r.cylinder == c && r.class == "high")
+                    .max_by(|a, b| a.p.probability.total_cmp(&b.p.probability))
+                {
+                    let _ = writeln!(
+                        s,
+                        "  cylinder {c} point {}: {:.3} [{:.3}, {:.3}]",
+                        r.point, r.p.probability, r.p.ci_low, r.p.ci_high
+                    );
+                }
+            }
         }
         for f in &self.files {
             let _ = writeln!(s, "wrote {f}");

@@ -4,6 +4,7 @@
 //! rejected) -> validated [`Scene`] in SI units. Every error names the file and the key.
 
 pub mod budget;
+pub mod design;
 pub mod overrides;
 pub mod raw;
 pub mod sanity;

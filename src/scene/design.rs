@@ -1,0 +1,539 @@
+//! Designs of a what-if study: the scene overrides of every run, and how the runs are split
+//! into shards for a batch scheduler.
+//!
+//! A design is either a Cartesian grid of listed values (`--vary KEY=V1,V2,...`, the last key
+//! varying fastest) or a sample of ranges (`--sample lhs:N|mc:N --range KEY=LO:HI`):
+//! - Monte Carlo: u_dk ~ U(0, 1) independently, x_dk = LO_d + u_dk (HI_d - LO_d);
+//! - Latin hypercube: per key d a random permutation pi_d of 0..N and
+//!   u_dk = (pi_d(k) + U(0, 1)) / N, so each of the N equal strata of every range holds
+//!   exactly one run (McKay, Beckman and Conover 1979).
+//!
+//! The stream is ChaCha8 seeded with `--seed` (default 1): the same command gives the same
+//! runs on every machine and in every shard. Values are written as the shortest decimal that
+//! reads back to the same f64, and enter the scene as `--set KEY=VALUE`.
+//!
+//! Shard I of N (1-based) holds the runs k (0-based) with k mod N = I - 1: a deterministic
+//! partition that spreads every part of a grid over all shards.
+
+use rand_chacha::rand_core::{RngCore, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A design that cannot be used, with the argument or variable at fault.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum DesignError {
+    #[error("{arg} '{value}': {problem} (expected {expected})")]
+    Argument {
+        arg: &'static str,
+        value: String,
+        problem: String,
+        expected: &'static str,
+    },
+    #[error("{0}")]
+    Design(String),
+    #[error("environment variable {var}='{value}': {problem}")]
+    Environment {
+        var: &'static str,
+        value: String,
+        problem: String,
+    },
+}
+
+/// One listed key of a grid and its values (TOML literals, as written).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Vary {
+    pub key: String,
+    pub values: Vec<String>,
+}
+
+/// One sampled key: uniform over [lo, hi].
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Range {
+    pub key: String,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// How a sample is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Latin hypercube.
+    Lhs,
+    /// Plain Monte Carlo.
+    Mc,
+}
+
+/// The runs of a study.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Design {
+    Grid {
+        vary: Vec<Vary>,
+    },
+    Sample {
+        method: Method,
+        runs: usize,
+        ranges: Vec<Range>,
+        seed: u64,
+    },
+}
+
+fn argument(arg: &'static str, value: &str, problem: &str, expected: &'static str) -> DesignError {
+    DesignError::Argument {
+        arg,
+        value: value.to_string(),
+        problem: problem.to_string(),
+        expected,
+    }
+}
+
+/// Parses `KEY=V1,V2,...`.
+pub fn parse_vary(arg: &str) -> Result<Vary, DesignError> {
+    let bad = |p: &str| argument("--vary", arg, p, "KEY=V1,V2,...");
+    let (k, v) = arg.split_once('=').ok_or_else(|| bad("no '='"))?;
+    let key = k.trim();
+    if key.is_empty() {
+        return Err(bad("empty key"));
+    }
+    let values: Vec<String> = v.split(',').map(|s| s.trim().to_string()).collect();
+    if values.iter().any(|s| s.is_empty()) {
+        return Err(bad("empty value"));
+    }
+    Ok(Vary {
+        key: key.to_string(),
+        values,
+    })
+}
+
+/// Parses `KEY=LO:HI` (finite numbers, LO < HI).
+pub fn parse_range(arg: &str) -> Result<Range, DesignError> {
+    let bad = |p: &str| argument("--range", arg, p, "KEY=LO:HI with finite LO < HI");
+    let (k, v) = arg.split_once('=').ok_or_else(|| bad("no '='"))?;
+    let key = k.trim();
+    if key.is_empty() {
+        return Err(bad("empty key"));
+    }
+    let (lo, hi) = v.split_once(':').ok_or_else(|| bad("no ':'"))?;
+    let num = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| bad(&format!("'{}' is not a finite number", s.trim())))
+    };
+    let (lo, hi) = (num(lo)?, num(hi)?);
+    if lo >= hi {
+        return Err(bad("LO is not below HI"));
+    }
+    Ok(Range {
+        key: key.to_string(),
+        lo,
+        hi,
+    })
+}
+
+/// Parses `lhs:N` or `mc:N` (N >= 2).
+pub fn parse_sample(arg: &str) -> Result<(Method, usize), DesignError> {
+    let bad = |p: &str| argument("--sample", arg, p, "lhs:N or mc:N with N >= 2");
+    let (m, n) = arg.split_once(':').ok_or_else(|| bad("no ':'"))?;
+    let method = match m.trim() {
+        "lhs" => Method::Lhs,
+        "mc" => Method::Mc,
+        other => return Err(bad(&format!("unknown method '{other}'"))),
+    };
+    let n: usize = n
+        .trim()
+        .parse()
+        .map_err(|_| bad("N is not a whole number"))?;
+    if n < 2 {
+        return Err(bad("fewer than 2 runs"));
+    }
+    Ok((method, n))
+}
+
+impl Design {
+    /// The design of the command line: a grid from `vary`, or a sample of `ranges`; each key
+    /// at most once, one kind only.
+    pub fn from_args(
+        vary: &[String],
+        sample: Option<&str>,
+        ranges: &[String],
+        seed: Option<u64>,
+    ) -> Result<Self, DesignError> {
+        let design = match sample {
+            None => {
+                if !ranges.is_empty() || seed.is_some() {
+                    return Err(DesignError::Design(
+                        "--range and --seed belong to a sample: give --sample lhs:N or mc:N".into(),
+                    ));
+                }
+                if vary.is_empty() {
+                    return Err(DesignError::Design(
+                        "give at least one --vary KEY=V1,V2,... or a --sample with --range KEY=LO:HI".into(),
+                    ));
+                }
+                Design::Grid {
+                    vary: vary
+                        .iter()
+                        .map(|v| parse_vary(v))
+                        .collect::<Result<_, _>>()?,
+                }
+            }
+            Some(s) => {
+                if !vary.is_empty() {
+                    return Err(DesignError::Design(
+                        "--vary (a grid) and --sample cannot be combined; fix a key with --set"
+                            .into(),
+                    ));
+                }
+                let (method, runs) = parse_sample(s)?;
+                if ranges.is_empty() {
+                    return Err(DesignError::Design(
+                        "--sample needs at least one --range KEY=LO:HI".into(),
+                    ));
+                }
+                Design::Sample {
+                    method,
+                    runs,
+                    ranges: ranges
+                        .iter()
+                        .map(|r| parse_range(r))
+                        .collect::<Result<_, _>>()?,
+                    seed: seed.unwrap_or(1),
+                }
+            }
+        };
+        let keys = design.keys();
+        let mut seen = std::collections::HashSet::new();
+        if let Some(k) = keys.iter().find(|k| !seen.insert(k.as_str())) {
+            return Err(DesignError::Design(format!("key '{k}' given twice")));
+        }
+        Ok(design)
+    }
+
+    /// The varied keys, in order.
+    pub fn keys(&self) -> Vec<String> {
+        match self {
+            Design::Grid { vary } => vary.iter().map(|v| v.key.clone()).collect(),
+            Design::Sample { ranges, .. } => ranges.iter().map(|r| r.key.clone()).collect(),
+        }
+    }
+
+    /// Number of runs (saturating).
+    pub fn len(&self) -> usize {
+        match self {
+            Design::Grid { vary } => vary
+                .iter()
+                .try_fold(1usize, |n, v| n.checked_mul(v.values.len()))
+                .unwrap_or(usize::MAX),
+            Design::Sample { runs, .. } => *runs,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Whether the runs are a random sample (probabilities and sensitivities apply).
+    pub fn is_sample(&self) -> bool {
+        matches!(self, Design::Sample { .. })
+    }
+
+    /// The values of every key for every run (run-major).
+    pub fn runs(&self) -> Vec<Vec<String>> {
+        match self {
+            Design::Grid { vary } => {
+                let mut combos: Vec<Vec<String>> = vec![vec![]];
+                for v in vary {
+                    combos = combos
+                        .into_iter()
+                        .flat_map(|c| {
+                            v.values.iter().map(move |x| {
+                                let mut c = c.clone();
+                                c.push(x.clone());
+                                c
+                            })
+                        })
+                        .collect();
+                }
+                combos
+            }
+            Design::Sample {
+                method,
+                runs,
+                ranges,
+                seed,
+            } => {
+                let u = unit_sample(*method, *runs, ranges.len(), *seed);
+                (0..*runs)
+                    .map(|k| {
+                        ranges
+                            .iter()
+                            .enumerate()
+                            .map(|(d, r)| format!("{}", r.lo + u[d][k] * (r.hi - r.lo)))
+                            .collect()
+                    })
+                    .collect()
+            }
+        }
+    }
+}
+
+/// A uniform double in [0, 1) from the top 53 bits of a 64-bit draw.
+fn unit(rng: &mut ChaCha8Rng) -> f64 {
+    (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// Points u[d][k] in [0, 1)^dims of a Monte Carlo or Latin hypercube sample of n runs. The
+/// permutation is Fisher-Yates with j = floor(U (i + 1)) (the bias of a 53-bit U is below
+/// 1e-12 for every n this tool can run).
+fn unit_sample(method: Method, n: usize, dims: usize, seed: u64) -> Vec<Vec<f64>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..dims)
+        .map(|_| match method {
+            Method::Mc => (0..n).map(|_| unit(&mut rng)).collect(),
+            Method::Lhs => {
+                let mut perm: Vec<usize> = (0..n).collect();
+                for i in (1..n).rev() {
+                    let j = ((unit(&mut rng) * (i + 1) as f64) as usize).min(i);
+                    perm.swap(i, j);
+                }
+                perm.iter()
+                    .map(|&p| (p as f64 + unit(&mut rng)) / n as f64)
+                    .collect()
+            }
+        })
+        .collect()
+}
+
+/// Shard `index` (1-based) of `count`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl Shard {
+    /// Parses `I/N` with 1 <= I <= N.
+    pub fn parse(arg: &str) -> Result<Self, DesignError> {
+        let bad = |p: &str| argument("--shard", arg, p, "I/N with 1 <= I <= N");
+        let (i, n) = arg.split_once('/').ok_or_else(|| bad("no '/'"))?;
+        let num = |s: &str| {
+            s.trim()
+                .parse::<usize>()
+                .map_err(|_| bad(&format!("'{}' is not a whole number", s.trim())))
+        };
+        let (index, count) = (num(i)?, num(n)?);
+        if index == 0 || index > count {
+            return Err(bad("I outside 1..N"));
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// The shard a scheduler gives this process, from the environment `var`:
+    /// - Slurm job arrays: SLURM_ARRAY_TASK_ID within SLURM_ARRAY_TASK_MIN..=MAX (step 1; any
+    ///   first index, `--array=0-2` and `--array=1-3` alike): I = ID - MIN + 1, N = MAX - MIN + 1;
+    /// - Kubernetes Indexed Jobs: JOB_COMPLETION_INDEX (0-based) with the count `shards`
+    ///   (the Job's `completions`): I = INDEX + 1, N = shards.
+    ///
+    /// None when neither is set.
+    pub fn from_env(
+        var: &dyn Fn(&str) -> Option<String>,
+        shards: Option<usize>,
+    ) -> Result<Option<Self>, DesignError> {
+        let number = |name: &'static str| -> Result<Option<usize>, DesignError> {
+            match var(name) {
+                None => Ok(None),
+                Some(v) => {
+                    v.trim()
+                        .parse::<usize>()
+                        .map(Some)
+                        .map_err(|_| DesignError::Environment {
+                            var: name,
+                            value: v.clone(),
+                            problem: "not a whole number".into(),
+                        })
+                }
+            }
+        };
+        if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
+            let missing = |name: &'static str| DesignError::Environment {
+                var: name,
+                value: String::new(),
+                problem: "not set beside SLURM_ARRAY_TASK_ID (give --shard I/N)".into(),
+            };
+            let min =
+                number("SLURM_ARRAY_TASK_MIN")?.ok_or_else(|| missing("SLURM_ARRAY_TASK_MIN"))?;
+            let max =
+                number("SLURM_ARRAY_TASK_MAX")?.ok_or_else(|| missing("SLURM_ARRAY_TASK_MAX"))?;
+            if let Some(step) = number("SLURM_ARRAY_TASK_STEP")?.filter(|&s| s != 1) {
+                return Err(DesignError::Environment {
+                    var: "SLURM_ARRAY_TASK_STEP",
+                    value: step.to_string(),
+                    problem: "the array must be a contiguous range like --array=0-9 (or give --shard I/N)".into(),
+                });
+            }
+            let count = max
+                .checked_sub(min)
+                .map(|d| d + 1)
+                .filter(|_| id >= min && id <= max);
+            let count = count.ok_or_else(|| DesignError::Environment {
+                var: "SLURM_ARRAY_TASK_ID",
+                value: id.to_string(),
+                problem: format!("outside SLURM_ARRAY_TASK_MIN..MAX = {min}..{max}"),
+            })?;
+            if let Some(c) = number("SLURM_ARRAY_TASK_COUNT")?.filter(|&c| c != count) {
+                return Err(DesignError::Environment {
+                    var: "SLURM_ARRAY_TASK_COUNT",
+                    value: c.to_string(),
+                    problem: format!(
+                        "the array has gaps ({c} tasks in {min}..{max}): use a contiguous range or --shard I/N"
+                    ),
+                });
+            }
+            return Ok(Some(Shard {
+                index: id - min + 1,
+                count,
+            }));
+        }
+        if let Some(idx) = number("JOB_COMPLETION_INDEX")? {
+            let count = shards.ok_or_else(|| DesignError::Environment {
+                var: "JOB_COMPLETION_INDEX",
+                value: idx.to_string(),
+                problem: "give the number of shards (the Job's completions) with --shards N".into(),
+            })?;
+            if idx >= count {
+                return Err(DesignError::Environment {
+                    var: "JOB_COMPLETION_INDEX",
+                    value: idx.to_string(),
+                    problem: format!("not below --shards {count}"),
+                });
+            }
+            return Ok(Some(Shard {
+                index: idx + 1,
+                count,
+            }));
+        }
+        Ok(None)
+    }
+
+    /// The runs (0-based indices among `total`) of this shard: k with k mod N = I - 1.
+    pub fn runs(&self, total: usize) -> Vec<usize> {
+        (self.index - 1..total).step_by(self.count).collect()
+    }
+
+    /// Whether run `k` belongs to this shard.
+    pub fn holds(&self, k: usize) -> bool {
+        k % self.count == self.index - 1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn env(pairs: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
+        let m: std::collections::HashMap<String, String> = pairs
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        move |k: &str| m.get(k).cloned()
+    }
+
+    #[test]
+    fn shards_partition_the_runs() {
+        for total in [0, 1, 7, 25, 2000] {
+            for count in [1, 2, 3, 7, 40] {
+                let mut seen = vec![0; total];
+                for index in 1..=count {
+                    let s = Shard { index, count };
+                    for k in s.runs(total) {
+                        assert!(s.holds(k));
+                        seen[k] += 1;
+                    }
+                }
+                assert!(seen.iter().all(|&c| c == 1), "{total} {count}");
+            }
+        }
+    }
+
+    #[test]
+    fn slurm_arrays_from_zero_and_from_one_give_the_same_shards() {
+        for (lo, hi) in [(0, 2), (1, 3)] {
+            for id in lo..=hi {
+                let (i, mn, mx) = (id.to_string(), lo.to_string(), hi.to_string());
+                let e = env(&[
+                    ("SLURM_ARRAY_TASK_ID", &i),
+                    ("SLURM_ARRAY_TASK_MIN", &mn),
+                    ("SLURM_ARRAY_TASK_MAX", &mx),
+                    ("SLURM_ARRAY_TASK_COUNT", "3"),
+                ]);
+                let s = Shard::from_env(&e, None).unwrap().unwrap();
+                assert_eq!(
+                    s,
+                    Shard {
+                        index: id - lo + 1,
+                        count: 3
+                    }
+                );
+            }
+        }
+        let gaps = env(&[
+            ("SLURM_ARRAY_TASK_ID", "3"),
+            ("SLURM_ARRAY_TASK_MIN", "1"),
+            ("SLURM_ARRAY_TASK_MAX", "7"),
+            ("SLURM_ARRAY_TASK_COUNT", "3"),
+        ]);
+        assert!(Shard::from_env(&gaps, None).is_err());
+        let k8s = env(&[("JOB_COMPLETION_INDEX", "4")]);
+        assert_eq!(
+            Shard::from_env(&k8s, Some(5)).unwrap(),
+            Some(Shard { index: 5, count: 5 })
+        );
+        assert!(Shard::from_env(&k8s, None).is_err());
+        assert!(Shard::from_env(&k8s, Some(4)).is_err());
+        assert_eq!(Shard::from_env(&env(&[]), Some(4)).unwrap(), None);
+    }
+
+    #[test]
+    fn latin_hypercube_puts_one_run_in_every_stratum() {
+        let d = Design::from_args(
+            &[],
+            Some("lhs:50"),
+            &["a=40:120".into(), "b=-1:1".into()],
+            Some(7),
+        )
+        .unwrap();
+        let runs = d.runs();
+        assert_eq!(runs, d.runs(), "deterministic");
+        for (dim, (lo, hi)) in [(40.0, 120.0), (-1.0, 1.0)].into_iter().enumerate() {
+            let mut strata = vec![0; 50];
+            for r in &runs {
+                let x: f64 = r[dim].parse().unwrap();
+                assert!((lo..hi).contains(&x));
+                strata[((x - lo) / (hi - lo) * 50.0) as usize] += 1;
+            }
+            assert!(strata.iter().all(|&c| c == 1), "{strata:?}");
+        }
+        let other = Design::from_args(
+            &[],
+            Some("lhs:50"),
+            &["a=40:120".into(), "b=-1:1".into()],
+            Some(8),
+        )
+        .unwrap();
+        assert_ne!(runs, other.runs(), "the seed matters");
+    }
+
+    #[test]
+    fn bad_designs_name_the_argument() {
+        let e = Design::from_args(&[], Some("lhs:1"), &["a=1:2".into()], None).unwrap_err();
+        assert!(e.to_string().contains("--sample 'lhs:1'"), "{e}");
+        let e = Design::from_args(&[], Some("lhs:5"), &["a=2:1".into()], None).unwrap_err();
+        assert!(e.to_string().contains("--range 'a=2:1'"), "{e}");
+        let e = Design::from_args(&["a=1,2".into()], Some("mc:5"), &[], None).unwrap_err();
+        assert!(e.to_string().contains("cannot be combined"), "{e}");
+        let e = Design::from_args(&["a=1,2".into(), "a=3".into()], None, &[], None).unwrap_err();
+        assert!(e.to_string().contains("twice"), "{e}");
+    }
+}
