@@ -244,9 +244,32 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
     if let Some(est) = budget::rom_build(scene) {
         limits.check(scene, &est)?;
     }
-    if !opts.no_cache {
+    // one builder per entry: processes that missed it at the same time wait for the lock and
+    // then find what the builder stored
+    let _lock = if opts.no_cache {
+        None
+    } else {
         cache::check_writable(&dir)?;
-    }
+        let lock = cache::BuildLock::acquire(&path, |l| {
+            log::warn!(
+                "another process is building this ROM (lock {}); waiting for it",
+                l.display()
+            )
+        })?;
+        if lock.waited {
+            if let Lookup::Hit(rom) = cache::load(&path, &description)? {
+                return Ok(LoadedRom {
+                    rom: *rom,
+                    cache: "waited",
+                    seconds: t.elapsed().as_secs_f64(),
+                    cache_file: Some(path),
+                    build: None,
+                    replaced: None,
+                });
+            }
+        }
+        Some(lock)
+    };
     let (b, _, _) = build_rom(scene, false)?;
     let rom = b.rom.clone();
     if rom.info.system_modes == 0 {

@@ -126,6 +126,48 @@ pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
     std::fs::remove_file(&probe).map_err(fail)
 }
 
+/// The exclusive right to build one cache entry: an advisory lock (flock) on `<entry>.lock`
+/// beside it. Processes that miss the same entry at once (the shards of an array job on a
+/// shared cache directory) queue on it: one builds and stores, the others then find the entry.
+/// The lock ends when the guard is dropped or its process dies (no stale lock files to clean
+/// up by hand; the empty lock file itself stays).
+pub struct BuildLock {
+    _file: std::fs::File,
+    /// Whether another process held the lock when it was asked for.
+    pub waited: bool,
+}
+
+impl BuildLock {
+    /// Takes the lock of the cache entry `path`, waiting for a holder; `on_wait` runs once
+    /// when it has to wait.
+    pub fn acquire(path: &Path, on_wait: impl FnOnce(&Path)) -> Result<Self, WriteError> {
+        let lock = path.with_extension("lock");
+        let fail = |source| WriteError {
+            path: lock.clone(),
+            source,
+        };
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&lock)
+            .map_err(fail)?;
+        let waited = match file.try_lock() {
+            Ok(()) => false,
+            Err(std::fs::TryLockError::WouldBlock) => {
+                on_wait(&lock);
+                file.lock().map_err(fail)?;
+                true
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(fail(e)),
+        };
+        Ok(Self {
+            _file: file,
+            waited,
+        })
+    }
+}
+
 /// Writes a ROM made from `description` atomically.
 pub fn store(path: &Path, description: &str, rom: &EngineRom) -> Result<(), WriteError> {
     if let Some(dir) = path.parent() {
