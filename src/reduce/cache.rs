@@ -152,19 +152,32 @@ impl BuildLock {
             .write(true)
             .open(&lock)
             .map_err(fail)?;
-        let waited = match file.try_lock() {
-            Ok(()) => false,
-            Err(std::fs::TryLockError::WouldBlock) => {
-                on_wait(&lock);
-                file.lock().map_err(fail)?;
-                true
-            }
-            Err(std::fs::TryLockError::Error(e)) => return Err(fail(e)),
+        let waited = if flock(&file, libc::LOCK_EX | libc::LOCK_NB).is_ok() {
+            false
+        } else {
+            on_wait(&lock);
+            flock(&file, libc::LOCK_EX).map_err(fail)?;
+            true
         };
         Ok(Self {
             _file: file,
             waited,
         })
+    }
+}
+
+/// flock(2) on an open file (std's File::lock needs Rust 1.89; the crate's MSRV is 1.84).
+fn flock(file: &std::fs::File, op: libc::c_int) -> std::io::Result<()> {
+    use std::os::fd::AsRawFd;
+    loop {
+        // SAFETY: the descriptor is open for the call's duration (borrowed from `file`)
+        if unsafe { libc::flock(file.as_raw_fd(), op) } == 0 {
+            return Ok(());
+        }
+        let e = std::io::Error::last_os_error();
+        if e.kind() != std::io::ErrorKind::Interrupted {
+            return Err(e);
+        }
     }
 }
 
