@@ -38,7 +38,8 @@ struct ModelArgs {
     /// Override any scene field: --set liner.mesh.radial=3 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
-    /// Gmsh MSH 4.1 mesh instead of a scene.
+    /// Mesh file instead of a scene: Gmsh MSH 4.1 (.msh), Nastran bulk data (.bdf, .nas) or
+    /// Abaqus input (.inp), by extension.
     #[arg(long, conflicts_with = "scene")]
     mesh: Option<PathBuf>,
     /// Young's modulus [Pa] (with --mesh).

@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::fem::element::check_mesh as check_and_compact;
 use crate::fem::material::Elastic;
 use crate::mesh::checks::CheckReport;
-use crate::mesh::{gmsh, liner, Mesh};
+use crate::mesh::{liner, Mesh};
 use crate::scene::{MeshSource, Scene, PARTS};
 use std::path::PathBuf;
 
@@ -67,7 +67,7 @@ pub fn load_scene(path: &std::path::Path, sets: &[String]) -> Result<Scene> {
 fn read_mesh(source: &MeshSource) -> Result<(Mesh, Option<String>)> {
     Ok(match source {
         MeshSource::Liner { geometry, meshing } => (liner::generate(geometry, meshing), None),
-        MeshSource::File(p) => (gmsh::read(p)?, Some(p.display().to_string())),
+        MeshSource::File(p) => (crate::mesh::read(p)?, Some(p.display().to_string())),
     })
 }
 
@@ -102,7 +102,7 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
             material
                 .validate()
                 .map_err(|m| Error::Input(format!("material: {m}")))?;
-            let m = gmsh::read(mesh)?;
+            let m = crate::mesh::read(mesh)?;
             (
                 m,
                 Some(mesh.display().to_string()),

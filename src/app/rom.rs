@@ -10,7 +10,7 @@ use super::progress::Progress;
 use crate::error::{Error, Result};
 use crate::fem::element::check_mesh as check_and_compact;
 use crate::fem::surface::SurfaceMass;
-use crate::mesh::{crankcase, gmsh, liner, Mesh};
+use crate::mesh::{crankcase, liner, Mesh};
 use crate::reduce::cache::{self, Lookup};
 use crate::reduce::rom::{build, EngineRom, RomBuild, RomInputs, ROM_FORMAT};
 use crate::scene::budget::{self, Limits};
@@ -55,7 +55,7 @@ pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
     })?;
     let (mut lm, lfile) = match &scene.liner.source {
         MeshSource::Liner { geometry, meshing } => (liner::generate(geometry, meshing), None),
-        MeshSource::File(p) => (gmsh::read(p)?, Some(p.display().to_string())),
+        MeshSource::File(p) => (crate::mesh::read(p)?, Some(p.display().to_string())),
     };
     check_and_compact(&mut lm).map_err(|source| Error::Mesh {
         file: lfile.clone(),
@@ -78,7 +78,7 @@ pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
         CrankcaseSource::Parametric { geometry, meshing } => {
             (crankcase::generate(geometry, meshing), None)
         }
-        CrankcaseSource::File(p) => (gmsh::read(p)?, Some(p.display().to_string())),
+        CrankcaseSource::File(p) => (crate::mesh::read(p)?, Some(p.display().to_string())),
     };
     check_and_compact(&mut cm).map_err(|source| Error::Mesh {
         file: cfile,

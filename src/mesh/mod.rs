@@ -1,18 +1,41 @@
 //! Meshes: nodes, solid elements by kind, and named node sets.
 //!
-//! Coordinates are metres. Parametric generators (`liner`) and the Gmsh importer (`gmsh`) both
-//! produce a [`Mesh`]; `checks` validates it before any matrix is built.
+//! Coordinates are metres. Parametric generators (`liner`) and the importers of Gmsh MSH 4.1
+//! (`gmsh`), Nastran bulk data (`nastran`) and Abaqus input (`abaqus`) all produce a [`Mesh`];
+//! `checks` validates it before any matrix is built.
 
+pub mod abaqus;
 pub mod checks;
+pub(crate) mod collect;
 pub mod crankcase;
 pub mod element;
 pub mod gmsh;
 pub mod lattice;
 pub mod liner;
 pub mod merge;
+pub mod nastran;
 
 pub use element::ElementKind;
 use std::collections::BTreeMap;
+
+/// Reads a mesh file by its extension: `.msh` (Gmsh MSH 4.1), `.bdf` / `.nas` (Nastran bulk
+/// data), `.inp` (Abaqus input).
+pub fn read(path: &std::path::Path) -> Result<Mesh, gmsh::MshError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("msh") => gmsh::read(path),
+        Some("bdf") | Some("nas") => nastran::read(path),
+        Some("inp") => abaqus::read(path),
+        _ => Err(gmsh::MshError {
+            path: path.to_path_buf(),
+            line: 0,
+            msg: "unknown mesh format: expected .msh (Gmsh MSH 4.1), .bdf or .nas (Nastran bulk data) or .inp (Abaqus input)".into(),
+        }),
+    }
+}
 
 /// A block of elements of one kind, connectivity flattened (`kind.num_nodes()` per element).
 #[derive(Clone, Debug, PartialEq)]

@@ -154,7 +154,7 @@ pub struct RawCrankcase {
     /// Node sets held fixed (engine mounting); the parametric mesh offers `pan_rail`.
     #[serde(default)]
     pub fix: Vec<String>,
-    /// Optional Gmsh MSH 4.1 mesh (path relative to the scene file) replacing the parametric
+    /// Optional mesh file (Gmsh MSH 4.1 `.msh`, Nastran `.bdf`/`.nas`, Abaqus `.inp`; path relative to the scene file) replacing the parametric
     /// one; it must provide `seat_<c>`, `guide_<c>` and `point_<c>_<k>` node sets in the
     /// engine frame (see the README).
     #[serde(default)]
@@ -296,7 +296,7 @@ pub struct RawLiner {
     pub analysis_spacing_mm: f64,
     /// Number of analysis points (paper: 4).
     pub analysis_points: usize,
-    /// Optional Gmsh MSH 4.1 mesh of the liner (path relative to the scene file); replaces the
+    /// Optional mesh file of the liner (Gmsh MSH 4.1 `.msh`, Nastran `.bdf`/`.nas`, Abaqus `.inp`; path relative to the scene file); replaces the
     /// parametric mesh. It must provide the node sets the later stages use.
     #[serde(default)]
     pub mesh_file: Option<String>,

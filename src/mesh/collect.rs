@@ -1,0 +1,204 @@
+//! What the Nastran and Abaqus readers collect from an input deck, with the deck's own node
+//! and element ids, and its assembly into a [`Mesh`] (ids to indices, element node order to
+//! ours, sets to node and element sets).
+
+use super::element::ElementKind;
+use super::gmsh::MshError;
+use super::{ElementBlock, Mesh};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+
+/// A deck's contents by id, each record with the line it came from (for messages).
+#[derive(Default)]
+pub(crate) struct Collected {
+    pub nodes: Vec<(i64, [f64; 3], usize)>,
+    /// (element id, kind, node ids in our order, line)
+    pub elements: Vec<(i64, ElementKind, Vec<i64>, usize)>,
+    /// name -> (node ids, line of the set's first record)
+    pub node_sets: BTreeMap<String, (Vec<i64>, usize)>,
+    pub element_sets: BTreeMap<String, (Vec<i64>, usize)>,
+}
+
+/// Reorders a quadratic element's nodes from a deck's edge convention to ours: the corners
+/// keep their places, the mid-edge node of edge (a, b) moves to where our
+/// [`ElementKind::mid_edges`] has that edge.
+pub(crate) fn reorder(kind: ElementKind, theirs: &[(usize, usize)], ids: &[i64]) -> Vec<i64> {
+    let nc = kind.num_corners();
+    let mut out = ids.to_vec();
+    for (i, &(a, b)) in theirs.iter().enumerate() {
+        let j = kind
+            .mid_edges()
+            .iter()
+            .position(|&(p, q)| (p, q) == (a, b) || (p, q) == (b, a))
+            .expect("the same edges in both conventions");
+        out[nc + j] = ids[nc + i];
+    }
+    out
+}
+
+/// Mid-edge nodes of 10-node tetrahedra in Nastran (CTETRA) and Abaqus (C3D10): edges
+/// 1-2, 2-3, 3-1, 1-4, 2-4, 3-4 (0-based here).
+pub(crate) const TET10_DECK: [(usize, usize); 6] = [(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)];
+/// Abaqus C3D20(R): bottom edges, top edges, then the vertical ones.
+pub(crate) const HEX20_ABAQUS: [(usize, usize); 12] = [
+    (0, 1),
+    (1, 2),
+    (2, 3),
+    (3, 0),
+    (4, 5),
+    (5, 6),
+    (6, 7),
+    (7, 4),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+];
+/// Nastran CHEXA with 20 nodes: bottom edges, the vertical ones, then the top edges.
+pub(crate) const HEX20_NASTRAN: [(usize, usize); 12] = [
+    (0, 1),
+    (1, 2),
+    (2, 3),
+    (3, 0),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+    (4, 5),
+    (5, 6),
+    (6, 7),
+    (7, 4),
+];
+
+fn err(path: &Path, line: usize, msg: String) -> MshError {
+    MshError {
+        path: path.to_path_buf(),
+        line,
+        msg,
+    }
+}
+
+impl Collected {
+    /// The mesh: nodes in deck order, elements grouped by kind (in deck order within a kind),
+    /// node sets as given, element sets as element indices, and each element set also as the
+    /// node set of its elements' nodes unless a node set has its name.
+    pub fn into_mesh(self, path: &Path) -> Result<Mesh, MshError> {
+        let path: PathBuf = path.to_path_buf();
+        if self.nodes.is_empty() || self.elements.is_empty() {
+            return Err(err(
+                &path,
+                0,
+                "no nodes or no solid elements (expected nodes and 4/10-node tetrahedra or 8/20-node hexahedra)".into(),
+            ));
+        }
+        let mut index: HashMap<i64, usize> = HashMap::with_capacity(self.nodes.len());
+        let mut nodes = Vec::with_capacity(self.nodes.len());
+        for (id, x, line) in self.nodes {
+            if index.insert(id, nodes.len()).is_some() {
+                return Err(err(&path, line, format!("node {id} defined twice")));
+            }
+            nodes.push(x);
+        }
+        let node = |id: i64, line: usize, what: &str| {
+            index.get(&id).copied().ok_or_else(|| {
+                err(
+                    &path,
+                    line,
+                    format!("{what} refers to node {id}, which is not defined"),
+                )
+            })
+        };
+        let mut by_kind: BTreeMap<ElementKind, Vec<(i64, Vec<usize>)>> = BTreeMap::new();
+        let mut seen = HashMap::new();
+        for (eid, kind, ids, line) in &self.elements {
+            if seen.insert(*eid, *line).is_some() {
+                return Err(err(&path, *line, format!("element {eid} defined twice")));
+            }
+            let conn = ids
+                .iter()
+                .map(|&n| node(n, *line, &format!("element {eid}")))
+                .collect::<Result<Vec<_>, _>>()?;
+            by_kind.entry(*kind).or_default().push((*eid, conn));
+        }
+        // global element index of each element id (blocks in kind order)
+        let mut element_index: HashMap<i64, usize> = HashMap::new();
+        let mut blocks = Vec::new();
+        let mut acc = 0;
+        for (kind, list) in by_kind {
+            let mut conn = Vec::with_capacity(list.len() * kind.num_nodes());
+            for (eid, c) in list {
+                element_index.insert(eid, acc);
+                acc += 1;
+                conn.extend(c);
+            }
+            blocks.push(ElementBlock { kind, conn });
+        }
+        let mut mesh = Mesh {
+            nodes,
+            blocks,
+            ..Default::default()
+        };
+        for (name, (ids, line)) in &self.node_sets {
+            let set: BTreeSet<usize> = ids
+                .iter()
+                .map(|&n| node(n, *line, &format!("node set '{name}'")))
+                .collect::<Result<_, _>>()?;
+            mesh.node_sets
+                .insert(name.clone(), set.into_iter().collect());
+        }
+        for (name, (ids, line)) in &self.element_sets {
+            let mut elements = Vec::with_capacity(ids.len());
+            for e in ids {
+                let Some(&g) = element_index.get(e) else {
+                    return Err(err(
+                        &path,
+                        *line,
+                        format!("element set '{name}' refers to element {e}, which is not a solid element of the file"),
+                    ));
+                };
+                elements.push(g);
+            }
+            elements.sort_unstable();
+            elements.dedup();
+            if !mesh.node_sets.contains_key(name) {
+                let nodes: BTreeSet<usize> = mesh
+                    .elements()
+                    .enumerate()
+                    .filter(|(g, _)| elements.binary_search(g).is_ok())
+                    .flat_map(|(_, (_, c))| c.iter().copied())
+                    .collect();
+                mesh.node_sets
+                    .insert(name.clone(), nodes.into_iter().collect());
+            }
+            mesh.element_sets.insert(name.clone(), elements);
+        }
+        Ok(mesh)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reordering_maps_each_mid_edge_node_to_our_edge() {
+        // label every mid node by its edge in the deck's convention; after reordering, our
+        // position j must hold the node of our edge j
+        for (kind, theirs) in [
+            (ElementKind::Tet10, &TET10_DECK[..]),
+            (ElementKind::Hex20, &HEX20_ABAQUS[..]),
+            (ElementKind::Hex20, &HEX20_NASTRAN[..]),
+        ] {
+            let nc = kind.num_corners();
+            let code = |(a, b): (usize, usize)| (100 * a.min(b) + b.max(a)) as i64;
+            let ids: Vec<i64> = (0..nc as i64)
+                .chain(theirs.iter().map(|&e| 1000 + code(e)))
+                .collect();
+            let ours = reorder(kind, theirs, &ids);
+            for (j, &e) in kind.mid_edges().iter().enumerate() {
+                assert_eq!(ours[nc + j], 1000 + code(e));
+            }
+            assert_eq!(&ours[..nc], &ids[..nc]);
+        }
+    }
+}
