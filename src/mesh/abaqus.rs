@@ -81,6 +81,87 @@ fn param(params: &[(String, String)], key: &str) -> Option<String> {
         .map(|(_, v)| v.clone())
 }
 
+/// The data block a keyword line (without its `*`) opens.
+fn keyword(kw: &str, at: &dyn Fn(String) -> MshError) -> Result<Block, MshError> {
+    let mut parts = kw.split(',').map(|s| s.trim());
+    let name = parts.next().unwrap_or("").to_ascii_uppercase();
+    let params: Vec<(String, String)> = parts
+        .filter(|p| !p.is_empty())
+        .map(|p| match p.split_once('=') {
+            Some((k, v)) => (k.trim().to_ascii_uppercase(), v.trim().to_string()),
+            None => (p.to_ascii_uppercase(), String::new()),
+        })
+        .collect();
+    Ok(match name.as_str() {
+        "NODE" => Block::Node(param(&params, "NSET")),
+        "ELEMENT" => {
+            let t = param(&params, "TYPE").ok_or_else(|| at("*ELEMENT without TYPE=".into()))?;
+            let kind = solid_kind(&t).ok_or_else(|| {
+                at(format!(
+                    "element type {t} is not supported (expected C3D4, C3D10, C3D8 or C3D20, with formulation letters R, I, H, M)"
+                ))
+            })?;
+            Block::Element {
+                kind,
+                abaqus: t.to_ascii_uppercase(),
+                elset: param(&params, "ELSET"),
+            }
+        }
+        "NSET" | "ELSET" => {
+            let nodes = name == "NSET";
+            let name = param(&params, &name)
+                .ok_or_else(|| at(format!("*{name} without {name}= (the set's name)")))?;
+            Block::Set {
+                nodes,
+                name,
+                generate: params.iter().any(|(k, _)| k == "GENERATE"),
+            }
+        }
+        "INCLUDE" => {
+            return Err(at(
+                "*INCLUDE is not read: merge the included files into one input file".into(),
+            ))
+        }
+        _ => Block::Skip,
+    })
+}
+
+/// The ids of a set's data line `l` (fields `f`): a list, or `first, last[, step]` when
+/// `generate`.
+fn set_ids(
+    f: &[&str],
+    generate: bool,
+    l: &str,
+    at: &dyn Fn(String) -> MshError,
+) -> Result<Vec<i64>, MshError> {
+    let mut ids = Vec::new();
+    if generate {
+        let n: Vec<i64> = f
+            .iter()
+            .map(|w| w.parse())
+            .collect::<Result<_, _>>()
+            .map_err(|_| at(format!("expected 'first, last[, step]', found '{l}'")))?;
+        let (a, b, s) = match n[..] {
+            [a, b] => (a, b, 1),
+            [a, b, s] => (a, b, s),
+            _ => return Err(at(format!("expected 'first, last[, step]', found '{l}'"))),
+        };
+        if s <= 0 || b < a || (b - a) / s > 100_000_000 {
+            return Err(at(format!("GENERATE {a}, {b}, {s} is not a range")));
+        }
+        ids.extend((a..=b).step_by(s as usize));
+    } else {
+        for w in f {
+            ids.push(w.parse::<i64>().map_err(|_| {
+                at(format!(
+                    "'{w}' is not an id (sets of sets are not read: list the ids)"
+                ))
+            })?);
+        }
+    }
+    Ok(ids)
+}
+
 /// Parses an input file; `path` is used in messages only.
 pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
     let mut c = Collected::default();
@@ -104,48 +185,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                     "the element started on line {first} lacks nodes before this keyword"
                 )));
             }
-            let mut parts = kw.split(',').map(|s| s.trim());
-            let name = parts.next().unwrap_or("").to_ascii_uppercase();
-            let params: Vec<(String, String)> = parts
-                .filter(|p| !p.is_empty())
-                .map(|p| match p.split_once('=') {
-                    Some((k, v)) => (k.trim().to_ascii_uppercase(), v.trim().to_string()),
-                    None => (p.to_ascii_uppercase(), String::new()),
-                })
-                .collect();
-            block = match name.as_str() {
-                "NODE" => Block::Node(param(&params, "NSET")),
-                "ELEMENT" => {
-                    let t = param(&params, "TYPE")
-                        .ok_or_else(|| at("*ELEMENT without TYPE=".into()))?;
-                    let kind = solid_kind(&t).ok_or_else(|| {
-                        at(format!(
-                            "element type {t} is not supported (expected C3D4, C3D10, C3D8 or C3D20, with formulation letters R, I, H, M)"
-                        ))
-                    })?;
-                    Block::Element {
-                        kind,
-                        abaqus: t.to_ascii_uppercase(),
-                        elset: param(&params, "ELSET"),
-                    }
-                }
-                "NSET" | "ELSET" => {
-                    let nodes = name == "NSET";
-                    let name = param(&params, &name)
-                        .ok_or_else(|| at(format!("*{name} without {name}= (the set's name)")))?;
-                    Block::Set {
-                        nodes,
-                        name,
-                        generate: params.iter().any(|(k, _)| k == "GENERATE"),
-                    }
-                }
-                "INCLUDE" => {
-                    return Err(at(
-                        "*INCLUDE is not read: merge the included files into one input file".into(),
-                    ))
-                }
-                _ => Block::Skip,
-            };
+            block = keyword(kw, &at)?;
             continue;
         }
         let numbers = || -> Result<Vec<&str>, MshError> {
@@ -230,34 +270,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                 name,
                 generate,
             } => {
-                let f = numbers()?;
-                let mut ids = Vec::new();
-                if *generate {
-                    let n: Vec<i64> = f
-                        .iter()
-                        .map(|w| w.parse())
-                        .collect::<Result<_, _>>()
-                        .map_err(|_| at(format!("expected 'first, last[, step]', found '{l}'")))?;
-                    let (a, b, s) = match n[..] {
-                        [a, b] => (a, b, 1),
-                        [a, b, s] => (a, b, s),
-                        _ => {
-                            return Err(at(format!("expected 'first, last[, step]', found '{l}'")))
-                        }
-                    };
-                    if s <= 0 || b < a || (b - a) / s > 100_000_000 {
-                        return Err(at(format!("GENERATE {a}, {b}, {s} is not a range")));
-                    }
-                    ids.extend((a..=b).step_by(s as usize));
-                } else {
-                    for w in f {
-                        ids.push(w.parse::<i64>().map_err(|_| {
-                            at(format!(
-                                "'{w}' is not an id (sets of sets are not read: list the ids)"
-                            ))
-                        })?);
-                    }
-                }
+                let ids = set_ids(&numbers()?, *generate, l, &at)?;
                 let sets = if *nodes {
                     &mut c.node_sets
                 } else {
