@@ -514,6 +514,31 @@ proptest! {
         prop_assert!(t.elapsed() < CASE_LIMIT);
     }
 
+    /// Fuzz (400 cases each): mutated Nastran and Abaqus decks (meshio-written fixtures) are
+    /// read and checked without a panic and in bounded time.
+    #[test]
+    fn fuzz_mutated_nastran_and_abaqus_decks_never_panic(
+        muts in prop::collection::vec(mutation(), 1..4)
+    ) {
+        for (file, nastran) in [
+            ("tests/fixtures/block_hex20.bdf", true),
+            ("tests/fixtures/block_hex20_free.nas", true),
+            ("tests/fixtures/block_hex20.inp", false),
+        ] {
+            let text = apply(&fixture_text(file), &muts);
+            let t = Instant::now();
+            let read = if nastran {
+                linercav::mesh::nastran::parse(Path::new(file), &text)
+            } else {
+                linercav::mesh::abaqus::parse(Path::new(file), &text)
+            };
+            if let Ok(mut mesh) = read {
+                let _ = linercav::fem::element::check_mesh(&mut mesh);
+            }
+            prop_assert!(t.elapsed() < CASE_LIMIT);
+        }
+    }
+
     /// Fuzz (400 cases): a hostile value at a random place of the small engine's scene is
     /// refused or accepted by the loader, and the size estimates of what it accepts are
     /// finite, without a panic.
