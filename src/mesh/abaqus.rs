@@ -148,7 +148,7 @@ fn set_ids(
             _ => return Err(at(format!("expected 'first, last[, step]', found '{l}'"))),
         };
         // a file defines fewer ids than it has bytes: a longer range is hostile
-    if s <= 0 || b < a || (b - a) / s > file_bytes as i64 {
+        if s <= 0 || b < a || (b - a) / s > file_bytes as i64 {
             return Err(at(format!("GENERATE {a}, {b}, {s} is not a range")));
         }
         ids.extend((a..=b).step_by(s as usize));
