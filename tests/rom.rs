@@ -25,7 +25,7 @@ fn scene(sets: &[&str]) -> Scene {
 /// model, paired mode shapes with MAC > 0.98. The full model uses the same interface fields
 /// and no modal truncation, so the difference is the Craig-Bampton truncation alone.
 #[test]
-fn rom_matches_full_coupled_model() {
+fn verification_rom_matches_full_coupled_model() {
     rom_against_full(&scene(&[]));
 }
 
@@ -33,7 +33,7 @@ fn rom_matches_full_coupled_model() {
 /// liner whose lower end hangs free in the crank bay. The guide interface then sits between
 /// two free liner sections and the crankcase's support plate above an open hanging zone.
 #[test]
-fn rom_matches_full_coupled_model_with_a_raised_guide() {
+fn verification_rom_matches_full_coupled_model_with_a_raised_guide() {
     let sc = scene(&["liner.guide_depth_mm=150"]);
     let g = &sc.liner_geometry;
     assert!((g.guide_bottom - 0.080).abs() < 1e-12, "{}", g.guide_bottom);
@@ -44,7 +44,7 @@ fn rom_matches_full_coupled_model_with_a_raised_guide() {
 /// `cargo test --release --test rom -- --ignored default_engine`.
 #[test]
 #[ignore = "heavy: the default engine's full coupled model, ~12 min, ~6 GB"]
-fn default_engine_rom_matches_full_coupled_model() {
+fn verification_default_engine_rom_matches_full_coupled_model() {
     let sc = Scene::load(Path::new("models/engine.toml"), &[]).expect("default scene");
     rom_against_full(&sc);
 }
@@ -74,7 +74,7 @@ fn rom_against_full(sc: &Scene) {
 /// translated to another bore (interface fields evaluated about that axis) must give the same
 /// reduced matrices to roundoff: the reuse is exact, not an approximation.
 #[test]
-fn reused_liner_reduction_equals_reducing_a_placed_copy() {
+fn verification_reused_liner_reduction_equals_reducing_a_placed_copy() {
     let sc = scene(&[]);
     let (lm, cm) = load_meshes(&sc).unwrap();
     let inp = rom_inputs(&sc, &lm, &cm, false);

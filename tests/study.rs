@@ -37,7 +37,7 @@ fn json_without_timing(p: &Path) -> serde_json::Value {
 }
 
 #[test]
-fn merged_shards_equal_the_unsharded_sweep() {
+fn verification_merged_shards_equal_the_unsharded_sweep() {
     let dir = tempfile::tempdir().unwrap();
     let (full, parts, merged) = (
         dir.path().join("full"),

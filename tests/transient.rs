@@ -17,7 +17,7 @@ use std::sync::OnceLock;
 const SMALL: &str = "tests/fixtures/engine_small.toml";
 
 #[test]
-fn undamped_newmark_conserves_energy() {
+fn verification_undamped_newmark_conserves_energy() {
     // Average acceleration on eta'' + omega^2 eta = 0 conserves 1/2 (eta'^2 + omega^2 eta^2)
     // exactly; over 10^4 steps only roundoff (~1e-13) may accumulate.
     let omega = [
@@ -47,7 +47,7 @@ fn undamped_newmark_conserves_energy() {
 }
 
 #[test]
-fn newmark_period_error_matches_formula() {
+fn verification_newmark_period_error_matches_formula() {
     // Period measured from zero crossings over 200 periods vs
     // T_num / T = (omega dt / 2) / atan(omega dt / 2); the crossing interpolation error is
     // below 1e-6 of a period, so 1e-5 relative is a safe bound.
@@ -199,7 +199,7 @@ impl Structure for FreeMass {
 /// forces taken unshifted while the structure's are shifted would break the balance by about
 /// alpha times the impulse during contact.
 #[test]
-fn hht_bodies_exchange_momentum_with_the_structure_exactly() {
+fn verification_hht_bodies_exchange_momentum_with_the_structure_exactly() {
     let (m, ms, k, c) = (2.0, 5.0, 1.0e8, 2.0e3);
     let law = SliceLaw::new(k, 0.0, 0.0);
     for alpha in [0.0, -0.1, -1.0 / 3.0] {
@@ -606,7 +606,7 @@ fn engine_cycle_runs_with_bounded_energy_and_finite_peaks() {
 /// deviation and largest value of the three single-cycle peaks must come back (to roundoff of
 /// the summation: 1e-9 relative).
 #[test]
-fn averaged_cycles_are_the_statistics_of_the_single_cycles() {
+fn verification_averaged_cycles_are_the_statistics_of_the_single_cycles() {
     let single: Vec<_> = (1..=3)
         .map(|k| simulate(&[&format!("transient.cycles={k}")], |s| s.tolerance = None).unwrap())
         .collect();
@@ -688,7 +688,7 @@ fn verification_accuracy_control_meets_its_tolerance_against_a_converged_run() {
 }
 
 #[test]
-fn per_cylinder_coupling_matches_the_monolithic_step() {
+fn verification_per_cylinder_coupling_matches_the_monolithic_step() {
     // Lagging the other cylinder's within-step influence changes the contact by the measured
     // lag; on this engine that is below 1 % of the skirt penetration, and the peaks (which
     // follow the slap, itself sensitive to the contact history) agree to 2 %.
@@ -717,7 +717,7 @@ fn per_cylinder_coupling_matches_the_monolithic_step() {
 }
 
 #[test]
-fn bounded_predictions_change_nothing() {
+fn verification_bounded_predictions_change_nothing() {
     // The predictor's products are skipped only where the Cauchy-Schwarz bound proves a slice
     // apart, and such a slice's exact penetration would have been below the onset as well: every
     // peak, angle and counter of a run with the bound equals the run without it, bit for bit
