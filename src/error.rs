@@ -35,6 +35,8 @@ pub enum Error {
     Modal(#[from] crate::eigen::modal::ModalError),
     #[error(transparent)]
     Design(#[from] crate::scene::design::DesignError),
+    #[error(transparent)]
+    Part(#[from] crate::scene::design::PartError),
     #[error("cavitation thresholds: {0}")]
     Thresholds(#[from] crate::cavitation::criteria::ThresholdError),
 }
@@ -46,7 +48,11 @@ impl Error {
             Error::Scene(_) | Error::Msh(_) | Error::Mesh { .. } | Error::Input(_) => 2,
             // an output that cannot be written, a cache file that cannot be read: the user's
             // to fix (a path, a permission, a full disk)
-            Error::Write(_) | Error::Cache(_) | Error::Thresholds(_) | Error::Design(_) => 2,
+            Error::Write(_)
+            | Error::Cache(_)
+            | Error::Thresholds(_)
+            | Error::Design(_)
+            | Error::Part(_) => 2,
             Error::Model(ModelError::Set(_)) | Error::Model(ModelError::NoDofs) => 2,
             Error::Modal(e) => e.exit_code(),
             Error::Rom(e) => e.exit_code(),

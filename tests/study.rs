@@ -126,6 +126,28 @@ fn parts_of_different_studies_are_refused() {
     ]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("given twice"), "{err}");
+    // forged parts: a shard number out of range, a run taken out
+    let part = a.join("part-00001-of-00002.json");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&part).unwrap()).unwrap();
+    for (forge, needle) in [("shard", "shard 5/2"), ("runs", "does not hold its runs")] {
+        let mut f = v.clone();
+        if forge == "shard" {
+            f["shard"]["index"] = 5.into();
+        } else {
+            f["runs"].as_array_mut().unwrap().pop();
+        }
+        let forged = dir.path().join(format!("forged-{forge}.json"));
+        std::fs::write(&forged, serde_json::to_string(&f).unwrap()).unwrap();
+        let (code, _, err) = linercav(&[
+            "sweep-merge",
+            forged.to_str().unwrap(),
+            "--out",
+            dir.path().join("m").to_str().unwrap(),
+        ]);
+        assert_eq!(code, 2, "{forge}: {err}");
+        assert!(err.contains(needle), "{forge}: {err}");
+    }
 }
 
 #[test]

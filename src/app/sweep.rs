@@ -19,7 +19,7 @@ use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
 use crate::files::{write_all_atomic, write_atomic, Filler, OutputDir};
 use crate::report::png::{write_png, Chart, Mark, Series};
-use crate::scene::design::{Design, Shard};
+use crate::scene::design::{Design, PartError, Shard};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -722,12 +722,15 @@ fn write_outputs(dir: &Path, report: &SweepReport) -> Result<Vec<String>> {
 }
 
 /// Part files named on the command line: directories (their `part-*.json`) or files.
-fn part_files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
+fn part_files(inputs: &[PathBuf]) -> std::result::Result<Vec<PathBuf>, PartError> {
     let mut files = Vec::new();
     for p in inputs {
         if p.is_dir() {
             let mut found: Vec<PathBuf> = std::fs::read_dir(p)
-                .map_err(|e| Error::Input(format!("{}: cannot list the parts: {e}", p.display())))?
+                .map_err(|e| PartError::Read {
+                    path: p.clone(),
+                    reason: e.to_string(),
+                })?
                 .filter_map(|e| e.ok().map(|e| e.path()))
                 .filter(|f| {
                     f.file_name()
@@ -736,10 +739,7 @@ fn part_files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
                 })
                 .collect();
             if found.is_empty() {
-                return Err(Error::Input(format!(
-                    "{}: no part-*.json in this directory (expected the --out PART_DIR of sweep shards)",
-                    p.display()
-                )));
+                return Err(PartError::NoParts { path: p.clone() });
             }
             found.sort();
             files.extend(found);
@@ -750,28 +750,106 @@ fn part_files(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-fn read_part(path: &Path) -> Result<Part> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::Input(format!("{}: cannot read the part: {e}", path.display())))?;
-    let part: Part = serde_json::from_str(&text).map_err(|e| {
-        Error::Input(format!(
-            "{}: not a sweep part ({e}; expected the part-I-of-N.json a `sweep --shard` writes)",
-            path.display()
-        ))
+/// Reads a part and checks what it says of itself: format, shard numbers, that it holds
+/// exactly its shard's runs of its design, each with the design's values.
+fn read_part(path: &Path) -> std::result::Result<Part, PartError> {
+    let text = std::fs::read_to_string(path).map_err(|e| PartError::Read {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
     })?;
+    let not_a_part = |reason: String| PartError::NotAPart {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let part: Part = serde_json::from_str(&text).map_err(|e| not_a_part(e.to_string()))?;
     if part.format != PART_FORMAT {
-        return Err(Error::Input(format!(
-            "{}: part format '{}' (expected '{PART_FORMAT}')",
-            path.display(),
+        return Err(not_a_part(format!(
+            "format '{}', expected '{PART_FORMAT}'",
             part.format
+        )));
+    }
+    let Shard { index, count } = part.shard;
+    if count == 0 || index == 0 || index > count {
+        return Err(not_a_part(format!("shard {index}/{count}")));
+    }
+    let total = part.design.len();
+    let runs_problem = |problem: String| PartError::Runs {
+        path: path.to_path_buf(),
+        index,
+        count,
+        total,
+        problem,
+    };
+    let got: Vec<usize> = part.runs.iter().map(|r| r.line.index).collect();
+    if got != part.shard.runs(total) {
+        return Err(runs_problem(format!("it holds {} runs", got.len())));
+    }
+    let design_runs = part.design.runs();
+    if let Some(r) = part
+        .runs
+        .iter()
+        .find(|r| r.line.values != design_runs[r.line.index])
+    {
+        return Err(runs_problem(format!(
+            "run {} has the values {:?}, the design gives {:?}",
+            r.line.index, r.line.values, design_runs[r.line.index]
         )));
     }
     Ok(part)
 }
 
-/// `sweep-merge`: checks that the parts come from one study (tool, scene text, overrides,
-/// design, shard count), that every shard and every run is present exactly once and each
-/// run is the design's, then writes the outputs of the unsharded sweep into `out`.
+/// Checks that `p` (from `path`) belongs to the study of `first` (from `first_path`): tool,
+/// scene text, overrides, design and shard count.
+fn same_study(
+    path: &Path,
+    p: &Part,
+    first_path: &Path,
+    first: &Part,
+) -> std::result::Result<(), PartError> {
+    let differ = |what: &'static str, theirs: String, ours: String| PartError::Differs {
+        path: path.to_path_buf(),
+        first: first_path.to_path_buf(),
+        what,
+        theirs,
+        ours,
+    };
+    if p.tool != first.tool {
+        return Err(differ("tool", p.tool.clone(), first.tool.clone()));
+    }
+    if p.scene_blake3 != first.scene_blake3 {
+        return Err(differ(
+            "scene text (BLAKE3)",
+            p.scene_blake3.clone(),
+            first.scene_blake3.clone(),
+        ));
+    }
+    if p.sets != first.sets {
+        return Err(differ(
+            "--set overrides",
+            format!("{:?}", p.sets),
+            format!("{:?}", first.sets),
+        ));
+    }
+    if p.design != first.design {
+        return Err(differ(
+            "design",
+            format!("{:?}", p.design),
+            format!("{:?}", first.design),
+        ));
+    }
+    if p.shard.count != first.shard.count {
+        return Err(differ(
+            "shard count",
+            p.shard.count.to_string(),
+            first.shard.count.to_string(),
+        ));
+    }
+    Ok(())
+}
+
+/// `sweep-merge`: checks that the parts come from one study ([`same_study`]), that every
+/// shard is present exactly once and holds its runs ([`read_part`]), then writes the outputs
+/// of the unsharded sweep into `out`.
 pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepReport> {
     let files = part_files(inputs)?;
     let stage = OutputDir::create(out)?;
@@ -781,73 +859,22 @@ pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepRe
         parts.push((f, p));
     }
     let (first_path, first) = &parts[0];
-    let total = first.design.len();
-    let design_runs = first.design.runs();
     let mut shard_seen = vec![None::<PathBuf>; first.shard.count];
-    let mut lines: Vec<Option<(RunLine, serde_json::Value)>> = vec![None; total];
+    let mut lines: Vec<Option<(RunLine, serde_json::Value)>> = vec![None; first.design.len()];
     for (path, p) in &parts {
-        let differ = |what: &str, a: &dyn std::fmt::Debug, b: &dyn std::fmt::Debug| {
-            Error::Input(format!(
-                "{}: {what} {a:?} differs from {}'s {b:?}: the parts are not one study",
-                path.display(),
-                first_path.display()
-            ))
-        };
-        if p.tool != first.tool {
-            return Err(differ("tool", &p.tool, &first.tool));
-        }
-        if p.scene_blake3 != first.scene_blake3 {
-            return Err(differ(
-                "scene text (BLAKE3)",
-                &p.scene_blake3,
-                &first.scene_blake3,
-            ));
-        }
-        if p.sets != first.sets {
-            return Err(differ("--set overrides", &p.sets, &first.sets));
-        }
-        if p.design != first.design {
-            return Err(differ("design", &p.design, &first.design));
-        }
-        if p.shard.count != first.shard.count {
-            return Err(differ("shard count", &p.shard.count, &first.shard.count));
-        }
+        same_study(path, p, first_path, first)?;
         let slot = &mut shard_seen[p.shard.index - 1];
         if let Some(other) = slot {
-            return Err(Error::Input(format!(
-                "{}: shard {}/{} given twice (also {})",
-                path.display(),
-                p.shard.index,
-                p.shard.count,
-                other.display()
-            )));
+            return Err(PartError::Twice {
+                path: path.clone(),
+                index: p.shard.index,
+                count: p.shard.count,
+                other: other.clone(),
+            }
+            .into());
         }
         *slot = Some(path.clone());
-        let expected = p.shard.runs(total);
-        let got: Vec<usize> = p.runs.iter().map(|r| r.line.index).collect();
-        if got != expected {
-            return Err(Error::Input(format!(
-                "{}: shard {}/{} holds runs {} (expected {} runs, {}..)",
-                path.display(),
-                p.shard.index,
-                p.shard.count,
-                got.len(),
-                expected.len(),
-                expected
-                    .first()
-                    .map_or(String::from("none"), |k| k.to_string())
-            )));
-        }
         for r in &p.runs {
-            if r.line.values != design_runs[r.line.index] {
-                return Err(Error::Input(format!(
-                    "{}: run {} has values {:?}, the design gives {:?}",
-                    path.display(),
-                    r.line.index,
-                    r.line.values,
-                    design_runs[r.line.index]
-                )));
-            }
             lines[r.line.index] = Some((r.line.clone(), r.run.clone()));
         }
     }
@@ -858,10 +885,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepRe
         .map(|(i, _)| format!("{}/{}", i + 1, first.shard.count))
         .collect();
     if !missing.is_empty() {
-        return Err(Error::Input(format!(
-            "sweep-merge: shard(s) {} missing (their part-I-of-N.json files)",
-            missing.join(", ")
-        )));
+        return Err(PartError::Missing(missing.join(", ")).into());
     }
     let (lines, runs): (Vec<RunLine>, Vec<serde_json::Value>) = lines
         .into_iter()

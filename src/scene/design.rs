@@ -17,6 +17,7 @@
 
 use rand_chacha::rand_core::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use std::path::PathBuf;
 
 /// A design that cannot be used, with the argument or variable at fault.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -36,6 +37,45 @@ pub enum DesignError {
         value: String,
         problem: String,
     },
+}
+
+/// Why the parts of a sharded study (`sweep-merge`) cannot be merged: the file and what is
+/// wrong with it.
+#[derive(Debug, thiserror::Error)]
+pub enum PartError {
+    #[error("{path}: cannot read: {reason}")]
+    Read { path: PathBuf, reason: String },
+    #[error(
+        "{path}: no part-*.json in this directory (expected the --out PART_DIR of sweep shards)"
+    )]
+    NoParts { path: PathBuf },
+    #[error("{path}: not a sweep part ({reason}; expected the part-I-of-N.json a `sweep --shard` writes)")]
+    NotAPart { path: PathBuf, reason: String },
+    #[error("{path}: {what} {theirs} differs from {first}'s {ours}: the parts are not one study")]
+    Differs {
+        path: PathBuf,
+        first: PathBuf,
+        what: &'static str,
+        theirs: String,
+        ours: String,
+    },
+    #[error("{path}: shard {index}/{count} given twice (also {other})")]
+    Twice {
+        path: PathBuf,
+        index: usize,
+        count: usize,
+        other: PathBuf,
+    },
+    #[error("{path}: shard {index}/{count} does not hold its runs (k mod {count} = {index} - 1 of the design's {total}): {problem}")]
+    Runs {
+        path: PathBuf,
+        index: usize,
+        count: usize,
+        total: usize,
+        problem: String,
+    },
+    #[error("sweep-merge: shard(s) {0} missing (their part-I-of-N.json files)")]
+    Missing(String),
 }
 
 /// One listed key of a grid and its values (TOML literals, as written).
