@@ -150,16 +150,18 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         Some(s) => Some(Shard::parse(s)?),
         None => Shard::from_env(&|k| std::env::var(k).ok(), req.shards)?,
     };
-    let indices: Vec<usize> = match shard {
-        Some(s) => s.runs(design.len()),
-        None => (0..design.len()).collect(),
-    };
     if shard.is_some() && req.out.is_none() {
         return Err(Error::Input(
             "sweep: a shard writes its part into a directory: give --out PART_DIR".into(),
         ));
     }
-    check_size(req, indices.len())?;
+    // the size is checked before any list of the runs is made
+    let total = design.len();
+    check_size(req, shard.map_or(total, |s| s.len(total)))?;
+    let indices: Vec<usize> = match shard {
+        Some(s) => s.runs(total),
+        None => (0..total).collect(),
+    };
     let scene_text = std::fs::read(&req.scene).map_err(|e| {
         Error::Input(format!(
             "{}: cannot read the scene: {e}",
@@ -751,7 +753,8 @@ fn part_files(inputs: &[PathBuf]) -> std::result::Result<Vec<PathBuf>, PartError
 }
 
 /// Reads a part and checks what it says of itself: format, shard numbers, that it holds
-/// exactly its shard's runs of its design, each with the design's values.
+/// exactly its shard's runs of its design (their values are checked by [`merge`], once every
+/// shard is there).
 fn read_part(path: &Path) -> std::result::Result<Part, PartError> {
     let text = std::fs::read_to_string(path).map_err(|e| PartError::Read {
         path: path.to_path_buf(),
@@ -780,20 +783,12 @@ fn read_part(path: &Path) -> std::result::Result<Part, PartError> {
         total,
         problem,
     };
-    let got: Vec<usize> = part.runs.iter().map(|r| r.line.index).collect();
-    if got != part.shard.runs(total) {
-        return Err(runs_problem(format!("it holds {} runs", got.len())));
-    }
-    let design_runs = part.design.runs();
-    if let Some(r) = part
-        .runs
-        .iter()
-        .find(|r| r.line.values != design_runs[r.line.index])
+    // k mod N = I - 1, in order, without listing the design's runs
+    let expected = (index - 1..total).step_by(count);
+    if part.runs.len() != part.shard.len(total)
+        || !part.runs.iter().map(|r| r.line.index).eq(expected)
     {
-        return Err(runs_problem(format!(
-            "run {} has the values {:?}, the design gives {:?}",
-            r.line.index, r.line.values, design_runs[r.line.index]
-        )));
+        return Err(runs_problem(format!("it holds {} runs", part.runs.len())));
     }
     Ok(part)
 }
@@ -859,33 +854,54 @@ pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepRe
         parts.push((f, p));
     }
     let (first_path, first) = &parts[0];
-    let mut shard_seen = vec![None::<PathBuf>; first.shard.count];
-    let mut lines: Vec<Option<(RunLine, serde_json::Value)>> = vec![None; first.design.len()];
+    let count = first.shard.count;
+    let mut shard_seen: BTreeMap<usize, &Path> = BTreeMap::new();
     for (path, p) in &parts {
         same_study(path, p, first_path, first)?;
-        let slot = &mut shard_seen[p.shard.index - 1];
-        if let Some(other) = slot {
+        if let Some(other) = shard_seen.insert(p.shard.index, path) {
             return Err(PartError::Twice {
                 path: path.clone(),
                 index: p.shard.index,
-                count: p.shard.count,
-                other: other.clone(),
+                count,
+                other: other.to_path_buf(),
             }
             .into());
         }
-        *slot = Some(path.clone());
+    }
+    if shard_seen.len() < count {
+        let missing: Vec<String> = (1..=count)
+            .filter(|i| !shard_seen.contains_key(i))
+            .take(10)
+            .map(|i| format!("{i}/{count}"))
+            .collect();
+        let more = count - shard_seen.len() - missing.len();
+        let more = if more > 0 {
+            format!(" and {more} more")
+        } else {
+            String::new()
+        };
+        return Err(PartError::Missing(format!("{}{more}", missing.join(", "))).into());
+    }
+    // every shard holds its runs: the design's runs are as many as the parts hold
+    let design_runs = first.design.runs();
+    let mut lines: Vec<Option<(RunLine, serde_json::Value)>> = vec![None; design_runs.len()];
+    for (path, p) in &parts {
         for r in &p.runs {
+            if r.line.values != design_runs[r.line.index] {
+                return Err(PartError::Runs {
+                    path: path.clone(),
+                    index: p.shard.index,
+                    count,
+                    total: design_runs.len(),
+                    problem: format!(
+                        "run {} has the values {:?}, the design gives {:?}",
+                        r.line.index, r.line.values, design_runs[r.line.index]
+                    ),
+                }
+                .into());
+            }
             lines[r.line.index] = Some((r.line.clone(), r.run.clone()));
         }
-    }
-    let missing: Vec<String> = shard_seen
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| s.is_none())
-        .map(|(i, _)| format!("{}/{}", i + 1, first.shard.count))
-        .collect();
-    if !missing.is_empty() {
-        return Err(PartError::Missing(missing.join(", ")).into());
     }
     let (lines, runs): (Vec<RunLine>, Vec<serde_json::Value>) = lines
         .into_iter()

@@ -457,6 +457,11 @@ impl Shard {
         Ok(None)
     }
 
+    /// How many of `total` runs this shard holds.
+    pub fn len(&self, total: usize) -> usize {
+        (total + self.count - self.index) / self.count
+    }
+
     /// The runs (0-based indices among `total`) of this shard: k with k mod N = I - 1.
     pub fn runs(&self, total: usize) -> Vec<usize> {
         (self.index - 1..total).step_by(self.count).collect()
@@ -487,6 +492,7 @@ mod tests {
                 let mut seen = vec![0; total];
                 for index in 1..=count {
                     let s = Shard { index, count };
+                    assert_eq!(s.len(total), s.runs(total).len());
                     for k in s.runs(total) {
                         assert!(s.holds(k));
                         seen[k] += 1;
