@@ -168,10 +168,14 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
             req.scene.display()
         ))
     })?;
-    // the part directory is shared by the shards (one file each); a whole sweep's output
-    // directory is staged and renamed into place
+    // the part directory is shared by the shards (one file each, checked writable before
+    // any run); a whole sweep's output directory is staged and renamed into place
     let stage = match (&req.out, shard) {
         (Some(o), None) => Some(OutputDir::create(o)?),
+        (Some(o), Some(_)) => {
+            crate::reduce::cache::check_writable(o)?;
+            None
+        }
         _ => None,
     };
     let all = design.runs();
@@ -190,10 +194,6 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         files: vec![],
     };
     if let (Some(s), Some(dir)) = (shard, &req.out) {
-        std::fs::create_dir_all(dir).map_err(|e| crate::files::WriteError {
-            path: dir.clone(),
-            source: e,
-        })?;
         let path = dir.join(format!("part-{:05}-of-{:05}.json", s.index, s.count));
         let part = Part {
             format: PART_FORMAT.into(),
