@@ -220,18 +220,17 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
     let key = cache::key_of(&description);
     let path = cache::path_for(&dir, &key);
     let mut replaced = None;
+    let found = |rom: Box<EngineRom>, how: &'static str, path: PathBuf| LoadedRom {
+        rom: *rom,
+        cache: how,
+        seconds: t.elapsed().as_secs_f64(),
+        cache_file: Some(path),
+        build: None,
+        replaced: None,
+    };
     if !opts.no_cache {
         match cache::load(&path, &description)? {
-            Lookup::Hit(rom) => {
-                return Ok(LoadedRom {
-                    rom: *rom,
-                    cache: "hit",
-                    seconds: t.elapsed().as_secs_f64(),
-                    cache_file: Some(path),
-                    build: None,
-                    replaced: None,
-                })
-            }
+            Lookup::Hit(rom) => return Ok(found(rom, "hit", path)),
             Lookup::Corrupt(reason) => {
                 log::warn!("{}: {reason}; rebuilding the ROM", path.display());
                 replaced = Some(reason);
@@ -258,14 +257,7 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
         })?;
         if lock.waited {
             if let Lookup::Hit(rom) = cache::load(&path, &description)? {
-                return Ok(LoadedRom {
-                    rom: *rom,
-                    cache: "waited",
-                    seconds: t.elapsed().as_secs_f64(),
-                    cache_file: Some(path),
-                    build: None,
-                    replaced: None,
-                });
+                return Ok(found(rom, "waited", path));
             }
         }
         Some(lock)

@@ -219,16 +219,22 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     } else {
         add_statistics(&mut report);
         if let Some(stage) = stage {
-            let files = write_outputs(stage.path(), &report)?;
-            report.files = files
-                .iter()
-                .map(|f| stage.final_path(Path::new(f)).display().to_string())
-                .collect();
-            stage.commit()?;
+            finish(&mut report, stage)?;
         }
     }
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// Writes the outputs of a whole sweep into the staged directory and moves it into place.
+fn finish(report: &mut SweepReport, stage: OutputDir) -> Result<()> {
+    let files = write_outputs(stage.path(), report)?;
+    report.files = files
+        .iter()
+        .map(|f| stage.final_path(Path::new(f)).display().to_string())
+        .collect();
+    stage.commit()?;
+    Ok(())
 }
 
 fn tool_version() -> String {
@@ -923,12 +929,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepRe
         files: vec![],
     };
     add_statistics(&mut report);
-    let files = write_outputs(stage.path(), &report)?;
-    report.files = files
-        .iter()
-        .map(|f| stage.final_path(Path::new(f)).display().to_string())
-        .collect();
-    stage.commit()?;
+    finish(&mut report, stage)?;
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
 }

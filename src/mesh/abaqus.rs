@@ -11,29 +11,15 @@
 //! with `**`. Every element set also becomes the node set of its elements' nodes (unless a
 //! node set has the name). Coordinates are taken as metres.
 
-use super::collect::{reorder, Collected, HEX20_ABAQUS, TET10_DECK};
+use super::collect::{read_mesh_text, reorder, Collected, HEX20_ABAQUS, TET10_DECK};
 use super::element::ElementKind;
 use super::gmsh::MshError;
 use super::Mesh;
-use crate::files::{read_text, ReadError, LIMIT_MESH};
 use std::path::Path;
 
 /// Reads an input file from disk.
 pub fn read(path: &Path) -> Result<Mesh, MshError> {
-    let text = read_text(path, LIMIT_MESH).map_err(|e| {
-        let (line, msg) = match e {
-            ReadError::NotText { line, byte } => (
-                line,
-                format!("byte 0x{byte:02x} is not text: expected an Abaqus input file (ASCII)"),
-            ),
-            other => (0, other.to_string()),
-        };
-        MshError {
-            path: path.to_path_buf(),
-            line,
-            msg,
-        }
-    })?;
+    let text = read_mesh_text(path, "expected an Abaqus input file (ASCII)")?;
     parse(path, &text)
 }
 

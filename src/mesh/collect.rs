@@ -5,6 +5,7 @@
 use super::element::ElementKind;
 use super::gmsh::MshError;
 use super::{ElementBlock, Mesh};
+use crate::files::{read_text, ReadError, LIMIT_MESH};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -69,6 +70,20 @@ pub(crate) const HEX20_NASTRAN: [(usize, usize); 12] = [
     (6, 7),
     (7, 4),
 ];
+
+/// The text of mesh file `path` (a regular file of at most [`LIMIT_MESH`] bytes); a byte that
+/// is not text is reported with its line and `expected` (what the reader takes).
+pub(crate) fn read_mesh_text(path: &Path, expected: &str) -> Result<String, MshError> {
+    read_text(path, LIMIT_MESH).map_err(|e| {
+        let (line, msg) = match e {
+            ReadError::NotText { line, byte } => {
+                (line, format!("byte 0x{byte:02x} is not text: {expected}"))
+            }
+            other => (0, other.to_string()),
+        };
+        err(path, line, msg)
+    })
+}
 
 fn err(path: &Path, line: usize, msg: String) -> MshError {
     MshError {

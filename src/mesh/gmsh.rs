@@ -9,7 +9,6 @@
 
 use super::element::ElementKind;
 use super::{ElementBlock, Mesh};
-use crate::files::{read_text, ReadError, LIMIT_MESH};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -114,24 +113,12 @@ fn need<T: Copy>(v: &[T], n: usize, lines: &Lines, what: &str) -> Result<(), Msh
     Ok(())
 }
 
-/// Reads an MSH 4.1 file from disk (a regular file of at most [`LIMIT_MESH`] bytes).
+/// Reads an MSH 4.1 file from disk (a regular file of at most [`crate::files::LIMIT_MESH`] bytes).
 pub fn read(path: &Path) -> Result<Mesh, MshError> {
-    let text = read_text(path, LIMIT_MESH).map_err(|e| {
-        let (line, msg) = match e {
-            ReadError::NotText { line, byte } => (
-                line,
-                format!(
-                    "byte 0x{byte:02x} is not text: the reader takes ASCII MSH 4.1 (binary MSH: save as ASCII, Gmsh -format msh41 with Mesh.Binary = 0)"
-                ),
-            ),
-            other => (0, other.to_string()),
-        };
-        MshError {
-            path: path.to_path_buf(),
-            line,
-            msg,
-        }
-    })?;
+    let text = super::collect::read_mesh_text(
+        path,
+        "the reader takes ASCII MSH 4.1 (binary MSH: save as ASCII, Gmsh -format msh41 with Mesh.Binary = 0)",
+    )?;
     parse(path, &text)
 }
 

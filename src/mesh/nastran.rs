@@ -15,30 +15,16 @@
 //! anywhere in the file; without one the set is named by its id (`"7"`). Element sets: the
 //! property id of the solid elements, `"PID<n>"` (none for a blank PID). Coordinates are taken as metres.
 
-use super::collect::{reorder, Collected, HEX20_NASTRAN, TET10_DECK};
+use super::collect::{read_mesh_text, reorder, Collected, HEX20_NASTRAN, TET10_DECK};
 use super::element::ElementKind;
 use super::gmsh::MshError;
 use super::Mesh;
-use crate::files::{read_text, ReadError, LIMIT_MESH};
 use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Reads a bulk-data file from disk.
 pub fn read(path: &Path) -> Result<Mesh, MshError> {
-    let text = read_text(path, LIMIT_MESH).map_err(|e| {
-        let (line, msg) = match e {
-            ReadError::NotText { line, byte } => (
-                line,
-                format!("byte 0x{byte:02x} is not text: expected Nastran bulk data (ASCII)"),
-            ),
-            other => (0, other.to_string()),
-        };
-        MshError {
-            path: path.to_path_buf(),
-            line,
-            msg,
-        }
-    })?;
+    let text = read_mesh_text(path, "expected Nastran bulk data (ASCII)")?;
     parse(path, &text)
 }
 
