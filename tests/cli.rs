@@ -4,28 +4,11 @@
 
 use serde_json::Value;
 use std::path::Path;
-use std::process::Output;
 
 mod common;
 use common::linercav_output as linercav;
 
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
-}
-
-fn freqs(v: &Value) -> Vec<f64> {
-    v["frequencies_hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
+use common::{freqs, json};
 
 const STEEL: [&str; 6] = ["--youngs", "210e9", "--poisson", "0.3", "--density", "7850"];
 

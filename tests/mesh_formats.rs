@@ -11,8 +11,7 @@
 //! node changes them by percents (or fails the Jacobian check).
 
 mod common;
-use common::linercav;
-use serde_json::Value;
+use common::{freqs, json, linercav, linercav_output};
 
 const STEEL: [&str; 6] = [
     "--youngs",
@@ -24,15 +23,7 @@ const STEEL: [&str; 6] = [
 ];
 
 fn frequencies(args: &[&str]) -> Vec<f64> {
-    let (code, out, err) = linercav(args);
-    assert_eq!(code, 0, "{args:?}: {err}");
-    let v: Value = serde_json::from_str(&out).unwrap();
-    v["frequencies_hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
+    freqs(&json(&linercav_output(args)))
 }
 
 /// Largest relative difference of the elastic frequencies (those above 1e-3 of the largest;

@@ -20,6 +20,26 @@ pub fn linercav(args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// The JSON a successful run printed (fails the test with its stderr otherwise).
+pub fn json(out: &std::process::Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
+}
+
+/// `frequencies_hz` of a `modes --json` answer.
+pub fn freqs(v: &serde_json::Value) -> Vec<f64> {
+    v["frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
 use linercav::fem::shape::ElementKind;
 use linercav::mesh::lattice::Lattice;
 use linercav::mesh::Mesh;
