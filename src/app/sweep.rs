@@ -651,7 +651,8 @@ fn draw_statistics(path: &Path, report: &SweepReport) -> Result<()> {
         .keys
         .iter()
         .enumerate()
-        .map(|(k, n)| format!("{} {n}", k + 1))
+        // the key's last part: the full names are in the JSON and the CSV header
+        .map(|(k, n)| format!("{} {}", k + 1, n.rsplit('.').next().unwrap_or(n)))
         .collect();
     let x_label = format!("varied key: {}", names.join(", "));
     let lo = sens.cylinders.iter().min().copied().unwrap_or(1) as f64 - 0.5;
