@@ -129,10 +129,13 @@ pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
 /// The exclusive right to build one cache entry: an advisory lock (flock) on `<entry>.lock`
 /// beside it. Processes that miss the same entry at once (the shards of an array job on a
 /// shared cache directory) queue on it: one builds and stores, the others then find the entry.
-/// The lock ends when the guard is dropped or its process dies (no stale lock files to clean
-/// up by hand; the empty lock file itself stays).
+/// The holder removes the lock file before it lets go (a build leaves nothing behind, also
+/// when it fails), so a process that locked a file no longer at the path locks again; a
+/// process that dies lets go by itself (its file stays, empty, and is reused).
 pub struct BuildLock {
+    /// Held for the lock: closing it lets go.
     _file: std::fs::File,
+    path: PathBuf,
     /// Whether another process held the lock when it was asked for.
     pub waited: bool,
 }
@@ -141,28 +144,48 @@ impl BuildLock {
     /// Takes the lock of the cache entry `path`, waiting for a holder; `on_wait` runs once
     /// when it has to wait.
     pub fn acquire(path: &Path, on_wait: impl FnOnce(&Path)) -> Result<Self, WriteError> {
+        use std::os::unix::fs::MetadataExt;
         let lock = path.with_extension("lock");
         let fail = |source| WriteError {
             path: lock.clone(),
             source,
         };
-        let file = std::fs::OpenOptions::new()
-            .create(true)
-            .truncate(false)
-            .write(true)
-            .open(&lock)
-            .map_err(fail)?;
-        let waited = if flock(&file, libc::LOCK_EX | libc::LOCK_NB).is_ok() {
-            false
-        } else {
-            on_wait(&lock);
-            flock(&file, libc::LOCK_EX).map_err(fail)?;
-            true
-        };
-        Ok(Self {
-            _file: file,
-            waited,
-        })
+        let mut on_wait = Some(on_wait);
+        let mut waited = false;
+        loop {
+            let file = std::fs::OpenOptions::new()
+                .create(true)
+                .truncate(false)
+                .write(true)
+                .open(&lock)
+                .map_err(fail)?;
+            if flock(&file, libc::LOCK_EX | libc::LOCK_NB).is_err() {
+                if let Some(f) = on_wait.take() {
+                    f(&lock);
+                }
+                waited = true;
+                flock(&file, libc::LOCK_EX).map_err(fail)?;
+            }
+            // the holder before us may have removed the file we locked: lock the current one
+            let ours = file.metadata().map_err(fail)?;
+            match std::fs::metadata(&lock) {
+                Ok(now) if now.ino() == ours.ino() && now.dev() == ours.dev() => {
+                    return Ok(Self {
+                        _file: file,
+                        path: lock,
+                        waited,
+                    })
+                }
+                _ => continue,
+            }
+        }
+    }
+}
+
+impl Drop for BuildLock {
+    /// Removes the lock file, then lets go of the lock (closing the file).
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
     }
 }
 
