@@ -20,27 +20,10 @@ use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// ROM modes against the full model's, mode by mode.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct ModeComparison {
-    /// Number of compared modes (the full model's lowest).
-    pub modes: usize,
-    pub worst_frequency_error: f64,
-    pub worst_mac: f64,
-    /// Per compared mode: full and ROM frequency [Hz], relative error, best MAC.
-    pub rows: Vec<(f64, f64, f64, f64)>,
-}
-
-/// MAC(a, b) = (a.b)^2 / ((a.a)(b.b)).
-pub fn mac(a: &[f64], b: &[f64]) -> f64 {
-    let ab: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
-    let aa: f64 = a.iter().map(|x| x * x).sum();
-    let bb: f64 = b.iter().map(|x| x * x).sum();
-    ab * ab / (aa * bb)
-}
+pub use crate::analysis::correlation::{mac, ModeComparison};
 
 /// Compares the lowest `n` modes of `reference` with the ROM of `b` (which must have kept its
-/// bases): frequency error in order, MAC against the best ROM mode within 1 % in frequency.
+/// bases) on all part DOFs ([`crate::analysis::correlation::compare_modes`]).
 pub fn compare(b: &RomBuild, reference: &FullModes, n: usize) -> Result<ModeComparison> {
     let n = n
         .min(reference.frequencies_hz.len())
@@ -51,26 +34,13 @@ pub fn compare(b: &RomBuild, reference: &FullModes, n: usize) -> Result<ModeComp
         .iter()
         .map(|m| m.concat())
         .collect();
-    let mut rows = Vec::with_capacity(n);
-    let (mut worst_f, mut worst_mac) = (0.0f64, 1.0f64);
-    for j in 0..n {
-        let (fr, ff) = (b.rom.frequencies_hz[j], reference.frequencies_hz[j]);
-        let rel = (fr - ff).abs() / ff;
-        let full_shape = reference.shapes[j].concat();
-        let best = (0..extra)
-            .filter(|&k| (b.rom.frequencies_hz[k] - ff).abs() / ff < 0.01)
-            .map(|k| mac(&rom_shapes[k], &full_shape))
-            .fold(0.0, f64::max);
-        worst_f = worst_f.max(rel);
-        worst_mac = worst_mac.min(best);
-        rows.push((ff, fr, rel, best));
-    }
-    Ok(ModeComparison {
-        modes: n,
-        worst_frequency_error: worst_f,
-        worst_mac,
-        rows,
-    })
+    let full_shapes: Vec<Vec<f64>> = reference.shapes[..n].iter().map(|m| m.concat()).collect();
+    Ok(crate::analysis::correlation::compare_modes(
+        &reference.frequencies_hz[..n],
+        &full_shapes,
+        &b.rom.frequencies_hz[..extra],
+        &rom_shapes,
+    ))
 }
 
 /// One cut-off factor's ROM.
