@@ -3,8 +3,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use linercav::app::rom::{get_rom, CacheOptions};
-use linercav::app::simulate::{piston_of, run_cycle, settings_of};
+use linercav::piston::setup::piston_of;
 use linercav::scene::Scene;
+use linercav::transient::engine::{run_cycle, settings_of};
 use std::path::Path;
 
 fn cycle(c: &mut Criterion) {
@@ -22,7 +23,7 @@ fn cycle(c: &mut Criterion) {
     let mut g = c.benchmark_group("transient");
     g.sample_size(10);
     g.bench_function("one_cycle_six_cylinders", |b| {
-        b.iter(|| run_cycle(&scene, &rom, &piston, settings.clone(), None).expect("runs"))
+        b.iter(|| run_cycle(&scene, &rom, &piston, settings.clone(), |_, _| {}).expect("runs"))
     });
     g.finish();
 }

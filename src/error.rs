@@ -37,6 +37,14 @@ pub enum Error {
     Design(#[from] crate::scene::design::DesignError),
     #[error(transparent)]
     Part(#[from] crate::scene::design::PartError),
+    #[error(transparent)]
+    Piston(#[from] crate::piston::setup::PistonSetupError),
+    #[error("{}: {source}", path.display())]
+    Transient {
+        path: std::path::PathBuf,
+        #[source]
+        source: crate::transient::cycle::TransientError,
+    },
     #[error("cavitation thresholds: {0}")]
     Thresholds(#[from] crate::cavitation::criteria::ThresholdError),
 }
@@ -52,11 +60,12 @@ impl Error {
             | Error::Cache(_)
             | Error::Thresholds(_)
             | Error::Design(_)
-            | Error::Part(_) => 2,
+            | Error::Part(_)
+            | Error::Piston(_) => 2,
             Error::Model(ModelError::Set(_)) | Error::Model(ModelError::NoDofs) => 2,
             Error::Modal(e) => e.exit_code(),
             Error::Rom(e) => e.exit_code(),
-            Error::Model(_) | Error::Failure(_) => 1,
+            Error::Model(_) | Error::Failure(_) | Error::Transient { .. } => 1,
         }
     }
 }

@@ -20,11 +20,12 @@
 //! and commit the file with the reason.
 
 use linercav::app::rom::{get_rom, CacheOptions};
-use linercav::app::simulate::{piston_of, run_cycle, settings_of, simulation};
 use linercav::app::simulate::{run, SimulateRequest};
 use linercav::cavitation::evaluate::evaluate;
+use linercav::piston::setup::{piston_of, simulation};
 use linercav::scene::Scene;
 use linercav::transient::cycle::CycleResult;
+use linercav::transient::engine::{run_cycle, settings_of};
 use std::path::Path;
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -159,7 +160,7 @@ fn run_scene(sets: &[&str]) -> (Scene, CycleResult) {
         default_rom(),
         &piston,
         settings_of(sim, scene.rom.band_hz),
-        None,
+        |_, _| {},
     )
     .unwrap();
     (scene, r)
@@ -499,7 +500,7 @@ fn validation_leaving_out_the_coolant_costs_a_few_percent() {
         &wet_rom,
         &piston,
         settings_of(sim, wet_scene.rom.band_hz),
-        None,
+        |_, _| {},
     )
     .unwrap();
     let values = |r: &CycleResult| -> Vec<f64> {

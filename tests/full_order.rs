@@ -4,8 +4,9 @@
 
 use linercav::app::full_order::compare;
 use linercav::app::rom::{get_rom, CacheOptions};
-use linercav::app::simulate::{piston_of, settings_of};
+use linercav::piston::setup::piston_of;
 use linercav::scene::Scene;
+use linercav::transient::engine::settings_of;
 use std::path::Path;
 
 const SMALL: &str = "tests/fixtures/engine_small.toml";

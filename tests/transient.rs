@@ -3,12 +3,13 @@
 //! must run stably or stop with a clear message (two-cylinder coarse test engine).
 
 use linercav::app::rom::{get_rom, CacheOptions};
-use linercav::app::simulate::{piston_of, run_cycle, settings_of};
+use linercav::piston::setup::piston_of;
 use linercav::piston::skirt::SliceLaw;
 use linercav::reduce::rom::EngineRom;
 use linercav::scene::Scene;
 use linercav::transient::contact::{self, Body, Location, Slice, Structure};
 use linercav::transient::cycle::CycleSettings;
+use linercav::transient::engine::{run_cycle, settings_of};
 use linercav::transient::scheme::{ModalIntegrator, Scheme};
 use nalgebra::DMatrix;
 use std::path::Path;
@@ -579,7 +580,7 @@ fn simulate(
     let piston = piston_of(&scene).map_err(|e| e.to_string())?;
     let mut settings = settings_of(scene.simulation.as_ref().unwrap(), scene.rom.band_hz);
     tweak(&mut settings);
-    run_cycle(&scene, small_rom(), &piston, settings, None).map_err(|e| e.to_string())
+    run_cycle(&scene, small_rom(), &piston, settings, |_, _| {}).map_err(|e| e.to_string())
 }
 
 #[test]

@@ -6,110 +6,18 @@ use super::progress::Progress;
 use super::rom::{get_rom, CacheOptions};
 use crate::error::{Error, Result};
 use crate::files::{write_atomic, OutputDir};
-use crate::piston::kinematics::CrankSlider;
-use crate::piston::pressure::PressureCurve;
-use crate::piston::skirt::Skirt;
 use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
-use crate::scene::{PressureSource, Scene, Simulation};
-use crate::transient::cycle::{CycleResult, CycleSettings, EngineSetup, Stats};
+use crate::scene::Scene;
+use crate::transient::cycle::{CycleResult, CycleSettings, Stats};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The scene's simulation sections, or an error naming what is missing.
-pub fn simulation(scene: &Scene) -> Result<&Simulation> {
-    scene.simulation.as_ref().ok_or_else(|| {
-        Error::Input(format!(
-            "{}: simulate needs the [piston], [operating] and [transient] sections (see models/engine.toml)",
-            scene.path.display()
-        ))
-    })
-}
+use crate::piston::setup::{piston_of, simulation};
+use crate::transient::engine::settings_of;
 
-/// The piston model of a scene (reads the pressure file when one is given).
-/// The warning for a hot skirt larger than the bore (`hot` < 0, the hot diametral clearance).
-fn interference_warning(hot: f64, cold: f64) -> Option<String> {
-    (hot <= 0.0).then(|| {
-        format!(
-            "the hot skirt is {} um (diametral) larger than the bore at piston.clearance_um = {}: an interference fit, the piston runs in permanent contact",
-            crate::text::num(-hot * 1e6),
-            crate::text::num(cold * 1e6)
-        )
-    })
-}
-
-pub fn piston_of(scene: &Scene) -> Result<Piston> {
-    let sim = simulation(scene)?;
-    let p = &sim.piston;
-    let e = &scene.engine;
-    let kinematics = CrankSlider {
-        radius: e.stroke / 2.0,
-        rod: e.rod_length,
-        offset: p.pin_offset - p.crank_offset,
-        omega: e.speed_rpm * std::f64::consts::PI / 30.0,
-    };
-    let area = std::f64::consts::PI * e.bore * e.bore / 4.0;
-    let pressure = match &sim.operating.pressure {
-        PressureSource::File(f) => {
-            PressureCurve::from_csv(f).map_err(|err| Error::Input(err.to_string()))?
-        }
-        PressureSource::Wiebe(w) => PressureCurve::wiebe(w, &kinematics, area),
-    };
-    let skirt = Skirt::new(&p.skirt);
-    let hot = skirt.hot_clearance();
-    if let Some(w) = interference_warning(hot, p.skirt.clearance) {
-        log::warn!("{}: {w}", scene.path.display());
-    }
-    if hot < -sim.transient.max_penetration {
-        return Err(Error::Input(format!(
-            "{}: the hot skirt is {:.1} um (diametral) larger than the bore: piston.clearance_um is too small for the temperatures in [piston.thermal] (the piston would seize)",
-            scene.path.display(),
-            -hot * 1e6
-        )));
-    }
-    Ok(Piston {
-        kinematics,
-        pressure,
-        crankcase_pa: sim.operating.crankcase_pa,
-        area,
-        mass: p.mass,
-        pin_mass: p.pin_mass,
-        tilt_inertia: p.tilt_inertia,
-        cg_above_pin: p.cg_above_pin,
-        cg_lateral: p.cg_lateral,
-        pin_offset: p.pin_offset,
-        pin_depth_at_tdc: p.crown_depth_at_tdc + p.compression_height,
-        skirt,
-        contact_damping: p.contact_damping,
-        friction: p.friction,
-    })
-}
-
-/// Transient settings of the scene.
-pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
-    let t = &sim.transient;
-    CycleSettings {
-        scheme: t.scheme.into(),
-        step_deg: t.step_deg,
-        cycles: t.cycles,
-        averaged_cycles: t.averaged_cycles,
-        adaptive: t.adaptive,
-        max_halvings: 6,
-        damping_ratio: t.damping_ratio,
-        max_penetration: t.max_penetration,
-        max_newton: 50,
-        modes_below_hz: t.mode_cutoff_hz,
-        static_correction: true,
-        coupling: crate::transient::cycle::Coupling::PerCylinder,
-        output_band_hz: Some(band_hz),
-        bound_predictions: true,
-        step_error: true,
-        onset_correction: true,
-        tolerance: Some(t.tolerance),
-    }
-}
-
-/// Runs the engine cycle of `scene` on `rom`.
+/// Runs the engine cycle of `scene` on `rom` ([`crate::transient::engine::run_cycle`]) with a
+/// progress bar on a terminal.
 pub fn run_cycle(
     scene: &Scene,
     rom: &EngineRom,
@@ -117,21 +25,17 @@ pub fn run_cycle(
     settings: CycleSettings,
     progress: Option<&Progress>,
 ) -> Result<CycleResult> {
-    let setup = EngineSetup {
-        rom,
-        piston,
-        firing_order: &scene.engine.firing_order,
-        omega: piston.kinematics.omega,
-        liner_top: scene.liner_geometry.length,
-    };
-    crate::transient::cycle::run_with_tolerance(&setup, settings, 2, |k, n| {
+    crate::transient::engine::run_cycle(scene, rom, piston, settings, |k, n| {
         if let Some(p) = progress {
             if k % 200 == 0 {
                 p.phase(&format!("transient: step {k} of {n}"));
             }
         }
     })
-    .map_err(|e| Error::Failure(format!("{}: {e}", scene.path.display())))
+    .map_err(|source| Error::Transient {
+        path: scene.path.clone(),
+        source,
+    })
 }
 
 /// One analysis point's peaks.
@@ -222,7 +126,7 @@ impl SimulateReport {
                 .warnings
                 .iter()
                 .cloned()
-                .chain(interference_warning(
+                .chain(crate::piston::setup::interference_warning(
                     piston.skirt.hot_clearance(),
                     simulation(scene).map_or(0.0, |s| s.piston.skirt.clearance),
                 ))

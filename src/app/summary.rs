@@ -11,16 +11,18 @@
 
 use super::full_order::{peak_negative, rom_window};
 use super::rom::{get_rom, CacheOptions};
-use super::simulate::{piston_of, run_cycle, settings_of, simulation, SimulateReport};
+use super::simulate::{run_cycle, SimulateReport};
 use crate::analysis::spectrum::{rms_average, Spectrum};
 use crate::cavitation::evaluate::{evaluate, spectra, Evaluation};
 use crate::error::{Error, Result};
 use crate::files::write_all_atomic;
+use crate::piston::setup::{piston_of, simulation};
 use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
 use crate::report::png::{bars, write_png, BarData, Chart, Mark, Rule, Series};
 use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
+use crate::transient::engine::settings_of;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -11,16 +11,16 @@
 //! sweep writes, from the same code: the CSV rows are identical.
 
 use super::rom::{get_rom, key_description, CacheOptions, LoadedRom};
-use super::simulate::{
-    piston_of, run_cycle, settings_of, simulation, CylinderReport, SimulateReport,
-};
+use super::simulate::{run_cycle, CylinderReport, SimulateReport};
 use crate::analysis::study::{rank_sensitivities, Proportion};
 use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
 use crate::files::{write_all_atomic, write_atomic, Filler, OutputDir};
+use crate::piston::setup::{piston_of, simulation};
 use crate::report::png::{write_png, Chart, Mark, Series};
 use crate::scene::design::{Design, PartError, Shard};
 use crate::scene::Scene;
+use crate::transient::engine::settings_of;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::io::IsTerminal;

@@ -22,6 +22,7 @@
 
 pub mod kinematics;
 pub mod pressure;
+pub mod setup;
 pub mod skirt;
 
 use kinematics::CrankSlider;

@@ -3,6 +3,7 @@
 
 pub mod contact;
 pub mod cycle;
+pub mod engine;
 pub mod full_order;
 pub mod modal;
 pub mod scheme;

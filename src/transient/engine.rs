@@ -1,0 +1,56 @@
+//! The engine transient of a scene: its numerical settings and one run on the engine ROM.
+
+use super::cycle::TransientError;
+use super::cycle::{run_with_tolerance, Coupling, CycleResult, CycleSettings, EngineSetup};
+use crate::piston::Piston;
+use crate::reduce::rom::EngineRom;
+use crate::scene::{Scene, Simulation};
+
+/// How often the tolerance control may halve the step ([`run_with_tolerance`]).
+pub const MAX_REFINEMENTS: usize = 2;
+
+/// The transient settings of a scene's `[transient]` section; accelerations reported in the
+/// ROM's band `band_hz`. Fixed choices (not scene keys): contact coupled per cylinder, the
+/// residual flexibility at the contact, the onset correction, the step-error windows, and up
+/// to 6 halvings of a failing step with at most 50 contact iterations each.
+pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
+    let t = &sim.transient;
+    CycleSettings {
+        scheme: t.scheme.into(),
+        step_deg: t.step_deg,
+        cycles: t.cycles,
+        averaged_cycles: t.averaged_cycles,
+        adaptive: t.adaptive,
+        max_halvings: 6,
+        damping_ratio: t.damping_ratio,
+        max_penetration: t.max_penetration,
+        max_newton: 50,
+        modes_below_hz: t.mode_cutoff_hz,
+        static_correction: true,
+        coupling: Coupling::PerCylinder,
+        output_band_hz: Some(band_hz),
+        bound_predictions: true,
+        step_error: true,
+        onset_correction: true,
+        tolerance: Some(t.tolerance),
+    }
+}
+
+/// Runs the engine cycles of `scene` on `rom` with `settings` (the tolerance control halving
+/// the step at most [`MAX_REFINEMENTS`] times); `on_step(k, n)` is called after step k of n.
+pub fn run_cycle(
+    scene: &Scene,
+    rom: &EngineRom,
+    piston: &Piston,
+    settings: CycleSettings,
+    on_step: impl FnMut(usize, usize),
+) -> Result<CycleResult, TransientError> {
+    let setup = EngineSetup {
+        rom,
+        piston,
+        firing_order: &scene.engine.firing_order,
+        omega: piston.kinematics.omega,
+        liner_top: scene.liner_geometry.length,
+    };
+    run_with_tolerance(&setup, settings, MAX_REFINEMENTS, on_step)
+}
