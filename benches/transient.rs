@@ -2,8 +2,8 @@
 //! run in sweeps). Run: cargo bench --bench transient  (builds the default ROM on first use).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use linercav::app::rom::{get_rom, CacheOptions};
 use linercav::piston::setup::piston_of;
+use linercav::reduce::scene_rom::{get_rom, CacheOptions};
 use linercav::scene::Scene;
 use linercav::transient::engine::{run_cycle, settings_of};
 use std::path::Path;
@@ -14,7 +14,9 @@ fn cycle(c: &mut Criterion) {
         &["transient.cycles=1".into()],
     )
     .expect("default scene");
-    let rom = get_rom(&scene, &CacheOptions::default()).expect("ROM").rom;
+    let rom = get_rom(&scene, &CacheOptions::default(), &|_| {})
+        .expect("ROM")
+        .rom;
     let piston = piston_of(&scene).expect("piston");
     let settings = settings_of(
         scene.simulation.as_ref().expect("sections"),

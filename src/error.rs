@@ -38,6 +38,8 @@ pub enum Error {
     #[error(transparent)]
     Part(#[from] crate::scene::design::PartError),
     #[error(transparent)]
+    SceneRom(#[from] crate::reduce::scene_rom::SceneRomError),
+    #[error(transparent)]
     Piston(#[from] crate::piston::setup::PistonSetupError),
     #[error("{}: {source}", path.display())]
     Transient {
@@ -65,6 +67,7 @@ impl Error {
             Error::Model(ModelError::Set(_)) | Error::Model(ModelError::NoDofs) => 2,
             Error::Modal(e) => e.exit_code(),
             Error::Rom(e) => e.exit_code(),
+            Error::SceneRom(e) => e.exit_code(),
             Error::Model(_) | Error::Failure(_) | Error::Transient { .. } => 1,
         }
     }

@@ -19,10 +19,10 @@
 //!   LINERCAV_UPDATE_BASELINE=1 cargo test --release --test baseline
 //! and commit the file with the reason.
 
-use linercav::app::rom::{get_rom, CacheOptions};
 use linercav::app::simulate::{run, SimulateRequest};
 use linercav::cavitation::evaluate::evaluate;
 use linercav::piston::setup::{piston_of, simulation};
+use linercav::reduce::scene_rom::{get_rom, CacheOptions};
 use linercav::scene::Scene;
 use linercav::transient::cycle::CycleResult;
 use linercav::transient::engine::{run_cycle, settings_of};
@@ -40,7 +40,9 @@ fn default_rom() -> &'static linercav::reduce::rom::EngineRom {
     static ROM: OnceLock<linercav::reduce::rom::EngineRom> = OnceLock::new();
     ROM.get_or_init(|| {
         let scene = Scene::load(Path::new(SCENE), &[]).unwrap();
-        get_rom(&scene, &CacheOptions::default()).unwrap().rom
+        get_rom(&scene, &CacheOptions::default(), &|_| {})
+            .unwrap()
+            .rom
     })
 }
 
@@ -476,7 +478,9 @@ fn validation_leaving_out_the_coolant_costs_a_few_percent() {
     let g = &wet_scene.liner_geometry;
     let wall = wet_scene.liner.material.density * (g.outer_diameter - g.inner_diameter) / 2.0;
     let ratio = mu / wall;
-    let wet_rom = get_rom(&wet_scene, &CacheOptions::default()).unwrap().rom;
+    let wet_rom = get_rom(&wet_scene, &CacheOptions::default(), &|_| {})
+        .unwrap()
+        .rom;
     let dry_rom = default_rom();
     let band = wet_scene.rom.band_hz;
     let dry_f: Vec<f64> = dry_rom.frequencies_hz[..dry_rom.info.system_modes]

@@ -3,8 +3,8 @@
 //! model (23.8k unknowns, no modal truncation) is the reference.
 
 use linercav::app::full_order::compare;
-use linercav::app::rom::{get_rom, CacheOptions};
 use linercav::piston::setup::piston_of;
+use linercav::reduce::scene_rom::{get_rom, CacheOptions};
 use linercav::scene::Scene;
 use linercav::transient::engine::settings_of;
 use std::path::Path;
@@ -20,6 +20,7 @@ fn comparison(sets: &[&str]) -> linercav::app::full_order::FullOrderReport {
             no_cache: true,
             dir: None,
         },
+        &|_| {},
     )
     .unwrap()
     .rom;

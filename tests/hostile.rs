@@ -241,7 +241,7 @@ fn regression_unwritable_cache_and_unreadable_entry_stop_before_the_build() {
     let dir = tmp.path().join("c");
     let key = {
         let sc = linercav::scene::Scene::load(Path::new(SMALL), &[]).unwrap();
-        linercav::reduce::cache::key_of(&linercav::app::rom::key_description(&sc).unwrap())
+        linercav::reduce::cache::key_of(&linercav::reduce::scene_rom::key_description(&sc).unwrap())
     };
     std::fs::create_dir_all(dir.join(format!("rom-{key}.bin"))).unwrap();
     refused(

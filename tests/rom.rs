@@ -5,12 +5,12 @@
 mod common;
 use common::linercav_output as linercav;
 use linercav::app::full_modes as full;
-use linercav::app::rom::{
-    build_rom, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
-};
 use linercav::app::rom_tradeoff;
 use linercav::reduce::craig_bampton::{reduce, CbSettings, InterfaceBlock, Part};
 use linercav::reduce::interface::{self, Direction, InterfaceShape};
+use linercav::reduce::scene_rom::{
+    build_rom, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
+};
 use linercav::scene::Scene;
 use std::path::Path;
 
@@ -50,7 +50,7 @@ fn verification_default_engine_rom_matches_full_coupled_model() {
 }
 
 fn rom_against_full(sc: &Scene) {
-    let (b, _, _) = build_rom(sc, true).unwrap();
+    let (b, _, _) = build_rom(sc, true, &|_| {}).unwrap();
     let half = sc.rom.cutoff_hz / 2.0;
     let n = b.rom.frequencies_hz.iter().filter(|&&f| f < half).count();
     assert!(n >= 10, "only {n} modes below half the cut-off");
@@ -218,15 +218,15 @@ fn cache_hit_miss_and_corruption() {
         dir: Some(dir.path().to_path_buf()),
     };
     let sc = scene(&[]);
-    let first = get_rom(&sc, &opts).unwrap();
+    let first = get_rom(&sc, &opts, &|_| {}).unwrap();
     assert_eq!(first.cache, "miss");
     let path = first.cache_file.clone().unwrap();
-    let second = get_rom(&sc, &opts).unwrap();
+    let second = get_rom(&sc, &opts, &|_| {}).unwrap();
     assert_eq!(second.cache, "hit");
     assert_eq!(first.rom.frequencies_hz, second.rom.frequencies_hz);
     // only operating data changed: same file reused
     let faster = scene(&["engine.speed_rpm=2200"]);
-    assert_eq!(get_rom(&faster, &opts).unwrap().cache, "hit");
+    assert_eq!(get_rom(&faster, &opts, &|_| {}).unwrap().cache, "hit");
     // corruptions
     let good = std::fs::read(&path).unwrap();
     let mut flipped = good.clone();
@@ -237,7 +237,7 @@ fn cache_hit_miss_and_corruption() {
         ("bit-flipped", flipped),
     ] {
         std::fs::write(&path, bytes).unwrap();
-        let r = get_rom(&sc, &opts).unwrap();
+        let r = get_rom(&sc, &opts, &|_| {}).unwrap();
         assert_eq!(r.cache, "miss", "{what} file must be rebuilt");
         assert!(r.replaced.is_some(), "{what} file must be reported");
         // a rebuild equals the first build to solver roundoff: parallel sums and ARPACK start

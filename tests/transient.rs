@@ -2,10 +2,10 @@
 //! impact against the spring-dashpot restitution, step convergence, and hard engine cases that
 //! must run stably or stop with a clear message (two-cylinder coarse test engine).
 
-use linercav::app::rom::{get_rom, CacheOptions};
 use linercav::piston::setup::piston_of;
 use linercav::piston::skirt::SliceLaw;
 use linercav::reduce::rom::EngineRom;
+use linercav::reduce::scene_rom::{get_rom, CacheOptions};
 use linercav::scene::Scene;
 use linercav::transient::contact::{self, Body, Location, Slice, Structure};
 use linercav::transient::cycle::CycleSettings;
@@ -565,6 +565,7 @@ fn small_rom() -> &'static EngineRom {
                 no_cache: true,
                 dir: None,
             },
+            &|_| {},
         )
         .unwrap()
         .rom

@@ -1,7 +1,6 @@
 //! The full coupled engine model's modes of a scene (the reference of `modes --assembly
 //! --full` and `rom-tradeoff`), and engine mode shapes written as VTU for ParaView.
 
-use super::rom::{load_meshes, rom_inputs};
 use crate::eigen::modal::certified_modes;
 use crate::error::{Error, Result};
 use crate::fem::dofs::DofMap;
@@ -10,6 +9,7 @@ use crate::mesh::Mesh;
 pub use crate::reduce::full::recover_shapes;
 use crate::reduce::full::{FullModes, FullSystem};
 use crate::reduce::rom::RomBuild;
+use crate::reduce::scene_rom::{load_meshes, rom_inputs};
 use crate::report::vtu;
 use crate::scene::Scene;
 use std::path::Path;

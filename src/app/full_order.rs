@@ -12,11 +12,11 @@
 //! over the analysis points; the speed-up is the full-order wall time (assembly, factorisation
 //! and stepping) over the ROM's window stepping on the cached ROM.
 
-use crate::app::rom::{load_meshes, rom_inputs};
 use crate::error::{Error, Result};
 use crate::piston::Piston;
 use crate::reduce::full::FullSystem;
 use crate::reduce::rom::{preload_loads, EngineRom, RomInputs};
+use crate::reduce::scene_rom::{load_meshes, rom_inputs};
 use crate::scene::Scene;
 use crate::transient::cycle::CycleSettings;
 use crate::transient::full_order::{FullLiner, Row};

@@ -10,13 +10,14 @@
 //! come from the same study and hold every run exactly once, then writes what the unsharded
 //! sweep writes, from the same code: the CSV rows are identical.
 
-use super::rom::{get_rom, key_description, CacheOptions, LoadedRom};
+use super::rom::{get_rom, CacheOptions, LoadedRom};
 use super::simulate::{run_cycle, CylinderReport, SimulateReport};
 use crate::analysis::study::{rank_sensitivities, Proportion};
 use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
 use crate::files::{write_all_atomic, write_atomic, Filler, OutputDir};
 use crate::piston::setup::{piston_of, simulation};
+use crate::reduce::scene_rom::key_description;
 use crate::report::png::{write_png, Chart, Mark, Series};
 use crate::scene::design::{Design, PartError, Shard};
 use crate::scene::Scene;

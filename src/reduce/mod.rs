@@ -7,3 +7,4 @@ pub mod engine;
 pub mod full;
 pub mod interface;
 pub mod rom;
+pub mod scene_rom;

@@ -1,0 +1,356 @@
+//! The engine ROM of a scene, through the cache: the meshes of the scene's liner and
+//! crankcase, the canonical description hashed into the cache key, the build inputs, and the
+//! cache lookup with one builder per entry.
+//!
+//! Cache key: the canonical JSON of everything the reduction depends on (liner and crankcase
+//! geometry, meshing or mesh-file contents, materials, fixed sets, clamp force, cut-off,
+//! harmonics, modelled cylinders, ROM format). Operating and piston data are not in it, so a
+//! what-if run on speed, pressure, clearance or pin offset reuses the ROM.
+
+use super::cache::{self, CacheReadError, Lookup};
+use super::rom::{build, EngineRom, RomBuild, RomError, RomInputs, ROM_FORMAT};
+use crate::fem::element::check_mesh as check_and_compact;
+use crate::fem::surface::SurfaceMass;
+use crate::files::WriteError;
+use crate::mesh::checks::MeshError;
+use crate::mesh::gmsh::MshError;
+use crate::mesh::{crankcase, liner, Mesh};
+use crate::scene::budget::{self, Limits};
+use crate::scene::{CrankcaseSource, MeshSource, Scene, SceneError};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Why a scene's ROM could not be had.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneRomError {
+    #[error("{}: the scene has no [crankcase] section; the engine model needs one", path.display())]
+    NoCrankcase { path: PathBuf },
+    #[error("{}: cannot read mesh file: {source}", path.display())]
+    MeshFile {
+        path: PathBuf,
+        source: crate::files::ReadError,
+    },
+    #[error(transparent)]
+    Msh(#[from] MshError),
+    #[error("{}: {source}", file.as_deref().unwrap_or("mesh"))]
+    Mesh {
+        file: Option<String>,
+        #[source]
+        source: MeshError,
+    },
+    #[error("{}: cavitation.coolant_mass = \"layer\" needs the liner's wet outer surface as node set '{set}' covering whole element faces{}: {msg}", path.display(), file.as_ref().map(|f| format!(" (a physical group of {f})")).unwrap_or_default())]
+    WetSurface {
+        path: PathBuf,
+        set: String,
+        file: Option<String>,
+        msg: String,
+    },
+    #[error("{}: crankcase.fix: unknown set '{name}'; the crankcase mesh has: {}", path.display(), have.join(", "))]
+    UnknownFixSet {
+        path: PathBuf,
+        name: String,
+        have: Vec<String>,
+    },
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Cache(#[from] CacheReadError),
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    #[error(transparent)]
+    Rom(#[from] RomError),
+    #[error("{}: the engine has no mode below the cut-off {} Hz (rom.band_hz x rom.cutoff_factor): raise rom.band_hz", path.display(), crate::text::num(*cutoff_hz))]
+    NoSystemMode { path: PathBuf, cutoff_hz: f64 },
+    #[error("{}: the built ROM is inconsistent: {msg}", path.display())]
+    Inconsistent { path: PathBuf, msg: String },
+}
+
+impl SceneRomError {
+    /// 2 for what the user can correct (scene, meshes, cache directory), 1 for a failed or
+    /// inconsistent build.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            SceneRomError::Rom(e) => e.exit_code(),
+            SceneRomError::Inconsistent { .. } => 1,
+            _ => 2,
+        }
+    }
+}
+
+type Result<T> = std::result::Result<T, SceneRomError>;
+
+/// Cache policy of a command.
+#[derive(Clone, Debug, Default)]
+pub struct CacheOptions {
+    /// Build without reading or writing the cache.
+    pub no_cache: bool,
+    /// Cache directory overriding the scene's.
+    pub dir: Option<PathBuf>,
+}
+
+/// The ROM of a scene and where it came from.
+pub struct LoadedRom {
+    pub rom: EngineRom,
+    pub cache: &'static str,
+    pub seconds: f64,
+    pub cache_file: Option<PathBuf>,
+    /// Present when the ROM was built in this run with bases kept.
+    pub build: Option<RomBuild>,
+    /// A corrupt cache file that was replaced (reason).
+    pub replaced: Option<String>,
+}
+
+fn file_digest(path: &Path) -> Result<String> {
+    let bytes = crate::files::read_regular(path, crate::files::LIMIT_MESH).map_err(|source| {
+        SceneRomError::MeshFile {
+            path: path.to_path_buf(),
+            source,
+        }
+    })?;
+    Ok(blake3::hash(&bytes).to_hex().to_string())
+}
+
+/// Loads and checks the liner and crankcase meshes of a scene.
+pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
+    let cc = scene
+        .crankcase
+        .as_ref()
+        .ok_or_else(|| SceneRomError::NoCrankcase {
+            path: scene.path.clone(),
+        })?;
+    let (mut lm, lfile) = match &scene.liner.source {
+        MeshSource::Liner { geometry, meshing } => (liner::generate(geometry, meshing), None),
+        MeshSource::File(p) => (crate::mesh::read(p)?, Some(p.display().to_string())),
+    };
+    check_and_compact(&mut lm).map_err(|source| SceneRomError::Mesh {
+        file: lfile.clone(),
+        source,
+    })?;
+    for sm in liner_surface_mass(scene) {
+        if let Err(e) = crate::fem::surface::boundary_faces(&lm, &sm.set) {
+            return Err(SceneRomError::WetSurface {
+                path: scene.path.clone(),
+                set: sm.set.clone(),
+                file: lfile.clone(),
+                msg: e.to_string(),
+            });
+        }
+    }
+    let (mut cm, cfile) = match &cc.source {
+        CrankcaseSource::Parametric { geometry, meshing } => {
+            (crankcase::generate(geometry, meshing), None)
+        }
+        CrankcaseSource::File(p) => (crate::mesh::read(p)?, Some(p.display().to_string())),
+    };
+    check_and_compact(&mut cm).map_err(|source| SceneRomError::Mesh {
+        file: cfile,
+        source,
+    })?;
+    // a mesh from a file is sized only once read: the engine model it makes is checked now
+    if lfile.is_some() || matches!(cc.source, CrankcaseSource::File(_)) {
+        let dofs = 3 * (cm.nodes.len() + scene.rom.cylinders.len() * lm.nodes.len());
+        let est = budget::fe_model(dofs, "the ROM build");
+        Limits::of(scene).check(scene, &est)?;
+    }
+    for name in &cc.fix {
+        if cm.node_set(name).is_none() {
+            return Err(SceneRomError::UnknownFixSet {
+                path: scene.path.clone(),
+                name: name.clone(),
+                have: cm.set_names().iter().map(|s| s.to_string()).collect(),
+            });
+        }
+    }
+    Ok((lm, cm))
+}
+
+/// The canonical description hashed into the cache key.
+pub fn key_description(scene: &Scene) -> Result<String> {
+    let cc = scene
+        .crankcase
+        .as_ref()
+        .ok_or_else(|| SceneRomError::NoCrankcase {
+            path: scene.path.clone(),
+        })?;
+    let liner_src = match &scene.liner.source {
+        MeshSource::Liner { geometry, meshing } => {
+            serde_json::json!({"geometry": geometry, "meshing": meshing})
+        }
+        MeshSource::File(p) => serde_json::json!({"file": file_digest(p)?}),
+    };
+    let cc_src = match &cc.source {
+        CrankcaseSource::Parametric { geometry, meshing } => {
+            serde_json::json!({"geometry": geometry, "meshing": meshing})
+        }
+        CrankcaseSource::File(p) => serde_json::json!({"file": file_digest(p)?}),
+    };
+    let mut d = serde_json::json!({
+        "format": ROM_FORMAT,
+        "liner": liner_src,
+        "liner_geometry": scene.liner_geometry,
+        "liner_material": scene.liner.material,
+        "crankcase": cc_src,
+        "crankcase_material": cc.material,
+        "crankcase_fix": cc.fix,
+        "clamp_force": cc.clamp_force,
+        "pitch": scene.engine.cylinder_pitch,
+        "cylinder_count": scene.engine.cylinders,
+        "band_hz": scene.rom.band_hz,
+        "cutoff_hz": scene.rom.cutoff_hz,
+        "harmonics": scene.rom.harmonics,
+        "residual_vector_spacing": scene.rom.residual_vector_spacing,
+        "cylinders": scene.rom.cylinders,
+    });
+    // only when present, so the keys of dry scenes stay those of earlier builds
+    let surface = liner_surface_mass(scene);
+    if !surface.is_empty() {
+        d["liner_surface_mass"] = serde_json::json!(surface);
+    }
+    Ok(d.to_string())
+}
+
+/// The liner's normal surface masses: the coolant layer on `coolant_wetted` when modelled.
+pub fn liner_surface_mass(scene: &Scene) -> Vec<SurfaceMass> {
+    scene
+        .cavitation
+        .layer_mass_per_area
+        .map(|mu| SurfaceMass {
+            set: liner::COOLANT_WETTED.into(),
+            mass_per_area: mu,
+        })
+        .into_iter()
+        .collect()
+}
+
+/// Builds the ROM of a loaded scene (no cache). `keep_bases` keeps full bases for recovery;
+/// `progress` is told each phase.
+pub fn build_rom(
+    scene: &Scene,
+    keep_bases: bool,
+    progress: &dyn Fn(&str),
+) -> Result<(RomBuild, Mesh, Mesh)> {
+    let (lm, cm) = load_meshes(scene)?;
+    let inputs = rom_inputs(scene, &lm, &cm, keep_bases);
+    let b = build(&inputs, progress)?;
+    Ok((b, lm, cm))
+}
+
+/// The ROM build inputs of a scene whose meshes are loaded.
+pub fn rom_inputs<'a>(
+    scene: &Scene,
+    lm: &'a Mesh,
+    cm: &'a Mesh,
+    keep_bases: bool,
+) -> RomInputs<'a> {
+    let cc = scene
+        .crankcase
+        .as_ref()
+        .expect("load_meshes checked the crankcase");
+    let g = &scene.liner_geometry;
+    let e = &scene.engine;
+    let axis_x: Vec<f64> = (0..e.cylinders)
+        .map(|c| (c as f64 - (e.cylinders as f64 - 1.0) / 2.0) * e.cylinder_pitch)
+        .collect();
+    RomInputs {
+        liner: lm,
+        liner_material: scene.liner.material,
+        liner_surface_mass: liner_surface_mass(scene),
+        crankcase: cm,
+        crankcase_material: cc.material,
+        crankcase_fix: cc.fix.clone(),
+        liner_outer_radius: g.outer_diameter / 2.0,
+        flange_radius: g.flange_outer_diameter / 2.0,
+        seat_z: g.length - g.flange_height,
+        guide_height: g.guide_height,
+        guide_bottom: g.guide_bottom,
+        analysis_points: g.analysis_depths.len(),
+        axis_x,
+        pitch: e.cylinder_pitch,
+        cylinders: scene.rom.cylinders.clone(),
+        clamp_force: cc.clamp_force,
+        band_hz: scene.rom.band_hz,
+        cutoff_hz: scene.rom.cutoff_hz,
+        harmonics: scene.rom.harmonics,
+        residual_vector_spacing: scene.rom.residual_vector_spacing,
+        keep_bases,
+    }
+}
+
+/// Gets the ROM of a scene: from the cache when a valid entry exists, else built (and stored);
+/// `progress` is told the build's phases.
+pub fn get_rom(scene: &Scene, opts: &CacheOptions, progress: &dyn Fn(&str)) -> Result<LoadedRom> {
+    let t = Instant::now();
+    let dir = opts
+        .dir
+        .clone()
+        .unwrap_or_else(|| scene.rom.cache_dir.clone());
+    let description = key_description(scene)?;
+    let key = cache::key_of(&description);
+    let path = cache::path_for(&dir, &key);
+    let mut replaced = None;
+    let found = |rom: Box<EngineRom>, how: &'static str, path: PathBuf| LoadedRom {
+        rom: *rom,
+        cache: how,
+        seconds: t.elapsed().as_secs_f64(),
+        cache_file: Some(path),
+        build: None,
+        replaced: None,
+    };
+    if !opts.no_cache {
+        match cache::load(&path, &description)? {
+            Lookup::Hit(rom) => return Ok(found(rom, "hit", path)),
+            Lookup::Corrupt(reason) => {
+                log::warn!("{}: {reason}; rebuilding the ROM", path.display());
+                replaced = Some(reason);
+            }
+            Lookup::Miss => {}
+        }
+    }
+    // nothing is built that the machine cannot hold or whose result cannot be stored
+    let limits = Limits::of(scene);
+    if let Some(est) = budget::rom_build(scene) {
+        limits.check(scene, &est)?;
+    }
+    // one builder per entry: processes that missed it at the same time wait for the lock and
+    // then find what the builder stored
+    let _lock = if opts.no_cache {
+        None
+    } else {
+        cache::check_writable(&dir)?;
+        let lock = cache::BuildLock::acquire(&path, |l| {
+            log::warn!(
+                "another process is building this ROM (lock {}); waiting for it",
+                l.display()
+            )
+        })?;
+        if lock.waited {
+            if let Lookup::Hit(rom) = cache::load(&path, &description)? {
+                return Ok(found(rom, "waited", path));
+            }
+        }
+        Some(lock)
+    };
+    let (b, _, _) = build_rom(scene, false, progress)?;
+    let rom = b.rom.clone();
+    if rom.info.system_modes == 0 {
+        return Err(SceneRomError::NoSystemMode {
+            path: scene.path.clone(),
+            cutoff_hz: scene.rom.cutoff_hz,
+        });
+    }
+    rom.validate().map_err(|e| SceneRomError::Inconsistent {
+        path: scene.path.clone(),
+        msg: e.to_string(),
+    })?;
+    if !opts.no_cache {
+        cache::store(&path, &description, &rom)?;
+    }
+    Ok(LoadedRom {
+        rom,
+        cache: if opts.no_cache { "bypassed" } else { "miss" },
+        seconds: t.elapsed().as_secs_f64(),
+        cache_file: (!opts.no_cache).then_some(path),
+        build: None,
+        replaced,
+    })
+}
