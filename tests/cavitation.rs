@@ -28,7 +28,7 @@ fn calibrate_reference(csv: &Path, png: &Path) -> (i32, String, String) {
 /// Reference coolant by hand (steam tables, 90 C): p_v = 70.18 kPa, rho = 965.3 kg/m^3,
 /// c = 1550.4 m/s; Vccv = (240 - 70.18) kPa / (965.3 x 1550.4) = 0.1135 m/s.
 #[test]
-fn coolant_json_matches_hand_values() {
+fn verification_coolant_json_matches_hand_values() {
     let (code, out, err) = linercav(&[
         "coolant",
         "--temp-c",
@@ -111,7 +111,7 @@ fn synthetic(path: &Path, neg_lo: f64, neg_hi: f64, n: usize) -> (f64, f64, f64)
 /// true threshold; peak sampling at 27 samples per period (< 0.7 %) and noise (< 0.3 %) add
 /// less. k_p: the A^2-weighted mean of the cycling k_i, within 5 % of their mean.
 #[test]
-fn calibration_recovers_known_thresholds() {
+fn verification_calibration_recovers_known_thresholds() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("rig.csv");
     let png = dir.path().join("cal.png");
@@ -163,7 +163,7 @@ fn refused(dir: &Path, name: &str, text: &str, needle: &str) {
 }
 
 #[test]
-fn bad_rig_data_is_refused() {
+fn contract_bad_rig_data_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     refused(

@@ -26,7 +26,7 @@ fn small_scene_args() -> Vec<&'static str> {
 }
 
 #[test]
-fn modes_json_contract_on_gmsh_meshes() {
+fn contract_modes_json_on_gmsh_meshes() {
     let mut by_kind = Vec::new();
     for mesh in [
         "tests/fixtures/block_tet10.msh",
@@ -66,7 +66,7 @@ fn modes_json_contract_on_gmsh_meshes() {
 }
 
 #[test]
-fn fixing_a_group_removes_rigid_modes() {
+fn verification_fixing_a_group_removes_rigid_modes() {
     let mut args = vec![
         "modes",
         "--mesh",
@@ -92,7 +92,7 @@ fn fixing_a_group_removes_rigid_modes() {
 }
 
 #[test]
-fn mesh_round_trip_and_scene_part_agree() {
+fn contract_mesh_round_trip_and_scene_part_agree() {
     let dir = tempfile::tempdir().unwrap();
     let msh = dir.path().join("liner.msh");
     let mut args = vec!["export-mesh"];
@@ -132,7 +132,7 @@ fn mesh_round_trip_and_scene_part_agree() {
 /// Exported K and M are read back independently: the translation field is in K's null space
 /// (free-free) and u^T M u of a unit translation is the part's mass rho V.
 #[test]
-fn exported_matrices_are_consistent() {
+fn verification_exported_matrices_are_consistent() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("mtx");
     let mut args = vec![
@@ -197,7 +197,7 @@ fn exported_matrices_are_consistent() {
 }
 
 #[test]
-fn scene_overrides_change_the_model() {
+fn contract_scene_overrides_change_the_model() {
     let mut a = vec!["modes"];
     a.extend(small_scene_args());
     a.extend(["--count", "8", "--json"]);
@@ -227,7 +227,7 @@ fn refused(args: &[&str], needle: &str, out: Option<&Path>) {
 }
 
 #[test]
-fn bad_input_is_refused_cleanly() {
+fn contract_bad_input_is_refused_cleanly() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir(dir.path().join("out")).unwrap();
     let vtu = dir.path().join("out").join("modes.vtu");
@@ -316,7 +316,7 @@ fn bad_input_is_refused_cleanly() {
 /// A scene that models the coolant layer on an imported liner needs the wet surface as a
 /// physical group: without it, exit 2 before any build, naming the key, the set and the file.
 #[test]
-fn coolant_layer_on_an_imported_liner_needs_its_wet_surface() {
+fn contract_coolant_layer_on_an_imported_liner_needs_its_wet_surface() {
     let dir = tempfile::tempdir().unwrap();
     let msh = dir.path().join("liner.msh");
     let mut args = vec!["export-mesh"];
@@ -349,7 +349,7 @@ fn coolant_layer_on_an_imported_liner_needs_its_wet_surface() {
 /// (a false MISMATCH); the check now passes the cluster and certifies through the first elastic
 /// gap.
 #[test]
-fn fewer_modes_than_rigid_body_modes_are_certified() {
+fn contract_fewer_modes_than_rigid_body_modes_are_certified() {
     let mut args = vec![
         "modes",
         "--mesh",
@@ -377,7 +377,7 @@ fn fewer_modes_than_rigid_body_modes_are_certified() {
 /// Regression (issue 23): a failed certification exits 1 (it printed MISMATCH and exited 0). A
 /// nearly incompressible block solved far above its spectrum misses modes below the shift.
 #[test]
-fn a_missed_mode_exits_non_zero() {
+fn contract_a_missed_mode_exits_non_zero() {
     let out = linercav(&[
         "modes",
         "--mesh",
@@ -405,7 +405,7 @@ fn a_missed_mode_exits_non_zero() {
 /// is 1189 m/s^2 on the default engine), are refused before any work: exit 2 naming the scene
 /// file and the key.
 #[test]
-fn thresholds_out_of_order_are_refused() {
+fn contract_thresholds_out_of_order_are_refused() {
     for sets in [
         &["cavitation.onset_m_s2=2000"][..],
         &["cavitation.onset_m_s2=900", "cavitation.high_risk_m_s2=800"][..],

@@ -268,3 +268,47 @@ fn verification_every_referenced_file_and_test_exists() {
         missing.join("\n")
     );
 }
+
+/// Every test in `tests/` is named for what it is (docs/verification.md): a test without one
+/// of the prefixes fails here with its file and name.
+#[test]
+fn contract_every_test_is_named_for_what_it_is() {
+    const KINDS: [&str; 5] = [
+        "verification_",
+        "regression_",
+        "validation_",
+        "contract_",
+        "fuzz_",
+    ];
+    let mut files = Vec::new();
+    files_under(Path::new("tests"), &["rs"], &mut files);
+    let mut unnamed = Vec::new();
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        let mut marked = false;
+        for line in text.lines().map(str::trim) {
+            if line == "#[test]" {
+                marked = true;
+                continue;
+            }
+            // a proptest's cases are functions inside `proptest! { ... }`, named like tests
+            let in_proptest = line.starts_with("fn fuzz_");
+            if (marked || in_proptest) && line.starts_with("fn ") {
+                let name: String = line[3..]
+                    .chars()
+                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                    .collect();
+                if !KINDS.iter().any(|k| name.starts_with(k)) {
+                    unnamed.push(format!("{}: {name}", f.display()));
+                }
+                marked = false;
+            } else if marked && !line.starts_with("#[") && !line.starts_with("//") {
+                marked = false;
+            }
+        }
+    }
+    assert!(
+        unnamed.is_empty(),
+        "tests not named for what they are: {unnamed:#?}"
+    );
+}

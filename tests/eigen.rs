@@ -89,7 +89,7 @@ fn verification_sturm_count_detects_a_missed_mode() {
 
 /// Bad requests are refused with typed errors, not panics.
 #[test]
-fn too_many_modes_is_an_error() {
+fn contract_too_many_modes_is_an_error() {
     let mesh = box_mesh(ElementKind::Hex8, [1, 1, 1], [0.1, 0.1, 0.1], 0.0);
     let mut model = FeModel::build(mesh, &STEEL, &[]).unwrap();
     assert!(model.modes(24, SIGMA, 0).is_err());

@@ -108,7 +108,7 @@ proptest! {
     /// mechanisms, no locking of rigid motion), M symmetric positive definite with
     /// sum of the x-x block = rho V.
     #[test]
-    fn element_properties(kind_i in 0usize..4,
+    fn verification_element_properties(kind_i in 0usize..4,
                           shift in proptest::collection::vec(-0.12f64..0.12, 24),
                           sx in 0.005f64..0.2, sy in 0.005f64..0.2, sz in 0.005f64..0.2,
                           nu in -0.5f64..0.45) {

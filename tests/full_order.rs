@@ -68,7 +68,7 @@ fn verification_rom_matches_the_full_order_model_on_the_window() {
 }
 
 #[test]
-fn hht_alpha_runs_the_same_scheme_in_both_models() {
+fn verification_hht_alpha_runs_the_same_scheme_in_both_models() {
     // HHT-alpha in the full model (its own K_eff and the -alpha F0 contact term) against the
     // modal HHT update: they differ by the modal truncation only, so the same bound holds
     // (a wrong shifted term in either shows as a difference of order alpha, here 10 %).
@@ -86,7 +86,7 @@ fn hht_alpha_runs_the_same_scheme_in_both_models() {
 }
 
 #[test]
-fn coolant_layer_enters_both_models() {
+fn verification_coolant_layer_enters_both_models() {
     // A heavy coolant layer (gap 30 mm: rho h = 29 kg/m^2, about a third of the test liner's
     // wall mass per area) in the liner's reduction and in the full model alike: the ROM must
     // stay within the same 2 % of the full model. The layer moves the full model's peaks by

@@ -23,11 +23,11 @@ fn default_liner() -> (LinerGeometry, LinerMeshing) {
 /// Regenerates the converged reference of the default liner (about 1 minute, 2 GB):
 /// `cargo test --release --test liner -- --ignored reference`.
 /// The reference mesh is 1.5x finer in every direction; with the O(h^4) convergence shown by
-/// `ovalling_frequency_converges_at_fourth_order` its own error is about 1.5^-4 = 20 % of the
-/// default mesh's, which the 0.4 % floor of `default_liner_is_within_half_a_percent` covers.
+/// `verification_ovalling_frequency_converges_at_fourth_order` its own error is about 1.5^-4 = 20 % of the
+/// default mesh's, which the 0.4 % floor of `verification_default_liner_is_within_half_a_percent` covers.
 #[test]
 #[ignore]
-fn reference_liner_frequencies() {
+fn verification_reference_liner_frequencies() {
     let (geo, m) = default_liner();
     let fine = LinerMeshing {
         circumferential: 72,
@@ -49,7 +49,7 @@ fn reference_liner_frequencies() {
 /// The default liner mesh reproduces the first 10 elastic frequencies of the refined reference
 /// within 0.4 % (so within 0.5 % of the converged values, see the reference's note).
 #[test]
-fn default_liner_is_within_half_a_percent() {
+fn verification_default_liner_is_within_half_a_percent() {
     let text = std::fs::read_to_string(REFERENCE).expect("reference JSON committed");
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     let reference: Vec<f64> = v["frequencies_hz"]
@@ -123,7 +123,7 @@ fn elastic_frequencies(geo: &LinerGeometry, m: &LinerMeshing, count: usize) -> V
 /// 2 %: at t/R = 0.16 the shear deformation and rotary inertia it neglects lower the n = 2
 /// frequency by about 1 % (observed: -1.1 %), so 2 % is twice the expected model difference.
 #[test]
-fn ovalling_frequency_converges_at_fourth_order() {
+fn verification_ovalling_frequency_converges_at_fourth_order() {
     let geo = ring(0.02);
     let levels = [(12usize, 1usize), (24, 2), (48, 4)];
     let f: Vec<f64> = levels

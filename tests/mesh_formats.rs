@@ -89,7 +89,7 @@ fn verification_nastran_and_abaqus_liners_give_the_gmsh_modes() {
 }
 
 #[test]
-fn unknown_mesh_formats_and_broken_decks_are_refused() {
+fn contract_unknown_mesh_formats_and_broken_decks_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("block.stl");
     std::fs::write(&bad, "solid x\n").unwrap();

@@ -173,7 +173,7 @@ fn verification_reused_liner_reduction_equals_reducing_a_placed_copy() {
 
 /// The cache key covers what the reduction depends on and nothing else.
 #[test]
-fn cache_key_follows_the_reduction_inputs() {
+fn contract_cache_key_follows_the_reduction_inputs() {
     let base = key_description(&scene(&[])).unwrap();
     for same in [
         "engine.speed_rpm=1200",
@@ -211,7 +211,7 @@ fn cache_key_follows_the_reduction_inputs() {
 /// Miss, then hit with identical content; a truncated or bit-flipped file is detected and
 /// rebuilt, never trusted.
 #[test]
-fn cache_hit_miss_and_corruption() {
+fn contract_cache_hit_miss_and_corruption() {
     let dir = tempfile::tempdir().unwrap();
     let opts = CacheOptions {
         no_cache: false,
@@ -316,7 +316,7 @@ fn forged_files_are_not_trusted(sc: &linercav::scene::Scene, path: &std::path::P
 }
 
 #[test]
-fn rom_and_shapes_json_contract() {
+fn contract_rom_and_shapes_json() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().to_str().unwrap();
     let out = linercav(&["rom", SMALL, "--json", "--cache-dir", d]);
@@ -366,7 +366,7 @@ fn rom_and_shapes_json_contract() {
 }
 
 #[test]
-fn interface_errors_name_part_and_set() {
+fn contract_interface_errors_name_part_and_set() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().to_str().unwrap();
     let cases: [(&[&str], &str); 3] = [
@@ -400,7 +400,7 @@ fn interface_errors_name_part_and_set() {
 /// below the band are at least as good, up to roundoff: 1e-6 slack) and meets the issue-3
 /// floors at the default factor. Bad factors are refused before any solve, nothing written.
 #[test]
-fn rom_tradeoff_cli_contract() {
+fn contract_rom_tradeoff_cli() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().join("rt");
     let ds = d.to_str().unwrap();
@@ -448,7 +448,7 @@ fn rom_tradeoff_cli_contract() {
 /// liner's lower end free (no crankcase node on the liner's outer radius or inside the open
 /// ring around it in the hanging zone). Without the key the band ends the liner, as before.
 #[test]
-fn guide_depth_moves_the_guide_band_on_both_parts() {
+fn contract_guide_depth_moves_the_guide_band_on_both_parts() {
     for (sets, bottom) in [(vec![], 0.0), (vec!["liner.guide_depth_mm=150"], 0.080)] {
         let sc = scene(&sets);
         let g = sc.liner_geometry.clone();
@@ -492,7 +492,7 @@ fn guide_depth_moves_the_guide_band_on_both_parts() {
 /// A guide band above the flange's underside, past the liner bottom, or above an analysis
 /// point is refused with the key named.
 #[test]
-fn bad_guide_depth_is_refused_with_the_key() {
+fn contract_bad_guide_depth_is_refused_with_the_key() {
     for (depth, needle) in [
         ("5", "liner.guide_depth_mm"),
         ("240", "liner.guide_depth_mm"),

@@ -97,7 +97,7 @@ fn verification_merged_shards_equal_the_unsharded_sweep() {
 }
 
 #[test]
-fn parts_of_different_studies_are_refused() {
+fn contract_parts_of_different_studies_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
     let mut one = GRID.to_vec();
@@ -151,7 +151,7 @@ fn parts_of_different_studies_are_refused() {
 }
 
 #[test]
-fn the_scheduler_chooses_the_shard() {
+fn contract_the_scheduler_chooses_the_shard() {
     let dir = tempfile::tempdir().unwrap();
     let run = |env: &[(&str, &str)], extra: &[&str], out: &Path| {
         let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_linercav"));
@@ -210,7 +210,7 @@ fn the_scheduler_chooses_the_shard() {
 }
 
 #[test]
-fn a_sample_writes_probabilities_and_sensitivities() {
+fn contract_a_sample_writes_probabilities_and_sensitivities() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("lhs");
     let design = [
@@ -264,7 +264,7 @@ fn a_sample_writes_probabilities_and_sensitivities() {
 }
 
 #[test]
-fn bad_designs_are_refused_before_any_run() {
+fn contract_bad_designs_are_refused_before_any_run() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("bad");
     for (args, needle) in [
@@ -313,7 +313,7 @@ fn bad_designs_are_refused_before_any_run() {
 }
 
 #[test]
-fn shards_starting_together_on_an_empty_cache_build_the_rom_once() {
+fn contract_shards_starting_together_on_an_empty_cache_build_the_rom_once() {
     let dir = tempfile::tempdir().unwrap();
     let (cache, parts) = (dir.path().join("cache"), dir.path().join("parts"));
     let children: Vec<std::process::Child> = (1..=3)

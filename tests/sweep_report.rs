@@ -15,7 +15,7 @@ fn is_png(p: &Path) -> bool {
 }
 
 #[test]
-fn sweep_writes_the_cartesian_product_as_a_tidy_csv() {
+fn contract_sweep_writes_the_cartesian_product_as_a_tidy_csv() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sw");
     let (code, _, err) = linercav(&[
@@ -84,7 +84,7 @@ fn sweep_writes_the_cartesian_product_as_a_tidy_csv() {
 }
 
 #[test]
-fn sweep_refuses_bad_keys_and_values_before_running() {
+fn contract_sweep_refuses_bad_keys_and_values_before_running() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sw");
     for (vary, needle) in [
@@ -107,7 +107,7 @@ fn sweep_refuses_bad_keys_and_values_before_running() {
 }
 
 #[test]
-fn report_writes_the_figure_set() {
+fn contract_report_writes_the_figure_set() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("rep");
     let (code, _, err) = linercav(&["report", SCENE, "--out", out.to_str().unwrap()]);
@@ -140,7 +140,7 @@ fn report_writes_the_figure_set() {
 /// acceleration at a point is one of the two cycle peaks, i.e. the largest (`_max`) or
 /// 2 mean - max (to the CSV's 3 decimals), and the side-force column peaks at the JSON's value.
 #[test]
-fn simulate_time_series_agrees_with_its_json() {
+fn contract_simulate_time_series_agrees_with_its_json() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sim");
     let (code, stdout, err) = linercav(&[

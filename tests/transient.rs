@@ -585,7 +585,7 @@ fn simulate(
 }
 
 #[test]
-fn engine_cycle_runs_with_bounded_energy_and_finite_peaks() {
+fn verification_engine_cycle_runs_with_bounded_energy_and_finite_peaks() {
     let r = simulate(&[], |s| s.tolerance = None).unwrap();
     assert_eq!(r.peaks.len(), 2);
     for c in &r.peaks {
@@ -751,7 +751,7 @@ fn verification_bounded_predictions_change_nothing() {
 }
 
 #[test]
-fn hard_cases_run_stably_or_stop_clearly() {
+fn contract_hard_cases_run_stably_or_stop_clearly() {
     // very stiff contact: stable (average acceleration is unconditionally stable)
     let r = simulate(&["piston.contact_stiffness_n_per_m=1e10"], |_| {}).unwrap();
     assert!(r.stats.energy_error.abs() < 1e-9);
@@ -797,7 +797,7 @@ fn hard_cases_run_stably_or_stop_clearly() {
 }
 
 #[test]
-fn unstable_scheme_is_caught_as_energy_growth() {
+fn contract_unstable_scheme_is_caught_as_energy_growth() {
     // gamma < 1/2 gives Newmark negative numerical damping: energy grows until the balance
     // check stops the run, naming the crank angle.
     let Err(e) = simulate(&["transient.damping_ratio=0"], |s| {
@@ -816,7 +816,7 @@ fn unstable_scheme_is_caught_as_energy_growth() {
 }
 
 #[test]
-fn pressure_file_with_nan_is_refused_with_its_line() {
+fn contract_pressure_file_with_nan_is_refused_with_its_line() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("p.csv");
     std::fs::write(
