@@ -10,11 +10,12 @@
 //! (inertance from the slap location to each cylinder's worst point, from the modal model).
 
 use super::full_order::{peak_negative, rom_window};
-use super::rom::{get_rom, CacheOptions};
-use super::simulate::{run_cycle, SimulateReport};
+use super::rom::CacheOptions;
+use super::simulate::SimulateReport;
+use super::sweep::Variants;
 use crate::analysis::spectrum::{rms_average, Spectrum};
 use crate::cavitation::evaluate::{evaluate, spectra, Evaluation};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::files::write_all_atomic;
 use crate::piston::setup::{piston_of, simulation};
 use crate::piston::Piston;
@@ -23,7 +24,6 @@ use crate::report::png::{bars, write_png, BarData, Chart, Mark, Rule, Series};
 use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
 use crate::transient::engine::settings_of;
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -103,20 +103,23 @@ fn condense(value: f64, r: &CycleResult) -> SweepPoint {
     }
 }
 
-/// Runs the scene with `sets` on `rom` (same reduction inputs: only piston/operating keys).
-fn run_with(
-    path: &Path,
-    base_sets: &[String],
-    extra: &str,
-    rom: &EngineRom,
-) -> Result<CycleResult> {
-    let mut sets = base_sets.to_vec();
-    sets.push(extra.to_string());
-    let sc = super::load_scene(path, &sets)?;
-    let sim = simulation(&sc)?;
-    let piston = piston_of(&sc)?;
-    run_cycle(&sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None)
-        .map_err(|e| Error::Failure(format!("{extra}: {e}")))
+/// What a report run varies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Swept {
+    Scene,
+    Clearance,
+    PinOffset,
+}
+
+impl Swept {
+    /// The `--set` overrides of a run at `value` (the clearance in um, the pin offset in mm).
+    fn sets(self, value: f64) -> Vec<String> {
+        match self {
+            Swept::Scene => Vec::new(),
+            Swept::Clearance => vec![format!("piston.clearance_um={value}")],
+            Swept::PinOffset => vec![format!("piston.pin_offset_mm={value}")],
+        }
+    }
 }
 
 /// Speed against error on the reference window: mode cut-off and step, each against the
@@ -185,48 +188,47 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     let target = out;
     let out = stage.path();
     let progress = super::progress::Progress::new();
-    progress.phase("engine ROM");
-    let loaded = get_rom(&scene, cache)?;
-    let rom = &loaded.rom;
-    progress.phase("transients: the scene, clearance and pin-offset sweeps");
+    // the scene itself, then the clearance and pin-offset sweeps (their scene values skipped)
     let cur_c = sim.piston.skirt.clearance * 1e6;
     let cur_o = sim.piston.pin_offset * 1e3;
-    let mut jobs: Vec<(u8, f64, String)> = vec![(0, 0.0, String::new())];
-    for c in CLEARANCES_UM {
-        if (c - cur_c).abs() > 1e-9 {
-            jobs.push((1, c, format!("piston.clearance_um={c}")));
-        }
-    }
-    for o in PIN_OFFSETS_MM {
-        if (o - cur_o).abs() > 1e-9 {
-            jobs.push((2, o, format!("piston.pin_offset_mm={o}")));
-        }
-    }
-    let results: Vec<(u8, f64, CycleResult)> = jobs
-        .par_iter()
-        .map(|(kind, v, set)| {
-            let r = if set.is_empty() {
-                run_cycle(
-                    &scene,
-                    rom,
-                    &piston,
-                    settings_of(sim, scene.rom.band_hz),
-                    None,
-                )
-                .map_err(|e| Error::Failure(format!("{}: {e}", scene.path.display())))?
+    let mut jobs: Vec<(Swept, f64)> = vec![(Swept::Scene, 0.0)];
+    jobs.extend(
+        CLEARANCES_UM
+            .iter()
+            .filter(|&&c| (c - cur_c).abs() > 1e-9)
+            .map(|&c| (Swept::Clearance, c)),
+    );
+    jobs.extend(
+        PIN_OFFSETS_MM
+            .iter()
+            .filter(|&&o| (o - cur_o).abs() > 1e-9)
+            .map(|&o| (Swept::PinOffset, o)),
+    );
+    let extra: Vec<Vec<String>> = jobs.iter().map(|(k, v)| k.sets(*v)).collect();
+    let labels: Vec<String> = extra
+        .iter()
+        .map(|e| {
+            if e.is_empty() {
+                scene.path.display().to_string()
             } else {
-                run_with(scene_path, sets, set, rom)?
-            };
-            Ok((*kind, *v, r))
+                e.join(" ")
+            }
         })
-        .collect::<Result<_>>()?;
-    let base = &results[0].2;
+        .collect();
+    progress.phase("engine ROM");
+    let variants = Variants::prepare(scene_path, sets, &extra, cache)?;
+    progress.phase("transients: the scene, clearance and pin-offset sweeps");
+    let results = variants.run(&labels, || {})?;
+    let loaded = &variants.roms[variants.rom_of[0]];
+    let rom = &loaded.rom;
+    let base = &results[0].0;
     let mut clearance: Vec<SweepPoint> = vec![condense(cur_c, base)];
     let mut offset: Vec<SweepPoint> = vec![condense(cur_o, base)];
-    for (kind, v, r) in &results[1..] {
+    for ((kind, v), (r, _)) in jobs.iter().zip(&results).skip(1) {
         match kind {
-            1 => clearance.push(condense(*v, r)),
-            _ => offset.push(condense(*v, r)),
+            Swept::Clearance => clearance.push(condense(*v, r)),
+            Swept::PinOffset => offset.push(condense(*v, r)),
+            Swept::Scene => {}
         }
     }
     clearance.sort_by(|a, b| a.value.total_cmp(&b.value));

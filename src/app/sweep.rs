@@ -17,10 +17,12 @@ use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
 use crate::files::{write_all_atomic, write_atomic, Filler, OutputDir};
 use crate::piston::setup::{piston_of, simulation};
+use crate::reduce::rom::EngineRom;
 use crate::reduce::scene_rom::key_description;
 use crate::report::png::{write_png, Chart, Mark, Series};
 use crate::scene::design::{Design, PartError, Shard};
 use crate::scene::Scene;
+use crate::transient::cycle::CycleResult;
 use crate::transient::engine::settings_of;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -242,6 +244,83 @@ fn tool_version() -> String {
     format!("linercav {}", env!("CARGO_PKG_VERSION"))
 }
 
+/// Variants of one scene: each a list of `--set` overrides added to the base ones, loaded and
+/// checked before any run, with one ROM per distinct reduction input (loaded or built one
+/// after the other).
+pub struct Variants {
+    pub scenes: Vec<Scene>,
+    pub roms: Vec<LoadedRom>,
+    /// Index into `roms` of each scene's ROM.
+    pub rom_of: Vec<usize>,
+}
+
+impl Variants {
+    /// Loads the variants `variants` of the scene at `path` with the overrides `base`: a bad
+    /// value stops here, before any run.
+    pub fn prepare(
+        path: &Path,
+        base: &[String],
+        variants: &[Vec<String>],
+        cache: &CacheOptions,
+    ) -> Result<Self> {
+        let scenes: Vec<Scene> = variants
+            .iter()
+            .map(|extra| {
+                let mut sets = base.to_vec();
+                sets.extend(extra.iter().cloned());
+                let sc = super::load_scene(path, &sets)?;
+                simulation(&sc)?;
+                Ok(sc)
+            })
+            .collect::<Result<_>>()?;
+        let mut roms: Vec<LoadedRom> = Vec::new();
+        let mut rom_keys: BTreeMap<String, usize> = BTreeMap::new();
+        let mut rom_of = Vec::with_capacity(scenes.len());
+        for sc in &scenes {
+            let k = key_description(sc)?;
+            let idx = match rom_keys.get(&k) {
+                Some(&i) => i,
+                None => {
+                    roms.push(get_rom(sc, cache)?);
+                    rom_keys.insert(k, roms.len() - 1);
+                    roms.len() - 1
+                }
+            };
+            rom_of.push(idx);
+        }
+        Ok(Self {
+            scenes,
+            roms,
+            rom_of,
+        })
+    }
+
+    /// Runs every variant's engine cycles in parallel (`labels[k]` names variant k in a
+    /// failure); `done()` is called after each run. Returns the results with each run's wall
+    /// time [s], in the variants' order.
+    pub fn run(
+        &self,
+        labels: &[String],
+        done: impl Fn() + Sync,
+    ) -> Result<Vec<(CycleResult, f64)>> {
+        self.scenes
+            .par_iter()
+            .zip(self.rom_of.par_iter())
+            .zip(labels.par_iter())
+            .map(|((sc, &ri), name)| {
+                let t = Instant::now();
+                let piston = piston_of(sc)?;
+                let sim = simulation(sc)?;
+                let rom = &self.roms[ri].rom;
+                let res = run_cycle(sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None)
+                    .map_err(|e| Error::Failure(format!("run {name}: {e}")))?;
+                done();
+                Ok((res, t.elapsed().as_secs_f64()))
+            })
+            .collect()
+    }
+}
+
 /// Runs `indices` of the design's runs `all`: their lines, full results and the ROMs used.
 fn execute(
     req: &SweepRequest,
@@ -250,39 +329,18 @@ fn execute(
     indices: &[usize],
 ) -> Result<(Vec<RunLine>, Vec<serde_json::Value>, Vec<String>)> {
     let keys = design.keys();
-    // load and validate every scene first: a bad value stops the sweep before any run
-    let scenes: Vec<Scene> = indices
+    let extra: Vec<Vec<String>> = indices
         .iter()
         .map(|&k| {
-            let mut sets = req.sets.clone();
-            sets.extend(
-                keys.iter()
-                    .zip(&all[k])
-                    .map(|(key, x)| format!("{key}={x}")),
-            );
-            let sc = super::load_scene(&req.scene, &sets)?;
-            simulation(&sc)?;
-            Ok(sc)
+            keys.iter()
+                .zip(&all[k])
+                .map(|(key, x)| format!("{key}={x}"))
+                .collect()
         })
-        .collect::<Result<_>>()?;
-    // one ROM per distinct reduction input, loaded or built one after the other
-    let mut roms: Vec<LoadedRom> = Vec::new();
-    let mut rom_keys: BTreeMap<String, usize> = BTreeMap::new();
-    let mut which = Vec::with_capacity(scenes.len());
-    for sc in &scenes {
-        let k = key_description(sc)?;
-        let idx = match rom_keys.get(&k) {
-            Some(&i) => i,
-            None => {
-                roms.push(get_rom(sc, &req.cache)?);
-                rom_keys.insert(k, roms.len() - 1);
-                roms.len() - 1
-            }
-        };
-        which.push(idx);
-    }
+        .collect();
+    let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache)?;
     let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(scenes.len() as u64);
+        let b = indicatif::ProgressBar::new(indices.len() as u64);
         b.set_style(
             indicatif::ProgressStyle::with_template(
                 "{bar:30} {pos}/{len} runs, {elapsed} (eta {eta})",
@@ -291,42 +349,40 @@ fn execute(
         );
         b
     });
-    let done: Vec<(RunLine, serde_json::Value)> = scenes
-        .par_iter()
-        .zip(indices.par_iter())
-        .zip(which.par_iter())
-        .map(|((sc, &k), &ri)| {
-            let run = one_run(sc, &roms[ri], &keys, &all[k])?;
-            if let Some(b) = &bar {
-                b.inc(1);
-            }
-            Ok((
-                line_of(k, &run),
-                serde_json::to_value(&run).expect("serialisable"),
-            ))
-        })
-        .collect::<Result<_>>()?;
+    let labels: Vec<String> = indices.iter().map(|&k| label(&keys, &all[k])).collect();
+    let results = variants.run(&labels, || {
+        if let Some(b) = &bar {
+            b.inc(1);
+        }
+    })?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let (lines, runs) = done.into_iter().unzip();
+    let mut lines = Vec::with_capacity(indices.len());
+    let mut runs = Vec::with_capacity(indices.len());
+    for (k, (sc, (res, seconds))) in indices.iter().zip(variants.scenes.iter().zip(results)) {
+        let ri = variants.rom_of[lines.len()];
+        let run = sweep_run(sc, &variants.roms[ri].rom, &all[*k], &res, seconds)?;
+        lines.push(line_of(*k, &run));
+        runs.push(serde_json::to_value(&run).expect("serialisable"));
+    }
     Ok((
         lines,
         runs,
-        roms.iter().map(|r| r.cache.to_string()).collect(),
+        variants.roms.iter().map(|r| r.cache.to_string()).collect(),
     ))
 }
 
-/// One run of the sweep on its ROM.
-fn one_run(sc: &Scene, rom: &LoadedRom, keys: &[String], values: &[String]) -> Result<SweepRun> {
-    let t = Instant::now();
-    let sim = simulation(sc)?;
-    let piston = piston_of(sc)?;
-    let rom = &rom.rom;
-    let res = run_cycle(sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None)
-        .map_err(|e| Error::Failure(format!("run {}: {e}", label(keys, values))))?;
+/// One run of the sweep, evaluated: values, per-cylinder peaks and risks, largest tilt.
+fn sweep_run(
+    sc: &Scene,
+    rom: &EngineRom,
+    values: &[String],
+    res: &CycleResult,
+    seconds: f64,
+) -> Result<SweepRun> {
     let ev = evaluate(
-        &res,
+        res,
         rom,
         &crate::cavitation::Setup::new(&sc.cavitation)?,
         &sc.engine.firing_order,
@@ -334,7 +390,7 @@ fn one_run(sc: &Scene, rom: &LoadedRom, keys: &[String], values: &[String]) -> R
     );
     Ok(SweepRun {
         values: values.to_vec(),
-        cylinders: SimulateReport::cylinders_of(&res),
+        cylinders: SimulateReport::cylinders_of(res),
         risk: ev.cylinders,
         peak_tilt_rad: res
             .series
@@ -342,7 +398,7 @@ fn one_run(sc: &Scene, rom: &LoadedRom, keys: &[String], values: &[String]) -> R
             .iter()
             .map(|c| c.tilt_rad.iter().fold(0.0f64, |m, v| m.max(v.abs())))
             .collect(),
-        seconds: t.elapsed().as_secs_f64(),
+        seconds,
     })
 }
 
