@@ -2,10 +2,7 @@
 //! run in sweeps). Run: cargo bench --bench transient  (builds the default ROM on first use).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use linercav::piston::setup::piston_of;
-use linercav::reduce::scene_rom::{get_rom, CacheOptions};
-use linercav::scene::Scene;
-use linercav::transient::engine::{run_cycle, settings_of};
+use linercav::api::{get_rom, piston_of, run_cycle, settings_of, CacheOptions, Scene};
 use std::path::Path;
 
 fn cycle(c: &mut Criterion) {

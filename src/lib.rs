@@ -2,9 +2,11 @@
 //!
 //! The pipeline (docs/physics.md): scene -> mesh -> FE matrices -> modal bases
 //! -> reduced engine model -> slap transient -> analysis -> cavitation risk -> reports.
-//! This crate is the library; `src/main.rs` is a thin command-line front end.
+//! This crate is the library ([`api`] is its front door); `src/app` and `src/main.rs` are the
+//! thin command-line layer.
 
 pub mod analysis;
+pub mod api;
 pub mod app;
 pub mod cavitation;
 pub mod coolant;

@@ -471,7 +471,7 @@ fn rom_command(
     cache: &CacheArgs,
     started: Instant,
 ) -> Result<(), Error> {
-    let sc = linercav::app::load_scene(scene, sets)?;
+    let sc = linercav::api::load_scene(scene, sets)?;
     let loaded = rom::get_rom(&sc, &cache.options())?;
     let mut report = rom::RomReport::new(&loaded);
     report.seconds = started.elapsed().as_secs_f64();
@@ -486,7 +486,7 @@ fn shapes_command(
     json: bool,
     cache: &CacheArgs,
 ) -> Result<(), Error> {
-    let sc = linercav::app::load_scene(scene, sets)?;
+    let sc = linercav::api::load_scene(scene, sets)?;
     let loaded = rom::get_rom(&sc, &cache.options())?;
     let report = rom::ShapesReport {
         modes: loaded.rom.shapes(),
@@ -545,7 +545,7 @@ fn modes_command(
             .scene
             .clone()
             .ok_or_else(|| Error::Input("--assembly needs a scene file".into()))?;
-        let scene = linercav::app::load_scene(&scene_path, &model.sets)?;
+        let scene = linercav::api::load_scene(&scene_path, &model.sets)?;
         let report = modes::run_assembly(
             &scene,
             count,

@@ -19,13 +19,11 @@
 //!   LINERCAV_UPDATE_BASELINE=1 cargo test --release --test baseline
 //! and commit the file with the reason.
 
+use linercav::api::{
+    evaluate, get_rom, piston_of, run_cycle, settings_of, simulation, CacheOptions, CycleResult,
+    Scene,
+};
 use linercav::app::simulate::{run, SimulateRequest};
-use linercav::cavitation::evaluate::evaluate;
-use linercav::piston::setup::{piston_of, simulation};
-use linercav::reduce::scene_rom::{get_rom, CacheOptions};
-use linercav::scene::Scene;
-use linercav::transient::cycle::CycleResult;
-use linercav::transient::engine::{run_cycle, settings_of};
 use std::path::Path;
 use std::path::PathBuf;
 use std::sync::OnceLock;

@@ -2,11 +2,8 @@
 //! test engine): same piston, contact law, scheme and step; the scene's scheme on the full coupled
 //! model (23.8k unknowns, no modal truncation) is the reference.
 
+use linercav::api::{get_rom, piston_of, settings_of, CacheOptions, Scene};
 use linercav::app::full_order::compare;
-use linercav::piston::setup::piston_of;
-use linercav::reduce::scene_rom::{get_rom, CacheOptions};
-use linercav::scene::Scene;
-use linercav::transient::engine::settings_of;
 use std::path::Path;
 
 const SMALL: &str = "tests/fixtures/engine_small.toml";

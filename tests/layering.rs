@@ -24,7 +24,8 @@ fn level(module: &str) -> Option<i32> {
         "cavitation" => 8,
         "report" => 9,
         "error" => 10,
-        "app" => 11,
+        "api" => 11,
+        "app" => 12,
         _ => return None,
     })
 }

@@ -2,14 +2,11 @@
 //! impact against the spring-dashpot restitution, step convergence, and hard engine cases that
 //! must run stably or stop with a clear message (two-cylinder coarse test engine).
 
-use linercav::piston::setup::piston_of;
+use linercav::api::{
+    get_rom, piston_of, run_cycle, settings_of, CacheOptions, CycleSettings, EngineRom, Scene,
+};
 use linercav::piston::skirt::SliceLaw;
-use linercav::reduce::rom::EngineRom;
-use linercav::reduce::scene_rom::{get_rom, CacheOptions};
-use linercav::scene::Scene;
 use linercav::transient::contact::{self, Body, Location, Slice, Structure};
-use linercav::transient::cycle::CycleSettings;
-use linercav::transient::engine::{run_cycle, settings_of};
 use linercav::transient::scheme::{ModalIntegrator, Scheme};
 use nalgebra::DMatrix;
 use std::path::Path;

@@ -19,7 +19,7 @@ use crate::fem::element::check_mesh as check_and_compact;
 use crate::fem::material::Elastic;
 use crate::mesh::checks::CheckReport;
 use crate::mesh::{liner, Mesh};
-use crate::scene::{MeshSource, Scene, PARTS};
+use crate::scene::{MeshSource, PARTS};
 use std::path::PathBuf;
 
 /// Where the model of a command comes from: a scene part, or a bare mesh file with a material.
@@ -49,20 +49,7 @@ pub struct LoadedPart {
     pub guard_modes: usize,
 }
 
-/// Loads and validates a scene with its `--set` overrides, and resolves its cavitation
-/// thresholds, so that thresholds out of order are refused (exit 2, naming the file) before
-/// any work starts.
-pub fn load_scene(path: &std::path::Path, sets: &[String]) -> Result<Scene> {
-    let scene = Scene::load(path, sets)?;
-    crate::cavitation::Setup::new(&scene.cavitation).map_err(|e| {
-        crate::scene::SceneError::Field {
-            path: path.to_path_buf(),
-            key: "cavitation".into(),
-            msg: e.to_string(),
-        }
-    })?;
-    Ok(scene)
-}
+pub use crate::api::load_scene;
 
 fn read_mesh(source: &MeshSource) -> Result<(Mesh, Option<String>)> {
     Ok(match source {

@@ -720,7 +720,7 @@ fn validate_cavitation(
         }
     };
     // their order is checked where the cavitation stage resolves them (`cavitation::Setup`,
-    // called by `app::load_scene` right after loading)
+    // called by `api::load_scene` right after loading)
     Ok(CavitationSpec {
         coolant,
         gap,
