@@ -19,8 +19,11 @@ pub enum Error {
         #[source]
         source: MeshError,
     },
-    #[error("{0}")]
-    Input(String),
+    /// A command-line argument the command cannot use: the flag (or "part", "scene") and why.
+    #[error("{flag}: {msg}")]
+    Argument { flag: String, msg: String },
+    #[error(transparent)]
+    Calibration(#[from] crate::cavitation::calibration::CalibrationError),
     #[error(transparent)]
     Model(#[from] ModelError),
     #[error(transparent)]
@@ -55,7 +58,11 @@ impl Error {
     /// 2 for input the user can correct, 1 for failures of the computation or the system.
     pub fn exit_code(&self) -> i32 {
         match self {
-            Error::Scene(_) | Error::Msh(_) | Error::Mesh { .. } | Error::Input(_) => 2,
+            Error::Scene(_)
+            | Error::Msh(_)
+            | Error::Mesh { .. }
+            | Error::Argument { .. }
+            | Error::Calibration(_) => 2,
             // an output that cannot be written, a cache file that cannot be read: the user's
             // to fix (a path, a permission, a full disk)
             Error::Write(_)

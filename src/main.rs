@@ -66,7 +66,10 @@ impl ModelArgs {
             }),
             (None, Some(mesh)) => {
                 let need = |v: Option<f64>, flag: &str| {
-                    v.ok_or_else(|| Error::Input(format!("--mesh needs {flag}")))
+                    v.ok_or_else(|| Error::Argument {
+                        flag: "--mesh".into(),
+                        msg: format!("needs {flag}"),
+                    })
                 };
                 Ok(ModelInput::Mesh {
                     mesh: mesh.clone(),
@@ -78,7 +81,10 @@ impl ModelArgs {
                     fix: Vec::new(),
                 })
             }
-            _ => Err(Error::Input("give a scene file or --mesh FILE.msh".into())),
+            _ => Err(Error::Argument {
+                flag: "model".into(),
+                msg: "give a scene file or --mesh FILE.msh".into(),
+            }),
         }
     }
 }
@@ -541,10 +547,10 @@ fn modes_command(
         rom: _,
     } = o;
     if assembly {
-        let scene_path = model
-            .scene
-            .clone()
-            .ok_or_else(|| Error::Input("--assembly needs a scene file".into()))?;
+        let scene_path = model.scene.clone().ok_or_else(|| Error::Argument {
+            flag: "--assembly".into(),
+            msg: "needs a scene file".into(),
+        })?;
         let scene = linercav::api::load_scene(&scene_path, &model.sets)?;
         let report = modes::run_assembly(
             &scene,

@@ -37,13 +37,14 @@ pub struct CoolantReport {
 
 /// Coolant state from command-line values, errors naming the option.
 pub fn coolant_of(temp_c: f64, static_kpa: f64, glycol: f64) -> Result<Coolant> {
-    Coolant::new(temp_c, glycol, static_kpa * 1e3).map_err(|e| {
-        Error::Input(format!(
-            "--temp-c {} --static-kpa {} --glycol {}: {e}",
+    Coolant::new(temp_c, glycol, static_kpa * 1e3).map_err(|e| Error::Argument {
+        flag: format!(
+            "--temp-c {} --static-kpa {} --glycol {}",
             num(temp_c),
             num(static_kpa),
             num(glycol)
-        ))
+        ),
+        msg: e.to_string(),
     })
 }
 
@@ -51,10 +52,10 @@ fn gap_of(gap_mm: f64) -> Result<f64> {
     if gap_mm.is_finite() && gap_mm > 0.0 {
         Ok(gap_mm * 1e-3)
     } else {
-        Err(Error::Input(format!(
-            "--gap-mm {}: must be a positive number of millimetres",
-            num(gap_mm)
-        )))
+        Err(Error::Argument {
+            flag: format!("--gap-mm {}", num(gap_mm)),
+            msg: "must be a positive number of millimetres".into(),
+        })
     }
 }
 
@@ -127,12 +128,12 @@ pub fn calibrate(req: &CalibrateRequest) -> Result<Calibration> {
     let coolant = coolant_of(req.temp_c, req.static_kpa, req.glycol)?;
     let gap = gap_of(req.gap_mm)?;
     if !(req.quiet_ms.is_finite() && req.quiet_ms > 0.0) {
-        return Err(Error::Input(format!(
-            "--quiet-ms {}: must be positive",
-            req.quiet_ms
-        )));
+        return Err(Error::Argument {
+            flag: format!("--quiet-ms {}", req.quiet_ms),
+            msg: "must be positive".into(),
+        });
     }
-    let d = RigData::read(&req.data).map_err(|e| Error::Input(e.to_string()))?;
+    let d = RigData::read(&req.data)?;
     let file = req.data.display().to_string();
     let cal = calibration::calibrate(
         &file,
@@ -142,8 +143,7 @@ pub fn calibrate(req: &CalibrateRequest) -> Result<Calibration> {
             gap,
             quiet: req.quiet_ms * 1e-3,
         },
-    )
-    .map_err(|e| Error::Input(e.to_string()))?;
+    )?;
     if let Some(png) = &req.png {
         draw_calibration(png, &cal)?;
     }

@@ -20,10 +20,10 @@ pub struct ExportReport {
 
 fn ensure_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| {
-        Error::Input(format!(
-            "{}: cannot create the output directory: {e}",
-            dir.display()
-        ))
+        Error::Write(crate::files::WriteError {
+            path: dir.to_path_buf(),
+            source: e,
+        })
     })
 }
 

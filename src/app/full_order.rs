@@ -92,9 +92,12 @@ fn liner_rows(
     np: usize,
 ) -> Result<(Vec<Row>, Vec<Row>)> {
     let set = |name: &str| -> Result<Vec<usize>> {
-        lm.node_set(name)
-            .map(|s| s.to_vec())
-            .ok_or_else(|| Error::Input(format!("liner mesh: node set '{name}' is missing")))
+        lm.node_set(name).map(|s| s.to_vec()).ok_or_else(|| {
+            // the ROM was built from this mesh with these sets: a stale cache or a bug
+            Error::Failure(format!(
+                "liner mesh: node set '{name}' is missing, though the ROM was built with it"
+            ))
+        })
     };
     let mut contact: Vec<Row> = Vec::with_capacity(nc);
     for (name, dir) in [
@@ -353,7 +356,11 @@ pub fn rom_window(
         .iter()
         .copied()
         .find(|c| rom.cylinders.iter().any(|r| r.cylinder == *c))
-        .ok_or_else(|| Error::Input("no modelled cylinder for the full-order window".into()))?;
+        .ok_or_else(|| crate::scene::SceneError::Field {
+            path: scene.path.clone(),
+            key: "rom.cylinders".into(),
+            msg: "none of the modelled cylinders is in engine.firing_order: the full-order window needs one".into(),
+        })?;
     let idx = rom
         .cylinders
         .iter()

@@ -63,12 +63,9 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
     let (mesh, file, material, mut fix, label, shift_hz, guard_modes) = match input {
         ModelInput::Scene { scene, part, sets } => {
             let sc = load_scene(scene, sets)?;
-            let p = sc.part(part).ok_or_else(|| {
-                Error::Input(format!(
-                    "{}: unknown part '{part}'; the scene has: {}",
-                    scene.display(),
-                    PARTS.join(", ")
-                ))
+            let p = sc.part(part).ok_or_else(|| Error::Argument {
+                flag: format!("{}: part '{part}'", scene.display()),
+                msg: format!("unknown; the scene has: {}", PARTS.join(", ")),
             })?;
             let (mesh, file) = read_mesh(&p.source)?;
             (
@@ -86,9 +83,10 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
             material,
             fix,
         } => {
-            material
-                .validate()
-                .map_err(|m| Error::Input(format!("material: {m}")))?;
+            material.validate().map_err(|m| Error::Argument {
+                flag: "material".into(),
+                msg: m.to_string(),
+            })?;
             let m = crate::mesh::read(mesh)?;
             (
                 m,
@@ -110,10 +108,10 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
     let checks = check_and_compact(&mut mesh).map_err(|source| Error::Mesh { file, source })?;
     for name in &fix {
         if mesh.node_set(name).is_none() {
-            return Err(Error::Input(format!(
-                "{label}: unknown group '{name}' to fix; the mesh has: {}",
-                mesh.set_names().join(", ")
-            )));
+            return Err(Error::Argument {
+                flag: format!("{label}: group '{name}' to fix"),
+                msg: format!("unknown; the mesh has: {}", mesh.set_names().join(", ")),
+            });
         }
     }
     Ok(LoadedPart {

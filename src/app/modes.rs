@@ -53,25 +53,28 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
     let shift_hz = req.shift_hz.unwrap_or(part.shift_hz);
     // above 1e9 Hz sigma = -(2 pi f)^2 swamps K: no structural spectrum lies there
     if !(shift_hz.is_finite() && shift_hz > 0.0 && shift_hz <= 1e9) {
-        return Err(crate::error::Error::Input(format!(
-            "--shift-hz must be a positive number up to 1e9, got {}",
-            crate::text::num(shift_hz)
-        )));
+        return Err(crate::error::Error::Argument {
+            flag: format!("--shift-hz {}", crate::text::num(shift_hz)),
+            msg: "must be a positive number up to 1e9".into(),
+        });
     }
     if req.count == 0 {
-        return Err(crate::error::Error::Input(
-            "--count must be at least 1".into(),
-        ));
+        return Err(crate::error::Error::Argument {
+            flag: "--count".into(),
+            msg: "must be at least 1".into(),
+        });
     }
     let (nodes, elements) = (part.mesh.nodes.len(), part.mesh.num_elements());
     progress.phase("assembling K and M");
     let mut model = FeModel::build(part.mesh, &part.material, &part.fix)?;
     if req.count >= model.n_free() {
-        return Err(crate::error::Error::Input(format!(
-            "--count {} must be smaller than the number of free DOFs ({})",
-            req.count,
-            model.n_free()
-        )));
+        return Err(crate::error::Error::Argument {
+            flag: format!("--count {}", req.count),
+            msg: format!(
+                "must be smaller than the number of free DOFs ({})",
+                model.n_free()
+            ),
+        });
     }
     progress.phase("factorising and solving (ARPACK shift-invert)");
     let sigma = -(2.0 * std::f64::consts::PI * shift_hz).powi(2);
@@ -240,7 +243,10 @@ pub fn run_assembly(
 ) -> Result<AssemblyReport> {
     use crate::error::Error;
     if count == 0 {
-        return Err(Error::Input("--count must be at least 1".into()));
+        return Err(Error::Argument {
+            flag: "--count".into(),
+            msg: "must be at least 1".into(),
+        });
     }
     if full {
         let r = super::full_modes::run(scene, count, vtu_path)?;
@@ -266,11 +272,14 @@ pub fn run_assembly(
         (l.rom, l.cache)
     };
     if rom.frequencies_hz.len() < count {
-        return Err(Error::Input(format!(
-            "the ROM holds {} system modes below its cut-off {:.0} Hz; ask for fewer or raise rom.band_hz",
-            rom.frequencies_hz.len(),
-            rom.info.cutoff_hz
-        )));
+        return Err(Error::Argument {
+            flag: format!("--count {count}"),
+            msg: format!(
+                "the ROM holds {} system modes below its cut-off {:.0} Hz; ask for fewer or raise rom.band_hz",
+                rom.frequencies_hz.len(),
+                rom.info.cutoff_hz
+            ),
+        });
     }
     Ok(AssemblyReport {
         frequencies_hz: rom.frequencies_hz[..count].to_vec(),

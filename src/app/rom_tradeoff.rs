@@ -103,9 +103,10 @@ pub fn run(
     out: Option<&Path>,
 ) -> Result<RomTradeoff> {
     if factors.is_empty() || factors.iter().any(|f| !(f.is_finite() && *f >= 1.0)) {
-        return Err(Error::Input(format!(
-            "--factors: cut-off factors must be numbers >= 1, got {factors:?}"
-        )));
+        return Err(Error::Argument {
+            flag: format!("--factors {factors:?}"),
+            msg: "cut-off factors must be numbers >= 1".into(),
+        });
     }
     let base = super::load_scene(scene_path, sets)?;
     let band = base.rom.band_hz;
@@ -173,10 +174,10 @@ pub fn run(
 
 fn write_files(t: &RomTradeoff, dir: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|e| {
-        Error::Input(format!(
-            "{}: cannot create the output directory: {e}",
-            dir.display()
-        ))
+        Error::Write(crate::files::WriteError {
+            path: dir.to_path_buf(),
+            source: e,
+        })
     })?;
     let png = dir.join("rom_tradeoff.png");
     write_png(&png, (1100, 650), |root| {

@@ -154,9 +154,10 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         None => Shard::from_env(&|k| std::env::var(k).ok(), req.shards)?,
     };
     if shard.is_some() && req.out.is_none() {
-        return Err(Error::Input(
-            "sweep: a shard writes its part into a directory: give --out PART_DIR".into(),
-        ));
+        return Err(Error::Argument {
+            flag: "--shard".into(),
+            msg: "a shard writes its part into a directory: give --out PART_DIR".into(),
+        });
     }
     // the size is checked before any list of the runs is made
     let total = design.len();
@@ -165,12 +166,13 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         Some(s) => s.runs(total),
         None => (0..total).collect(),
     };
-    let scene_text = std::fs::read(&req.scene).map_err(|e| {
-        Error::Input(format!(
-            "{}: cannot read the scene: {e}",
-            req.scene.display()
-        ))
-    })?;
+    let scene_text =
+        crate::files::read_regular(&req.scene, crate::files::LIMIT_TEXT).map_err(|source| {
+            crate::scene::SceneError::Io {
+                path: req.scene.clone(),
+                source,
+            }
+        })?;
     // the part directory is shared by the shards (one file each, checked writable before
     // any run); a whole sweep's output directory is staged and renamed into place
     let stage = match (&req.out, shard) {
