@@ -43,6 +43,8 @@ pub enum Error {
     #[error(transparent)]
     SceneRom(#[from] crate::reduce::scene_rom::SceneRomError),
     #[error(transparent)]
+    Verify(#[from] crate::transient::verify::VerifyError),
+    #[error(transparent)]
     Piston(#[from] crate::piston::setup::PistonSetupError),
     #[error("{}: {source}", path.display())]
     Transient {
@@ -75,6 +77,7 @@ impl Error {
             Error::Modal(e) => e.exit_code(),
             Error::Rom(e) => e.exit_code(),
             Error::SceneRom(e) => e.exit_code(),
+            Error::Verify(e) => e.exit_code(),
             Error::Model(_) | Error::Failure(_) | Error::Transient { .. } => 1,
         }
     }

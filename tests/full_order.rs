@@ -3,12 +3,12 @@
 //! model (23.8k unknowns, no modal truncation) is the reference.
 
 use linercav::api::{get_rom, piston_of, settings_of, CacheOptions, Scene};
-use linercav::app::full_order::compare;
+use linercav::transient::verify::compare;
 use std::path::Path;
 
 const SMALL: &str = "tests/fixtures/engine_small.toml";
 
-fn comparison(sets: &[&str]) -> linercav::app::full_order::FullOrderReport {
+fn comparison(sets: &[&str]) -> linercav::transient::verify::FullOrderReport {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
     let scene = Scene::load(Path::new(SMALL), &sets).unwrap();
     let rom = get_rom(
@@ -33,7 +33,7 @@ fn comparison(sets: &[&str]) -> linercav::app::full_order::FullOrderReport {
     .unwrap()
 }
 
-fn print_points(c: &linercav::app::full_order::FullOrderReport) {
+fn print_points(c: &linercav::transient::verify::FullOrderReport) {
     for p in &c.points {
         eprintln!(
             "point {}: full {:.1} rom {:.1} ({:.2e})",

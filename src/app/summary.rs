@@ -9,7 +9,6 @@
 //! `sweep_pin_offset.png`, `criteria.png` (CSF against Ca), `speed_error.png`, `frf.png`
 //! (inertance from the slap location to each cylinder's worst point, from the modal model).
 
-use super::full_order::{peak_negative, rom_window};
 use super::rom::CacheOptions;
 use super::simulate::SimulateReport;
 use super::sweep::Variants;
@@ -24,6 +23,7 @@ use crate::report::png::{bars, write_png, BarData, Chart, Mark, Rule, Series};
 use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
 use crate::transient::engine::settings_of;
+use crate::transient::verify::{peak_negative, rom_window};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

@@ -7,4 +7,5 @@ pub mod engine;
 pub mod full_order;
 pub mod modal;
 pub mod scheme;
+pub mod verify;
 pub mod window;

@@ -1,0 +1,476 @@
+//! The ROM's transient verified against the full-order model (`simulate --full-order`): the ROM against the full-order FE model on a window around firing
+//! TDC of one cylinder, with the same piston, contact, scheme and step.
+//!
+//! Both runs start from the preload state at rest with the piston centred at the window start,
+//! only that cylinder's piston acts, and both use the same Rayleigh damping C = a M + b K (the
+//! scene's damping ratio at the first system mode and at the band's upper edge; the ROM's modes
+//! get zeta_j = a / (2 w_j) + b w_j / 2, which is the same damping in modal form). The point
+//! accelerations of both are low-passed to the scene's band by the same zero-phase FIR
+//! ([`super::window::low_pass`]): the ROM is meant to be accurate in its band, and
+//! the full model's content above the band (up to the mesh's limit) is not what either run
+//! reports. The error is the largest relative difference of the peak negative acceleration
+//! over the analysis points; the speed-up is the full-order wall time (assembly, factorisation
+//! and stepping) over the ROM's window stepping on the cached ROM.
+
+use super::cycle::CycleSettings;
+use super::full_order::{FullLiner, Row};
+use super::modal::ModalStructure;
+use super::scheme::{ModalIntegrator, Scheme};
+use super::window::{self, low_pass, ModalLiner, Window, WindowResult};
+use crate::piston::Piston;
+use crate::reduce::full::FullSystem;
+use crate::reduce::rom::RomError;
+use crate::reduce::rom::{preload_loads, EngineRom, RomInputs};
+use crate::reduce::scene_rom::SceneRomError;
+use crate::reduce::scene_rom::{load_meshes, rom_inputs};
+use crate::scene::Scene;
+use crate::scene::SceneError;
+use std::time::Instant;
+
+/// Why the comparison could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum VerifyError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    SceneRom(#[from] SceneRomError),
+    #[error(transparent)]
+    Rom(#[from] RomError),
+    /// A run or a solve of the window failed, or the ROM does not fit the mesh.
+    #[error("{0}")]
+    Failure(String),
+}
+
+impl VerifyError {
+    /// 2 for what the user can correct, 1 for a failed computation.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            VerifyError::Scene(_) => 2,
+            VerifyError::SceneRom(e) => e.exit_code(),
+            VerifyError::Rom(e) => e.exit_code(),
+            VerifyError::Failure(_) => 1,
+        }
+    }
+}
+
+type Result<T> = std::result::Result<T, VerifyError>;
+
+/// Window around firing TDC (360 deg) in the cylinder's own crank angle [deg]: from before the
+/// piston crosses over at TDC to past the side-force peak.
+pub const WINDOW_DEG: (f64, f64) = (330.0, 420.0);
+
+/// One analysis point compared.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PointComparison {
+    pub point: usize,
+    pub peak_negative_full_m_s2: f64,
+    pub peak_negative_rom_m_s2: f64,
+    pub crank_angle_full_deg: f64,
+    pub crank_angle_rom_deg: f64,
+    pub relative_error: f64,
+}
+
+/// What the comparison found.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FullOrderReport {
+    pub cylinder: usize,
+    pub window_start_deg: f64,
+    pub window_end_deg: f64,
+    pub step_deg: f64,
+    pub steps: usize,
+    /// The scheme both models ran on the window (the scene's).
+    pub scheme: Scheme,
+    /// Upper edge of the band both series are low-passed to [Hz].
+    pub filter_band_hz: f64,
+    pub full_dofs: usize,
+    pub rom_modes: usize,
+    /// Rayleigh coefficients a [1/s] and b [s].
+    pub rayleigh_a: f64,
+    pub rayleigh_b: f64,
+    pub points: Vec<PointComparison>,
+    /// Largest relative error of the ROM's peak negative acceleration over the points.
+    pub rom_error_peak_negative: f64,
+    /// Largest contact-force difference relative to the full model's peak contact force.
+    pub contact_force_error: f64,
+    /// Largest difference of the preload displacement at the bore lines, relative to its
+    /// largest magnitude.
+    pub preload_error: f64,
+    pub full_seconds: f64,
+    pub full_stepping_seconds: f64,
+    pub rom_seconds: f64,
+    /// full_seconds / rom_seconds, and the stepping alone.
+    pub speedup: f64,
+    pub speedup_stepping: f64,
+    /// The two runs' series (written by `simulate --full-order --out DIR`).
+    #[serde(skip)]
+    pub full_series: WindowResult,
+    #[serde(skip)]
+    pub rom_series: WindowResult,
+    /// The window's step [s].
+    #[serde(skip)]
+    pub dt: f64,
+}
+
+/// The full model's rows of liner instance `inst`: its `nc` bore-line contact DOFs (thrust
+/// +y, then anti-thrust -y; the ROM's count, else the cache is stale) and its `np` analysis
+/// points (+y).
+fn liner_rows(
+    sys: &FullSystem,
+    lm: &crate::mesh::Mesh,
+    inst: usize,
+    nc: usize,
+    np: usize,
+) -> Result<(Vec<Row>, Vec<Row>)> {
+    let set = |name: &str| -> Result<Vec<usize>> {
+        lm.node_set(name).map(|s| s.to_vec()).ok_or_else(|| {
+            // the ROM was built from this mesh with these sets: a stale cache or a bug
+            VerifyError::Failure(format!(
+                "liner mesh: node set '{name}' is missing, though the ROM was built with it"
+            ))
+        })
+    };
+    let mut contact: Vec<Row> = Vec::with_capacity(nc);
+    for (name, dir) in [
+        ("bore_thrust", [0.0, 1.0, 0.0]),
+        ("bore_antithrust", [0.0, -1.0, 0.0]),
+    ] {
+        for n in set(name)? {
+            contact.push(sys.node_row(inst, n, dir));
+        }
+    }
+    if contact.len() != nc {
+        return Err(VerifyError::Failure(format!(
+            "full-order window: {} bore-line DOFs in the mesh, {nc} in the ROM (stale cache?)",
+            contact.len()
+        )));
+    }
+    let mut points: Vec<Row> = Vec::new();
+    for k in 1..=np {
+        let n = set(&format!("point_{k}"))?[0];
+        points.push(sys.node_row(inst, n, [0.0, 1.0, 0.0]));
+    }
+    Ok((contact, points))
+}
+
+/// The preload displacement at the contact rows: K u = f (liner clamps and bolt reactions)
+/// solved on the full model.
+fn full_preload(sys: &FullSystem, inp: &RomInputs<'_>, contact: &[Row]) -> Result<Vec<f64>> {
+    let nl = inp.cylinders.len();
+    let pre = preload_loads(inp).map_err(VerifyError::from)?;
+    let mut f = vec![0.0; sys.dofs()];
+    for i in 0..nl {
+        sys.add_load(i, &pre.liner, &mut f);
+    }
+    for l in &pre.crankcase {
+        sys.add_load(nl, l, &mut f);
+    }
+    let llt = sys
+        .analysis
+        .llt(&sys.km.pattern, &sys.km.k)
+        .map_err(|e| VerifyError::Failure(format!("full-order preload: {e}")))?;
+    llt.solve_vec(&mut f);
+    Ok(contact
+        .iter()
+        .map(|r| r.iter().map(|&(k, v)| v * f[k]).sum())
+        .collect())
+}
+
+/// Runs the comparison on the scene's meshes.
+pub fn compare(
+    scene: &Scene,
+    rom: &EngineRom,
+    piston: &Piston,
+    settings: &CycleSettings,
+    progress: &dyn Fn(&str),
+) -> Result<FullOrderReport> {
+    progress("full-order window: ROM run");
+    // the full-order model takes no onset impulses: both models run without the correction
+    let settings = &CycleSettings {
+        onset_correction: false,
+        ..settings.clone()
+    };
+    let rw = rom_window(scene, rom, piston, settings, None, None)?;
+    let RomWindow {
+        cylinder,
+        index: idx,
+        res: rom_res,
+        win,
+        dt,
+        band,
+        rayleigh: (ra, rb),
+        preload: rom_preload,
+        modes: nm,
+    } = rw;
+    let crom = &rom.cylinders[idx];
+    let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
+    let nc = nt + na;
+    let scheme = win.scheme;
+    let fail = |e: super::cycle::TransientError, what: &str| {
+        VerifyError::Failure(format!(
+            "{}: {what} window, cylinder {cylinder}: {e}",
+            scene.path.display()
+        ))
+    };
+    // --- full-order window
+    let t_full = Instant::now();
+    progress("full-order window: assembling the full model");
+    let (lm, cm) = load_meshes(scene)?;
+    let inp = rom_inputs(scene, &lm, &cm, false);
+    let sys = FullSystem::build(&inp)?;
+    let inst = inp
+        .cylinders
+        .iter()
+        .position(|&c| c == cylinder)
+        .expect("ROM and scene model the same cylinders");
+    let (contact, points) = liner_rows(&sys, &lm, inst, nc, crom.point_modes.rows)?;
+    progress("full-order window: preload (static solve)");
+    let preload = full_preload(&sys, &inp, &contact)?;
+    let pre_scale = preload.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let preload_error = preload
+        .iter()
+        .zip(&rom_preload)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+        / pre_scale.max(1e-30);
+    progress("full-order window: factorising the Newmark matrix");
+    let mut full = FullLiner::new(&sys, contact, points, preload, scheme, dt, (ra, rb))
+        .map_err(|e| VerifyError::Failure(format!("full-order Newmark matrix: {e}")))?;
+    progress("full-order window: stepping");
+    let full_res = window::run(&win, piston, &mut full).map_err(|e| fail(e, "full-order"))?;
+    let full_seconds = t_full.elapsed().as_secs_f64();
+    // --- compare
+    let peak = |res: &WindowResult, p: usize| peak_negative(res, p, dt, band);
+    let mut cmp = Vec::new();
+    for p in 0..full_res.acceleration.len() {
+        let (pf, af) = peak(&full_res, p);
+        let (pr, ar) = peak(&rom_res, p);
+        cmp.push(PointComparison {
+            point: p + 1,
+            peak_negative_full_m_s2: pf,
+            peak_negative_rom_m_s2: pr,
+            crank_angle_full_deg: af,
+            crank_angle_rom_deg: ar,
+            relative_error: (pr - pf).abs() / pf.abs().max(1e-30),
+        });
+    }
+    let fmax = full_res
+        .contact_force_n
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let contact_force_error = full_res
+        .contact_force_n
+        .iter()
+        .zip(&rom_res.contact_force_n)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+        / fmax.max(1e-30);
+    Ok(FullOrderReport {
+        cylinder,
+        window_start_deg: win.start_deg,
+        window_end_deg: win.end_deg,
+        step_deg: win.step_deg,
+        steps: full_res.crank_angle_deg.len(),
+        scheme,
+        filter_band_hz: band,
+        full_dofs: sys.dofs(),
+        rom_modes: nm,
+        rayleigh_a: ra,
+        rayleigh_b: rb,
+        rom_error_peak_negative: cmp.iter().map(|c| c.relative_error).fold(0.0, f64::max),
+        points: cmp,
+        contact_force_error,
+        preload_error,
+        full_seconds,
+        full_stepping_seconds: full_res.seconds,
+        rom_seconds: rom_res.seconds,
+        speedup: full_seconds / rom_res.seconds.max(1e-9),
+        speedup_stepping: full_res.seconds / rom_res.seconds.max(1e-9),
+        full_series: full_res,
+        rom_series: rom_res,
+        dt,
+    })
+}
+
+/// Peak negative acceleration (magnitude) of point `p` of a window run after the band's
+/// low-pass, and its crank angle; the filter's edge samples are skipped.
+pub fn peak_negative(res: &WindowResult, p: usize, dt: f64, band: f64) -> (f64, f64) {
+    let (y, edge) = low_pass(&res.acceleration[p], dt, band, false);
+    let n = y.len();
+    let mut best = (f64::NEG_INFINITY, 0.0);
+    for k in edge.min(n)..n.saturating_sub(edge) {
+        if -y[k] > best.0 {
+            best = (-y[k], res.crank_angle_deg[k]);
+        }
+    }
+    best
+}
+
+/// The ROM's run on the window of the first modelled cylinder in the firing order.
+pub struct RomWindow {
+    pub cylinder: usize,
+    /// Index of the cylinder in the ROM.
+    pub index: usize,
+    pub res: WindowResult,
+    pub win: Window,
+    pub dt: f64,
+    pub band: f64,
+    pub rayleigh: (f64, f64),
+    /// Preload displacement at the contact DOFs.
+    pub preload: Vec<f64>,
+    /// Modes integrated.
+    pub modes: usize,
+}
+
+/// Runs the ROM alone on the window with the scene's scheme (HHT-alpha included): system modes
+/// up to `keep_below_hz` (all when None; the dropped ones join the static correction) at
+/// `step_deg` (the scene's when None).
+pub fn rom_window(
+    scene: &Scene,
+    rom: &EngineRom,
+    piston: &Piston,
+    settings: &CycleSettings,
+    keep_below_hz: Option<f64>,
+    step_deg: Option<f64>,
+) -> Result<RomWindow> {
+    let cylinder = scene
+        .engine
+        .firing_order
+        .iter()
+        .copied()
+        .find(|c| rom.cylinders.iter().any(|r| r.cylinder == *c))
+        .ok_or_else(|| crate::scene::SceneError::Field {
+            path: scene.path.clone(),
+            key: "rom.cylinders".into(),
+            msg: "none of the modelled cylinders is in engine.firing_order: the full-order window needs one".into(),
+        })?;
+    let idx = rom
+        .cylinders
+        .iter()
+        .position(|r| r.cylinder == cylinder)
+        .expect("found above");
+    let crom = &rom.cylinders[idx];
+    let scheme = settings.scheme;
+    let omega = piston.kinematics.omega;
+    let step_deg = step_deg.unwrap_or(settings.step_deg);
+    let dt = step_deg.to_radians() / omega;
+    let band = rom.info.band_hz;
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let (ra, rb) = window::rayleigh(
+        settings.damping_ratio,
+        two_pi * rom.frequencies_hz[0],
+        two_pi * band,
+    );
+    let win = Window {
+        start_deg: WINDOW_DEG.0,
+        end_deg: WINDOW_DEG.1,
+        step_deg,
+        omega,
+        scheme,
+        liner_top: scene.liner_geometry.length,
+        thrust_z: crom.thrust_z.clone(),
+        antithrust_z: crom.antithrust_z.clone(),
+        max_newton: settings.max_newton,
+        max_penetration: settings.max_penetration,
+        onset_correction: settings.onset_correction,
+    };
+    let fail = |e: super::cycle::TransientError, what: &str| {
+        VerifyError::Failure(format!(
+            "{}: {what} window, cylinder {cylinder}: {e}",
+            scene.path.display()
+        ))
+    };
+    // --- ROM window
+    let all = rom.frequencies_hz.len();
+    let nm = match keep_below_hz {
+        Some(f) => rom
+            .frequencies_hz
+            .iter()
+            .take_while(|&&x| x <= f)
+            .count()
+            .max(1),
+        None => all,
+    };
+    let w: Vec<f64> = rom.frequencies_hz[..nm]
+        .iter()
+        .map(|f| two_pi * f)
+        .collect();
+    let zeta: Vec<f64> = w.iter().map(|w| ra / (2.0 * w) + rb * w / 2.0).collect();
+    let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
+    let nc = nt + na;
+    let mut rows = crate::reduce::engine::Dense {
+        rows: nc,
+        cols: nm,
+        data: Vec::with_capacity(nc * nm),
+    };
+    for i in 0..nt {
+        rows.data.extend_from_slice(&crom.thrust_modes.row(i)[..nm]);
+    }
+    for i in 0..na {
+        rows.data
+            .extend_from_slice(&crom.antithrust_modes.row(i)[..nm]);
+    }
+    let r = &rom.residual_flexibility;
+    let off = crom.contact_offset;
+    let mut rflex = crate::reduce::engine::Dense {
+        rows: nc,
+        cols: nc,
+        data: (0..nc * nc)
+            .map(|k| r.at(off + k / nc, off + k % nc))
+            .collect(),
+    };
+    let np = crom.point_modes.rows;
+    let points = crate::reduce::engine::Dense {
+        rows: np,
+        cols: nm,
+        data: (0..np)
+            .flat_map(|i| crom.point_modes.row(i)[..nm].to_vec())
+            .collect(),
+    };
+    let mut point_residual = crom.point_residual.clone();
+    // dropped modes join the static correction: R += phi phi^T / w^2 (contact x contact and
+    // points x contact), as the cycle does for `mode_cutoff_hz`
+    let contact_row = |i: usize, j: usize| {
+        if i < nt {
+            crom.thrust_modes.at(i, j)
+        } else {
+            crom.antithrust_modes.at(i - nt, j)
+        }
+    };
+    for j in nm..all {
+        let w2 = (two_pi * rom.frequencies_hz[j]).powi(2);
+        for a in 0..nc {
+            let ra_ = contact_row(a, j) / w2;
+            for b in 0..nc {
+                rflex.data[a * nc + b] += ra_ * contact_row(b, j);
+            }
+            for p in 0..np {
+                point_residual.data[p * nc + a] += crom.point_modes.at(p, j) * ra_;
+            }
+        }
+    }
+    let rom_preload: Vec<f64> = crom
+        .preload_thrust
+        .iter()
+        .chain(&crom.preload_antithrust)
+        .copied()
+        .collect();
+    let mut integrator = ModalIntegrator::new(&w, &zeta, scheme);
+    integrator.dynamic_modes = rom.info.system_modes.min(w.len());
+    let mut modal = ModalLiner {
+        structure: ModalStructure::new(integrator, rows, rflex, rom_preload.clone()),
+        points,
+        point_residual: Some(point_residual),
+    };
+    let res = window::run(&win, piston, &mut modal).map_err(|e| fail(e, "ROM"))?;
+    Ok(RomWindow {
+        cylinder,
+        index: idx,
+        res,
+        win,
+        dt,
+        band,
+        rayleigh: (ra, rb),
+        preload: rom_preload,
+        modes: nm,
+    })
+}
