@@ -279,7 +279,10 @@ fn forged_files_are_not_trusted(sc: &linercav::scene::Scene, path: &std::path::P
     let mut empty = rom.clone();
     empty.cylinders.clear();
     let mut short = rom.clone();
-    short.cylinders[0].point_modes.data.pop();
+    // a matrix one column short of the modes (a stored matrix of the wrong shape)
+    let pm = &short.cylinders[0].point_modes;
+    short.cylinders[0].point_modes =
+        linercav::linalg::dense::Dense::zeros((pm.nrows(), pm.ncols() - 1));
     let cases = [
         ("all-zero payload", sign(&vec![0u8; good.len() - 52])),
         (

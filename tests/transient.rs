@@ -272,7 +272,6 @@ fn impact(
     mode: Option<(f64, f64)>,
     dt: f64,
 ) -> Impact {
-    use linercav::reduce::engine::Dense;
     use linercav::transient::contact::SliceState;
     use linercav::transient::modal::ModalStructure;
     let law = SliceLaw::new(k, 0.0, 0.0);
@@ -286,11 +285,7 @@ fn impact(
     // the one-mode structure, mass-normalised: phi = 1 / sqrt(m_s), omega^2 = k_s / m_s
     let mut modal = mode.map(|(ms, ks)| {
         let integrator = ModalIntegrator::new(&[(ks / ms).sqrt()], &[0.0], scheme);
-        let one = |v: f64| Dense {
-            rows: 1,
-            cols: 1,
-            data: vec![v],
-        };
+        let one = |v: f64| linercav::linalg::dense::from_rows(1, 1, vec![v]);
         let mut st = ModalStructure::new(integrator, one(1.0 / ms.sqrt()), one(0.0), vec![0.0]);
         st.bound_predictions = false;
         (st, 1.0 / ms.sqrt())

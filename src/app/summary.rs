@@ -592,8 +592,8 @@ impl Figures<'_> {
                 })?;
                 let point = c.worst_point.checked_sub(1)?;
                 let a = crate::analysis::frf::inertance(
-                    cr.thrust_modes.row(node),
-                    cr.point_modes.row(point),
+                    crate::linalg::dense::row(&cr.thrust_modes, node),
+                    crate::linalg::dense::row(&cr.point_modes, point),
                     &rom.frequencies_hz,
                     zeta,
                     &freqs,

@@ -18,32 +18,7 @@ use super::craig_bampton::{symmetrise, PartReduction};
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 
-/// A row-major dense matrix for storage (cache) and reporting.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Dense {
-    pub rows: usize,
-    pub cols: usize,
-    pub data: Vec<f64>,
-}
-
-impl Dense {
-    pub fn from_mat(m: &Mat<f64>) -> Self {
-        let (rows, cols) = (m.nrows(), m.ncols());
-        let mut data = Vec::with_capacity(rows * cols);
-        for i in 0..rows {
-            for j in 0..cols {
-                data.push(m[(i, j)]);
-            }
-        }
-        Self { rows, cols, data }
-    }
-    pub fn at(&self, i: usize, j: usize) -> f64 {
-        self.data[i * self.cols + j]
-    }
-    pub fn row(&self, i: usize) -> &[f64] {
-        &self.data[i * self.cols..(i + 1) * self.cols]
-    }
-}
+pub use crate::linalg::dense::Dense;
 
 /// Where a part's reduced coordinates go in the assembled model.
 pub struct Placement<'a> {

@@ -15,8 +15,8 @@ use crate::mesh::Mesh;
 use faer::Mat;
 use std::time::Instant;
 
-/// Version of the ROM layout; part of the cache key.
-pub const ROM_FORMAT: u32 = 4;
+/// Version of the ROM layout; part of the cache key (5: matrices stored as ndarray arrays).
+pub const ROM_FORMAT: u32 = 5;
 
 /// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
 /// system modes along the stated direction.
@@ -123,12 +123,12 @@ impl EngineRom {
         check_dense("residual flexibility", square, contact, contact)?;
         for c in &self.cylinders {
             let (nt, na) = (c.thrust_z.len(), c.antithrust_z.len());
-            let np = c.point_modes.rows;
+            let np = c.point_modes.nrows();
             let at = |what: &str| format!("cylinder {}: {what}", c.cylinder);
             check_dense(&at("thrust modes"), &c.thrust_modes, nt, nm)?;
             check_dense(&at("anti-thrust modes"), &c.antithrust_modes, na, nm)?;
             check_dense(&at("point modes"), &c.point_modes, np, nm)?;
-            let ncp = c.crankcase_point_modes.rows;
+            let ncp = c.crankcase_point_modes.nrows();
             check_dense(
                 &at("crankcase point modes"),
                 &c.crankcase_point_modes,
@@ -161,15 +161,14 @@ impl EngineRom {
 
 /// A stored matrix has the expected dimensions and finite entries.
 fn check_dense(what: &str, d: &Dense, rows: usize, cols: usize) -> Result<(), String> {
-    if d.rows != rows || d.cols != cols || d.data.len() != rows * cols {
+    if d.nrows() != rows || d.ncols() != cols || !d.is_standard_layout() {
         return Err(format!(
-            "{what}: {} x {} with {} entries, expected {rows} x {cols}",
-            d.rows,
-            d.cols,
-            d.data.len()
+            "{what}: {} x {}, expected {rows} x {cols} (row-major)",
+            d.nrows(),
+            d.ncols(),
         ));
     }
-    if d.data.iter().any(|x| !x.is_finite()) {
+    if d.iter().any(|x| !x.is_finite()) {
         return Err(format!("{what}: an entry is not finite"));
     }
     Ok(())
@@ -685,7 +684,7 @@ fn point_residual(g_all: &Mat<f64>, sys: &SystemModes, b: &Basis, ncon: usize) -
     let gys = g_all * &b.ys;
     let r = gy.as_ref().subrows(ncon, np) * gy.as_ref().subrows(0, ncon).transpose()
         - gys.as_ref().subrows(ncon, np) * gys.as_ref().subrows(0, ncon).transpose();
-    Dense::from_mat(&r)
+    crate::linalg::dense::from_faer(&r)
 }
 
 /// What [`cylinder_rom`] needs of the assembled engine.
@@ -717,8 +716,9 @@ fn cylinder_rom(a: &Assembled<'_>, cyl: usize, g_all: &Mat<f64>, offset: usize) 
         n_g,
     );
     let cc_modes = &g_cc * &a.basis.modes;
-    let sub =
-        |r0: usize, nr: usize| Dense::from_mat(&modes_rows.as_ref().subrows(r0, nr).to_owned());
+    let sub = |r0: usize, nr: usize| {
+        crate::linalg::dense::from_faer(&modes_rows.as_ref().subrows(r0, nr).to_owned())
+    };
     let zs = |nodes: &[usize]| {
         nodes
             .iter()
@@ -734,7 +734,7 @@ fn cylinder_rom(a: &Assembled<'_>, cyl: usize, g_all: &Mat<f64>, offset: usize) 
         thrust_modes: sub(0, nt),
         antithrust_modes: sub(nt, na),
         point_modes: sub(nt + na, np),
-        crankcase_point_modes: Dense::from_mat(&cc_modes),
+        crankcase_point_modes: crate::linalg::dense::from_faer(&cc_modes),
         preload_thrust: column(0, nt),
         preload_antithrust: column(nt, na),
         preload_points: column(nt + na, np),
@@ -944,7 +944,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
             .map(|&l| hz(l))
             .collect(),
         cylinders,
-        residual_flexibility: Dense::from_mat(&rflex),
+        residual_flexibility: crate::linalg::dense::from_faer(&rflex),
         info,
     };
     Ok(RomBuild {
@@ -976,8 +976,8 @@ impl EngineRom {
                     .cylinders
                     .iter()
                     .map(|c| {
-                        (0..c.point_modes.rows)
-                            .map(|p| c.point_modes.at(p, j))
+                        (0..c.point_modes.nrows())
+                            .map(|p| c.point_modes[[p, j]])
                             .collect()
                     })
                     .collect();

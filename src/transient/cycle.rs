@@ -25,8 +25,8 @@ use super::contact::{self, Body, Location, Slice, SliceState, StepFailure};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
 use super::window::{body_at_rest, low_pass, second_difference};
+use crate::linalg::dense::{row, values_mut, Dense};
 use crate::piston::Piston;
-use crate::reduce::engine::Dense;
 use crate::reduce::rom::{CylinderRom, EngineRom};
 
 /// Numerical settings of the transient.
@@ -384,12 +384,8 @@ pub struct EngineRun<'a> {
 
 /// Modes kept and the contact-DOF rows/flexibility/preload of the ROM.
 fn contact_data(rom: &EngineRom, nm: usize) -> (Dense, Vec<f64>) {
-    let ndof = rom.residual_flexibility.rows;
-    let mut rows = Dense {
-        rows: ndof,
-        cols: nm,
-        data: vec![0.0; ndof * nm],
-    };
+    let ndof = rom.residual_flexibility.nrows();
+    let mut rows = Dense::zeros((ndof, nm));
     let mut pre = vec![0.0; ndof];
     for c in &rom.cylinders {
         let nt = c.thrust_z.len();
@@ -400,9 +396,9 @@ fn contact_data(rom: &EngineRom, nm: usize) -> (Dense, Vec<f64>) {
         .into_iter()
         .enumerate()
         {
-            for i in 0..m.rows {
+            for i in 0..m.nrows() {
                 let r = c.contact_offset + k * nt + i;
-                rows.data[r * nm..(r + 1) * nm].copy_from_slice(&m.row(i)[..nm]);
+                values_mut(&mut rows)[r * nm..(r + 1) * nm].copy_from_slice(&row(m, i)[..nm]);
                 pre[r] = p[i];
             }
         }
@@ -414,7 +410,7 @@ fn contact_data(rom: &EngineRom, nm: usize) -> (Dense, Vec<f64>) {
 /// plus the static part of the ROM modes left out, sum_{j >= nm} phi_j phi_j^T / omega_j^2.
 fn truncated_flexibility(rom: &EngineRom, nm: usize) -> Dense {
     let mut r = rom.residual_flexibility.clone();
-    let n = r.rows;
+    let n = r.nrows();
     let all = rom.frequencies_hz.len();
     if nm == all {
         return r;
@@ -423,12 +419,12 @@ fn truncated_flexibility(rom: &EngineRom, nm: usize) -> Dense {
     for j in nm..all {
         let w2 = (2.0 * std::f64::consts::PI * rom.frequencies_hz[j]).powi(2);
         for a in 0..n {
-            let pa = rows.data[a * all + j] / w2;
+            let pa = rows[[a, j]] / w2;
             if pa == 0.0 {
                 continue;
             }
             for b in 0..n {
-                r.data[a * n + b] += pa * rows.data[b * all + j];
+                r[[a, b]] += pa * rows[[b, j]];
             }
         }
     }
@@ -882,8 +878,8 @@ impl<'a> EngineRun<'a> {
         };
         let a = &self.structure.integrator.ddeta;
         let nb = a.len();
-        (0..m.rows)
-            .map(|p| contact::dot(&m.row(p)[..nb], &a[..nb]))
+        (0..m.nrows())
+            .map(|p| contact::dot(&row(m, p)[..nb], &a[..nb]))
             .collect()
     }
 
@@ -1079,7 +1075,7 @@ impl<'a> EngineRun<'a> {
     /// acceleration of cylinder index `c`'s points over the window, filtered like the cycle's
     /// outputs and taken where the filter's ends do not reach.
     fn window_peaks(mut self, c: usize, steps: usize, h: f64) -> Result<Vec<f64>, TransientError> {
-        let n = self.cyls[c].rom.point_modes.rows;
+        let n = self.cyls[c].rom.point_modes.nrows();
         let (mut raw, mut res) = (vec![Vec::new(); n], vec![Vec::new(); n]);
         let t0 = self.time;
         for k in 1..=steps {
@@ -1124,8 +1120,8 @@ impl<'a> EngineRun<'a> {
                 .iter()
                 .map(|c| CylinderSeries {
                     cylinder: c.rom.cylinder,
-                    acceleration: vec![Vec::new(); c.rom.point_modes.rows],
-                    crankcase_acceleration: vec![Vec::new(); c.rom.crankcase_point_modes.rows],
+                    acceleration: vec![Vec::new(); c.rom.point_modes.nrows()],
+                    crankcase_acceleration: vec![Vec::new(); c.rom.crankcase_point_modes.nrows()],
                     ..CylinderSeries::default()
                 })
                 .collect(),
@@ -1188,12 +1184,12 @@ impl Record {
         let raw: Vec<Vec<Vec<f64>>> = run
             .cyls
             .iter()
-            .map(|c| vec![Vec::new(); c.rom.point_modes.rows])
+            .map(|c| vec![Vec::new(); c.rom.point_modes.nrows()])
             .collect();
         let wall = run
             .cyls
             .iter()
-            .map(|c| vec![Vec::new(); c.rom.crankcase_point_modes.rows])
+            .map(|c| vec![Vec::new(); c.rom.crankcase_point_modes.nrows()])
             .collect();
         Record {
             start: 0,

@@ -20,8 +20,8 @@
 
 use super::contact::{Location, Structure};
 use super::scheme::ModalIntegrator;
+use crate::linalg::dense::{from_faer, row, values, values_mut, Dense};
 use crate::linalg::kernels::{axpy, dot, dot_pair};
-use crate::reduce::engine::Dense;
 use nalgebra::DMatrix;
 
 /// ROM structure state of a transient.
@@ -62,13 +62,13 @@ impl ModalStructure {
         mut rflex: Dense,
         preload: Vec<f64>,
     ) -> Self {
-        let ndof = rows.rows;
-        let nr = rflex.rows;
+        let ndof = rows.nrows();
+        let nr = rflex.nrows();
         for a in 0..nr {
             for b in a + 1..nr {
-                let v = 0.5 * (rflex.data[a * nr + b] + rflex.data[b * nr + a]);
-                rflex.data[a * nr + b] = v;
-                rflex.data[b * nr + a] = v;
+                let v = 0.5 * (rflex[[a, b]] + rflex[[b, a]]);
+                rflex[[a, b]] = v;
+                rflex[[b, a]] = v;
             }
         }
         let k = integrator.stiffness();
@@ -78,7 +78,7 @@ impl ModalStructure {
                 if rigid {
                     return f64::INFINITY;
                 }
-                let row = &rows.row(d)[..k.len()];
+                let row = &row(&rows, d)[..k.len()];
                 row.iter()
                     .zip(k)
                     .map(|(p, w2)| p * p / w2)
@@ -116,12 +116,10 @@ impl ModalStructure {
             return;
         }
         let n = self.integrator.len();
-        let ndof = self.rows.rows;
+        let ndof = self.rows.nrows();
         let d = &self.integrator.compliance;
-        let nm = self.rows.cols;
         // Psi = Phi sqrt(D) (DOFs x modes), S = Psi Psi^T
-        let psi =
-            faer::Mat::<f64>::from_fn(ndof, n, |r, j| self.rows.data[r * nm + j] * d[j].sqrt());
+        let psi = faer::Mat::<f64>::from_fn(ndof, n, |r, j| self.rows[[r, j]] * d[j].sqrt());
         let mut s = faer::Mat::<f64>::zeros(ndof, ndof);
         let whole = 0..ndof;
         let blocks = self
@@ -143,10 +141,10 @@ impl ModalStructure {
         if self.step_compliance.len() >= 8 {
             self.step_compliance.remove(0);
         }
-        let s = Dense::from_mat(&s);
+        let s = from_faer(&s);
         let mut t = s.clone();
         if self.static_correction {
-            for (tv, rv) in t.data.iter_mut().zip(&self.rflex.data) {
+            for (tv, rv) in values_mut(&mut t).iter_mut().zip(values(&self.rflex)) {
                 *tv += rv;
             }
         }
@@ -159,7 +157,7 @@ impl ModalStructure {
     fn interpolate(s: &Dense, a: &Location, b: &Location) -> f64 {
         let mut v = 0.0;
         for i in 0..2 {
-            let row = s.row(a.dofs[i]);
+            let row = row(s, a.dofs[i]);
             v += a.weights[i] * (b.weights[0] * row[b.dofs[0]] + b.weights[1] * row[b.dofs[1]]);
         }
         v
@@ -171,7 +169,7 @@ impl ModalStructure {
         if memo[d].0.is_nan() {
             let it = &self.integrator;
             let n = it.len();
-            memo[d] = dot_pair(&self.rows.row(d)[..n], &it.pred, &it.dpred);
+            memo[d] = dot_pair(&row(&self.rows, d)[..n], &it.pred, &it.dpred);
             self.touched.borrow_mut().push(d);
         }
         memo[d]
@@ -185,7 +183,7 @@ impl ModalStructure {
         let mut s = 0.0;
         for i in 0..2 {
             for k in 0..2 {
-                s += a.weights[i] * b.weights[k] * self.rflex.at(a.dofs[i], b.dofs[k]);
+                s += a.weights[i] * b.weights[k] * self.rflex[[a.dofs[i], b.dofs[k]]];
             }
         }
         s
@@ -193,14 +191,14 @@ impl ModalStructure {
 
     /// Number of contact DOFs (bore-line nodes of every modelled liner).
     pub fn contact_dofs(&self) -> usize {
-        self.rows.rows
+        self.rows.nrows()
     }
 
     /// u += f R_e[range] (row `e` of the residual flexibility, which is symmetric: the column
     /// too); nothing without the static correction.
     pub fn rflex_axpy(&self, u: &mut [f64], f: f64, e: usize, range: std::ops::Range<usize>) {
         if self.static_correction {
-            axpy(u, f, &self.rflex.row(e)[range]);
+            axpy(u, f, &row(&self.rflex, e)[range]);
         }
     }
 
@@ -214,7 +212,7 @@ impl ModalStructure {
             if fe == 0.0 {
                 continue;
             }
-            axpy(&mut f, fe, &self.rows.row(e)[..n]);
+            axpy(&mut f, fe, &row(&self.rows, e)[..n]);
         }
         f
     }
@@ -227,7 +225,7 @@ impl ModalStructure {
         (0..2)
             .map(|i| {
                 let d = at.dofs[i];
-                at.weights[i] * (self.preload[d] + dot(&self.rows.row(d)[..n], eta))
+                at.weights[i] * (self.preload[d] + dot(&row(&self.rows, d)[..n], eta))
             })
             .sum()
     }
@@ -332,7 +330,7 @@ impl ModalStructure {
             .map(|at| {
                 let mut u = 0.0;
                 for m in 0..2 {
-                    let row = x.row(at.dofs[m]);
+                    let row = row(x, at.dofs[m]);
                     u += at.weights[m] * gathered.iter().map(|&(e, f)| row[e] * f).sum::<f64>();
                 }
                 scale * u
@@ -392,21 +390,14 @@ mod tests {
         let omega: Vec<f64> = (0..n).map(|j| 2e3 + 1e3 * j as f64).collect();
         let mut integrator =
             ModalIntegrator::new(&omega, &vec![0.02; n], Scheme::average_acceleration());
-        let rows = Dense {
-            rows: ndof,
-            cols: n,
-            data: (0..ndof * n).map(|_| lcg(&mut st)).collect(),
-        };
+        let rows =
+            crate::linalg::dense::from_rows(ndof, n, (0..ndof * n).map(|_| lcg(&mut st)).collect());
         let preload: Vec<f64> = (0..ndof).map(|_| 1e-5 * lcg(&mut st)).collect();
         for j in 0..n {
             integrator.eta[j] = 1e-6 * lcg(&mut st);
             integrator.deta[j] = 1e-3 * lcg(&mut st);
         }
-        let rflex = Dense {
-            rows: ndof,
-            cols: ndof,
-            data: vec![0.0; ndof * ndof],
-        };
+        let rflex = crate::linalg::dense::from_rows(ndof, ndof, vec![0.0; ndof * ndof]);
         let mut s = ModalStructure::new(integrator, rows, rflex, preload);
         let locs: Vec<Location> = (0..ndof - 1)
             .map(|d| {
@@ -431,16 +422,8 @@ mod tests {
         // one mode: the bound is attained
         let mut one = ModalIntegrator::new(&[3e3], &[0.0], Scheme::average_acceleration());
         one.eta[0] = 2e-6;
-        let rows1 = Dense {
-            rows: 2,
-            cols: 1,
-            data: vec![0.7, -0.3],
-        };
-        let zero = Dense {
-            rows: 2,
-            cols: 2,
-            data: vec![0.0; 4],
-        };
+        let rows1 = crate::linalg::dense::from_rows(2, 1, vec![0.7, -0.3]);
+        let zero = crate::linalg::dense::from_rows(2, 2, vec![0.0; 4]);
         let mut s1 = ModalStructure::new(one, rows1, zero, vec![0.0; 2]);
         s1.integrator.predict(1e-9);
         let at = [Location {

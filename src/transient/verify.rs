@@ -17,6 +17,7 @@ use super::full_order::{FullLiner, Row};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
 use super::window::{self, low_pass, ModalLiner, Window, WindowResult};
+use crate::linalg::dense::{from_rows, row, Dense};
 use crate::piston::Piston;
 use crate::reduce::full::FullSystem;
 use crate::reduce::rom::RomError;
@@ -222,7 +223,7 @@ pub fn compare(
         .iter()
         .position(|&c| c == cylinder)
         .expect("ROM and scene model the same cylinders");
-    let (contact, points) = liner_rows(&sys, &lm, inst, nc, crom.point_modes.rows)?;
+    let (contact, points) = liner_rows(&sys, &lm, inst, nc, crom.point_modes.nrows())?;
     progress("full-order window: preload (static solve)");
     let preload = full_preload(&sys, &inp, &contact)?;
     let pre_scale = preload.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -397,43 +398,27 @@ pub fn rom_window(
     let zeta: Vec<f64> = w.iter().map(|w| ra / (2.0 * w) + rb * w / 2.0).collect();
     let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
     let nc = nt + na;
-    let mut rows = crate::reduce::engine::Dense {
-        rows: nc,
-        cols: nm,
-        data: Vec::with_capacity(nc * nm),
-    };
+    let mut data = Vec::with_capacity(nc * nm);
     for i in 0..nt {
-        rows.data.extend_from_slice(&crom.thrust_modes.row(i)[..nm]);
+        data.extend_from_slice(&row(&crom.thrust_modes, i)[..nm]);
     }
     for i in 0..na {
-        rows.data
-            .extend_from_slice(&crom.antithrust_modes.row(i)[..nm]);
+        data.extend_from_slice(&row(&crom.antithrust_modes, i)[..nm]);
     }
+    let rows = from_rows(nc, nm, data);
     let r = &rom.residual_flexibility;
     let off = crom.contact_offset;
-    let mut rflex = crate::reduce::engine::Dense {
-        rows: nc,
-        cols: nc,
-        data: (0..nc * nc)
-            .map(|k| r.at(off + k / nc, off + k % nc))
-            .collect(),
-    };
-    let np = crom.point_modes.rows;
-    let points = crate::reduce::engine::Dense {
-        rows: np,
-        cols: nm,
-        data: (0..np)
-            .flat_map(|i| crom.point_modes.row(i)[..nm].to_vec())
-            .collect(),
-    };
+    let mut rflex = Dense::from_shape_fn((nc, nc), |(a, b)| r[[off + a, off + b]]);
+    let np = crom.point_modes.nrows();
+    let points = Dense::from_shape_fn((np, nm), |(i, j)| crom.point_modes[[i, j]]);
     let mut point_residual = crom.point_residual.clone();
     // dropped modes join the static correction: R += phi phi^T / w^2 (contact x contact and
     // points x contact), as the cycle does for `mode_cutoff_hz`
     let contact_row = |i: usize, j: usize| {
         if i < nt {
-            crom.thrust_modes.at(i, j)
+            crom.thrust_modes[[i, j]]
         } else {
-            crom.antithrust_modes.at(i - nt, j)
+            crom.antithrust_modes[[i - nt, j]]
         }
     };
     for j in nm..all {
@@ -441,10 +426,10 @@ pub fn rom_window(
         for a in 0..nc {
             let ra_ = contact_row(a, j) / w2;
             for b in 0..nc {
-                rflex.data[a * nc + b] += ra_ * contact_row(b, j);
+                rflex[[a, b]] += ra_ * contact_row(b, j);
             }
             for p in 0..np {
-                point_residual.data[p * nc + a] += crom.point_modes.at(p, j) * ra_;
+                point_residual[[p, a]] += crom.point_modes[[p, j]] * ra_;
             }
         }
     }

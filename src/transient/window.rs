@@ -13,8 +13,8 @@ use super::contact::{self, dot, Body, Location, Structure};
 use super::cycle::{push_slices, BoreLines, PistonInBore, TransientError};
 use super::modal::ModalStructure;
 use super::scheme::Scheme;
+use crate::linalg::dense::{row, Dense};
 use crate::piston::Piston;
-use crate::reduce::engine::Dense;
 use nalgebra::DMatrix;
 
 /// A structure that integrates itself: the contact's view ([`Structure`]) plus the step.
@@ -247,9 +247,9 @@ pub struct ModalLiner {
 
 /// Residual point displacement R_pc F of `forces` at `locs` (contact DOFs interpolated).
 pub fn residual_displacement(r: &Dense, locs: &[Location], forces: &[f64]) -> Vec<f64> {
-    (0..r.rows)
+    (0..r.nrows())
         .map(|p| {
-            let row = r.row(p);
+            let row = row(r, p);
             locs.iter()
                 .zip(forces)
                 .filter(|(_, &f)| f != 0.0)
@@ -312,9 +312,9 @@ impl Liner for ModalLiner {
     }
     fn point_accelerations(&self) -> Vec<f64> {
         let a = &self.structure.integrator.ddeta;
-        let n = a.len().min(self.points.cols);
-        (0..self.points.rows)
-            .map(|p| dot(&self.points.row(p)[..n], &a[..n]))
+        let n = a.len().min(self.points.ncols());
+        (0..self.points.nrows())
+            .map(|p| dot(&row(&self.points, p)[..n], &a[..n]))
             .collect()
     }
     fn impulse(&mut self, locs: &[Location], impulses: &[f64]) -> bool {
