@@ -628,8 +628,8 @@ fn verification_averaged_cycles_are_the_statistics_of_the_single_cycles() {
     }
     // the series are the last cycle's, as with one averaged cycle
     assert_eq!(
-        avg.series.cylinders[0].acceleration[0],
-        single[2].series.cylinders[0].acceleration[0]
+        avg.series.cylinders[0].acceleration.row(0),
+        single[2].series.cylinders[0].acceleration.row(0)
     );
     // more averaged cycles than run: all of them; zero is refused with the key
     let all = simulate(

@@ -356,10 +356,10 @@ pub fn write_series(path: &Path, res: &CycleResult) -> Result<()> {
         write!(w, "crank_angle_deg,time_s")?;
         for c in &s.cylinders {
             let k = c.cylinder;
-            for p in 0..c.acceleration.len() {
+            for p in 0..c.acceleration.nrows() {
                 write!(w, ",c{k}_p{}_acc_m_s2", p + 1)?;
             }
-            for p in 0..c.crankcase_acceleration.len() {
+            for p in 0..c.crankcase_acceleration.nrows() {
                 write!(w, ",c{k}_p{}_wall_acc_m_s2", p + 1)?;
             }
             write!(
@@ -371,7 +371,12 @@ pub fn write_series(path: &Path, res: &CycleResult) -> Result<()> {
         for i in 0..s.time_s.len() {
             write!(w, "{:.4},{:.8}", s.crank_angle_deg[i], s.time_s[i])?;
             for c in &s.cylinders {
-                for a in c.acceleration.iter().chain(&c.crankcase_acceleration) {
+                for a in c
+                    .acceleration
+                    .rows()
+                    .into_iter()
+                    .chain(c.crankcase_acceleration.rows())
+                {
                     write!(w, ",{:.3}", a[i])?;
                 }
                 write!(

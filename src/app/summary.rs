@@ -436,7 +436,8 @@ impl Figures<'_> {
                 let c = &s.cylinders[ci];
                 let series = c
                     .acceleration
-                    .iter()
+                    .rows()
+                    .into_iter()
                     .enumerate()
                     .map(|(pi, a)| {
                         let mut pts: Vec<(f64, f64)> = (0..n)

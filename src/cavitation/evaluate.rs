@@ -8,6 +8,7 @@ use super::criteria::{self, Risk, Thresholds};
 use super::Setup;
 use crate::analysis::correlation::{pearson, spearman};
 use crate::analysis::spectrum::{amplitude_spectrum, rms_average, Spectrum};
+use crate::linalg::dense::row;
 use crate::reduce::rom::EngineRom;
 use crate::transient::cycle::{CycleResult, Series};
 
@@ -104,9 +105,9 @@ pub fn spectra(series: &Series, firing_order: &[usize]) -> Vec<Vec<Spectrum>> {
                     d(a).total_cmp(&d(b))
                 })
                 .unwrap_or(0);
-            c.acceleration
-                .iter()
-                .map(|a| {
+            (0..c.acceleration.nrows())
+                .map(|p| {
+                    let a = row(&c.acceleration, p);
                     let rot: Vec<f64> = (0..n).map(|i| a[(start + i) % n]).collect();
                     amplitude_spectrum(&rot, dt)
                 })
@@ -156,7 +157,7 @@ pub fn evaluate(
             let v = s
                 .cylinders
                 .get(ci)
-                .map(|cs| peak_velocity(&cs.acceleration[p], dt))
+                .map(|cs| peak_velocity(row(&cs.acceleration, p), dt))
                 .unwrap_or(0.0);
             let (fd, amp) = sp
                 .get(ci)

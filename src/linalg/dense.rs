@@ -17,6 +17,13 @@ pub fn from_rows(rows: usize, cols: usize, data: Vec<f64>) -> Dense {
     Array2::from_shape_vec((rows, cols), data).expect("rows x cols values")
 }
 
+/// A matrix whose rows are `rows` (all of one length; no rows: 0 x 0).
+pub fn from_row_vecs(rows: Vec<Vec<f64>>) -> Dense {
+    let cols = rows.first().map_or(0, Vec::len);
+    let n = rows.len();
+    from_rows(n, cols, rows.into_iter().flatten().collect())
+}
+
 /// Row `i` of a standard-layout matrix as a slice (the inner loops of the transient read
 /// contiguous rows).
 pub fn row(m: &Dense, i: usize) -> &[f64] {

@@ -25,7 +25,7 @@ use super::contact::{self, Body, Location, Slice, SliceState, StepFailure};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
 use super::window::{body_at_rest, low_pass, second_difference};
-use crate::linalg::dense::{row, values_mut, Dense};
+use crate::linalg::dense::{from_row_vecs, row, values_mut, Dense};
 use crate::piston::Piston;
 use crate::reduce::rom::{CylinderRom, EngineRom};
 
@@ -189,9 +189,10 @@ pub struct Series {
 pub struct CylinderSeries {
     pub cylinder: usize,
     /// Liner point accelerations [m/s^2] (points x steps), + toward the coolant.
-    pub acceleration: Vec<Vec<f64>>,
-    /// Crankcase jacket-wall accelerations at the facing points [m/s^2].
-    pub crankcase_acceleration: Vec<Vec<f64>>,
+    pub acceleration: Dense,
+    /// Crankcase jacket-wall accelerations at the facing points [m/s^2] (points x steps; the
+    /// last cycle's only, 0 steps in the others).
+    pub crankcase_acceleration: Dense,
     pub lateral_m: Vec<f64>,
     pub tilt_rad: Vec<f64>,
     /// Summed contact force on the thrust and anti-thrust side [N].
@@ -1120,8 +1121,8 @@ impl<'a> EngineRun<'a> {
                 .iter()
                 .map(|c| CylinderSeries {
                     cylinder: c.rom.cylinder,
-                    acceleration: vec![Vec::new(); c.rom.point_modes.nrows()],
-                    crankcase_acceleration: vec![Vec::new(); c.rom.crankcase_point_modes.nrows()],
+                    acceleration: Dense::zeros((c.rom.point_modes.nrows(), 0)),
+                    crankcase_acceleration: Dense::zeros((c.rom.crankcase_point_modes.nrows(), 0)),
                     ..CylinderSeries::default()
                 })
                 .collect(),
@@ -1158,8 +1159,12 @@ impl<'a> EngineRun<'a> {
                     .collect();
                 CylinderPeaks {
                     cylinder: cs.cylinder,
-                    peak_negative: cs.acceleration.iter().map(|a| arg(a, &|x| -x)).collect(),
-                    peak_positive: cs.acceleration.iter().map(|a| arg(a, &|x| x)).collect(),
+                    peak_negative: (0..cs.acceleration.nrows())
+                        .map(|p| arg(row(&cs.acceleration, p), &|x| -x))
+                        .collect(),
+                    peak_positive: (0..cs.acceleration.nrows())
+                        .map(|p| arg(row(&cs.acceleration, p), &|x| x))
+                        .collect(),
                     slap_force: arg(&dyn_force, &|x| x.abs()),
                     side_force: arg(&cs.side_force_n, &|x| x),
                 }
@@ -1232,18 +1237,24 @@ impl Record {
         let lo = (k * spc) as isize - margin as isize;
         let len = spc + 2 * margin;
         for (c, cs) in series.cylinders.iter_mut().enumerate() {
-            for p in 0..self.raw[c].len() {
-                let mut acc = record_segment(&self.raw[c][p], self.start, lo, len);
-                let r = record_segment(&self.res[c][p], self.start, lo, len);
-                let d2 = second_difference(&r, dt, false);
-                acc.iter_mut().zip(d2).for_each(|(a, d)| *a += d);
-                cs.acceleration[p] = run.output_filter(&acc, dt, margin, spc);
-            }
+            let points = (0..self.raw[c].len())
+                .map(|p| {
+                    let mut acc = record_segment(&self.raw[c][p], self.start, lo, len);
+                    let r = record_segment(&self.res[c][p], self.start, lo, len);
+                    let d2 = second_difference(&r, dt, false);
+                    acc.iter_mut().zip(d2).for_each(|(a, d)| *a += d);
+                    run.output_filter(&acc, dt, margin, spc)
+                })
+                .collect();
+            cs.acceleration = from_row_vecs(points);
             if last {
-                for p in 0..self.wall[c].len() {
-                    let w = record_segment(&self.wall[c][p], self.wall_from, lo, len);
-                    cs.crankcase_acceleration[p] = run.output_filter(&w, dt, margin, spc);
-                }
+                let walls = (0..self.wall[c].len())
+                    .map(|p| {
+                        let w = record_segment(&self.wall[c][p], self.wall_from, lo, len);
+                        run.output_filter(&w, dt, margin, spc)
+                    })
+                    .collect();
+                cs.crankcase_acceleration = from_row_vecs(walls);
             }
         }
         let keep_from = ((k + 1) * spc).saturating_sub(margin).max(self.start);
