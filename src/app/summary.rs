@@ -16,14 +16,10 @@ use crate::cavitation::evaluate::{evaluate, Evaluation};
 use crate::error::Result;
 use crate::files::write_all_atomic;
 use crate::piston::setup::{piston_of, simulation};
-use crate::piston::Piston;
-use crate::reduce::rom::EngineRom;
 use crate::report::figures::Figures;
 pub use crate::report::figures::{SweepPoint, TradeoffPoint};
-use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
 use crate::transient::engine::settings_of;
-use crate::transient::verify::{peak_negative, rom_window};
 use std::path::Path;
 use std::time::Instant;
 
@@ -95,55 +91,6 @@ impl Swept {
     }
 }
 
-/// Speed against error on the reference window: mode cut-off and step, each against the
-/// finest setting.
-pub fn tradeoff(scene: &Scene, rom: &EngineRom, piston: &Piston) -> Result<Vec<TradeoffPoint>> {
-    let sim = simulation(scene)?;
-    let settings = settings_of(sim, scene.rom.band_hz);
-    let base = settings.step_deg;
-    let run = |keep: Option<f64>, step: f64| -> Result<(Vec<f64>, usize, f64)> {
-        let rw = rom_window(scene, rom, piston, &settings, keep, Some(step))?;
-        let peaks = (0..rw.res.acceleration.len())
-            .map(|p| peak_negative(&rw.res, p, rw.dt, rw.band).0)
-            .collect();
-        Ok((peaks, rw.modes, rw.res.seconds))
-    };
-    // the converged reference: all modes at a step 64 times finer (the window is one piston
-    // from rest, deterministic); the truncated-mode rows at 1/8 of the step
-    let (reference, _, _) = run(None, base / 64.0)?;
-    let fine = base / 8.0;
-    let err = |p: &[f64]| {
-        p.iter()
-            .zip(&reference)
-            .map(|(a, b)| (a - b).abs() / b.abs().max(1e-30))
-            .fold(0.0, f64::max)
-    };
-    let mut out = Vec::new();
-    let band = scene.rom.band_hz;
-    for f in [band, 1.5 * band, 2.0 * band] {
-        let (p, m, s) = run(Some(f), fine)?;
-        out.push(TradeoffPoint {
-            setting: format!("modes <= {f:.0} Hz, step {fine} deg"),
-            modes: m,
-            step_deg: fine,
-            error: err(&p),
-            seconds: s,
-        });
-    }
-    for k in [4.0, 2.0, 1.0, 0.5] {
-        let step = base * k;
-        let (p, m, s) = run(None, step)?;
-        out.push(TradeoffPoint {
-            setting: format!("all modes, step {step} deg"),
-            modes: m,
-            step_deg: step,
-            error: err(&p),
-            seconds: s,
-        });
-    }
-    Ok(out)
-}
-
 /// Writes the report of `scene` into `out`.
 pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions) -> Result<Report> {
     let started = Instant::now();
@@ -207,7 +154,12 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     clearance.sort_by(|a, b| a.value.total_cmp(&b.value));
     offset.sort_by(|a, b| a.value.total_cmp(&b.value));
     progress.phase("speed against error (window runs)");
-    let trade = tradeoff(&scene, rom, &piston)?;
+    let trade = crate::transient::verify::tradeoff(
+        &scene,
+        rom,
+        &piston,
+        &settings_of(sim, scene.rom.band_hz),
+    )?;
     let ev = evaluate(
         base,
         rom,

@@ -14,19 +14,8 @@ use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
 use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
+pub use crate::transient::verify::TradeoffPoint;
 use std::path::{Path, PathBuf};
-
-/// One point of the speed-against-error curve.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct TradeoffPoint {
-    pub setting: String,
-    pub modes: usize,
-    pub step_deg: f64,
-    /// Largest relative error of the window's peak negative accelerations against the finest
-    /// setting (all modes, smallest step).
-    pub error: f64,
-    pub seconds: f64,
-}
 
 /// One run of a report sweep, condensed.
 #[derive(Clone, Debug, serde::Serialize)]

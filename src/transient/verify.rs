@@ -459,3 +459,67 @@ pub fn rom_window(
         modes: nm,
     })
 }
+
+/// One point of the speed-against-error curve.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TradeoffPoint {
+    pub setting: String,
+    pub modes: usize,
+    pub step_deg: f64,
+    /// Largest relative error of the window's peak negative accelerations against the finest
+    /// setting (all modes, smallest step).
+    pub error: f64,
+    pub seconds: f64,
+}
+
+/// Speed against error on the reference window: mode cut-off and step, each against the
+/// finest setting.
+pub fn tradeoff(
+    scene: &Scene,
+    rom: &EngineRom,
+    piston: &Piston,
+    settings: &CycleSettings,
+) -> Result<Vec<TradeoffPoint>> {
+    let base = settings.step_deg;
+    let run = |keep: Option<f64>, step: f64| -> Result<(Vec<f64>, usize, f64)> {
+        let rw = rom_window(scene, rom, piston, settings, keep, Some(step))?;
+        let peaks = (0..rw.res.acceleration.len())
+            .map(|p| peak_negative(&rw.res, p, rw.dt, rw.band).0)
+            .collect();
+        Ok((peaks, rw.modes, rw.res.seconds))
+    };
+    // the converged reference: all modes at a step 64 times finer (the window is one piston
+    // from rest, deterministic); the truncated-mode rows at 1/8 of the step
+    let (reference, _, _) = run(None, base / 64.0)?;
+    let fine = base / 8.0;
+    let err = |p: &[f64]| {
+        p.iter()
+            .zip(&reference)
+            .map(|(a, b)| (a - b).abs() / b.abs().max(1e-30))
+            .fold(0.0, f64::max)
+    };
+    let mut out = Vec::new();
+    let band = scene.rom.band_hz;
+    for f in [band, 1.5 * band, 2.0 * band] {
+        let (p, m, s) = run(Some(f), fine)?;
+        out.push(TradeoffPoint {
+            setting: format!("modes <= {f:.0} Hz, step {fine} deg"),
+            modes: m,
+            step_deg: fine,
+            error: err(&p),
+            seconds: s,
+        });
+    }
+    for k in [4.0, 2.0, 1.0, 0.5] {
+        let step = base * k;
+        let (p, m, s) = run(None, step)?;
+        out.push(TradeoffPoint {
+            setting: format!("all modes, step {step} deg"),
+            modes: m,
+            step_deg: step,
+            error: err(&p),
+            seconds: s,
+        });
+    }
+    Ok(out)
+}
