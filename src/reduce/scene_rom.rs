@@ -110,14 +110,19 @@ fn file_digest(path: &Path) -> Result<String> {
     Ok(blake3::hash(&bytes).to_hex().to_string())
 }
 
-/// Loads and checks the liner and crankcase meshes of a scene.
-pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
-    let cc = scene
+/// The scene's crankcase; the engine model needs one.
+fn crankcase_of(scene: &Scene) -> Result<&crate::scene::Crankcase> {
+    scene
         .crankcase
         .as_ref()
         .ok_or_else(|| SceneRomError::NoCrankcase {
             path: scene.path.clone(),
-        })?;
+        })
+}
+
+/// Loads and checks the liner and crankcase meshes of a scene.
+pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
+    let cc = crankcase_of(scene)?;
     let (mut lm, lfile) = match &scene.liner.source {
         MeshSource::Liner { geometry, meshing } => (liner::generate(geometry, meshing), None),
         MeshSource::File(p) => (crate::mesh::read(p)?, Some(p.display().to_string())),
@@ -166,12 +171,7 @@ pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
 
 /// The canonical description hashed into the cache key.
 pub fn key_description(scene: &Scene) -> Result<String> {
-    let cc = scene
-        .crankcase
-        .as_ref()
-        .ok_or_else(|| SceneRomError::NoCrankcase {
-            path: scene.path.clone(),
-        })?;
+    let cc = crankcase_of(scene)?;
     let liner_src = match &scene.liner.source {
         MeshSource::Liner { geometry, meshing } => {
             serde_json::json!({"geometry": geometry, "meshing": meshing})
