@@ -514,8 +514,9 @@ pub struct RawTransient {
     /// it assumes first-order convergence); above the tolerance the step is halved and the run
     /// repeated, at most twice (each costs twice the time); what was reached is reported
     /// (`stats.step_error_estimate`, per point `peak_negative_step_error_m_s2`). Measured on
-    /// the default engine at 0.25 deg: estimate 2.4 %, error of the mean against a step 64
-    /// times finer 1.9 %, every cylinder's worst point within 2.6 %.
+    /// the default engine at 0.25 deg (pooled realisations, benches/convergence.sh): estimate
+    /// 3.3 %, error of the mean against a step 64 times finer -1.2 %, the cylinders' worst
+    /// points -3.8 .. +1.3 % (the per-point estimates over-state: 9-18 %).
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
 }
