@@ -24,7 +24,7 @@
 use super::contact::{self, Body, Location, Slice, SliceState, StepFailure};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
-use super::window::{body_at_rest, low_pass, second_difference};
+use super::window::{body_at_rest, low_pass, sampled_peak, second_difference};
 use crate::linalg::dense::{from_row_vecs, row, values_mut, Dense};
 use crate::piston::Piston;
 use crate::reduce::rom::{CylinderRom, EngineRom};
@@ -1105,8 +1105,8 @@ impl<'a> EngineRun<'a> {
                     None => acc,
                 };
                 let lo = half.min(y.len());
-                let core = &y[lo..y.len().saturating_sub(half).max(lo)];
-                core.iter().fold(0.0f64, |m, &a| m.max(-a))
+                sampled_peak(&y, lo..y.len().saturating_sub(half).max(lo), -1.0)
+                    .map_or(0.0, |(p, _)| p.max(0.0))
             })
             .collect())
     }
@@ -1157,13 +1157,24 @@ impl<'a> EngineRun<'a> {
                 let dyn_force: Vec<f64> = (0..cs.side_force_n.len())
                     .map(|k| cs.thrust_force_n[k] - cs.antithrust_force_n[k] - cs.side_force_n[k])
                     .collect();
+                // the filtered accelerations are band-limited: their peaks lie between samples
+                let band_peak = |v: &[f64], sign: f64| -> Peak {
+                    match sampled_peak(v, 0..v.len(), sign) {
+                        Some((value, at)) => {
+                            let k = at.floor() as usize;
+                            let angle = local(k) + (at - k as f64) * self.settings.step_deg;
+                            Peak::single(value, angle.rem_euclid(720.0))
+                        }
+                        None => Peak::single(f64::NEG_INFINITY, 0.0),
+                    }
+                };
                 CylinderPeaks {
                     cylinder: cs.cylinder,
                     peak_negative: (0..cs.acceleration.nrows())
-                        .map(|p| arg(row(&cs.acceleration, p), &|x| -x))
+                        .map(|p| band_peak(row(&cs.acceleration, p), -1.0))
                         .collect(),
                     peak_positive: (0..cs.acceleration.nrows())
-                        .map(|p| arg(row(&cs.acceleration, p), &|x| x))
+                        .map(|p| band_peak(row(&cs.acceleration, p), 1.0))
                         .collect(),
                     slap_force: arg(&dyn_force, &|x| x.abs()),
                     side_force: arg(&cs.side_force_n, &|x| x),

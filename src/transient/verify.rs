@@ -16,7 +16,7 @@ use super::cycle::CycleSettings;
 use super::full_order::{FullLiner, Row};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
-use super::window::{self, low_pass, ModalLiner, Window, WindowResult};
+use super::window::{self, low_pass, sampled_peak, ModalLiner, Window, WindowResult};
 use crate::linalg::dense::{from_rows, row, Dense};
 use crate::piston::Piston;
 use crate::reduce::full::FullSystem;
@@ -293,17 +293,21 @@ pub fn compare(
 }
 
 /// Peak negative acceleration (magnitude) of point `p` of a window run after the band's
-/// low-pass, and its crank angle; the filter's edge samples are skipped.
+/// low-pass, located between the samples ([`sampled_peak`]), and its crank angle; the
+/// filter's edge samples are skipped.
 pub fn peak_negative(res: &WindowResult, p: usize, dt: f64, band: f64) -> (f64, f64) {
     let (y, edge) = low_pass(&res.acceleration[p], dt, band, false);
     let n = y.len();
-    let mut best = (f64::NEG_INFINITY, 0.0);
-    for k in edge.min(n)..n.saturating_sub(edge) {
-        if -y[k] > best.0 {
-            best = (-y[k], res.crank_angle_deg[k]);
+    match sampled_peak(&y, edge.min(n)..n.saturating_sub(edge), -1.0) {
+        Some((value, at)) => {
+            let k = at.floor() as usize;
+            let next = res.crank_angle_deg.get(k + 1).copied();
+            let angle = res.crank_angle_deg[k]
+                + (at - k as f64) * next.map_or(0.0, |a| a - res.crank_angle_deg[k]);
+            (value, angle)
         }
+        None => (f64::NEG_INFINITY, 0.0),
     }
-    best
 }
 
 /// The ROM's run on the window of the first modelled cylinder in the firing order.
