@@ -408,7 +408,7 @@ pub fn sampled_peak(y: &[f64], range: std::ops::Range<usize>, sign: f64) -> Opti
     }
     let (before, after) = (sign * y[k - 1], sign * y[k + 1]);
     let curvature = before - 2.0 * g + after;
-    if !(curvature < 0.0) || before > g || after > g {
+    if curvature.is_nan() || curvature >= 0.0 || before > g || after > g {
         return Some((g, k as f64));
     }
     let delta = 0.5 * (before - after) / curvature;
