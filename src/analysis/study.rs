@@ -47,6 +47,109 @@ pub fn rank_sensitivities(x: &[Vec<f64>], y: &[Vec<f64>]) -> Vec<Vec<Option<f64>
         .collect()
 }
 
+/// What the tables and pictures need of one run (kept in shard parts).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct RunLine {
+    /// Index of the run in the design (0-based).
+    pub index: usize,
+    pub values: Vec<String>,
+    /// The run's rows of `sweep.csv` (no header).
+    pub csv: String,
+    pub cylinders: Vec<CylinderLine>,
+}
+
+/// One cylinder of a [`RunLine`].
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct CylinderLine {
+    pub cylinder: usize,
+    pub slap_force_n: f64,
+    pub tilt_rad: f64,
+    /// Per analysis point: mean peak negative acceleration [m/s^2] and risk class.
+    pub peak_negative_m_s2: Vec<f64>,
+    pub risk: Vec<String>,
+}
+
+/// One row of `probabilities.csv`: the probability of a risk class at a point over the runs.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ProbabilityRow {
+    pub cylinder: usize,
+    pub point: usize,
+    pub class: &'static str,
+    #[serde(flatten)]
+    pub p: Proportion,
+}
+
+/// Spearman rank correlation of each cylinder's worst-point peak negative acceleration (and
+/// the engine's largest) with each varied key over the runs of a sample.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Sensitivities {
+    pub keys: Vec<String>,
+    pub cylinders: Vec<usize>,
+    /// rho[key][cylinder] (None: constant), then the engine's largest peak as the last column.
+    pub spearman: Vec<Vec<Option<f64>>>,
+}
+
+/// For a sampled design: the probability of every risk class at every point
+/// ([`Proportion::wilson`]) and the rank sensitivities of the peaks to the keys.
+/// `keys` are the varied keys, `lines` the runs (at least one; their values parse as numbers
+/// where the key is numeric, NaN otherwise).
+pub fn statistics(keys: &[String], lines: &[RunLine]) -> (Vec<ProbabilityRow>, Sensitivities) {
+    let n = lines.len();
+    let first = &lines[0];
+    let mut rows = Vec::new();
+    for (ci, c) in first.cylinders.iter().enumerate() {
+        for pi in 0..c.risk.len() {
+            for class in ["safe", "transitional", "high"] {
+                let k = lines
+                    .iter()
+                    .filter(|l| l.cylinders[ci].risk[pi] == class)
+                    .count();
+                rows.push(ProbabilityRow {
+                    cylinder: c.cylinder,
+                    point: pi + 1,
+                    class,
+                    p: Proportion::wilson(k, n),
+                });
+            }
+        }
+    }
+    let x: Vec<Vec<f64>> = (0..keys.len())
+        .map(|j| {
+            lines
+                .iter()
+                .map(|l| l.values[j].parse::<f64>().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let mut y: Vec<Vec<f64>> = (0..first.cylinders.len())
+        .map(|ci| lines.iter().map(|l| worst_peak(l, ci)).collect())
+        .collect();
+    y.push(
+        lines
+            .iter()
+            .map(|l| {
+                (0..l.cylinders.len())
+                    .map(|ci| worst_peak(l, ci))
+                    .fold(0.0, f64::max)
+            })
+            .collect(),
+    );
+    let sensitivities = Sensitivities {
+        keys: keys.to_vec(),
+        cylinders: first.cylinders.iter().map(|c| c.cylinder).collect(),
+        spearman: rank_sensitivities(&x, &y),
+    };
+    (rows, sensitivities)
+}
+
+/// Largest mean peak negative acceleration over cylinder `ci`'s points in run `l`.
+pub fn worst_peak(l: &RunLine, ci: usize) -> f64 {
+    l.cylinders[ci]
+        .peak_negative_m_s2
+        .iter()
+        .fold(0.0, |m: f64, &v| m.max(v))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

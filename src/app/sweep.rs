@@ -12,14 +12,16 @@
 
 use super::rom::{get_rom, CacheOptions, LoadedRom};
 use super::simulate::{run_cycle, CylinderReport, SimulateReport};
-use crate::analysis::study::{rank_sensitivities, Proportion};
+use crate::analysis::study::{
+    statistics, worst_peak, CylinderLine, ProbabilityRow, RunLine, Sensitivities,
+};
 use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
 use crate::files::{write_all_atomic, write_atomic, Filler, OutputDir};
 use crate::piston::setup::{piston_of, simulation};
 use crate::reduce::rom::EngineRom;
 use crate::reduce::scene_rom::key_description;
-use crate::report::png::{write_png, Chart, Mark, Series};
+use crate::report::study::{draw_key, draw_statistics, numeric};
 use crate::scene::design::{Design, PartError, Shard};
 use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
@@ -43,48 +45,6 @@ pub struct SweepRun {
     /// Largest |tilt| per cylinder over the cycle [rad].
     pub peak_tilt_rad: Vec<f64>,
     pub seconds: f64,
-}
-
-/// What the tables and pictures need of one run (kept in shard parts).
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct RunLine {
-    /// Index of the run in the design (0-based).
-    pub index: usize,
-    pub values: Vec<String>,
-    /// The run's rows of `sweep.csv` (no header).
-    pub csv: String,
-    pub cylinders: Vec<CylinderLine>,
-}
-
-/// One cylinder of a [`RunLine`].
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct CylinderLine {
-    pub cylinder: usize,
-    pub slap_force_n: f64,
-    pub tilt_rad: f64,
-    /// Per analysis point: mean peak negative acceleration [m/s^2] and risk class.
-    pub peak_negative_m_s2: Vec<f64>,
-    pub risk: Vec<String>,
-}
-
-/// One row of `probabilities.csv`.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct ProbabilityRow {
-    pub cylinder: usize,
-    pub point: usize,
-    pub class: &'static str,
-    #[serde(flatten)]
-    pub p: Proportion,
-}
-
-/// Spearman rank correlation of each cylinder's worst-point peak negative acceleration (and
-/// the engine's largest) with each varied key over the runs of a sample.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct Sensitivities {
-    pub keys: Vec<String>,
-    pub cylinders: Vec<usize>,
-    /// rho[key][cylinder] (None: constant), then the engine's largest peak as the last column.
-    pub spearman: Vec<Vec<Option<f64>>>,
 }
 
 /// What `sweep` and `sweep-merge` return.
@@ -505,69 +465,15 @@ pub fn csv(report: &SweepReport) -> String {
     s
 }
 
-/// For a sampled design: the probability of every risk class at every point
-/// ([`Proportion::wilson`]) and the rank sensitivities of the peaks to the keys.
+/// For a sampled design: the probability of every risk class at every point and the rank
+/// sensitivities of the peaks to the keys ([`statistics`]).
 fn add_statistics(report: &mut SweepReport) {
     if !report.design.is_sample() || report.lines.is_empty() {
         return;
     }
-    let n = report.lines.len();
-    let first = &report.lines[0];
-    let mut rows = Vec::new();
-    for (ci, c) in first.cylinders.iter().enumerate() {
-        for pi in 0..c.risk.len() {
-            for class in ["safe", "transitional", "high"] {
-                let k = report
-                    .lines
-                    .iter()
-                    .filter(|l| l.cylinders[ci].risk[pi] == class)
-                    .count();
-                rows.push(ProbabilityRow {
-                    cylinder: c.cylinder,
-                    point: pi + 1,
-                    class,
-                    p: Proportion::wilson(k, n),
-                });
-            }
-        }
-    }
-    let x: Vec<Vec<f64>> = (0..report.keys.len())
-        .map(|j| {
-            report
-                .lines
-                .iter()
-                .map(|l| l.values[j].parse::<f64>().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
-    let mut y: Vec<Vec<f64>> = (0..first.cylinders.len())
-        .map(|ci| report.lines.iter().map(|l| worst(l, ci)).collect())
-        .collect();
-    y.push(
-        report
-            .lines
-            .iter()
-            .map(|l| {
-                (0..l.cylinders.len())
-                    .map(|ci| worst(l, ci))
-                    .fold(0.0, f64::max)
-            })
-            .collect(),
-    );
-    report.sensitivities = Some(Sensitivities {
-        keys: report.keys.clone(),
-        cylinders: first.cylinders.iter().map(|c| c.cylinder).collect(),
-        spearman: rank_sensitivities(&x, &y),
-    });
+    let (rows, sens) = statistics(&report.keys, &report.lines);
     report.probabilities = Some(rows);
-}
-
-/// Largest mean peak negative acceleration over cylinder `ci`'s points in run `l`.
-fn worst(l: &RunLine, ci: usize) -> f64 {
-    l.cylinders[ci]
-        .peak_negative_m_s2
-        .iter()
-        .fold(0.0, |m: f64, &v| m.max(v))
+    report.sensitivities = Some(sens);
 }
 
 /// `probabilities.csv`: cylinder,point,class,probability,ci_low,ci_high.
@@ -580,170 +486,6 @@ pub fn probabilities_csv(rows: &[ProbabilityRow]) -> String {
         ));
     }
     s
-}
-
-/// Numeric value of a sweep value (TOML literal), for plotting.
-fn numeric(v: &str) -> Option<f64> {
-    v.parse::<f64>().ok()
-}
-
-/// The three-panel figure of one varied key: per cylinder, slap force, peak tilt and peak
-/// negative acceleration (largest over the points) against the key; for a grid the other
-/// keys held at their first value (lines), for a sample every run (dots).
-pub fn draw_key(path: &Path, report: &SweepReport, key: usize) -> Result<()> {
-    let sample = report.design.is_sample();
-    let runs: Vec<&RunLine> = report
-        .lines
-        .iter()
-        .filter(|r| {
-            sample
-                || r.values
-                    .iter()
-                    .enumerate()
-                    .all(|(j, v)| j == key || *v == report.lines[0].values[j])
-        })
-        .collect();
-    let ncyl = runs.first().map(|r| r.cylinders.len()).unwrap_or(0);
-    let series = |f: &dyn Fn(&RunLine, usize) -> f64| -> Vec<Series> {
-        (0..ncyl)
-            .map(|c| Series {
-                name: format!("cylinder {}", runs[0].cylinders[c].cylinder),
-                points: runs
-                    .iter()
-                    .filter_map(|r| Some((numeric(&r.values[key])?, f(r, c))))
-                    .collect(),
-                mark: if sample { Mark::Dots } else { Mark::LineDots },
-                color: c,
-            })
-            .collect()
-    };
-    let k = &report.keys[key];
-    let chart = |title, y_label, series| Chart {
-        title,
-        x_label: k,
-        y_label,
-        series,
-        rules: vec![],
-        x_range: None,
-        y_range: None,
-    };
-    let charts = [
-        chart(
-            "Dynamic slap force",
-            "peak slap force [kN]",
-            series(&|r, c| r.cylinders[c].slap_force_n / 1e3),
-        ),
-        chart(
-            "Piston tilt",
-            "peak |tilt| [mrad]",
-            series(&|r, c| r.cylinders[c].tilt_rad * 1e3),
-        ),
-        chart(
-            "Liner acceleration",
-            "peak negative acceleration [m/s^2]",
-            series(&|r, c| worst(r, c)),
-        ),
-    ];
-    write_png(path, (1800, 560), |root| {
-        let areas = root.split_evenly((1, 3));
-        for (a, c) in areas.iter().zip(&charts) {
-            c.draw(a)?;
-        }
-        Ok(())
-    })?;
-    Ok(())
-}
-
-/// The sample's picture: per cylinder the probability of each risk class at its worst point
-/// (the point most often high) with its 95 % interval, and the rank correlation of the
-/// cylinder's peak with every varied key (x: key number, named in the title).
-fn draw_statistics(path: &Path, report: &SweepReport) -> Result<()> {
-    let (Some(rows), Some(sens)) = (&report.probabilities, &report.sensitivities) else {
-        return Ok(());
-    };
-    let mut prob = Vec::new();
-    for (ci, class) in ["safe", "transitional", "high"].iter().enumerate() {
-        // per cylinder, the point with the largest probability of the high class
-        let mut pts = Vec::new();
-        for &cyl in &sens.cylinders {
-            let of_cyl = |cl: &'static str| {
-                rows.iter()
-                    .filter(move |r| r.cylinder == cyl && r.class == cl)
-            };
-            let point = of_cyl("high")
-                .max_by(|a, b| a.p.probability.total_cmp(&b.p.probability))
-                .map_or(1, |r| r.point);
-            if let Some(r) = of_cyl(class).find(|r| r.point == point) {
-                // the classes side by side around the cylinder's number
-                let x = cyl as f64 + 0.15 * (ci as f64 - 1.0);
-                pts.push((x, r.p.probability));
-                prob.push(Series {
-                    name: String::new(),
-                    points: vec![(x, r.p.ci_low), (x, r.p.ci_high)],
-                    mark: Mark::Line,
-                    color: ci + 3,
-                });
-            }
-        }
-        prob.push(Series {
-            name: format!("{class} (95 % interval)"),
-            points: pts,
-            mark: Mark::Dots,
-            color: ci + 3,
-        });
-    }
-    let mut sensitivity = Vec::new();
-    for (c, &cyl) in sens.cylinders.iter().enumerate() {
-        sensitivity.push(Series {
-            name: format!("cylinder {cyl}"),
-            points: sens
-                .spearman
-                .iter()
-                .enumerate()
-                .filter_map(|(k, row)| Some((k as f64 + 1.0 + 0.08 * c as f64 - 0.2, row[c]?)))
-                .collect(),
-            mark: Mark::Dots,
-            color: c,
-        });
-    }
-    let names: Vec<String> = sens
-        .keys
-        .iter()
-        .enumerate()
-        // the key's last part: the full names are in the JSON and the CSV header
-        .map(|(k, n)| format!("{} {}", k + 1, n.rsplit('.').next().unwrap_or(n)))
-        .collect();
-    let x_label = format!("varied key: {}", names.join(", "));
-    let lo = sens.cylinders.iter().min().copied().unwrap_or(1) as f64 - 0.5;
-    let hi = sens.cylinders.iter().max().copied().unwrap_or(1) as f64 + 0.5;
-    let charts = [
-        Chart {
-            title: "Risk class probability at each cylinder's worst point",
-            x_label: "cylinder",
-            y_label: "probability over the sample",
-            series: prob,
-            rules: vec![],
-            x_range: Some((lo, hi)),
-            y_range: Some((0.0, 1.0)),
-        },
-        Chart {
-            title: "Rank correlation of each cylinder's peak with the keys",
-            x_label: &x_label,
-            y_label: "Spearman rho",
-            series: sensitivity,
-            rules: vec![],
-            x_range: Some((0.5, sens.keys.len() as f64 + 0.5)),
-            y_range: Some((-1.0, 1.0)),
-        },
-    ];
-    write_png(path, (1600, 600), |root| {
-        let areas = root.split_evenly((1, 2));
-        for (a, c) in areas.iter().zip(&charts) {
-            c.draw(a)?;
-        }
-        Ok(())
-    })?;
-    Ok(())
 }
 
 fn write_outputs(dir: &Path, report: &SweepReport) -> Result<Vec<String>> {
@@ -776,12 +518,18 @@ fn write_outputs(dir: &Path, report: &SweepReport) -> Result<Vec<String>> {
             continue;
         }
         let p = dir.join(format!("sweep_{}.png", key.replace('.', "_")));
-        draw_key(&p, report, j)?;
+        draw_key(
+            &p,
+            &report.keys,
+            &report.lines,
+            report.design.is_sample(),
+            j,
+        )?;
         pngs.push(p.display().to_string());
     }
-    if report.probabilities.is_some() {
+    if let (Some(rows), Some(sens)) = (&report.probabilities, &report.sensitivities) {
         let p = dir.join("sweep_statistics.png");
-        draw_statistics(&p, report)?;
+        draw_statistics(&p, rows, sens)?;
         pngs.push(p.display().to_string());
     }
     write_all_atomic(std::mem::take(&mut files))?;
@@ -1020,7 +768,7 @@ impl SweepReport {
                     s,
                     " c{} {:>5.0}/{:>5.1}kN",
                     c.cylinder,
-                    worst(r, ci),
+                    worst_peak(r, ci),
                     c.slap_force_n / 1e3
                 );
             }

@@ -3,4 +3,5 @@
 pub mod figures;
 pub mod mtx;
 pub mod png;
+pub mod study;
 pub mod vtu;
