@@ -192,7 +192,8 @@ fn files_under(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
 
 /// Every path like `tests/rom.rs` or `docs/physics.md` in the README, the docs, the sources'
 /// comments, the scenes and the scripts names a file or directory that exists; every test
-/// named `verification_*`, `regression_*` or `validation_*` in a document exists in `tests/`.
+/// named `verification_*`, `regression_*` or `validation_*` in a document exists in `tests/` or
+/// as a unit test in `src/`.
 #[test]
 fn verification_every_referenced_file_and_test_exists() {
     let mut docs = vec![PathBuf::from("README.md")];
@@ -211,7 +212,9 @@ fn verification_every_referenced_file_and_test_exists() {
     }
     let mut test_src = String::new();
     let mut tests = Vec::new();
+    // integration tests and the unit tests beside the code they check
     files_under(Path::new("tests"), &["rs"], &mut tests);
+    files_under(Path::new("src"), &["rs"], &mut tests);
     for t in &tests {
         test_src.push_str(&std::fs::read_to_string(t).unwrap());
     }

@@ -515,8 +515,8 @@ pub struct RawTransient {
     /// repeated, at most twice (each costs twice the time); what was reached is reported
     /// (`stats.step_error_estimate`, per point `peak_negative_step_error_m_s2`). Measured on
     /// the default engine at 0.25 deg (pooled realisations, benches/convergence.sh): estimate
-    /// 3.3 %, error of the mean against a step 64 times finer -1.2 %, the cylinders' worst
-    /// points -3.8 .. +1.3 % (the per-point estimates over-state: 9-18 %).
+    /// 2.5 %, error of the mean against a step 64 times finer -0.7 %, the cylinders' worst
+    /// points -3.3 .. +2.0 % (the per-point estimates over-state: 8-17 %).
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
 }
