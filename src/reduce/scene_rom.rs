@@ -59,6 +59,8 @@ pub enum SceneRomError {
     Write(#[from] WriteError),
     #[error(transparent)]
     Rom(#[from] RomError),
+    #[error(transparent)]
+    Modal(#[from] crate::eigen::modal::ModalError),
     #[error("{}: the engine has no mode below the cut-off {} Hz (rom.band_hz x rom.cutoff_factor): raise rom.band_hz", path.display(), crate::text::num(*cutoff_hz))]
     NoSystemMode { path: PathBuf, cutoff_hz: f64 },
     #[error("{}: the built ROM is inconsistent: {msg}", path.display())]
@@ -71,6 +73,7 @@ impl SceneRomError {
     pub fn exit_code(&self) -> i32 {
         match self {
             SceneRomError::Rom(e) => e.exit_code(),
+            SceneRomError::Modal(e) => e.exit_code(),
             SceneRomError::Inconsistent { .. } => 1,
             _ => 2,
         }
@@ -352,5 +355,51 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions, progress: &dyn Fn(&str)) -> R
         cache_file: (!opts.no_cache).then_some(path),
         build: None,
         replaced,
+    })
+}
+
+/// The full coupled FE model of a scene (every part DOF plus the interface fields, no modal
+/// truncation) with its lowest modes, and the placed meshes its shapes live on.
+pub struct SceneFullModes {
+    pub modes: super::full::FullModes,
+    pub system: super::full::FullSystem,
+    pub liner_mesh: Mesh,
+    pub crankcase_mesh: Mesh,
+    /// Bore axis x of every cylinder [m].
+    pub axis_x: Vec<f64>,
+}
+
+/// Builds the full coupled model of `scene` and solves its lowest `count` modes with the
+/// scene's shift, certified (Sturm count with the scene's guard modes): the reference of
+/// `modes --assembly --full` and `rom-tradeoff`.
+pub fn full_modes(scene: &Scene, count: usize) -> Result<SceneFullModes> {
+    let (lm, cm) = load_meshes(scene)?;
+    let inp = rom_inputs(scene, &lm, &cm, false);
+    let axis_x = inp.axis_x.clone();
+    let system = super::full::FullSystem::build(&inp)?;
+    let (sol, _) = crate::eigen::modal::certified_modes(
+        &system.km,
+        &system.analysis,
+        count,
+        scene.solver.sigma(),
+        scene.solver.guard_modes,
+    )?;
+    let modes = super::full::FullModes {
+        frequencies_hz: (0..sol.modes.count())
+            .map(|j| sol.modes.frequency_hz(j))
+            .collect(),
+        residuals: sol.residuals.clone(),
+        sturm_ok: sol.sturm.as_ref().is_some_and(|s| s.ok),
+        dofs: system.dofs(),
+        shapes: (0..sol.modes.count())
+            .map(|j| system.part_displacements(sol.modes.vector(j)))
+            .collect(),
+    };
+    Ok(SceneFullModes {
+        modes,
+        system,
+        liner_mesh: lm,
+        crankcase_mesh: cm,
+        axis_x,
     })
 }

@@ -2,9 +2,12 @@
 //! Quadratic cells are written as VTK_QUADRATIC_TETRA (24) and VTK_QUADRATIC_HEXAHEDRON (25),
 //! with the mid-edge nodes reordered from Gmsh's to VTK's convention.
 
+use crate::fem::dofs::DofMap;
 use crate::fem::shape::ElementKind;
-use crate::mesh::Mesh;
+use crate::files::{write_atomic, WriteError};
+use crate::mesh::{ElementBlock, Mesh};
 use std::io::Write;
+use std::path::Path;
 
 fn vtk_type(kind: ElementKind) -> u8 {
     match kind {
@@ -94,4 +97,87 @@ pub fn write(mesh: &Mesh, fields: &[Field], w: &mut dyn Write) -> std::io::Resul
         w,
         "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>"
     )
+}
+
+/// Mode shapes of the engine's part instances on their meshes: liners of the modelled
+/// `cylinders` (placed at `axis_x`), then the crankcase; `shapes[mode][instance]` in each
+/// instance's free-DOF order.
+#[derive(Clone, Copy)]
+pub struct EngineShapes<'a> {
+    pub cylinders: &'a [usize],
+    pub axis_x: &'a [f64],
+    pub liner: &'a Mesh,
+    pub crankcase: &'a Mesh,
+    pub dofs: &'a [&'a DofMap],
+    pub shapes: &'a [Vec<Vec<f64>>],
+    pub freqs: &'a [f64],
+}
+
+/// Writes coupled mode shapes on the placed meshes (liners of the modelled cylinders, then the
+/// crankcase) as one VTU file. `shapes[mode][instance]` are in each instance's free-DOF order.
+pub fn write_engine_modes(path: &Path, e: &EngineShapes<'_>) -> Result<(), WriteError> {
+    let EngineShapes {
+        cylinders,
+        axis_x,
+        liner: lm,
+        crankcase: cm,
+        dofs,
+        shapes,
+        freqs,
+    } = *e;
+    let mut meshes = Vec::new();
+    for &cyl in cylinders {
+        let mut m = lm.clone();
+        for p in m.nodes.iter_mut() {
+            p[0] += axis_x[cyl - 1];
+        }
+        m.node_sets.clear();
+        m.element_sets.clear();
+        meshes.push(m);
+    }
+    let mut c = cm.clone();
+    c.node_sets.clear();
+    c.element_sets.clear();
+    meshes.push(c);
+    // concatenate without merging (parts touch but are separate bodies)
+    let mut all = Mesh::default();
+    let mut node_off = Vec::new();
+    for m in &meshes {
+        node_off.push(all.nodes.len());
+        let off = all.nodes.len();
+        all.nodes.extend_from_slice(&m.nodes);
+        for b in &m.blocks {
+            let conn = b.conn.iter().map(|&n| n + off);
+            match all.blocks.iter_mut().find(|x| x.kind == b.kind) {
+                Some(x) => x.conn.extend(conn),
+                None => all.blocks.push(ElementBlock {
+                    kind: b.kind,
+                    conn: conn.collect(),
+                }),
+            }
+        }
+    }
+    let fields: Vec<Vec<f64>> = shapes
+        .iter()
+        .map(|per| {
+            let mut v = vec![0.0; 3 * all.nodes.len()];
+            for (inst, u) in per.iter().enumerate() {
+                let full = dofs[inst].expand(u);
+                let o = 3 * node_off[inst];
+                v[o..o + full.len()].copy_from_slice(&full);
+            }
+            v
+        })
+        .collect();
+    let named: Vec<Field<'_>> = fields
+        .iter()
+        .zip(freqs)
+        .enumerate()
+        .map(|(j, (v, f))| Field {
+            name: format!("mode_{:02}_{:.1}Hz", j + 1, f),
+            values: v,
+        })
+        .collect();
+    write_atomic(path, |w| write(&all, &named, w))?;
+    Ok(())
 }
