@@ -1,6 +1,9 @@
 //! Correlation between crankcase mode-shape coefficients and per-cylinder risk, and between
 //! the modes of two models of one structure (MAC).
 
+use crate::reduce::full::{recover_shapes, FullModes};
+use crate::reduce::rom::RomBuild;
+
 /// Pearson correlation coefficient r = sum (x - x_mean)(y - y_mean) /
 /// sqrt(sum (x - x_mean)^2 sum (y - y_mean)^2); `None` when either series is constant.
 pub fn pearson(x: &[f64], y: &[f64]) -> Option<f64> {
@@ -93,6 +96,30 @@ pub fn compare_modes(
         worst_mac,
         rows,
     }
+}
+
+/// Compares the lowest `n` modes of `reference` with the ROM of `b` (which must have kept its
+/// bases) on all part DOFs ([`compare_modes`]); None when the build did not keep them.
+pub fn compare_rom_with_full(
+    b: &RomBuild,
+    reference: &FullModes,
+    n: usize,
+) -> Option<ModeComparison> {
+    let n = n
+        .min(reference.frequencies_hz.len())
+        .min(b.rom.frequencies_hz.len());
+    let extra = (n + 2).min(b.rom.frequencies_hz.len());
+    let rom_shapes: Vec<Vec<f64>> = recover_shapes(b, extra)?
+        .iter()
+        .map(|m| m.concat())
+        .collect();
+    let full_shapes: Vec<Vec<f64>> = reference.shapes[..n].iter().map(|m| m.concat()).collect();
+    Some(compare_modes(
+        &reference.frequencies_hz[..n],
+        &full_shapes,
+        &b.rom.frequencies_hz[..extra],
+        &rom_shapes,
+    ))
 }
 
 #[cfg(test)]

@@ -14,34 +14,12 @@ use super::rom::build_rom;
 use crate::error::{Error, Result};
 use crate::files::write_all_atomic;
 use crate::reduce::full::FullModes;
-use crate::reduce::rom::RomBuild;
 use crate::report::png::{write_png, Chart, Mark, Rule, Series};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-pub use crate::analysis::correlation::{mac, ModeComparison};
-
-/// Compares the lowest `n` modes of `reference` with the ROM of `b` (which must have kept its
-/// bases) on all part DOFs ([`crate::analysis::correlation::compare_modes`]).
-pub fn compare(b: &RomBuild, reference: &FullModes, n: usize) -> Result<ModeComparison> {
-    let n = n
-        .min(reference.frequencies_hz.len())
-        .min(b.rom.frequencies_hz.len());
-    let extra = (n + 2).min(b.rom.frequencies_hz.len());
-    let rom_shapes: Vec<Vec<f64>> = full::recover_shapes(b, extra)
-        .ok_or_else(|| crate::error::Error::Failure("the ROM build did not keep its bases".into()))?
-        .iter()
-        .map(|m| m.concat())
-        .collect();
-    let full_shapes: Vec<Vec<f64>> = reference.shapes[..n].iter().map(|m| m.concat()).collect();
-    Ok(crate::analysis::correlation::compare_modes(
-        &reference.frequencies_hz[..n],
-        &full_shapes,
-        &b.rom.frequencies_hz[..extra],
-        &rom_shapes,
-    ))
-}
+pub use crate::analysis::correlation::{compare_rom_with_full as compare, mac, ModeComparison};
 
 /// One cut-off factor's ROM.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -142,7 +120,8 @@ pub fn run(
             reference = Some((r, t1.elapsed().as_secs_f64(), below));
         }
         let (r, _, below) = reference.as_ref().expect("set above");
-        let c = compare(&b, r, *below)?;
+        let c = compare(&b, r, *below)
+            .ok_or_else(|| Error::Failure("the ROM build did not keep its bases".into()))?;
         rows.push(TradeoffRow {
             cutoff_factor: *f,
             cutoff_hz: f * band,
