@@ -3,5 +3,6 @@
 
 pub mod correlation;
 pub mod frf;
+pub mod ranking;
 pub mod spectrum;
 pub mod study;

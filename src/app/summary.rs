@@ -12,6 +12,7 @@
 use super::rom::CacheOptions;
 use super::simulate::SimulateReport;
 use super::sweep::Variants;
+use crate::analysis::ranking::{separations, RankStep};
 use crate::cavitation::evaluate::{evaluate, Evaluation};
 use crate::error::Result;
 use crate::files::write_all_atomic;
@@ -40,6 +41,9 @@ pub struct Report {
     pub clearance_sweep: Vec<SweepPoint>,
     pub pin_offset_sweep: Vec<SweepPoint>,
     pub tradeoff: Vec<TradeoffPoint>,
+    /// Neighbours of the cylinder ranking, separated beyond their combined statistical and
+    /// numerical uncertainty or tied ([`separations`]).
+    pub ranking_resolution: Vec<RankStep>,
     pub files: Vec<String>,
     pub seconds: f64,
 }
@@ -182,6 +186,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         rom,
     }
     .draw()?;
+    let ranking_resolution = separations(&ranked_uncertainty(&simulate, &ev.ranking));
     let mut report = Report {
         scene: scene.path.display().to_string(),
         title: scene.title.clone(),
@@ -192,6 +197,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         clearance_sweep: clearance,
         pin_offset_sweep: offset,
         tradeoff: trade,
+        ranking_resolution,
         files: figs
             .iter()
             .map(|p| stage.final_path(p).display().to_string())
@@ -215,36 +221,38 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     Ok(report)
 }
 
-/// Which neighbours of the cylinder ranking are separated beyond the uncertainty: each
-/// cylinder's largest mean peak m carries u = sqrt(SE^2 + E^2), SE its standard error (cycles
-/// correlated) and E its estimated step error; neighbours m1 > m2 count as separated when
-/// m1 - m2 > 2 sqrt(u1^2 + u2^2), and as tied otherwise.
+/// Each ranked cylinder's worst point: (cylinder, mean peak, sqrt(SE^2 + E^2)), SE its
+/// standard error (cycles correlated) and E its estimated step error.
+fn ranked_uncertainty(simulate: &SimulateReport, ranking: &[usize]) -> Vec<(usize, f64, f64)> {
+    ranking
+        .iter()
+        .filter_map(|&cyl| {
+            let c = simulate.cylinders.iter().find(|c| c.cylinder == cyl)?;
+            c.points
+                .iter()
+                .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))
+                .map(|p| {
+                    let u = p
+                        .peak_negative_se_m_s2
+                        .hypot(p.peak_negative_step_error_m_s2);
+                    (cyl, p.peak_negative_m_s2, u)
+                })
+        })
+        .collect()
+}
+
+/// The ranking with its uncertainty as a sentence ([`separations`]).
 fn ranking_resolution(r: &Report) -> String {
-    let worst = |cyl: usize| -> Option<(f64, f64)> {
-        let c = r.simulate.cylinders.iter().find(|c| c.cylinder == cyl)?;
-        c.points
-            .iter()
-            .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))
-            .map(|p| {
-                let u = p
-                    .peak_negative_se_m_s2
-                    .hypot(p.peak_negative_step_error_m_s2);
-                (p.peak_negative_m_s2, u)
-            })
-    };
     let pairs: Vec<String> = r
-        .evaluation
-        .ranking
-        .windows(2)
-        .filter_map(|w| {
-            let ((m1, u1), (m2, u2)) = (worst(w[0])?, worst(w[1])?);
-            let separated = m1 - m2 > 2.0 * u1.hypot(u2);
-            Some(format!(
+        .ranking_resolution
+        .iter()
+        .map(|s| {
+            format!(
                 "{} {} {}",
-                w[0],
-                if separated { ">" } else { "~" },
-                w[1]
-            ))
+                s.upper,
+                if s.separated { ">" } else { "~" },
+                s.lower
+            )
         })
         .collect();
     format!(
