@@ -1,8 +1,9 @@
 //! The library's front door: load a scene, get or build its ROM, run the engine cycles and
 //! evaluate the cavitation risk; for the single-part commands, a part's checked mesh and
-//! material ([`load_part`]). The command layer (`src/app`, `src/main.rs`) and the tests go
-//! through here; each re-exported item belongs to its pipeline stage (docs/physics.md), the
-//! two loaders here join the scene to the stages' input checks:
+//! material ([`load_part`]); variants of a scene run in parallel on shared ROMs ([`Variants`],
+//! the sweeps' and the report's runs). The command layer (`src/app`, `src/main.rs`) and the
+//! tests go through here; each re-exported item belongs to its pipeline stage
+//! (docs/physics.md), the items defined here join the scene to the stages:
 //!
 //! ```no_run
 //! use linercav::api::*;
@@ -25,12 +26,16 @@ use crate::mesh::{liner, Mesh};
 pub use crate::piston::setup::{piston_of, simulation};
 pub use crate::piston::Piston;
 pub use crate::reduce::rom::EngineRom;
+use crate::reduce::scene_rom::key_description;
 pub use crate::reduce::scene_rom::{build_rom, get_rom, CacheOptions, LoadedRom};
 pub use crate::scene::Scene;
 use crate::scene::{MeshSource, PARTS};
 pub use crate::transient::cycle::{CycleResult, CycleSettings};
 pub use crate::transient::engine::{run_cycle, settings_of};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// Loads and validates a scene with its `--set` overrides, and resolves its cavitation
 /// thresholds, so that thresholds out of order are refused (exit 2, naming the file) before
@@ -158,4 +163,88 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
         shift_hz,
         guard_modes,
     })
+}
+
+/// Variants of one scene: each a list of `--set` overrides added to the base ones, loaded and
+/// checked before any run, with one ROM per distinct reduction input (loaded or built one
+/// after the other).
+pub struct Variants {
+    pub scenes: Vec<Scene>,
+    pub roms: Vec<LoadedRom>,
+    /// Index into `roms` of each scene's ROM.
+    pub rom_of: Vec<usize>,
+}
+
+impl Variants {
+    /// Loads the variants `variants` of the scene at `path` with the overrides `base`: a bad
+    /// value stops here, before any run. `progress` hears the phases of a ROM build.
+    pub fn prepare(
+        path: &Path,
+        base: &[String],
+        variants: &[Vec<String>],
+        cache: &CacheOptions,
+        progress: &dyn Fn(&str),
+    ) -> Result<Self> {
+        let scenes: Vec<Scene> = variants
+            .iter()
+            .map(|extra| {
+                let mut sets = base.to_vec();
+                sets.extend(extra.iter().cloned());
+                let sc = load_scene(path, &sets)?;
+                simulation(&sc)?;
+                Ok(sc)
+            })
+            .collect::<Result<_>>()?;
+        let mut roms: Vec<LoadedRom> = Vec::new();
+        let mut rom_keys: BTreeMap<String, usize> = BTreeMap::new();
+        let mut rom_of = Vec::with_capacity(scenes.len());
+        for sc in &scenes {
+            let k = key_description(sc)?;
+            let idx = match rom_keys.get(&k) {
+                Some(&i) => i,
+                None => {
+                    roms.push(get_rom(sc, cache, progress)?);
+                    rom_keys.insert(k, roms.len() - 1);
+                    roms.len() - 1
+                }
+            };
+            rom_of.push(idx);
+        }
+        Ok(Self {
+            scenes,
+            roms,
+            rom_of,
+        })
+    }
+
+    /// Runs every variant's engine cycles in parallel (`labels[k]` names variant k in a
+    /// failure); `done()` is called after each run. Returns the results with each run's wall
+    /// time [s], in the variants' order.
+    pub fn run(
+        &self,
+        labels: &[String],
+        done: impl Fn() + Sync,
+    ) -> Result<Vec<(CycleResult, f64)>> {
+        self.scenes
+            .par_iter()
+            .zip(self.rom_of.par_iter())
+            .zip(labels.par_iter())
+            .map(|((sc, &ri), name)| {
+                let t = Instant::now();
+                let piston = piston_of(sc)?;
+                let sim = simulation(sc)?;
+                let rom = &self.roms[ri].rom;
+                let res = run_cycle(
+                    sc,
+                    rom,
+                    &piston,
+                    settings_of(sim, sc.rom.band_hz),
+                    |_, _| {},
+                )
+                .map_err(|e| Error::Failure(format!("run {name}: {}: {e}", sc.path.display())))?;
+                done();
+                Ok((res, t.elapsed().as_secs_f64()))
+            })
+            .collect()
+    }
 }

@@ -9,6 +9,16 @@ pub use crate::reduce::scene_rom::{CacheOptions, LoadedRom};
 use crate::scene::Scene;
 use std::cell::OnceCell;
 
+/// The phases of a ROM build on a terminal (the bar appears with the first phase).
+#[derive(Default)]
+pub struct RomProgress(OnceCell<Progress>);
+
+impl RomProgress {
+    pub fn phase(&self, msg: &str) {
+        self.0.get_or_init(Progress::new).phase(msg)
+    }
+}
+
 /// Gets the ROM of a scene ([`crate::reduce::scene_rom::get_rom`]), showing the build's
 /// phases on a terminal.
 pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {

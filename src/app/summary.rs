@@ -11,8 +11,8 @@
 
 use super::rom::CacheOptions;
 use super::simulate::SimulateReport;
-use super::sweep::Variants;
 use crate::analysis::ranking::{separations, RankStep};
+use crate::api::Variants;
 use crate::cavitation::evaluate::{evaluate, Evaluation};
 use crate::error::Result;
 use crate::files::write_all_atomic;
@@ -140,7 +140,8 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         })
         .collect();
     progress.phase("engine ROM");
-    let variants = Variants::prepare(scene_path, sets, &extra, cache)?;
+    let rom_progress = super::rom::RomProgress::default();
+    let variants = Variants::prepare(scene_path, sets, &extra, cache, &|m| rom_progress.phase(m))?;
     progress.phase("transients: the scene, clearance and pin-offset sweeps");
     let results = variants.run(&labels, || {})?;
     let loaded = &variants.roms[variants.rom_of[0]];

@@ -10,23 +10,20 @@
 //! come from the same study and hold every run exactly once, then writes what the unsharded
 //! sweep writes, from the same code: the CSV rows are identical.
 
-use super::rom::{get_rom, CacheOptions, LoadedRom};
-use super::simulate::{run_cycle, CylinderReport, SimulateReport};
+use super::rom::CacheOptions;
+use super::simulate::{CylinderReport, SimulateReport};
 use crate::analysis::study::{
     statistics, worst_peak, CylinderLine, ProbabilityRow, RunLine, Sensitivities,
 };
+use crate::api::Variants;
 use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
 use crate::files::{write_all_atomic, write_atomic, Filler, OutputDir};
-use crate::piston::setup::{piston_of, simulation};
 use crate::reduce::rom::EngineRom;
-use crate::reduce::scene_rom::key_description;
 use crate::report::study::{draw_key, draw_statistics, numeric};
 use crate::scene::design::{Design, PartError, Shard};
 use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
-use crate::transient::engine::settings_of;
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -206,83 +203,6 @@ fn tool_version() -> String {
     format!("linercav {}", env!("CARGO_PKG_VERSION"))
 }
 
-/// Variants of one scene: each a list of `--set` overrides added to the base ones, loaded and
-/// checked before any run, with one ROM per distinct reduction input (loaded or built one
-/// after the other).
-pub struct Variants {
-    pub scenes: Vec<Scene>,
-    pub roms: Vec<LoadedRom>,
-    /// Index into `roms` of each scene's ROM.
-    pub rom_of: Vec<usize>,
-}
-
-impl Variants {
-    /// Loads the variants `variants` of the scene at `path` with the overrides `base`: a bad
-    /// value stops here, before any run.
-    pub fn prepare(
-        path: &Path,
-        base: &[String],
-        variants: &[Vec<String>],
-        cache: &CacheOptions,
-    ) -> Result<Self> {
-        let scenes: Vec<Scene> = variants
-            .iter()
-            .map(|extra| {
-                let mut sets = base.to_vec();
-                sets.extend(extra.iter().cloned());
-                let sc = super::load_scene(path, &sets)?;
-                simulation(&sc)?;
-                Ok(sc)
-            })
-            .collect::<Result<_>>()?;
-        let mut roms: Vec<LoadedRom> = Vec::new();
-        let mut rom_keys: BTreeMap<String, usize> = BTreeMap::new();
-        let mut rom_of = Vec::with_capacity(scenes.len());
-        for sc in &scenes {
-            let k = key_description(sc)?;
-            let idx = match rom_keys.get(&k) {
-                Some(&i) => i,
-                None => {
-                    roms.push(get_rom(sc, cache)?);
-                    rom_keys.insert(k, roms.len() - 1);
-                    roms.len() - 1
-                }
-            };
-            rom_of.push(idx);
-        }
-        Ok(Self {
-            scenes,
-            roms,
-            rom_of,
-        })
-    }
-
-    /// Runs every variant's engine cycles in parallel (`labels[k]` names variant k in a
-    /// failure); `done()` is called after each run. Returns the results with each run's wall
-    /// time [s], in the variants' order.
-    pub fn run(
-        &self,
-        labels: &[String],
-        done: impl Fn() + Sync,
-    ) -> Result<Vec<(CycleResult, f64)>> {
-        self.scenes
-            .par_iter()
-            .zip(self.rom_of.par_iter())
-            .zip(labels.par_iter())
-            .map(|((sc, &ri), name)| {
-                let t = Instant::now();
-                let piston = piston_of(sc)?;
-                let sim = simulation(sc)?;
-                let rom = &self.roms[ri].rom;
-                let res = run_cycle(sc, rom, &piston, settings_of(sim, sc.rom.band_hz), None)
-                    .map_err(|e| Error::Failure(format!("run {name}: {e}")))?;
-                done();
-                Ok((res, t.elapsed().as_secs_f64()))
-            })
-            .collect()
-    }
-}
-
 /// Runs `indices` of the design's runs `all`: their lines, full results and the ROMs used.
 fn execute(
     req: &SweepRequest,
@@ -300,7 +220,10 @@ fn execute(
                 .collect()
         })
         .collect();
-    let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache)?;
+    let rom_progress = super::rom::RomProgress::default();
+    let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache, &|m| {
+        rom_progress.phase(m)
+    })?;
     let bar = std::io::stderr().is_terminal().then(|| {
         let b = indicatif::ProgressBar::new(indices.len() as u64);
         b.set_style(
