@@ -241,7 +241,14 @@ impl Variants {
                     settings_of(sim, sc.rom.band_hz),
                     |_, _| {},
                 )
-                .map_err(|e| Error::Failure(format!("run {name}: {}: {e}", sc.path.display())))?;
+                .map_err(|source| {
+                    // the run's name before the scene's own transient error
+                    let e = Error::Transient {
+                        path: sc.path.clone(),
+                        source,
+                    };
+                    Error::Failure(format!("run {name}: {e}"))
+                })?;
                 done();
                 Ok((res, t.elapsed().as_secs_f64()))
             })

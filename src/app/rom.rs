@@ -22,18 +22,20 @@ impl RomProgress {
 /// Gets the ROM of a scene ([`crate::reduce::scene_rom::get_rom`]), showing the build's
 /// phases on a terminal.
 pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
-    let bar = OnceCell::new();
-    let progress = |msg: &str| bar.get_or_init(Progress::new).phase(msg);
-    Ok(crate::reduce::scene_rom::get_rom(scene, opts, &progress)?)
+    let bar = RomProgress::default();
+    Ok(crate::reduce::scene_rom::get_rom(scene, opts, &|m| {
+        bar.phase(m)
+    })?)
 }
 
 /// Builds the ROM of a scene without the cache ([`crate::reduce::scene_rom::build_rom`]),
 /// showing its phases on a terminal.
 pub fn build_rom(scene: &Scene, keep_bases: bool) -> Result<(RomBuild, Mesh, Mesh)> {
-    let bar = OnceCell::new();
-    let progress = |msg: &str| bar.get_or_init(Progress::new).phase(msg);
+    let bar = RomProgress::default();
     Ok(crate::reduce::scene_rom::build_rom(
-        scene, keep_bases, &progress,
+        scene,
+        keep_bases,
+        &|m| bar.phase(m),
     )?)
 }
 
