@@ -167,6 +167,9 @@ pub struct TransientSpec {
     pub mode_cutoff_hz: Option<f64>,
     /// Largest acceptable estimated relative step error of the mean peak.
     pub tolerance: f64,
+    /// Sub-steps per base step around slap onsets, and for how long after one [deg].
+    pub slap_substeps: usize,
+    pub slap_span_deg: f64,
 }
 
 /// What `simulate` needs beyond the ROM.
@@ -1008,6 +1011,18 @@ fn validate_transient(c: &Checker<'_>, t: &raw::RawTransient) -> Result<Transien
     if t.averaged_cycles == 0 {
         return Err(c.err("transient.averaged_cycles", "must be at least 1"));
     }
+    if !(1..=64).contains(&t.slap_substeps) {
+        return Err(c.err(
+            "transient.slap_substeps",
+            format!("must lie in 1..=64, got {}", t.slap_substeps),
+        ));
+    }
+    if !(t.slap_span_deg.is_finite() && (0.0..=720.0).contains(&t.slap_span_deg)) {
+        return Err(c.err(
+            "transient.slap_span_deg",
+            format!("must lie in [0, 720], got {}", num(t.slap_span_deg)),
+        ));
+    }
     if !(t.damping_ratio.is_finite() && (0.0..1.0).contains(&t.damping_ratio)) {
         return Err(c.err(
             "transient.damping_ratio",
@@ -1027,6 +1042,8 @@ fn validate_transient(c: &Checker<'_>, t: &raw::RawTransient) -> Result<Transien
             Some(f) => Some(c.positive("transient.mode_cutoff_hz", f)?),
             None => None,
         },
+        slap_substeps: t.slap_substeps,
+        slap_span_deg: t.slap_span_deg,
         tolerance: if t.tolerance.is_finite() && t.tolerance > 0.0 && t.tolerance < 1.0 {
             t.tolerance
         } else {

@@ -519,6 +519,22 @@ pub struct RawTransient {
     /// points -3.3 .. +2.0 % (the per-point estimates over-state: 8-17 %).
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
+    /// Sub-steps per base step while a slap is resolved, 1-64 (1: none; default 3). A base
+    /// step in which a cylinder side comes into contact is re-taken as this many sub-steps, and
+    /// so are the base steps of the next `slap_span_deg`: the impacts, where the step's error is
+    /// made, are integrated at the finer step, the rest of the cycle at the base step.
+    #[serde(default = "default_slap_substeps")]
+    pub slap_substeps: usize,
+    /// How long after a contact onset the base steps are sub-stepped [deg crank angle], >= 0
+    /// (default 1.5: the contact periods of an impact and its first rebounds).
+    #[serde(default = "default_slap_span")]
+    pub slap_span_deg: f64,
+}
+fn default_slap_substeps() -> usize {
+    3
+}
+fn default_slap_span() -> f64 {
+    1.5
 }
 fn default_tolerance() -> f64 {
     0.05

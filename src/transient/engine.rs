@@ -33,6 +33,8 @@ pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
         step_error: true,
         onset_correction: true,
         tolerance: Some(t.tolerance),
+        slap_substeps: t.slap_substeps,
+        slap_span_deg: t.slap_span_deg,
     }
 }
 

@@ -281,6 +281,22 @@ pub fn second_difference(r: &[f64], dt: f64, cyclic: bool) -> Vec<f64> {
         .collect()
 }
 
+/// Fourth-order central second difference of a sampled series, the acceleration of a
+/// displacement record:
+///   a_k = (-r_{k+2} + 16 r_{k+1} - 30 r_k + 16 r_{k-1} - r_{k-2}) / (12 dt^2),
+/// the series extended by its end values. For r = cos(omega t) it gives
+/// -omega^2 cos(omega t) (1 - (omega dt)^4 / 90 + O((omega dt)^6)).
+pub fn second_difference4(r: &[f64], dt: f64) -> Vec<f64> {
+    let n = r.len() as isize;
+    let at = |k: isize| r[k.clamp(0, n - 1) as usize];
+    (0..n)
+        .map(|k| {
+            (-at(k + 2) + 16.0 * at(k + 1) - 30.0 * at(k) + 16.0 * at(k - 1) - at(k - 2))
+                / (12.0 * dt * dt)
+        })
+        .collect()
+}
+
 impl Structure for ModalLiner {
     fn prepare(&mut self, locs: &[Location]) {
         self.structure.prepare(locs)
