@@ -125,6 +125,21 @@ fn regression_hostile_scene_values_are_refused_before_work() {
         ("simulate", vec!["piston.slices=1000000"], "piston.slices"),
         (
             "simulate",
+            vec!["transient.slap_substeps=0"],
+            "transient.slap_substeps",
+        ),
+        (
+            "simulate",
+            vec!["transient.slap_substeps=100000"],
+            "transient.slap_substeps",
+        ),
+        (
+            "simulate",
+            vec!["transient.slap_span_deg=-1"],
+            "transient.slap_span_deg",
+        ),
+        (
+            "simulate",
             vec!["piston.skirt_length_mm=300"],
             "piston.skirt_length_mm",
         ),

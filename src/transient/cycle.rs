@@ -1252,7 +1252,7 @@ impl<'a> EngineRun<'a> {
 
 /// Samples each side of an output sample that its difference formula reads
 /// ([`second_difference4`]) plus one.
-const OUTPUT_DIFFERENCE_REACH: usize = 3;
+pub const OUTPUT_DIFFERENCE_REACH: usize = 3;
 
 /// The rolling record of the run from sample `start` on: per cylinder and point the liner's
 /// displacement ([`EngineRun::point_displacements`]), and (from `wall_from` on, the last
