@@ -9,12 +9,12 @@
 # sqrt(sum SE_k^2) / R. Prints per cylinder the worst point's pooled means, their difference,
 # the combined standard error, the default runs' own step-error estimate, and the ratio of the
 # work per cycle.
-#   bash benches/convergence.sh [SCENE] [R_DEFAULT] [R_REFERENCE]   (R = 4 and 2: ~40 min on 2 cores)
+#   bash benches/convergence.sh [SCENE] [R_DEFAULT] [R_REFERENCE]   (defaults R = 4 and 4: ~75 min on 2 cores)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scene=${1:-models/engine.toml}
 rd=${2:-4}
-rr=${3:-2}
+rr=${3:-4}
 cargo build --release --quiet
 bin=$(mktemp -d)/linercav
 cp target/release/linercav "$bin"
@@ -36,8 +36,8 @@ run() { # kind k extra...
     python3 -c "print($t1 - $t0)" > "$work/$kind-$k.seconds"
 }
 for k in $(seq 1 "$rd"); do run default "$k"; done
-# the reference: a fixed step, no tolerance control
-for k in $(seq 1 "$rr"); do run reference "$k" --set transient.step_deg="$fine" --set transient.tolerance=0.99; done
+# the reference: a fixed step (no slap sub-steps), no tolerance control
+for k in $(seq 1 "$rr"); do run reference "$k" --set transient.step_deg="$fine" --set transient.tolerance=0.99 --set transient.slap_substeps=1; done
 python3 - "$work" "$rd" "$rr" "$step" "$fine" "$scene" <<'PY'
 import json, math, sys, platform, os
 work, rd, rr, step, fine, scene = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], sys.argv[5], sys.argv[6]

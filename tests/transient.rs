@@ -565,7 +565,10 @@ fn small_rom() -> &'static EngineRom {
 }
 
 fn simulation_of_small() -> linercav::scene::Simulation {
-    Scene::load(Path::new(SMALL), &[]).unwrap().simulation.unwrap()
+    Scene::load(Path::new(SMALL), &[])
+        .unwrap()
+        .simulation
+        .unwrap()
 }
 
 fn simulate(
@@ -600,7 +603,10 @@ fn verification_engine_cycle_runs_with_bounded_energy_and_finite_peaks() {
     let m = simulation_of_small().transient.slap_substeps;
     assert_eq!(r.stats.rejected_steps, 0);
     assert!(r.stats.substepped_steps > 0 && r.stats.substepped_steps < 2880 / 4);
-    assert_eq!(r.stats.steps, 2880 + margin + (m - 1) * r.stats.substepped_steps);
+    assert_eq!(
+        r.stats.steps,
+        2880 + margin + (m - 1) * r.stats.substepped_steps
+    );
 }
 
 /// The averaged peaks are the statistics of the per-cycle peaks (at a fixed step: the accuracy

@@ -952,7 +952,10 @@ impl<'a> EngineRun<'a> {
         if crankcase {
             return modal.collect();
         }
-        modal.zip(self.point_residual(c)).map(|(u, r)| u + r).collect()
+        modal
+            .zip(self.point_residual(c))
+            .map(|(u, r)| u + r)
+            .collect()
     }
 
     /// Residual (quasi-static) displacement of cylinder index `c`'s analysis points under its

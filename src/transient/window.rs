@@ -460,7 +460,10 @@ mod tests {
                 worst = worst.max((a[k] - exact).abs() / (w * w));
                 worst2 = worst2.max((a2[k] - exact).abs() / (w * w));
             }
-            assert!(worst <= x.powi(4) / 90.0 * (1.0 + 1e-6) + 1e-9, "{f} Hz: {worst}");
+            assert!(
+                worst <= x.powi(4) / 90.0 * (1.0 + 1e-6) + 1e-9,
+                "{f} Hz: {worst}"
+            );
             assert!(worst2 > 0.5 * x * x / 12.0, "{f} Hz: {worst2}");
         }
     }
