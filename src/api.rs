@@ -1,7 +1,8 @@
 //! The library's front door: load a scene, get or build its ROM, run the engine cycles and
 //! evaluate the cavitation risk; for the single-part commands, a part's checked mesh and
 //! material ([`load_part`]); variants of a scene run in parallel on shared ROMs ([`Variants`],
-//! the sweeps' and the report's runs). The command layer (`src/app`, `src/main.rs`) and the
+//! the sweeps' and the report's runs), and the transients behind a design-review report
+//! ([`report_runs`]). The command layer (`src/app`, `src/main.rs`) and the
 //! tests go through here; each re-exported item belongs to its pipeline stage
 //! (docs/physics.md), the items defined here join the scene to the stages:
 //!
@@ -28,10 +29,12 @@ pub use crate::piston::Piston;
 pub use crate::reduce::rom::EngineRom;
 use crate::reduce::scene_rom::key_description;
 pub use crate::reduce::scene_rom::{build_rom, get_rom, CacheOptions, LoadedRom};
+pub use crate::report::figures::SweepPoint;
 pub use crate::scene::Scene;
 use crate::scene::{MeshSource, PARTS};
 pub use crate::transient::cycle::{CycleResult, CycleSettings};
 pub use crate::transient::engine::{run_cycle, settings_of};
+pub use crate::transient::verify::TradeoffPoint;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -254,4 +257,114 @@ impl Variants {
             })
             .collect()
     }
+}
+
+/// Values of the report's sweeps (the scene's own value is added when missing).
+pub const CLEARANCES_UM: [f64; 3] = [40.0, 80.0, 120.0];
+pub const PIN_OFFSETS_MM: [f64; 3] = [-1.0, 0.0, 1.0];
+
+/// The transients behind a design-review report of a scene.
+pub struct ReportRuns {
+    /// The scene's own run, on `rom`.
+    pub base: CycleResult,
+    pub rom: LoadedRom,
+    /// The clearance [um] and pin-offset [mm] sweeps, the scene's run included, ascending.
+    pub clearance: Vec<SweepPoint>,
+    pub pin_offset: Vec<SweepPoint>,
+    /// Speed against error of the fast path on the reference window.
+    pub tradeoff: Vec<TradeoffPoint>,
+    pub evaluation: Evaluation,
+}
+
+/// What a report run varies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Swept {
+    Scene,
+    Clearance(f64),
+    PinOffset(f64),
+}
+
+impl Swept {
+    /// The `--set` overrides of the run.
+    fn sets(self) -> Vec<String> {
+        match self {
+            Swept::Scene => Vec::new(),
+            Swept::Clearance(v) => vec![format!("piston.clearance_um={v}")],
+            Swept::PinOffset(v) => vec![format!("piston.pin_offset_mm={v}")],
+        }
+    }
+}
+
+/// Runs the report's transients of `scene` (loaded from `path` with `sets`): the scene, its
+/// clearance sweep over [`CLEARANCES_UM`] and pin-offset sweep over [`PIN_OFFSETS_MM`] (the
+/// scene's own values not run twice) in parallel on shared ROMs, the speed-against-error
+/// windows, and the risk evaluation of the scene's run. `phase` hears what is being done.
+pub fn report_runs(
+    path: &Path,
+    sets: &[String],
+    scene: &Scene,
+    cache: &CacheOptions,
+    phase: &dyn Fn(&str),
+) -> Result<ReportRuns> {
+    let sim = simulation(scene)?;
+    let cur_c = sim.piston.skirt.clearance * 1e6;
+    let cur_o = sim.piston.pin_offset * 1e3;
+    let mut jobs = vec![Swept::Scene];
+    jobs.extend(
+        CLEARANCES_UM
+            .iter()
+            .filter(|&&c| (c - cur_c).abs() > 1e-9)
+            .map(|&c| Swept::Clearance(c)),
+    );
+    jobs.extend(
+        PIN_OFFSETS_MM
+            .iter()
+            .filter(|&&o| (o - cur_o).abs() > 1e-9)
+            .map(|&o| Swept::PinOffset(o)),
+    );
+    let extra: Vec<Vec<String>> = jobs.iter().map(|j| j.sets()).collect();
+    let labels: Vec<String> = extra
+        .iter()
+        .map(|e| match e.is_empty() {
+            true => scene.path.display().to_string(),
+            false => e.join(" "),
+        })
+        .collect();
+    phase("engine ROM");
+    let variants = Variants::prepare(path, sets, &extra, cache, phase)?;
+    phase("transients: the scene, clearance and pin-offset sweeps");
+    let mut results = variants.run(&labels, || {})?.into_iter().map(|(r, _)| r);
+    let base = results.next().expect("the scene's run");
+    let mut clearance = vec![SweepPoint::of(cur_c, &base)];
+    let mut pin_offset = vec![SweepPoint::of(cur_o, &base)];
+    for (job, r) in jobs.iter().skip(1).zip(results) {
+        match *job {
+            Swept::Clearance(v) => clearance.push(SweepPoint::of(v, &r)),
+            Swept::PinOffset(v) => pin_offset.push(SweepPoint::of(v, &r)),
+            Swept::Scene => {}
+        }
+    }
+    clearance.sort_by(|a, b| a.value.total_cmp(&b.value));
+    pin_offset.sort_by(|a, b| a.value.total_cmp(&b.value));
+    let Variants {
+        mut roms, rom_of, ..
+    } = variants;
+    let rom = roms.swap_remove(rom_of[0]);
+    phase("speed against error (window runs)");
+    let piston = piston_of(scene)?;
+    let tradeoff = crate::transient::verify::tradeoff(
+        scene,
+        &rom.rom,
+        &piston,
+        &settings_of(sim, scene.rom.band_hz),
+    )?;
+    let evaluation = evaluate_scene(scene, &rom.rom, &base)?;
+    Ok(ReportRuns {
+        base,
+        rom,
+        clearance,
+        pin_offset,
+        tradeoff,
+        evaluation,
+    })
 }

@@ -4,7 +4,6 @@ use super::progress::Progress;
 use super::{load_part, ModelInput};
 use crate::error::Result;
 use crate::fem::model::{FeModel, Timings};
-use crate::files as atomic;
 use crate::report::vtu;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -81,18 +80,10 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
     let sol = model.modes(req.count, sigma, part.guard_modes)?;
     if let Some(path) = &req.vtu {
         progress.phase("writing VTU");
-        let full: Vec<Vec<f64>> = (0..sol.modes.count())
-            .map(|j| model.dofs.expand(sol.modes.vector(j)))
-            .collect();
-        let fields: Vec<vtu::Field> = full
-            .iter()
-            .enumerate()
-            .map(|(j, v)| vtu::Field {
-                name: format!("mode_{:02}_{:.1}Hz", j + 1, sol.modes.frequency_hz(j)),
-                values: v,
-            })
-            .collect();
-        atomic::write_atomic(path, |w| vtu::write(&model.mesh, &fields, w))?;
+        let n = sol.modes.count();
+        let shapes: Vec<&[f64]> = (0..n).map(|j| sol.modes.vector(j)).collect();
+        let freqs: Vec<f64> = (0..n).map(|j| sol.modes.frequency_hz(j)).collect();
+        vtu::write_part_modes(path, &model.mesh, &model.dofs, &shapes, &freqs)?;
     }
     let max_residual = sol.residuals.iter().copied().fold(0.0, f64::max);
     Ok(ModesReport {

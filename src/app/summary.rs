@@ -12,21 +12,15 @@
 use super::rom::CacheOptions;
 use super::simulate::SimulateReport;
 use crate::analysis::ranking::{separations, RankStep};
-use crate::api::Variants;
-use crate::cavitation::evaluate::{evaluate, Evaluation};
+use crate::api::{report_runs, CLEARANCES_UM, PIN_OFFSETS_MM};
+use crate::cavitation::evaluate::Evaluation;
 use crate::error::Result;
 use crate::files::write_all_atomic;
-use crate::piston::setup::{piston_of, simulation};
+use crate::piston::setup::piston_of;
 use crate::report::figures::Figures;
 pub use crate::report::figures::{SweepPoint, TradeoffPoint};
-use crate::transient::cycle::CycleResult;
-use crate::transient::engine::settings_of;
 use std::path::Path;
 use std::time::Instant;
-
-/// Values of the report's sweeps (the scene's own value is added when missing).
-pub const CLEARANCES_UM: [f64; 3] = [40.0, 80.0, 120.0];
-pub const PIN_OFFSETS_MM: [f64; 3] = [-1.0, 0.0, 1.0];
 
 /// What the report holds (summary.json).
 #[derive(Clone, Debug, serde::Serialize)]
@@ -48,58 +42,10 @@ pub struct Report {
     pub seconds: f64,
 }
 
-fn condense(value: f64, r: &CycleResult) -> SweepPoint {
-    let cyl = SimulateReport::cylinders_of(r);
-    SweepPoint {
-        value,
-        peak_negative_m_s2: cyl
-            .iter()
-            .map(|c| {
-                c.points
-                    .iter()
-                    .fold(0.0f64, |m, p| m.max(p.peak_negative_m_s2))
-            })
-            .collect(),
-        peak_slap_force_n: cyl.iter().map(|c| c.peak_slap_force_n).collect(),
-        peak_side_force_n: cyl.iter().map(|c| c.peak_side_force_n).collect(),
-        side_force_crank_angle_deg: cyl.iter().map(|c| c.side_force_crank_angle_deg).collect(),
-        peak_tilt_rad: r
-            .series
-            .cylinders
-            .iter()
-            .map(|c| c.tilt_rad.iter().fold(0.0f64, |m, v| m.max(v.abs())))
-            .collect(),
-        points_m_s2: cyl
-            .iter()
-            .map(|c| c.points.iter().map(|p| p.peak_negative_m_s2).collect())
-            .collect(),
-    }
-}
-
-/// What a report run varies.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Swept {
-    Scene,
-    Clearance,
-    PinOffset,
-}
-
-impl Swept {
-    /// The `--set` overrides of a run at `value` (the clearance in um, the pin offset in mm).
-    fn sets(self, value: f64) -> Vec<String> {
-        match self {
-            Swept::Scene => Vec::new(),
-            Swept::Clearance => vec![format!("piston.clearance_um={value}")],
-            Swept::PinOffset => vec![format!("piston.pin_offset_mm={value}")],
-        }
-    }
-}
-
 /// Writes the report of `scene` into `out`.
 pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions) -> Result<Report> {
     let started = Instant::now();
     let scene = super::load_scene(scene_path, sets)?;
-    let sim = simulation(&scene)?;
     let piston = piston_of(&scene)?;
     // about ten transients (the scene and its two sweeps): refused before any work when beyond
     // the limits, as is an output directory that cannot be written
@@ -109,95 +55,34 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
     }
     let stage = crate::files::OutputDir::create(out)?;
-    let target = out;
-    let out = stage.path();
     let progress = super::progress::Progress::new();
-    // the scene itself, then the clearance and pin-offset sweeps (their scene values skipped)
-    let cur_c = sim.piston.skirt.clearance * 1e6;
-    let cur_o = sim.piston.pin_offset * 1e3;
-    let mut jobs: Vec<(Swept, f64)> = vec![(Swept::Scene, 0.0)];
-    jobs.extend(
-        CLEARANCES_UM
-            .iter()
-            .filter(|&&c| (c - cur_c).abs() > 1e-9)
-            .map(|&c| (Swept::Clearance, c)),
-    );
-    jobs.extend(
-        PIN_OFFSETS_MM
-            .iter()
-            .filter(|&&o| (o - cur_o).abs() > 1e-9)
-            .map(|&o| (Swept::PinOffset, o)),
-    );
-    let extra: Vec<Vec<String>> = jobs.iter().map(|(k, v)| k.sets(*v)).collect();
-    let labels: Vec<String> = extra
-        .iter()
-        .map(|e| {
-            if e.is_empty() {
-                scene.path.display().to_string()
-            } else {
-                e.join(" ")
-            }
-        })
-        .collect();
-    progress.phase("engine ROM");
-    let rom_progress = super::rom::RomProgress::default();
-    let variants = Variants::prepare(scene_path, sets, &extra, cache, &|m| rom_progress.phase(m))?;
-    progress.phase("transients: the scene, clearance and pin-offset sweeps");
-    let results = variants.run(&labels, || {})?;
-    let loaded = &variants.roms[variants.rom_of[0]];
-    let rom = &loaded.rom;
-    let base = &results[0].0;
-    let mut clearance: Vec<SweepPoint> = vec![condense(cur_c, base)];
-    let mut offset: Vec<SweepPoint> = vec![condense(cur_o, base)];
-    for ((kind, v), (r, _)) in jobs.iter().zip(&results).skip(1) {
-        match kind {
-            Swept::Clearance => clearance.push(condense(*v, r)),
-            Swept::PinOffset => offset.push(condense(*v, r)),
-            Swept::Scene => {}
-        }
-    }
-    clearance.sort_by(|a, b| a.value.total_cmp(&b.value));
-    offset.sort_by(|a, b| a.value.total_cmp(&b.value));
-    progress.phase("speed against error (window runs)");
-    let trade = crate::transient::verify::tradeoff(
-        &scene,
-        rom,
-        &piston,
-        &settings_of(sim, scene.rom.band_hz),
-    )?;
-    let ev = evaluate(
-        base,
-        rom,
-        &crate::cavitation::Setup::new(&scene.cavitation)?,
-        &scene.engine.firing_order,
-        scene.rom.band_hz,
-    );
-    let mut simulate = SimulateReport::new(&scene, &piston, base, loaded.cache, 0.0);
+    let runs = report_runs(scene_path, sets, &scene, cache, &|m| progress.phase(m))?;
+    let mut simulate = SimulateReport::new(&scene, &piston, &runs.base, runs.rom.cache, 0.0);
     simulate.seconds = started.elapsed().as_secs_f64();
     progress.phase("figures");
     let figs = Figures {
-        out,
+        out: stage.path(),
         scene: &scene,
         piston: &piston,
-        base,
-        ev: &ev,
-        clearance: &clearance,
-        offset: &offset,
-        trade: &trade,
-        rom,
+        base: &runs.base,
+        ev: &runs.evaluation,
+        clearance: &runs.clearance,
+        offset: &runs.pin_offset,
+        trade: &runs.tradeoff,
+        rom: &runs.rom.rom,
     }
     .draw()?;
-    let ranking_resolution = separations(&ranked_uncertainty(&simulate, &ev.ranking));
+    let ranking_resolution = separations(&ranked_uncertainty(&simulate, &runs.evaluation.ranking));
     let mut report = Report {
         scene: scene.path.display().to_string(),
         title: scene.title.clone(),
         speed_rpm: scene.engine.speed_rpm,
         coolant_layer_kg_m2: scene.cavitation.layer_mass_per_area,
         simulate,
-        evaluation: ev,
-        clearance_sweep: clearance,
-        pin_offset_sweep: offset,
-        tradeoff: trade,
+        evaluation: runs.evaluation,
+        clearance_sweep: runs.clearance,
+        pin_offset_sweep: runs.pin_offset,
+        tradeoff: runs.tradeoff,
         ranking_resolution,
         files: figs
             .iter()
@@ -206,15 +91,15 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         seconds: 0.0,
     };
     report.seconds = started.elapsed().as_secs_f64();
-    let md = markdown(&report, scene_path, target);
+    let md = markdown(&report, scene_path, out);
     let json = serde_json::to_string_pretty(&report).expect("serialisable");
     write_all_atomic(vec![
         (
-            out.join("summary.json"),
+            stage.path().join("summary.json"),
             Box::new(move |w: &mut dyn std::io::Write| w.write_all(json.as_bytes())),
         ),
         (
-            out.join("summary.md"),
+            stage.path().join("summary.md"),
             Box::new(move |w: &mut dyn std::io::Write| w.write_all(md.as_bytes())),
         ),
     ])?;

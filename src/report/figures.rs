@@ -32,6 +32,40 @@ pub struct SweepPoint {
     pub points_m_s2: Vec<Vec<f64>>,
 }
 
+impl SweepPoint {
+    /// The sweep's summary of the run `r` at the swept `value`: per cylinder the largest mean
+    /// peak negative acceleration over the points, the slap and side-force peaks, the
+    /// side-force angle and the last cycle's largest |tilt|; per cylinder and point the peaks.
+    pub fn of(value: f64, r: &CycleResult) -> Self {
+        let points: Vec<Vec<f64>> = r
+            .peaks
+            .iter()
+            .map(|c| c.peak_negative.iter().map(|p| p.value).collect())
+            .collect();
+        SweepPoint {
+            value,
+            peak_negative_m_s2: points
+                .iter()
+                .map(|p| p.iter().fold(0.0f64, |m, &v| m.max(v)))
+                .collect(),
+            peak_slap_force_n: r.peaks.iter().map(|c| c.slap_force.value).collect(),
+            peak_side_force_n: r.peaks.iter().map(|c| c.side_force.value).collect(),
+            side_force_crank_angle_deg: r
+                .peaks
+                .iter()
+                .map(|c| c.side_force.crank_angle_deg)
+                .collect(),
+            peak_tilt_rad: r
+                .series
+                .cylinders
+                .iter()
+                .map(|c| c.tilt_rad.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+                .collect(),
+            points_m_s2: points,
+        }
+    }
+}
+
 /// Vertical rules at the two system modes nearest the dominant response.
 fn mode_rules(ev: &Evaluation) -> Vec<Rule> {
     ev.nearest_modes

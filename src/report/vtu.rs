@@ -99,6 +99,29 @@ pub fn write(mesh: &Mesh, fields: &[Field], w: &mut dyn Write) -> std::io::Resul
     )
 }
 
+/// Writes one part's mode shapes on its mesh as one VTU file: field j is mode j's free-DOF
+/// vector `shapes[j]` expanded to every node (fixed DOFs zero), named with its frequency.
+pub fn write_part_modes(
+    path: &Path,
+    mesh: &Mesh,
+    dofs: &DofMap,
+    shapes: &[&[f64]],
+    freqs: &[f64],
+) -> Result<(), WriteError> {
+    let full: Vec<Vec<f64>> = shapes.iter().map(|u| dofs.expand(u)).collect();
+    let fields: Vec<Field<'_>> = full
+        .iter()
+        .zip(freqs)
+        .enumerate()
+        .map(|(j, (v, f))| Field {
+            name: format!("mode_{:02}_{:.1}Hz", j + 1, f),
+            values: v,
+        })
+        .collect();
+    write_atomic(path, |w| write(mesh, &fields, w))?;
+    Ok(())
+}
+
 /// Mode shapes of the engine's part instances on their meshes: liners of the modelled
 /// `cylinders` (placed at `axis_x`), then the crankcase; `shapes[mode][instance]` in each
 /// instance's free-DOF order.
