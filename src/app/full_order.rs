@@ -2,6 +2,7 @@
 //! series as CSV.
 
 use crate::error::Result;
+use crate::linalg::dense::row;
 pub use crate::transient::verify::{compare, FullOrderReport, PointComparison};
 use crate::transient::window::low_pass;
 
@@ -13,9 +14,16 @@ pub fn write_window_series(path: &std::path::Path, report: &FullOrderReport) -> 
     let filtered: Vec<Vec<Vec<f64>>> = runs
         .iter()
         .map(|(_, r)| {
-            r.acceleration
-                .iter()
-                .map(|a| low_pass(a, report.dt, report.filter_band_hz, false).0)
+            (0..r.acceleration.nrows())
+                .map(|p| {
+                    low_pass(
+                        row(&r.acceleration, p),
+                        report.dt,
+                        report.filter_band_hz,
+                        false,
+                    )
+                    .0
+                })
                 .collect()
         })
         .collect();
@@ -26,7 +34,7 @@ pub fn write_window_series(path: &std::path::Path, report: &FullOrderReport) -> 
                 w,
                 ",{name}_lateral_um,{name}_tilt_mrad,{name}_contact_force_n"
             )?;
-            for p in 1..=r.acceleration.len() {
+            for p in 1..=r.acceleration.nrows() {
                 write!(w, ",{name}_p{p}_acc_m_s2,{name}_p{p}_acc_band_m_s2")?;
             }
         }
@@ -42,8 +50,8 @@ pub fn write_window_series(path: &std::path::Path, report: &FullOrderReport) -> 
                     r.tilt_rad[i] * 1e3,
                     r.contact_force_n[i]
                 )?;
-                for (a, af) in r.acceleration.iter().zip(f) {
-                    write!(w, ",{:.3},{:.3}", a[i], af[i])?;
+                for (p, af) in f.iter().enumerate() {
+                    write!(w, ",{:.3},{:.3}", r.acceleration[[p, i]], af[i])?;
                 }
             }
             writeln!(w)?;

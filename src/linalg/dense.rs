@@ -41,6 +41,17 @@ pub fn values_mut(m: &mut Dense) -> &mut [f64] {
     m.as_slice_mut().expect("standard layout")
 }
 
+/// Serialises a matrix as a list of its rows (JSON: `[[..], [..]]`, the shape a reader of a
+/// table expects), for `#[serde(serialize_with = "...")]` on result fields.
+pub fn serialize_rows<S: serde::Serializer>(m: &Dense, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeSeq;
+    let mut seq = s.serialize_seq(Some(m.nrows()))?;
+    for r in m.rows() {
+        seq.serialize_element(&r.to_vec())?;
+    }
+    seq.end()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -56,5 +67,12 @@ mod tests {
         let bytes = bincode::serialize(&m).unwrap();
         let back: Dense = bincode::deserialize(&bytes).unwrap();
         assert_eq!(row(&back, 0), &[1.0, 2.0, 3.0]);
+        // a table for JSON readers: its rows
+        let mut out = Vec::new();
+        serialize_rows(&m, &mut serde_json::Serializer::new(&mut out)).unwrap();
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            "[[1.0,2.0,3.0],[4.0,5.0,6.0]]"
+        );
     }
 }

@@ -10,6 +10,7 @@ use super::png::{bars, write_png, BarData, Chart, Mark, Rule, Series};
 use crate::analysis::spectrum::{rms_average, Spectrum};
 use crate::cavitation::evaluate::{spectra, Evaluation};
 use crate::files::WriteError;
+use crate::linalg::dense::{from_row_vecs, Dense};
 use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
 use crate::scene::Scene;
@@ -28,8 +29,9 @@ pub struct SweepPoint {
     pub peak_side_force_n: Vec<f64>,
     pub side_force_crank_angle_deg: Vec<f64>,
     pub peak_tilt_rad: Vec<f64>,
-    /// Per cylinder and point.
-    pub points_m_s2: Vec<Vec<f64>>,
+    /// Per cylinder (rows) and point (columns).
+    #[serde(serialize_with = "crate::linalg::dense::serialize_rows")]
+    pub points_m_s2: Dense,
 }
 
 impl SweepPoint {
@@ -37,15 +39,17 @@ impl SweepPoint {
     /// peak negative acceleration over the points, the slap and side-force peaks, the
     /// side-force angle and the last cycle's largest |tilt|; per cylinder and point the peaks.
     pub fn of(value: f64, r: &CycleResult) -> Self {
-        let points: Vec<Vec<f64>> = r
-            .peaks
-            .iter()
-            .map(|c| c.peak_negative.iter().map(|p| p.value).collect())
-            .collect();
+        let points = from_row_vecs(
+            r.peaks
+                .iter()
+                .map(|c| c.peak_negative.iter().map(|p| p.value).collect())
+                .collect(),
+        );
         SweepPoint {
             value,
             peak_negative_m_s2: points
-                .iter()
+                .rows()
+                .into_iter()
                 .map(|p| p.iter().fold(0.0f64, |m, &v| m.max(v)))
                 .collect(),
             peak_slap_force_n: r.peaks.iter().map(|c| c.slap_force.value).collect(),

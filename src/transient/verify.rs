@@ -242,7 +242,7 @@ pub fn compare(
     // --- compare
     let peak = |res: &WindowResult, p: usize| peak_negative(res, p, dt, band);
     let mut cmp = Vec::new();
-    for p in 0..full_res.acceleration.len() {
+    for p in 0..full_res.acceleration.nrows() {
         let (pf, af) = peak(&full_res, p);
         let (pr, ar) = peak(&rom_res, p);
         cmp.push(PointComparison {
@@ -296,7 +296,7 @@ pub fn compare(
 /// low-pass, located between the samples ([`sampled_peak`]), and its crank angle; the
 /// filter's edge samples are skipped.
 pub fn peak_negative(res: &WindowResult, p: usize, dt: f64, band: f64) -> (f64, f64) {
-    let (y, edge) = low_pass(&res.acceleration[p], dt, band, false);
+    let (y, edge) = low_pass(row(&res.acceleration, p), dt, band, false);
     let n = y.len();
     match sampled_peak(&y, edge.min(n)..n.saturating_sub(edge), -1.0) {
         Some((value, at)) => {
@@ -487,7 +487,7 @@ pub fn tradeoff(
     let base = settings.step_deg;
     let run = |keep: Option<f64>, step: f64| -> Result<(Vec<f64>, usize, f64)> {
         let rw = rom_window(scene, rom, piston, settings, keep, Some(step))?;
-        let peaks = (0..rw.res.acceleration.len())
+        let peaks = (0..rw.res.acceleration.nrows())
             .map(|p| peak_negative(&rw.res, p, rw.dt, rw.band).0)
             .collect();
         Ok((peaks, rw.modes, rw.res.seconds))

@@ -13,7 +13,7 @@ use super::contact::{self, dot, Body, Location, Structure};
 use super::cycle::{push_slices, BoreLines, PistonInBore, TransientError};
 use super::modal::ModalStructure;
 use super::scheme::Scheme;
-use crate::linalg::dense::{row, Dense};
+use crate::linalg::dense::{from_row_vecs, row, Dense};
 use crate::piston::Piston;
 use nalgebra::DMatrix;
 
@@ -66,7 +66,8 @@ pub struct Window {
 pub struct WindowResult {
     pub crank_angle_deg: Vec<f64>,
     /// Analysis-point accelerations (points x steps) [m/s^2].
-    pub acceleration: Vec<Vec<f64>>,
+    #[serde(serialize_with = "crate::linalg::dense::serialize_rows")]
+    pub acceleration: Dense,
     pub lateral_m: Vec<f64>,
     pub tilt_rad: Vec<f64>,
     /// Net contact force toward thrust (thrust minus anti-thrust side) [N].
@@ -110,10 +111,8 @@ pub fn run(
         first: 0,
     };
     let npoints = liner.point_accelerations().len();
-    let mut out = WindowResult {
-        acceleration: vec![Vec::with_capacity(steps); npoints],
-        ..WindowResult::default()
-    };
+    let mut out = WindowResult::default();
+    let mut acceleration = vec![Vec::with_capacity(steps); npoints];
     let mut residual: Vec<Vec<f64>> = Vec::new();
     for s in 1..=steps {
         let deg = window.start_deg + s as f64 * window.step_deg;
@@ -220,17 +219,18 @@ pub fn run(
         out.newton_iterations += res.iterations;
         out.crank_angle_deg.push(deg);
         for (p, a) in liner.point_accelerations().into_iter().enumerate() {
-            out.acceleration[p].push(a);
+            acceleration[p].push(a);
         }
         out.lateral_m.push(b.q[0]);
         out.tilt_rad.push(b.q[1]);
         out.contact_force_n.push(net);
     }
-    for (acc, r) in out.acceleration.iter_mut().zip(&residual) {
+    for (acc, r) in acceleration.iter_mut().zip(&residual) {
         for (a, d) in acc.iter_mut().zip(second_difference(r, dt, false)) {
             *a += d;
         }
     }
+    out.acceleration = from_row_vecs(acceleration);
     out.seconds = t0.elapsed().as_secs_f64();
     Ok(out)
 }
