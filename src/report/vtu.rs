@@ -109,7 +109,18 @@ pub fn write_part_modes(
     freqs: &[f64],
 ) -> Result<(), WriteError> {
     let full: Vec<Vec<f64>> = shapes.iter().map(|u| dofs.expand(u)).collect();
-    let fields: Vec<Field<'_>> = full
+    write_mode_fields(path, mesh, &full, freqs)
+}
+
+/// Writes nodal mode shapes `fields` (3 values per node) on `mesh` as one VTU file, field j
+/// named with its number and frequency `freqs[j]`.
+fn write_mode_fields(
+    path: &Path,
+    mesh: &Mesh,
+    fields: &[Vec<f64>],
+    freqs: &[f64],
+) -> Result<(), WriteError> {
+    let named: Vec<Field<'_>> = fields
         .iter()
         .zip(freqs)
         .enumerate()
@@ -118,7 +129,7 @@ pub fn write_part_modes(
             values: v,
         })
         .collect();
-    write_atomic(path, |w| write(mesh, &fields, w))?;
+    write_atomic(path, |w| write(mesh, &named, w))?;
     Ok(())
 }
 
@@ -192,15 +203,5 @@ pub fn write_engine_modes(path: &Path, e: &EngineShapes<'_>) -> Result<(), Write
             v
         })
         .collect();
-    let named: Vec<Field<'_>> = fields
-        .iter()
-        .zip(freqs)
-        .enumerate()
-        .map(|(j, (v, f))| Field {
-            name: format!("mode_{:02}_{:.1}Hz", j + 1, f),
-            values: v,
-        })
-        .collect();
-    write_atomic(path, |w| write(&all, &named, w))?;
-    Ok(())
+    write_mode_fields(path, &all, &fields, freqs)
 }
