@@ -4,5 +4,6 @@
 pub mod correlation;
 pub mod frf;
 pub mod ranking;
+pub mod shards;
 pub mod spectrum;
 pub mod study;

@@ -12,6 +12,7 @@
 
 use super::rom::CacheOptions;
 use super::simulate::{CylinderReport, SimulateReport};
+use crate::analysis::shards::{assemble, parse_part, Merged, Part, PartRun, PART_FORMAT};
 use crate::analysis::study::{
     statistics, worst_peak, CylinderLine, ProbabilityRow, RunLine, Sensitivities,
 };
@@ -24,13 +25,9 @@ use crate::report::study::{draw_key, draw_statistics, numeric};
 use crate::scene::design::{Design, PartError, Shard};
 use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
-use std::collections::BTreeMap;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// Format tag of a shard's part file.
-const PART_FORMAT: &str = "linercav-sweep-part 1";
 
 /// One run of the sweep: its full results (in `sweep.json`).
 #[derive(Clone, Debug, serde::Serialize)]
@@ -80,27 +77,6 @@ pub struct SweepRequest {
     pub shards: Option<usize>,
     pub out: Option<PathBuf>,
     pub cache: CacheOptions,
-}
-
-/// A shard's part file.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct Part {
-    format: String,
-    tool: String,
-    scene: String,
-    scene_blake3: String,
-    sets: Vec<String>,
-    design: Design,
-    shard: Shard,
-    roms: Vec<String>,
-    seconds: f64,
-    runs: Vec<PartRun>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize)]
-struct PartRun {
-    line: RunLine,
-    run: serde_json::Value,
 }
 
 /// Runs the sweep, or its shard.
@@ -489,163 +465,23 @@ fn part_files(inputs: &[PathBuf]) -> std::result::Result<Vec<PathBuf>, PartError
     Ok(files)
 }
 
-/// Reads a part and checks what it says of itself: format, shard numbers, that it holds
-/// exactly its shard's runs of its design (their values are checked by [`merge`], once every
-/// shard is there).
-fn read_part(path: &Path) -> std::result::Result<Part, PartError> {
-    let text = std::fs::read_to_string(path).map_err(|e| PartError::Read {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
-    let not_a_part = |reason: String| PartError::NotAPart {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let part: Part = serde_json::from_str(&text).map_err(|e| not_a_part(e.to_string()))?;
-    if part.format != PART_FORMAT {
-        return Err(not_a_part(format!(
-            "format '{}', expected '{PART_FORMAT}'",
-            part.format
-        )));
-    }
-    let Shard { index, count } = part.shard;
-    if count == 0 || index == 0 || index > count {
-        return Err(not_a_part(format!("shard {index}/{count}")));
-    }
-    let total = part.design.len();
-    let runs_problem = |problem: String| PartError::Runs {
-        path: path.to_path_buf(),
-        index,
-        count,
-        total,
-        problem,
-    };
-    // k mod N = I - 1, in order, without listing the design's runs
-    let expected = (index - 1..total).step_by(count);
-    if part.runs.len() != part.shard.len(total)
-        || !part.runs.iter().map(|r| r.line.index).eq(expected)
-    {
-        return Err(runs_problem(format!("it holds {} runs", part.runs.len())));
-    }
-    Ok(part)
-}
-
-/// Checks that `p` (from `path`) belongs to the study of `first` (from `first_path`): tool,
-/// scene text, overrides, design and shard count.
-fn same_study(
-    path: &Path,
-    p: &Part,
-    first_path: &Path,
-    first: &Part,
-) -> std::result::Result<(), PartError> {
-    let differ = |what: &'static str, theirs: String, ours: String| PartError::Differs {
-        path: path.to_path_buf(),
-        first: first_path.to_path_buf(),
-        what,
-        theirs,
-        ours,
-    };
-    if p.tool != first.tool {
-        return Err(differ("tool", p.tool.clone(), first.tool.clone()));
-    }
-    if p.scene_blake3 != first.scene_blake3 {
-        return Err(differ(
-            "scene text (BLAKE3)",
-            p.scene_blake3.clone(),
-            first.scene_blake3.clone(),
-        ));
-    }
-    if p.sets != first.sets {
-        return Err(differ(
-            "--set overrides",
-            format!("{:?}", p.sets),
-            format!("{:?}", first.sets),
-        ));
-    }
-    if p.design != first.design {
-        return Err(differ(
-            "design",
-            format!("{:?}", p.design),
-            format!("{:?}", first.design),
-        ));
-    }
-    if p.shard.count != first.shard.count {
-        return Err(differ(
-            "shard count",
-            p.shard.count.to_string(),
-            first.shard.count.to_string(),
-        ));
-    }
-    Ok(())
-}
-
-/// `sweep-merge`: checks that the parts come from one study ([`same_study`]), that every
-/// shard is present exactly once and holds its runs ([`read_part`]), then writes the outputs
-/// of the unsharded sweep into `out`.
+/// `sweep-merge`: reads the parts, checks and assembles them into the unsharded sweep's runs
+/// ([`assemble`]: one study, every shard exactly once, each holding its runs), then writes the
+/// outputs of the unsharded sweep into `out`.
 pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepReport> {
     let files = part_files(inputs)?;
     let stage = OutputDir::create(out)?;
     let mut parts: Vec<(PathBuf, Part)> = Vec::new();
     for f in files {
-        let p = read_part(&f)?;
+        let text = std::fs::read_to_string(&f).map_err(|e| PartError::Read {
+            path: f.clone(),
+            reason: e.to_string(),
+        })?;
+        let p = parse_part(&f, &text)?;
         parts.push((f, p));
     }
-    let (first_path, first) = &parts[0];
-    let count = first.shard.count;
-    let mut shard_seen: BTreeMap<usize, &Path> = BTreeMap::new();
-    for (path, p) in &parts {
-        same_study(path, p, first_path, first)?;
-        if let Some(other) = shard_seen.insert(p.shard.index, path) {
-            return Err(PartError::Twice {
-                path: path.clone(),
-                index: p.shard.index,
-                count,
-                other: other.to_path_buf(),
-            }
-            .into());
-        }
-    }
-    if shard_seen.len() < count {
-        let missing: Vec<String> = (1..=count)
-            .filter(|i| !shard_seen.contains_key(i))
-            .take(10)
-            .map(|i| format!("{i}/{count}"))
-            .collect();
-        let more = count - shard_seen.len() - missing.len();
-        let more = if more > 0 {
-            format!(" and {more} more")
-        } else {
-            String::new()
-        };
-        return Err(PartError::Missing(format!("{}{more}", missing.join(", "))).into());
-    }
-    // every shard holds its runs: the design's runs are as many as the parts hold
-    let design_runs = first.design.runs();
-    let mut lines: Vec<Option<(RunLine, serde_json::Value)>> = vec![None; design_runs.len()];
-    for (path, p) in &parts {
-        for r in &p.runs {
-            if r.line.values != design_runs[r.line.index] {
-                return Err(PartError::Runs {
-                    path: path.clone(),
-                    index: p.shard.index,
-                    count,
-                    total: design_runs.len(),
-                    problem: format!(
-                        "run {} has the values {:?}, the design gives {:?}",
-                        r.line.index, r.line.values, design_runs[r.line.index]
-                    ),
-                }
-                .into());
-            }
-            lines[r.line.index] = Some((r.line.clone(), r.run.clone()));
-        }
-    }
-    let (lines, runs): (Vec<RunLine>, Vec<serde_json::Value>) = lines
-        .into_iter()
-        .map(|l| l.expect("every shard present"))
-        .unzip();
-    let mut roms: Vec<String> = parts.iter().flat_map(|(_, p)| p.roms.clone()).collect();
-    roms.dedup();
+    let Merged { lines, runs, roms } = assemble(&parts)?;
+    let first = &parts[0].1;
     let mut report = SweepReport {
         scene: first.scene.clone(),
         keys: first.design.keys(),
