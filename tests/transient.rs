@@ -662,7 +662,7 @@ fn verification_averaged_cycles_are_the_statistics_of_the_single_cycles() {
 /// engine at a fixed step 64 times finer than the default 1/4 deg. The mean peak negative
 /// acceleration must lie within 2 % of the converged one (issue 22's floor for the default;
 /// one cycle from rest is deterministic, so no statistical margin is due). Measured with the
-/// default 3 slap sub-steps: at 1/4 deg the estimate is 3.1 % against an error of 1.7 %, so the
+/// default 3 slap sub-steps: at 1/4 deg the estimate is 3.7 % against an error of 1.7 %, so the
 /// control keeps the step. Before the sub-steps the estimate was 7.4 % against 6.0 % at 1/4 deg,
 /// the control halved the step, and at 1/8 deg the error was 1.5 % while that run's own
 /// estimate said 0.17 % (the estimate covers each cylinder's firing slap of the last cycle

@@ -390,8 +390,10 @@ pub struct EngineRun<'a> {
     prev_state: Vec<SliceState>,
     /// Loaded locations of the last step (cylinder index, location, force).
     prev_loaded: Vec<(usize, Location, f64)>,
-    /// Base steps still to be sub-stepped after the last contact onset.
+    /// Base steps still to be sub-stepped after the last contact onset, and the base step
+    /// being advanced [s].
     substeps_left: usize,
+    base_step: f64,
 }
 
 /// Modes kept and the contact-DOF rows/flexibility/preload of the ROM.
@@ -587,6 +589,7 @@ impl<'a> EngineRun<'a> {
             prev_state: vec![SliceState::APART; 2 * nslices * ncyl],
             prev_loaded: Vec::new(),
             substeps_left: 0,
+            base_step: 0.0,
         }
     }
 
@@ -616,6 +619,7 @@ impl<'a> EngineRun<'a> {
         if m == 1 {
             return self.advance_depth(dt, 0);
         }
+        self.base_step = dt;
         if self.substeps_left == 0 {
             match self.try_step(dt, true) {
                 Ok(true) => return Ok(()),
@@ -633,9 +637,12 @@ impl<'a> EngineRun<'a> {
         Ok(())
     }
 
-    /// Base steps sub-stepped after a contact onset: the onset's own step and the span after it.
-    fn substep_span(&self) -> usize {
-        1 + (self.settings.slap_span_deg / self.settings.step_deg).ceil() as usize
+    /// Steps of `dt` sub-stepped after a contact onset: the onset's own step and those
+    /// covering `slap_span_deg` after it (the same crank-angle span at every step size, the
+    /// step-error windows' half step included).
+    fn substep_span(&self, dt: f64) -> usize {
+        let step_deg = self.angle_at(dt);
+        1 + (self.settings.slap_span_deg / step_deg - 1e-9).ceil() as usize
     }
 
     fn advance_depth(&mut self, dt: f64, depth: usize) -> Result<(), TransientError> {
@@ -825,7 +832,7 @@ impl<'a> EngineRun<'a> {
             if stop_at_onset {
                 return Ok(false);
             }
-            self.substeps_left = self.substep_span();
+            self.substeps_left = self.substep_span(self.base_step);
         }
         // commit
         let fmin = res.forces.iter().copied().fold(f64::INFINITY, f64::min);
