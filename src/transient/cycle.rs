@@ -613,7 +613,8 @@ impl<'a> EngineRun<'a> {
     /// impact grows with (omega_c dt)^2, omega_c the contact's frequency (a few steps per
     /// contact period at the default step): the sub-steps divide it by m^2 where it is made,
     /// at the cost of the few percent of the cycle that slaps occupy. A failing whole step is
-    /// re-taken as sub-steps too (counted as rejected).
+    /// re-taken as sub-steps too when `adaptive` (counted as rejected), and stops the run
+    /// otherwise.
     pub fn advance(&mut self, dt: f64) -> Result<(), TransientError> {
         let m = self.settings.slap_substeps.max(1);
         if m == 1 {
@@ -624,6 +625,7 @@ impl<'a> EngineRun<'a> {
             match self.try_step(dt, true) {
                 Ok(true) => return Ok(()),
                 Ok(false) => {}
+                Err(fail) if !self.settings.adaptive => return Err(fail.into_error(self, dt, 0)),
                 Err(_) => self.stats.rejected_steps += 1,
             }
         }
