@@ -15,7 +15,7 @@ use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
 use crate::scene::Scene;
 use crate::transient::cycle::CycleResult;
-pub use crate::transient::verify::TradeoffPoint;
+pub use crate::transient::verify::{TradeoffKind, TradeoffPoint};
 use std::path::{Path, PathBuf};
 
 /// One run of a report sweep, condensed.
@@ -704,39 +704,44 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// `speed_error.png`: wall time against error on the reference window.
+    /// `speed_error.png`: wall time against error of the mode cut-off and the step
+    /// ([`crate::transient::verify::tradeoff`]).
     fn speed_error(&self) -> Result<Vec<PathBuf>, WriteError> {
         let Self { out, trade, .. } = *self;
         let mut files = Vec::new();
         // speed against error
         let p = out.join("speed_error.png");
         write_png(&p, (1100, 650), |root| {
-            let modes: Vec<(f64, f64)> = trade
-                .iter()
-                .filter(|x| x.setting.starts_with("modes"))
-                .map(|x| (x.seconds * 1e3, x.error.max(1e-6)))
-                .collect();
-            let steps: Vec<(f64, f64)> = trade
-                .iter()
-                .filter(|x| x.setting.starts_with("all"))
-                .map(|x| (x.seconds * 1e3, x.error.max(1e-6)))
-                .collect();
+            let of = |kind: TradeoffKind| -> Vec<(f64, f64)> {
+                trade
+                    .iter()
+                    .filter(|x| x.kind == kind)
+                    .map(|x| (x.seconds * 1e3, x.error.max(1e-6)))
+                    .collect()
+            };
             Chart {
-                title: "Fast path: error against wall time (window 330-420 deg, one cylinder)",
-                x_label: "wall time of the window [ms]",
-                y_label: "error of peak negative acceleration (relative)",
+                title: "Fast path: error against wall time (converged reference: step / 64)",
+                x_label: "wall time [ms]",
+                y_label: "error of peak negative acceleration (relative, largest)",
                 series: vec![
                     Series {
-                        name: "mode cut-off (band, 1.5x, 2x band)".into(),
-                        points: modes,
+                        name: "mode cut-off (band, 1.5x, 2x band), one cylinder's window".into(),
+                        points: of(TradeoffKind::ModeCutoff),
                         mark: Mark::LineDots,
                         color: 0,
                     },
                     Series {
-                        name: "step (4x, 2x, 1x, 0.5x the scene's)".into(),
-                        points: steps,
+                        name: "step with slap sub-steps (4x, 2x, 1x, 0.5x), six firing slaps"
+                            .into(),
+                        points: of(TradeoffKind::Step),
                         mark: Mark::LineDots,
                         color: 1,
+                    },
+                    Series {
+                        name: "uniform step (4x, 2x, 1x, 0.5x), six firing slaps".into(),
+                        points: of(TradeoffKind::UniformStep),
+                        mark: Mark::LineDots,
+                        color: 2,
                     },
                 ],
                 rules: vec![Rule {

@@ -1007,11 +1007,7 @@ impl<'a> EngineRun<'a> {
         self.stats.dt_s = dt;
         let cycles = self.settings.cycles.max(1);
         let averaged = self.settings.averaged_cycles.clamp(1, cycles);
-        let margin = self
-            .settings
-            .output_band_hz
-            .map_or(0, |band| super::window::fir_half_length(dt, band))
-            + OUTPUT_DIFFERENCE_REACH;
+        let margin = self.output_margin(dt);
         let total = cycles * spc + margin;
         let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
         let mut prev_peaks: Option<Vec<CylinderPeaks>> = None;
@@ -1155,10 +1151,62 @@ impl<'a> EngineRun<'a> {
         (starts, window_steps)
     }
 
+    /// Samples of the record an output at step size `dt` reaches on either side: the output
+    /// filter's half length and the second difference's reach.
+    fn output_margin(&self, dt: f64) -> usize {
+        self.settings
+            .output_band_hz
+            .map_or(0, |band| super::window::fir_half_length(dt, band))
+            + OUTPUT_DIFFERENCE_REACH
+    }
+
+    /// The run's states where each cylinder's firing-slap window starts in cycle `cycle`
+    /// (0-based, from rest): the windows of the step-error estimate
+    /// ([`STEP_ERROR_WINDOW_DEG`], widened by the output filter's reach), as (cylinder index,
+    /// state) in time order, and the windows' length in base steps. Every state can be run on
+    /// by [`EngineRun::window_peaks`] at any step, so that settings are compared on identical
+    /// slaps.
+    pub fn slap_window_states(
+        mut self,
+        cycle: usize,
+    ) -> Result<(Vec<(usize, Self)>, usize), TransientError> {
+        let spc = (720.0 / self.settings.step_deg).round() as usize;
+        let dt = self.base_dt();
+        let (starts, steps) = self.step_error_plan(cycle + 1, spc, self.output_margin(dt));
+        let mut order: Vec<usize> = (0..starts.len()).collect();
+        order.sort_by_key(|&c| starts[c]);
+        let mut states = Vec::with_capacity(order.len());
+        let mut g = 0;
+        for c in order {
+            while g < starts[c] {
+                g += 1;
+                self.checked_step(g as f64 * dt)?;
+            }
+            states.push((c, self.clone()));
+        }
+        Ok((states, steps))
+    }
+
+    /// This state with `slap_substeps` sub-steps per base step in slaps (1: a uniform step).
+    pub fn with_slap_substeps(mut self, substeps: usize) -> Self {
+        self.settings.slap_substeps = substeps.max(1);
+        self
+    }
+
+    /// The cylinder number of cylinder index `c`.
+    pub fn cylinder_number(&self, c: usize) -> usize {
+        self.cyls[c].rom.cylinder
+    }
+
     /// Runs `steps` steps of `h` from the current state and returns the peak negative
     /// acceleration of cylinder index `c`'s points over the window, filtered like the cycle's
     /// outputs and taken where the filter's ends do not reach.
-    fn window_peaks(mut self, c: usize, steps: usize, h: f64) -> Result<Vec<f64>, TransientError> {
+    pub fn window_peaks(
+        mut self,
+        c: usize,
+        steps: usize,
+        h: f64,
+    ) -> Result<Vec<f64>, TransientError> {
         let n = self.cyls[c].rom.point_modes.nrows();
         let mut disp = vec![Vec::with_capacity(steps); n];
         let t0 = self.time;
@@ -1170,11 +1218,7 @@ impl<'a> EngineRun<'a> {
                 disp[p].push(u);
             }
         }
-        let half = self
-            .settings
-            .output_band_hz
-            .map_or(0, |band| super::window::fir_half_length(h, band))
-            + OUTPUT_DIFFERENCE_REACH;
+        let half = self.output_margin(h);
         Ok((0..n)
             .map(|p| {
                 let acc = second_difference4(&disp[p], h);

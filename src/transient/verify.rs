@@ -12,7 +12,7 @@
 //! over the analysis points; the speed-up is the full-order wall time (assembly, factorisation
 //! and stepping) over the ROM's window stepping on the cached ROM.
 
-use super::cycle::CycleSettings;
+use super::cycle::{CycleSettings, EngineRun, EngineSetup, TransientError};
 use super::full_order::{FullLiner, Row};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
@@ -464,20 +464,45 @@ pub fn rom_window(
     })
 }
 
+/// What a point of the speed-against-error curve varies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TradeoffKind {
+    /// The ROM's mode cut-off, on the single-cylinder window from rest.
+    ModeCutoff,
+    /// The step with the scene's slap sub-steps, on the engine's firing slaps.
+    Step,
+    /// A uniform step (no slap sub-steps), on the engine's firing slaps.
+    UniformStep,
+}
+
 /// One point of the speed-against-error curve.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct TradeoffPoint {
     pub setting: String,
+    pub kind: TradeoffKind,
     pub modes: usize,
     pub step_deg: f64,
-    /// Largest relative error of the window's peak negative accelerations against the finest
-    /// setting (all modes, smallest step).
+    /// Largest relative error against the converged reference (a step 64 times finer than
+    /// the scene's, all modes): over the window's points for a mode cut-off, over the
+    /// cylinders' worst points (the reference's) for a step.
     pub error: f64,
+    /// Wall time of the stepping: the window, or all cylinders' windows [s].
     pub seconds: f64,
 }
 
-/// Speed against error on the reference window: mode cut-off and step, each against the
-/// finest setting.
+/// Multiples of the scene's step on the speed-against-error curve.
+pub const TRADEOFF_STEPS: [f64; 4] = [4.0, 2.0, 1.0, 0.5];
+/// The converged reference's step: the scene's divided by this, uniform.
+pub const REFERENCE_DIVISOR: f64 = 64.0;
+/// The cycle (0-based, from rest) whose firing slaps the step points are measured on: past
+/// the start-up cycle.
+pub const TRADEOFF_CYCLE: usize = 2;
+
+/// Speed against error: the ROM's mode cut-off on the single-cylinder window from rest
+/// ([`rom_window`]), and the step, with the scene's slap sub-steps and uniform, on every
+/// cylinder's firing slap of the engine ([`engine_steps`]); each against a reference at a step
+/// [`REFERENCE_DIVISOR`] times finer with all modes.
 pub fn tradeoff(
     scene: &Scene,
     rom: &EngineRom,
@@ -492,38 +517,112 @@ pub fn tradeoff(
             .collect();
         Ok((peaks, rw.modes, rw.res.seconds))
     };
-    // the converged reference: all modes at a step 64 times finer (the window is one piston
-    // from rest, deterministic); the truncated-mode rows at 1/8 of the step
-    let (reference, _, _) = run(None, base / 64.0)?;
+    // the window is one piston from rest, deterministic; the truncated-mode rows at 1/8 of
+    // the step, where the step's own error is small against the truncation's
+    let (reference, _, _) = run(None, base / REFERENCE_DIVISOR)?;
     let fine = base / 8.0;
-    let err = |p: &[f64]| {
-        p.iter()
-            .zip(&reference)
-            .map(|(a, b)| (a - b).abs() / b.abs().max(1e-30))
-            .fold(0.0, f64::max)
-    };
     let mut out = Vec::new();
     let band = scene.rom.band_hz;
     for f in [band, 1.5 * band, 2.0 * band] {
         let (p, m, s) = run(Some(f), fine)?;
         out.push(TradeoffPoint {
             setting: format!("modes <= {f:.0} Hz, step {fine} deg"),
+            kind: TradeoffKind::ModeCutoff,
             modes: m,
             step_deg: fine,
-            error: err(&p),
+            error: largest_relative(p.iter().zip(&reference)),
             seconds: s,
         });
     }
-    for k in [4.0, 2.0, 1.0, 0.5] {
-        let step = base * k;
-        let (p, m, s) = run(None, step)?;
-        out.push(TradeoffPoint {
-            setting: format!("all modes, step {step} deg"),
-            modes: m,
-            step_deg: step,
-            error: err(&p),
-            seconds: s,
-        });
+    let setup = EngineSetup {
+        rom,
+        piston,
+        firing_order: &scene.engine.firing_order,
+        omega: piston.kinematics.omega,
+        liner_top: scene.liner_geometry.length,
+    };
+    out.extend(engine_steps(&setup, settings)?);
+    Ok(out)
+}
+
+/// max_i |a_i - b_i| / |b_i| over pairs (value, reference).
+fn largest_relative<'x>(pairs: impl Iterator<Item = (&'x f64, &'x f64)>) -> f64 {
+    pairs
+        .map(|(a, b)| (a - b).abs() / b.abs().max(1e-30))
+        .fold(0.0, f64::max)
+}
+
+/// The step's error and cost on the engine's firing slaps: from the states of a run at the
+/// scene's settings where each cylinder's firing-slap window begins in cycle
+/// [`TRADEOFF_CYCLE`] ([`EngineRun::slap_window_states`]), the windows are run at the steps
+/// [`TRADEOFF_STEPS`] x h with the scene's slap sub-steps and uniformly, and at h /
+/// [`REFERENCE_DIVISOR`] uniformly (the converged reference). The error of a setting is the
+/// largest over the cylinders of |P - P_ref| / P_ref at each cylinder's worst point (the
+/// reference's), the cost the wall time of all windows. The windows start from identical
+/// states, so the comparison carries no cycle-to-cycle scatter.
+pub fn engine_steps(setup: &EngineSetup, settings: &CycleSettings) -> Result<Vec<TradeoffPoint>> {
+    let fail = |e: TransientError| VerifyError::Failure(format!("speed against error: {e}"));
+    let run = EngineRun::new(
+        setup,
+        CycleSettings {
+            tolerance: None,
+            step_error: false,
+            ..settings.clone()
+        },
+    );
+    let h = run.base_dt();
+    let (states, steps) = run.slap_window_states(TRADEOFF_CYCLE).map_err(fail)?;
+    let peaks = |substeps: usize, factor: f64| -> Result<(Vec<Vec<f64>>, f64)> {
+        let t0 = Instant::now();
+        let n = ((steps as f64 / factor).round() as usize).max(1);
+        let p = states
+            .iter()
+            .map(|(c, s)| {
+                s.clone()
+                    .with_slap_substeps(substeps)
+                    .window_peaks(*c, n, h * factor)
+            })
+            .collect::<std::result::Result<Vec<_>, _>>()
+            .map_err(fail)?;
+        Ok((p, t0.elapsed().as_secs_f64()))
+    };
+    let (reference, _) = peaks(1, 1.0 / REFERENCE_DIVISOR)?;
+    let worst: Vec<usize> = reference
+        .iter()
+        .map(|r| {
+            (0..r.len())
+                .max_by(|&a, &b| r[a].total_cmp(&r[b]))
+                .unwrap_or(0)
+        })
+        .collect();
+    let m = settings.slap_substeps.max(1);
+    let modes = states.first().map_or(0, |(_, s)| s.stats.modes);
+    let mut out = Vec::new();
+    for (kind, substeps) in [(TradeoffKind::Step, m), (TradeoffKind::UniformStep, 1)] {
+        if kind == TradeoffKind::Step && m == 1 {
+            continue;
+        }
+        for k in TRADEOFF_STEPS {
+            let (p, seconds) = peaks(substeps, k)?;
+            let step = settings.step_deg * k;
+            let error = largest_relative(
+                worst
+                    .iter()
+                    .enumerate()
+                    .map(|(c, &w)| (&p[c][w], &reference[c][w])),
+            );
+            out.push(TradeoffPoint {
+                setting: match kind {
+                    TradeoffKind::Step => format!("step {step} deg, {m} slap sub-steps"),
+                    _ => format!("step {step} deg, uniform"),
+                },
+                kind,
+                modes,
+                step_deg: step,
+                error,
+                seconds,
+            });
+        }
     }
     Ok(out)
 }
