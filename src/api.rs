@@ -30,6 +30,7 @@ pub use crate::reduce::rom::EngineRom;
 use crate::reduce::scene_rom::key_description;
 pub use crate::reduce::scene_rom::{build_rom, get_rom, CacheOptions, LoadedRom};
 pub use crate::report::figures::SweepPoint;
+pub use crate::report::records::{CylinderReport, PointPeaks, SimulateReport};
 pub use crate::scene::Scene;
 use crate::scene::{MeshSource, PARTS};
 pub use crate::transient::cycle::{CycleResult, CycleSettings};

@@ -21,13 +21,10 @@
 
 use linercav::api::{
     evaluate, get_rom, piston_of, run_cycle, settings_of, simulation, CacheOptions, CycleResult,
-    Scene,
+    Scene, SimulateReport,
 };
-use linercav::app::simulate::{run, SimulateRequest};
 use std::path::Path;
-use std::path::PathBuf;
 use std::sync::OnceLock;
-use std::time::Instant;
 
 const BASELINE: &str = "tests/baseline/default_engine.json";
 const SCENE: &str = "models/engine.toml";
@@ -46,15 +43,12 @@ fn default_rom() -> &'static linercav::reduce::rom::EngineRom {
 
 #[test]
 fn regression_default_engine_peaks_match_the_baseline() {
-    default_rom(); // fills the cache; simulate::run below then loads it
-    let req = SimulateRequest {
-        scene: PathBuf::from("models/engine.toml"),
-        sets: vec![],
-        out: None,
-        cache: CacheOptions::default(),
-        full_order: false,
-    };
-    let report = run(&req, Instant::now()).unwrap();
+    let scene = Scene::load(Path::new(SCENE), &[]).unwrap();
+    let piston = piston_of(&scene).unwrap();
+    let settings = settings_of(simulation(&scene).unwrap(), scene.rom.band_hz);
+    let res = run_cycle(&scene, default_rom(), &piston, settings, |_, _| {}).unwrap();
+    // the records `simulate --json` prints
+    let report = SimulateReport::new(&scene, &piston, &res, "test", 0.0);
     // the contact law never pulls: no slice force below zero at any step of any cycle
     assert!(
         report.stats.min_slice_force_n >= 0.0,

@@ -129,6 +129,29 @@ fn verification_no_module_imports_a_later_stage() {
     );
 }
 
+/// The tests and benches reach the domain through the library (`linercav::api` and the
+/// stages), never through the command layer (`linercav::app`), whose only caller is the
+/// binary; the command-line contract is tested on the binary itself (tests/cli.rs).
+#[test]
+fn verification_tests_and_benches_do_not_use_the_command_layer() {
+    let mut files = Vec::new();
+    for dir in ["tests", "benches"] {
+        sources(Path::new(dir), &mut files);
+    }
+    let needle = ["linercav", "::app"].concat();
+    let users: Vec<String> = files
+        .iter()
+        .filter(|f| {
+            std::fs::read_to_string(f)
+                .unwrap()
+                .lines()
+                .any(|l| !l.trim_start().starts_with("//") && l.contains(&needle))
+        })
+        .map(|f| f.display().to_string())
+        .collect();
+    assert!(users.is_empty(), "command layer used by {users:?}");
+}
+
 /// Numerical kernels allowed past 150 lines (issue 24: "kernels with an equation may be
 /// longer when splitting would hide it"), each with the equation its doc comment carries.
 const KERNELS: [(&str, &str); 4] = [

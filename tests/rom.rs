@@ -4,12 +4,11 @@
 
 mod common;
 use common::linercav_output as linercav;
-use linercav::app::full_modes as full;
-use linercav::app::rom_tradeoff;
+use linercav::analysis::correlation::compare_rom_with_full;
 use linercav::reduce::craig_bampton::{reduce, CbSettings, InterfaceBlock, Part};
 use linercav::reduce::interface::{self, Direction, InterfaceShape};
 use linercav::reduce::scene_rom::{
-    build_rom, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
+    build_rom, full_modes, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
 };
 use linercav::scene::Scene;
 use std::path::Path;
@@ -54,9 +53,9 @@ fn rom_against_full(sc: &Scene) {
     let half = sc.rom.cutoff_hz / 2.0;
     let n = b.rom.frequencies_hz.iter().filter(|&&f| f < half).count();
     assert!(n >= 10, "only {n} modes below half the cut-off");
-    let reference = full::run(sc, n, None).unwrap();
+    let reference = full_modes(sc, n).unwrap().modes;
     assert!(reference.sturm_ok);
-    let c = rom_tradeoff::compare(&b, &reference, n).expect("the build kept its bases");
+    let c = compare_rom_with_full(&b, &reference, n).expect("the build kept its bases");
     assert_eq!(c.modes, n);
     for (j, (ff, fr, rel, m)) in c.rows.iter().enumerate() {
         println!(

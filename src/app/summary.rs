@@ -10,7 +10,6 @@
 //! (inertance from the slap location to each cylinder's worst point, from the modal model).
 
 use super::rom::CacheOptions;
-use super::simulate::SimulateReport;
 use crate::analysis::ranking::{separations, RankStep};
 use crate::api::{report_runs, CLEARANCES_UM, PIN_OFFSETS_MM};
 use crate::cavitation::evaluate::Evaluation;
@@ -19,6 +18,7 @@ use crate::files::write_all_atomic;
 use crate::piston::setup::piston_of;
 use crate::report::figures::Figures;
 pub use crate::report::figures::{SweepPoint, TradeoffPoint};
+use crate::report::records::SimulateReport;
 use std::path::Path;
 use std::time::Instant;
 

@@ -11,7 +11,6 @@
 //! sweep writes, from the same code: the CSV rows are identical.
 
 use super::rom::CacheOptions;
-use super::simulate::{CylinderReport, SimulateReport};
 use crate::analysis::shards::{assemble, parse_part, Merged, Part, PartRun, PART_FORMAT};
 use crate::analysis::study::{
     statistics, worst_peak, CylinderLine, ProbabilityRow, RunLine, Sensitivities,
@@ -21,6 +20,7 @@ use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
 use crate::files::{write_all_atomic, write_atomic, Filler, OutputDir};
 use crate::reduce::rom::EngineRom;
+use crate::report::records::{CylinderReport, SimulateReport};
 use crate::report::study::{draw_key, draw_statistics, numeric};
 use crate::scene::design::{Design, PartError, Shard};
 use crate::scene::Scene;

@@ -1,7 +1,9 @@
-//! Output writers: Matrix Market, VTU mode shapes, PNG charts and the report's figures.
+//! Output writers: Matrix Market, VTU mode shapes, PNG charts, the report's figures and the
+//! records of an engine run (JSON, text, time-series CSV).
 
 pub mod figures;
 pub mod mtx;
 pub mod png;
+pub mod records;
 pub mod study;
 pub mod vtu;

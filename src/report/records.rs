@@ -1,0 +1,310 @@
+//! The records of an engine run as the commands print and write them: per cylinder and
+//! analysis point the mean peaks with their standard error and estimated step error, the
+//! solver's statistics, warnings, and the last cycle's time series as CSV. `simulate` writes
+//! them as `simulate.json` and `time_series.csv`; the report and the sweeps reuse the
+//! per-cylinder records.
+
+use crate::files::{write_atomic, WriteError};
+use crate::piston::setup::simulation;
+use crate::piston::Piston;
+use crate::scene::Scene;
+use crate::transient::cycle::{CycleResult, Stats};
+use crate::transient::verify::FullOrderReport;
+use std::path::Path;
+
+/// One analysis point's peaks.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PointPeaks {
+    pub point: usize,
+    /// Largest negative acceleration (toward the crankcase... away from the coolant), as a
+    /// positive magnitude [m/s^2], and the cylinder's crank angle of it [deg].
+    pub peak_negative_m_s2: f64,
+    pub crank_angle_deg: f64,
+    pub peak_positive_m_s2: f64,
+    pub positive_crank_angle_deg: f64,
+    /// Over the averaged cycles (`stats.cycles_averaged`; the peaks above are their means):
+    /// sample standard deviation and largest per-cycle value of the peak negative
+    /// acceleration [m/s^2].
+    pub peak_negative_std_m_s2: f64,
+    pub peak_negative_max_m_s2: f64,
+    /// Standard error of the mean peak negative acceleration, corrected for the correlation
+    /// of consecutive cycles (`stats.autocorrelation_cycles`) [m/s^2].
+    pub peak_negative_se_m_s2: f64,
+    /// Estimated step error of the peak negative acceleration: the relative step error of
+    /// the point's firing-slap peak (`transient::cycle::StepError`) times the mean [m/s^2].
+    pub peak_negative_step_error_m_s2: f64,
+}
+
+/// One cylinder's results.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CylinderReport {
+    pub cylinder: usize,
+    pub points: Vec<PointPeaks>,
+    pub peak_slap_force_n: f64,
+    pub slap_crank_angle_deg: f64,
+    /// Sample standard deviation of the per-cycle slap-force peak [N].
+    pub slap_force_std_n: f64,
+    pub peak_side_force_n: f64,
+    pub side_force_crank_angle_deg: f64,
+}
+
+/// What `simulate` prints.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SimulateReport {
+    pub scene: String,
+    pub speed_rpm: f64,
+    pub cylinders: Vec<CylinderReport>,
+    pub seconds: f64,
+    /// Wall time of the transient alone [s].
+    pub transient_seconds: f64,
+    pub stats: Stats,
+    pub cache: &'static str,
+    /// The scene's `transient.tolerance`.
+    pub tolerance: f64,
+    pub hot_clearance_um: f64,
+    pub peak_pressure_bar: f64,
+    pub peak_pressure_deg: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_series_csv: Option<String>,
+    /// With `--full-order`: the comparison on the window, and its two headline figures.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub full_order: Option<FullOrderReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rom_error_peak_negative: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speedup: Option<f64>,
+    /// Physically doubtful scene values (also printed on stderr).
+    pub warnings: Vec<String>,
+}
+
+impl SimulateReport {
+    /// The report of a cycle result (no full-order comparison, no files yet).
+    pub fn new(
+        scene: &Scene,
+        piston: &Piston,
+        res: &CycleResult,
+        cache: &'static str,
+        transient_seconds: f64,
+    ) -> Self {
+        let (pp, pdeg) = piston.pressure.peak();
+        SimulateReport {
+            scene: scene.path.display().to_string(),
+            speed_rpm: scene.engine.speed_rpm,
+            cylinders: Self::cylinders_of(res),
+            seconds: 0.0,
+            transient_seconds,
+            stats: res.stats.clone(),
+            cache,
+            tolerance: simulation(scene).map_or(0.0, |s| s.transient.tolerance),
+            warnings: scene
+                .warnings
+                .iter()
+                .cloned()
+                .chain(crate::piston::setup::interference_warning(
+                    piston.skirt.hot_clearance(),
+                    simulation(scene).map_or(0.0, |s| s.piston.skirt.clearance),
+                ))
+                .collect(),
+            hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
+            peak_pressure_bar: pp / 1e5,
+            peak_pressure_deg: pdeg,
+            time_series_csv: None,
+            full_order: None,
+            rom_error_peak_negative: None,
+            speedup: None,
+        }
+    }
+
+    /// Per-cylinder summary of a result.
+    pub fn cylinders_of(res: &CycleResult) -> Vec<CylinderReport> {
+        res.peaks
+            .iter()
+            .map(|c| {
+                let step = res.step_error.iter().find(|e| e.cylinder == c.cylinder);
+                (c, step)
+            })
+            .map(|(c, step)| CylinderReport {
+                cylinder: c.cylinder,
+                points: c
+                    .peak_negative
+                    .iter()
+                    .zip(&c.peak_positive)
+                    .enumerate()
+                    .map(|(k, (n, p))| PointPeaks {
+                        point: k + 1,
+                        peak_negative_m_s2: n.value,
+                        crank_angle_deg: n.crank_angle_deg,
+                        peak_positive_m_s2: p.value,
+                        positive_crank_angle_deg: p.crank_angle_deg,
+                        peak_negative_std_m_s2: n.std,
+                        peak_negative_max_m_s2: n.max,
+                        peak_negative_se_m_s2: n.se,
+                        peak_negative_step_error_m_s2: step
+                            .map_or(0.0, |e| e.relative(k) * n.value),
+                    })
+                    .collect(),
+                peak_slap_force_n: c.slap_force.value,
+                slap_crank_angle_deg: c.slap_force.crank_angle_deg,
+                slap_force_std_n: c.slap_force.std,
+                peak_side_force_n: c.side_force.value,
+                side_force_crank_angle_deg: c.side_force.crank_angle_deg,
+            })
+            .collect()
+    }
+
+    pub fn to_text(&self) -> String {
+        let mut s = format!(
+            "{} at {:.0} rpm: peak pressure {:.1} bar at {:.1} deg, hot clearance {:.1} um\n",
+            self.scene,
+            self.speed_rpm,
+            self.peak_pressure_bar,
+            self.peak_pressure_deg,
+            self.hot_clearance_um
+        );
+        let n = self.stats.cycles_averaged;
+        s += &format!(
+            "peaks: mean over the last {n} cycle(s); sample std; standard error of the mean (cycles correlated: tau {:.2}); estimated step error; largest\n",
+            self.stats.autocorrelation_cycles
+        );
+        s += "cyl  point  peak neg [m/s^2]   std    SE  step    max @deg   peak pos [m/s^2] @deg\n";
+        for c in &self.cylinders {
+            for p in &c.points {
+                s += &format!(
+                    "{:>3}  {:>5}  {:>16.0} {:>5.0} {:>5.0} {:>5.0} {:>6.0} {:>6.1}   {:>16.0} {:>6.1}\n",
+                    c.cylinder,
+                    p.point,
+                    p.peak_negative_m_s2,
+                    p.peak_negative_std_m_s2,
+                    p.peak_negative_se_m_s2,
+                    p.peak_negative_step_error_m_s2,
+                    p.peak_negative_max_m_s2,
+                    p.crank_angle_deg,
+                    p.peak_positive_m_s2,
+                    p.positive_crank_angle_deg
+                );
+            }
+        }
+        s += "cyl  side force peak [N] @deg   dynamic slap force [N] @deg\n";
+        for c in &self.cylinders {
+            s += &format!(
+                "{:>3}  {:>19.0} {:>6.1}   {:>22.0} {:>6.1}\n",
+                c.cylinder,
+                c.peak_side_force_n,
+                c.side_force_crank_angle_deg,
+                c.peak_slap_force_n,
+                c.slap_crank_angle_deg
+            );
+        }
+        let st = &self.stats;
+        s += &format!(
+            "solver: {} steps (dt {:.2} us), {} Newton iterations (max {} per step), {} rejected, {} modes, energy balance {:.1e}, max penetration {:.2} um, last-cycle change {:.1e}, coupling lag {:.3} um\n",
+            st.steps, st.dt_s * 1e6, st.newton_iterations, st.max_newton_per_step, st.rejected_steps, st.modes, st.energy_error, st.max_penetration_m * 1e6, st.cycle_change, st.coupling_lag_m * 1e6
+        );
+        let wide: Vec<String> = self
+            .cylinders
+            .iter()
+            .filter_map(|c| {
+                let w = c
+                    .points
+                    .iter()
+                    .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))?;
+                let rel = w.peak_negative_se_m_s2 / w.peak_negative_m_s2.abs().max(1e-12);
+                (rel > 0.02).then(|| format!("cylinder {} ({:.1} %)", c.cylinder, 100.0 * rel))
+            })
+            .collect();
+        if !wide.is_empty() {
+            s += &format!(
+                "statistics: standard error of the worst point's mean above 2 % for {}: average more cycles (transient.cycles, transient.averaged_cycles)\n",
+                wide.join(", ")
+            );
+        }
+        s += &format!(
+            "accuracy: estimated step error of the mean peak {:.1} % (tolerance {:.1} %{}), step {:.4} deg{}\n",
+            100.0 * st.step_error_estimate,
+            100.0 * self.tolerance,
+            if st.step_error_estimate <= self.tolerance { ", met" } else { ", NOT met: refine transient.step_deg" },
+            st.dt_s * self.speed_rpm * 6.0,
+            if st.step_refinements > 0 { format!(" (halved {} time(s) to meet the tolerance)", st.step_refinements) } else { String::new() }
+        );
+        s += &format!(
+            "ROM cache: {}; {:.2} s (transient {:.3} s)\n",
+            self.cache, self.seconds, self.transient_seconds
+        );
+        if let Some(c) = &self.full_order {
+            s += &format!(
+                "full-order check, cylinder {} from {:.0} to {:.0} deg ({} steps, both low-passed to {:.0} Hz): {} DOFs vs {} ROM modes\n",
+                c.cylinder, c.window_start_deg, c.window_end_deg, c.steps, c.filter_band_hz, c.full_dofs, c.rom_modes
+            );
+            s += "  point  peak neg full [m/s^2] @deg   ROM [m/s^2] @deg   error\n";
+            for p in &c.points {
+                s += &format!(
+                    "  {:>5}  {:>20.1} {:>6.2}   {:>11.1} {:>6.2}   {:.2e}\n",
+                    p.point,
+                    p.peak_negative_full_m_s2,
+                    p.crank_angle_full_deg,
+                    p.peak_negative_rom_m_s2,
+                    p.crank_angle_rom_deg,
+                    p.relative_error
+                );
+            }
+            s += &format!(
+                "  ROM error (peak negative) {:.2e}, contact force {:.2e}, preload {:.2e}; speed-up {:.0}x ({:.1} s vs {:.4} s; stepping alone {:.0}x)\n",
+                c.rom_error_peak_negative, c.contact_force_error, c.preload_error, c.speedup, c.full_seconds, c.rom_seconds, c.speedup_stepping
+            );
+        }
+        if let Some(f) = &self.time_series_csv {
+            s += &format!("time series: {f}\n");
+        }
+        s
+    }
+}
+
+/// Writes the last cycle's time series (one row per step): per cylinder the liner points'
+/// accelerations (+ toward the coolant), the crankcase jacket wall's at the facing points
+/// (across the coolant gap, same sign convention), piston lateral motion and tilt, contact
+/// forces, the quasi-static side force and the cylinder pressure.
+pub fn write_series(path: &Path, res: &CycleResult) -> Result<(), WriteError> {
+    let s = &res.series;
+    write_atomic(path, |w| {
+        write!(w, "crank_angle_deg,time_s")?;
+        for c in &s.cylinders {
+            let k = c.cylinder;
+            for p in 0..c.acceleration.nrows() {
+                write!(w, ",c{k}_p{}_acc_m_s2", p + 1)?;
+            }
+            for p in 0..c.crankcase_acceleration.nrows() {
+                write!(w, ",c{k}_p{}_wall_acc_m_s2", p + 1)?;
+            }
+            write!(
+                w,
+                ",c{k}_lateral_um,c{k}_tilt_mrad,c{k}_thrust_force_n,c{k}_antithrust_force_n,c{k}_side_force_n,c{k}_pressure_bar"
+            )?;
+        }
+        writeln!(w)?;
+        for i in 0..s.time_s.len() {
+            write!(w, "{:.4},{:.8}", s.crank_angle_deg[i], s.time_s[i])?;
+            for c in &s.cylinders {
+                for a in c
+                    .acceleration
+                    .rows()
+                    .into_iter()
+                    .chain(c.crankcase_acceleration.rows())
+                {
+                    write!(w, ",{:.3}", a[i])?;
+                }
+                write!(
+                    w,
+                    ",{:.4},{:.5},{:.2},{:.2},{:.2},{:.3}",
+                    c.lateral_m[i] * 1e6,
+                    c.tilt_rad[i] * 1e3,
+                    c.thrust_force_n[i],
+                    c.antithrust_force_n[i],
+                    c.side_force_n[i],
+                    c.pressure_pa[i] / 1e5
+                )?;
+            }
+            writeln!(w)?;
+        }
+        Ok(())
+    })
+}
