@@ -6,4 +6,5 @@ pub mod mtx;
 pub mod png;
 pub mod records;
 pub mod study;
+pub mod summary;
 pub mod vtu;

@@ -1,0 +1,194 @@
+//! The design-review report's record (`summary.json`) and its text (`summary.md`): the verdict
+//! with the ranking and its uncertainty, why the cylinders differ, the what-if sweeps, the
+//! speed against error of the fast path, the figures' list.
+
+use crate::analysis::ranking::{separations, RankStep};
+use crate::cavitation::evaluate::Evaluation;
+use crate::report::figures::{SweepPoint, TradeoffPoint};
+use crate::report::records::SimulateReport;
+use std::path::Path;
+
+/// What the report holds (summary.json).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Report {
+    pub scene: String,
+    pub title: String,
+    pub speed_rpm: f64,
+    /// The coolant layer's normal mass on the liner's wet zone [kg/m^2]; null: dry model.
+    pub coolant_layer_kg_m2: Option<f64>,
+    pub simulate: SimulateReport,
+    pub evaluation: Evaluation,
+    pub clearance_sweep: Vec<SweepPoint>,
+    pub pin_offset_sweep: Vec<SweepPoint>,
+    pub tradeoff: Vec<TradeoffPoint>,
+    /// Neighbours of the cylinder ranking, separated beyond their combined statistical and
+    /// numerical uncertainty or tied ([`separations`]).
+    pub ranking_resolution: Vec<RankStep>,
+    pub files: Vec<String>,
+    pub seconds: f64,
+}
+
+impl Report {
+    /// Neighbours of `ranking` separated or tied beyond their combined uncertainty
+    /// ([`separations`] of [`ranked_uncertainty`]).
+    pub fn ranking_resolution_of(simulate: &SimulateReport, ranking: &[usize]) -> Vec<RankStep> {
+        separations(&ranked_uncertainty(simulate, ranking))
+    }
+}
+
+/// Each ranked cylinder's worst point: (cylinder, mean peak, sqrt(SE^2 + E^2)), SE its
+/// standard error (cycles correlated) and E its estimated step error.
+fn ranked_uncertainty(simulate: &SimulateReport, ranking: &[usize]) -> Vec<(usize, f64, f64)> {
+    ranking
+        .iter()
+        .filter_map(|&cyl| {
+            let c = simulate.cylinders.iter().find(|c| c.cylinder == cyl)?;
+            c.points
+                .iter()
+                .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))
+                .map(|p| {
+                    let u = p
+                        .peak_negative_se_m_s2
+                        .hypot(p.peak_negative_step_error_m_s2);
+                    (cyl, p.peak_negative_m_s2, u)
+                })
+        })
+        .collect()
+}
+
+/// The ranking with its uncertainty as a sentence ([`separations`]).
+fn ranking_resolution(r: &Report) -> String {
+    let pairs: Vec<String> = r
+        .ranking_resolution
+        .iter()
+        .map(|s| {
+            format!(
+                "{} {} {}",
+                s.upper,
+                if s.separated { ">" } else { "~" },
+                s.lower
+            )
+        })
+        .collect();
+    format!(
+        "Ranking with its uncertainty (each cylinder's worst point; > separated by more than two combined standard uncertainties, standard error and step error; ~ tied): {}.",
+        pairs.join(", ")
+    )
+}
+
+/// `summary.md` of report `r` of `scene` written to `out`.
+pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
+    use std::fmt::Write;
+    let ev = &r.evaluation;
+    let t = &ev.thresholds;
+    let coolant = match r.coolant_layer_kg_m2 {
+        None => "coolant around the liner not modelled (dry, as the study's model)".to_string(),
+        Some(mu) => format!("coolant layer on the liner's wet zone: {mu:.2} kg/m^2"),
+    };
+    let mut s = format!("# linercav report: {}\n\n{} at {:.0} rpm; peak cylinder pressure {:.1} bar at {:.1} deg; hot clearance {:.1} um; {coolant}.\n\n", r.title, r.scene, r.speed_rpm, r.simulate.peak_pressure_bar, r.simulate.peak_pressure_deg, r.simulate.hot_clearance_um);
+    let _ = writeln!(s, "## Verdict\n");
+    let _ = writeln!(s, "Acceleration criterion ({}): onset {:.0} m/s^2, high risk {:.0} m/s^2 (k_p {:.1} Pa per m/s^2). Cylinders from the highest to the lowest peak negative acceleration: {:?}. The most active point along the liner: {} (of {}, top to bottom).\n", ev.threshold_source, t.onset_m_s2, t.high_risk_m_s2, t.k_p_pa_per_m_s2, ev.ranking, ev.most_active_point, ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0));
+    let n_avg = r.simulate.stats.cycles_averaged;
+    if n_avg > 1 {
+        let st = &r.simulate.stats;
+        let _ = writeln!(s, "Peaks are means over the last {n_avg} of {} cycles (slap on the ringing liner is not periodic), given as mean ± standard error (the cycles' correlation counted: autocorrelation time {:.2} cycles). Estimated step error of the mean peak: {:.1} % (tolerance {:.1} %, step {:.4} deg). Risk and ranking use the means. {}\n", st.cycles_run, st.autocorrelation_cycles, 100.0 * st.step_error_estimate, 100.0 * r.simulate.tolerance, st.dt_s * r.speed_rpm * 6.0, ranking_resolution(r));
+    }
+    let _ = writeln!(s, "| cylinder | risk | peak negative per point [m/s^2] | Ca per point | CSF per point | slap force [kN] | side force [kN] at [deg] |\n|---|---|---|---|---|---|---|");
+    for (c, cr) in ev.cylinders.iter().zip(&r.simulate.cylinders) {
+        let f = |v: Vec<String>| v.join(" / ");
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {:.2} | {:.1} at {:.1} |",
+            c.cylinder,
+            c.worst.label(),
+            f(c.points
+                .iter()
+                .zip(&cr.points)
+                .map(|(p, q)| if n_avg > 1 {
+                    format!(
+                        "{:.0} ± {:.0}",
+                        p.peak_negative_m_s2, q.peak_negative_se_m_s2
+                    )
+                } else {
+                    format!("{:.0}", p.peak_negative_m_s2)
+                })
+                .collect()),
+            f(c.points.iter().map(|p| format!("{:.2}", p.ca)).collect()),
+            f(c.points.iter().map(|p| format!("{:.2}", p.csf)).collect()),
+            cr.peak_slap_force_n / 1e3,
+            cr.peak_side_force_n / 1e3,
+            cr.side_force_crank_angle_deg
+        );
+    }
+    let _ = writeln!(s, "\n## Why the cylinders differ\n\nDominant response {:.0} Hz. Nearest system modes, with each cylinder's largest normalised radial coefficient at its analysis points and the correlation of those with the per-cylinder peak:\n", ev.dominant_hz);
+    let _ = writeln!(s, "| mode [Hz] | coefficients (cylinders {:?}) | Pearson r | Spearman rho |\n|---|---|---|---|", ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>());
+    for m in &ev.nearest_modes {
+        let _ = writeln!(
+            s,
+            "| {:.0} | {} | {} | {} |",
+            m.frequency_hz,
+            m.cylinder_coefficients
+                .iter()
+                .map(|v| format!("{v:.2}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            m.pearson.map(|v| format!("{v:.2}")).unwrap_or("-".into()),
+            m.spearman.map(|v| format!("{v:.2}")).unwrap_or("-".into())
+        );
+    }
+    let _ = writeln!(s, "\n## What-if\n\n| clearance [um] | largest peak negative [m/s^2] | largest slap force [kN] |\n|---|---|---|");
+    for p in &r.clearance_sweep {
+        let _ = writeln!(
+            s,
+            "| {:.0} | {:.0} | {:.2} |",
+            p.value,
+            p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)),
+            p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3
+        );
+    }
+    let _ = writeln!(s, "\n| pin offset [mm] | largest peak negative [m/s^2] | largest slap force [kN] | side-force peak [kN] at [deg] |\n|---|---|---|---|");
+    for p in &r.pin_offset_sweep {
+        let _ = writeln!(
+            s,
+            "| {:+.1} | {:.0} | {:.2} | {:.1} at {:.1} |",
+            p.value,
+            p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)),
+            p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3,
+            p.peak_side_force_n.first().copied().unwrap_or(0.0) / 1e3,
+            p.side_force_crank_angle_deg.first().copied().unwrap_or(0.0)
+        );
+    }
+    let _ = writeln!(s, "\n## Speed against error\n\nAgainst a converged reference (a step 64 times finer, uniform, all modes): the mode cut-off on one cylinder's window from rest (330-420 deg, largest error over its points), the step on the six firing slaps of cycle 3 from identical states (largest error over the cylinders' worst points).\n\n| setting | modes | error | wall time [ms] |\n|---|---|---|---|");
+    for x in &r.tradeoff {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2e} | {:.1} |",
+            x.setting,
+            x.modes,
+            x.error,
+            x.seconds * 1e3
+        );
+    }
+    let _ = writeln!(s, "\n## Figures\n");
+    for f in &r.files {
+        let name = Path::new(f)
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let _ = writeln!(s, "![{name}]({name})");
+    }
+    let _ = writeln!(s, "\nReproduce: `linercav report {} --out {}` (solver: {} steps, {} Newton iterations, {} rejected, energy balance {:.1e}, cycle change {:.1e}).", scene.display(), out.display(), r.simulate.stats.steps, r.simulate.stats.newton_iterations, r.simulate.stats.rejected_steps, r.simulate.stats.energy_error, r.simulate.stats.cycle_change);
+    s
+}
+
+impl Report {
+    pub fn to_text(&self) -> String {
+        let mut s = self.evaluation.to_text();
+        s += &format!(
+            "report written: {} files in {:.1} s\n",
+            self.files.len() + 2,
+            self.seconds
+        );
+        s
+    }
+}
