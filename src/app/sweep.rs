@@ -12,34 +12,18 @@
 
 use super::rom::CacheOptions;
 use crate::analysis::shards::{assemble, parse_part, Merged, Part, PartRun, PART_FORMAT};
-use crate::analysis::study::{
-    statistics, worst_peak, CylinderLine, ProbabilityRow, RunLine, Sensitivities,
-};
+use crate::analysis::study::{statistics, worst_peak, ProbabilityRow, RunLine, Sensitivities};
 use crate::api::Variants;
-use crate::cavitation::evaluate::{evaluate, CylinderRisk};
 use crate::error::{Error, Result};
 use crate::files::{write_all_atomic, write_atomic, Filler, OutputDir};
-use crate::reduce::rom::EngineRom;
-use crate::report::records::{CylinderReport, SimulateReport};
-use crate::report::study::{draw_key, draw_statistics, numeric};
+pub use crate::report::study::SweepRun;
+use crate::report::study::{
+    csv, draw_key, draw_statistics, label, line_of, numeric, probabilities_csv, sweep_run,
+};
 use crate::scene::design::{Design, PartError, Shard};
-use crate::scene::Scene;
-use crate::transient::cycle::CycleResult;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// One run of the sweep: its full results (in `sweep.json`).
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct SweepRun {
-    /// Value of each varied key (same order as the sweep's keys).
-    pub values: Vec<String>,
-    pub cylinders: Vec<CylinderReport>,
-    pub risk: Vec<CylinderRisk>,
-    /// Largest |tilt| per cylinder over the cycle [rad].
-    pub peak_tilt_rad: Vec<f64>,
-    pub seconds: f64,
-}
 
 /// What `sweep` and `sweep-merge` return.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -234,35 +218,6 @@ fn execute(
     ))
 }
 
-/// One run of the sweep, evaluated: values, per-cylinder peaks and risks, largest tilt.
-fn sweep_run(
-    sc: &Scene,
-    rom: &EngineRom,
-    values: &[String],
-    res: &CycleResult,
-    seconds: f64,
-) -> Result<SweepRun> {
-    let ev = evaluate(
-        res,
-        rom,
-        &crate::cavitation::Setup::new(&sc.cavitation)?,
-        &sc.engine.firing_order,
-        sc.rom.band_hz,
-    );
-    Ok(SweepRun {
-        values: values.to_vec(),
-        cylinders: SimulateReport::cylinders_of(res),
-        risk: ev.cylinders,
-        peak_tilt_rad: res
-            .series
-            .cylinders
-            .iter()
-            .map(|c| c.tilt_rad.iter().fold(0.0f64, |m, v| m.max(v.abs())))
-            .collect(),
-        seconds,
-    })
-}
-
 /// Refuses, before any scene is loaded for each run, a sweep whose `runs` would take longer
 /// than `limits.max_hours` on this machine: runs x the base scene's transient estimate /
 /// cores.
@@ -284,86 +239,6 @@ fn check_size(req: &SweepRequest, runs: usize) -> Result<()> {
     Ok(())
 }
 
-fn label(keys: &[String], values: &[String]) -> String {
-    keys.iter()
-        .zip(values)
-        .map(|(k, x)| format!("{k}={x}"))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
-/// The header of `sweep.csv` for `keys`.
-fn csv_header(keys: &[String]) -> String {
-    let mut s: String = keys.iter().map(|k| format!("{k},")).collect();
-    s.push_str("cylinder,point,peak_negative_m_s2,peak_slap_force_n,peak_positive_m_s2,crank_angle_deg,peak_side_force_n,side_force_crank_angle_deg,peak_tilt_mrad,ca,risk,peak_negative_std_m_s2,peak_negative_max_m_s2\n");
-    s
-}
-
-/// The line of run `index`: its CSV rows (one per cylinder and point) and plotted values.
-fn line_of(index: usize, r: &SweepRun) -> RunLine {
-    use std::fmt::Write;
-    let mut s = String::new();
-    for (ci, c) in r.cylinders.iter().enumerate() {
-        for (pi, p) in c.points.iter().enumerate() {
-            for v in &r.values {
-                let _ = write!(s, "{v},");
-            }
-            let risk = r.risk.get(ci).and_then(|x| x.points.get(pi));
-            let _ = writeln!(
-                s,
-                "{},{},{:.3},{:.2},{:.3},{:.3},{:.2},{:.3},{:.5},{:.4},{},{:.3},{:.3}",
-                c.cylinder,
-                p.point,
-                p.peak_negative_m_s2,
-                c.peak_slap_force_n,
-                p.peak_positive_m_s2,
-                p.crank_angle_deg,
-                c.peak_side_force_n,
-                c.side_force_crank_angle_deg,
-                r.peak_tilt_rad.get(ci).copied().unwrap_or(0.0) * 1e3,
-                risk.map(|x| x.ca).unwrap_or(f64::NAN),
-                risk.map(|x| x.risk.label()).unwrap_or("-"),
-                p.peak_negative_std_m_s2,
-                p.peak_negative_max_m_s2,
-            );
-        }
-    }
-    RunLine {
-        index,
-        values: r.values.clone(),
-        csv: s,
-        cylinders: r
-            .cylinders
-            .iter()
-            .enumerate()
-            .map(|(ci, c)| CylinderLine {
-                cylinder: c.cylinder,
-                slap_force_n: c.peak_slap_force_n,
-                tilt_rad: r.peak_tilt_rad.get(ci).copied().unwrap_or(0.0),
-                peak_negative_m_s2: c.points.iter().map(|p| p.peak_negative_m_s2).collect(),
-                risk: (0..c.points.len())
-                    .map(|pi| {
-                        r.risk
-                            .get(ci)
-                            .and_then(|x| x.points.get(pi))
-                            .map_or("-", |x| x.risk.label())
-                            .to_string()
-                    })
-                    .collect(),
-            })
-            .collect(),
-    }
-}
-
-/// Tidy CSV text: one row per run, cylinder and point.
-pub fn csv(report: &SweepReport) -> String {
-    let mut s = csv_header(&report.keys);
-    for l in &report.lines {
-        s.push_str(&l.csv);
-    }
-    s
-}
-
 /// For a sampled design: the probability of every risk class at every point and the rank
 /// sensitivities of the peaks to the keys ([`statistics`]).
 fn add_statistics(report: &mut SweepReport) {
@@ -375,20 +250,8 @@ fn add_statistics(report: &mut SweepReport) {
     report.sensitivities = Some(sens);
 }
 
-/// `probabilities.csv`: cylinder,point,class,probability,ci_low,ci_high.
-pub fn probabilities_csv(rows: &[ProbabilityRow]) -> String {
-    let mut s = String::from("cylinder,point,class,probability,ci_low,ci_high\n");
-    for r in rows {
-        s.push_str(&format!(
-            "{},{},{},{:.4},{:.4},{:.4}\n",
-            r.cylinder, r.point, r.class, r.p.probability, r.p.ci_low, r.p.ci_high
-        ));
-    }
-    s
-}
-
 fn write_outputs(dir: &Path, report: &SweepReport) -> Result<Vec<String>> {
-    let csv_text = csv(report);
+    let csv_text = csv(&report.keys, &report.lines);
     let json = serde_json::to_string_pretty(report).expect("serialisable");
     let mut files: Vec<(PathBuf, Filler<'_>)> = vec![
         (
