@@ -8,6 +8,7 @@
 
 use super::png::{bars, write_png, BarData, Chart, Mark, Rule, Series};
 use crate::analysis::spectrum::{rms_average, Spectrum};
+use crate::cavitation::criteria::Thresholds;
 use crate::cavitation::evaluate::{spectra, Evaluation};
 use crate::files::WriteError;
 use crate::linalg::dense::{from_row_vecs, Dense};
@@ -68,6 +69,28 @@ impl SweepPoint {
             points_m_s2: points,
         }
     }
+}
+
+/// Horizontal rules at the acceleration criterion's onset and high-risk thresholds at
+/// `sign` x their values (-1 on a signed acceleration axis), named with the values when
+/// `with_values`; grey and black, apart from the six cylinders' colours.
+fn threshold_rules(t: &Thresholds, sign: f64, with_values: bool) -> Vec<Rule> {
+    let prefix = if sign < 0.0 { "-" } else { "" };
+    [
+        ("onset", t.onset_m_s2, 6),
+        ("high risk", t.high_risk_m_s2, 7),
+    ]
+    .into_iter()
+    .map(|(name, v, color)| Rule {
+        name: match with_values {
+            true => format!("{prefix}{name} {v:.0}"),
+            false => format!("{prefix}{name}"),
+        },
+        value: sign * v,
+        vertical: false,
+        color,
+    })
+    .collect()
 }
 
 /// Vertical rules at the two system modes nearest the dominant response.
@@ -242,20 +265,7 @@ impl Figures<'_> {
                     x_label: "crank angle of the cylinder [deg]",
                     y_label: "acceleration [m/s^2]",
                     series,
-                    rules: vec![
-                        Rule {
-                            name: "-onset".into(),
-                            value: -t.onset_m_s2,
-                            vertical: false,
-                            color: 4,
-                        },
-                        Rule {
-                            name: "-high risk".into(),
-                            value: -t.high_risk_m_s2,
-                            vertical: false,
-                            color: 1,
-                        },
-                    ],
+                    rules: threshold_rules(&t, -1.0, false),
                     x_range: Some((330.0, 450.0)),
                     y_range: None,
                 }
@@ -470,20 +480,7 @@ impl Figures<'_> {
                     groups: &groups,
                     errors: &errors,
                 },
-                &[
-                    Rule {
-                        name: format!("onset {:.0}", t.onset_m_s2),
-                        value: t.onset_m_s2,
-                        vertical: false,
-                        color: 4,
-                    },
-                    Rule {
-                        name: format!("high risk {:.0}", t.high_risk_m_s2),
-                        value: t.high_risk_m_s2,
-                        vertical: false,
-                        color: 1,
-                    },
-                ],
+                &threshold_rules(&t, 1.0, true),
             )
         })?;
         files.push(p);
@@ -556,12 +553,7 @@ impl Figures<'_> {
                     groups: &g,
                     errors: &[],
                 },
-                &[Rule {
-                    name: "high risk".into(),
-                    value: t.high_risk_m_s2,
-                    vertical: false,
-                    color: 1,
-                }],
+                &threshold_rules(&t, 1.0, false)[1..],
             )
         })?;
         files.push(p);
@@ -635,20 +627,7 @@ impl Figures<'_> {
                     x_label: key,
                     y_label: "peak negative acceleration [m/s^2]",
                     series: per_cyl(&|s, c| s.peak_negative_m_s2[c]),
-                    rules: vec![
-                        Rule {
-                            name: "onset".into(),
-                            value: t.onset_m_s2,
-                            vertical: false,
-                            color: 4,
-                        },
-                        Rule {
-                            name: "high risk".into(),
-                            value: t.high_risk_m_s2,
-                            vertical: false,
-                            color: 7,
-                        },
-                    ],
+                    rules: threshold_rules(&t, 1.0, false),
                     x_range: None,
                     y_range: None,
                 }

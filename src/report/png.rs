@@ -66,6 +66,23 @@ pub enum Mark {
     LineDots,
 }
 
+/// An axis tick's label: at most three decimals, trailing zeros dropped; roundoff around zero
+/// (below 1e-12) shown as 0, other magnitudes below 1e-3 in exponent form.
+fn tick(v: f64) -> String {
+    if v.abs() < 1e-12 {
+        return "0".to_string();
+    }
+    if v.abs() < 1e-3 {
+        return format!("{v:.1e}");
+    }
+    let s = format!("{v:.3}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    match s {
+        "-0" => "0".to_string(),
+        _ => s.to_string(),
+    }
+}
+
 /// One named series of (x, y) points.
 pub struct Series {
     pub name: String,
@@ -152,6 +169,8 @@ impl Chart<'_> {
             .configure_mesh()
             .x_desc(self.x_label)
             .y_desc(self.y_label)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .label_style(("sans-serif", 13))
             .light_line_style(RGBColor(235, 235, 235))
             .draw()?;
@@ -312,4 +331,19 @@ pub fn bars(
         .position(SeriesLabelPosition::UpperLeft)
         .draw()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick;
+
+    /// Tick labels: roundoff at zero is 0 (the pin-offset axis read "-0.0"), decimals trimmed.
+    #[test]
+    fn tick_labels() {
+        assert_eq!(tick(-2.2e-17), "0");
+        assert_eq!(tick(1600.0), "1600");
+        assert_eq!(tick(-0.2), "-0.2");
+        assert_eq!(tick(0.125), "0.125");
+        assert_eq!(tick(2.5e-5), "2.5e-5");
+    }
 }
