@@ -154,15 +154,13 @@ fn verification_tests_and_benches_do_not_use_the_command_layer() {
 
 /// Numerical kernels allowed past 150 lines (issue 24: "kernels with an equation may be
 /// longer when splitting would hide it"), each with the equation its doc comment carries.
-const KERNELS: [(&str, &str); 4] = [
+const KERNELS: [(&str, &str); 3] = [
     // Craig-Bampton reduction: constraint modes, fixed-interface modes below the cut-off,
     // the projected K and M, one pass over the factorised interior
     ("src/reduce/craig_bampton.rs", "reduce"),
     // one implicit step of the pistons in penalty contact with the condensed structure:
     // W F_A = r0 + (K_t + kappa C_d) S q and the bodies' Newmark rows, Newton on the pieces
     ("src/transient/contact.rs", "step"),
-    // one engine step: modal predictor, contact step, modal corrector, onset impulses
-    ("src/transient/cycle.rs", "try_step"),
     // shift-invert Lanczos (ARPACK reverse communication) with its certification hooks
     ("src/eigen/shift_invert.rs", "solve_modes"),
 ];

@@ -709,127 +709,9 @@ impl<'a> EngineRun<'a> {
                 self.settings.max_newton,
             )
             .map_err(Failure::Step)?,
-            Coupling::PerCylinder => {
-                let mut out = contact::StepResult {
-                    bodies: bodies.clone(),
-                    forces: vec![0.0; slices.len()],
-                    penetrations: vec![0.0; slices.len()],
-                    rates: vec![0.0; slices.len()],
-                    damper: vec![0.0; slices.len()],
-                    clamped: vec![false; slices.len()],
-                    iterations: 0,
-                };
-                // other cylinders' residual-flexibility displacement at a contact DOF, lagged:
-                // u_d = sum_{loaded e, other cylinder} R_de F_e with the last step's forces
-                // gathered on the DOFs, F_e = sum_k w_ke F_k (each DOF belongs to one cylinder's
-                // liner). R is symmetric, so u over a cylinder's slice DOFs is a sum of
-                // contiguous pieces of the loaded DOFs' rows: u[lo..hi] += F_e R_e[lo..hi].
-                let ndof = self.structure.contact_dofs();
-                let mut f_dof = vec![0.0; ndof];
-                let mut owner = vec![usize::MAX; ndof];
-                let mut touched = Vec::new();
-                for (c, at, f) in &self.prev_loaded {
-                    for k in 0..2 {
-                        let e = at.dofs[k];
-                        if owner[e] == usize::MAX {
-                            owner[e] = *c;
-                            touched.push(e);
-                        }
-                        f_dof[e] += at.weights[k] * f;
-                    }
-                }
-                let mut u_dof = vec![0.0; ndof];
-                for b in 0..bodies.len() {
-                    let idx: Vec<usize> =
-                        (0..slices.len()).filter(|&k| slices[k].body == b).collect();
-                    // the slices' DOF span on each side (slices run along a bore line)
-                    let mut spans: Vec<(usize, usize)> = Vec::new();
-                    for side in [true, false] {
-                        let (lo, hi) = idx.iter().filter(|&&k| meta[k].1 == side).fold(
-                            (usize::MAX, 0),
-                            |(lo, hi), &k| {
-                                (
-                                    lo.min(slices[k].at.dofs[0]),
-                                    hi.max(slices[k].at.dofs[1] + 1),
-                                )
-                            },
-                        );
-                        if lo < hi {
-                            spans.push((lo, hi));
-                        }
-                    }
-                    for &e in touched.iter().filter(|&&e| owner[e] != b) {
-                        for &(lo, hi) in &spans {
-                            self.structure
-                                .rflex_axpy(&mut u_dof[lo..hi], f_dof[e], e, lo..hi);
-                        }
-                    }
-                    let sub: Vec<Slice<'_>> = idx
-                        .iter()
-                        .map(|&k| {
-                            let mut sl = slices[k].clone();
-                            sl.body = 0;
-                            let [d0, d1] = sl.at.dofs;
-                            sl.gap += sl.at.weights[0] * u_dof[d0] + sl.at.weights[1] * u_dof[d1];
-                            sl
-                        })
-                        .collect();
-                    let r = contact::step(
-                        &bodies[b..b + 1],
-                        &sub,
-                        &mut self.structure,
-                        dt,
-                        s,
-                        self.settings.max_newton,
-                    )
-                    .map_err(Failure::Step)?;
-                    out.bodies[b] = r.bodies[0];
-                    for (j, &k) in idx.iter().enumerate() {
-                        out.forces[k] = r.forces[j];
-                        out.penetrations[k] = r.penetrations[j];
-                        out.rates[k] = r.rates[j];
-                        out.damper[k] = r.damper[j];
-                        out.clamped[k] = r.clamped[j];
-                    }
-                    out.iterations = out.iterations.max(r.iterations);
-                }
-                out
-            }
+            Coupling::PerCylinder => self.contact_per_cylinder(&bodies, &slices, &meta, dt)?,
         };
-        // penetration limit
-        if let Some((k, &p)) = res
-            .penetrations
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-        {
-            if p > self.settings.max_penetration {
-                let (b, side, i, z) = meta[k];
-                return Err(Failure::Deep {
-                    cylinder: self.cyls[b].rom.cylinder,
-                    side,
-                    slice: i + 1,
-                    height: z,
-                    penetration: p,
-                });
-            }
-            self.stats.max_penetration_m = self.stats.max_penetration_m.max(p);
-        }
-        if res
-            .bodies
-            .iter()
-            .any(|b| !(b.q.iter().chain(&b.v).chain(&b.a).all(|x| x.is_finite())))
-        {
-            let b = res
-                .bodies
-                .iter()
-                .position(|b| !b.q.iter().chain(&b.a).all(|x| x.is_finite()))
-                .unwrap_or(0);
-            return Err(Failure::NonFinite(format!(
-                "the piston of cylinder {}",
-                self.cyls[b].rom.cylinder
-            )));
-        }
+        self.check_step(&res, &meta)?;
         if self.settings.slap_substeps > 1 && self.side_onset(&meta, &res.penetrations) {
             if stop_at_onset {
                 return Ok(false);
@@ -867,6 +749,69 @@ impl<'a> EngineRun<'a> {
         for (cyl, b) in self.cyls.iter_mut().zip(&bodies_after) {
             cyl.body = *b;
         }
+        self.record_step(&res, &slices, &meta, &after);
+        self.time = t1;
+        self.stats.steps += 1;
+        self.stats.newton_iterations += res.iterations;
+        self.stats.max_newton_per_step = self.stats.max_newton_per_step.max(res.iterations);
+        Ok(true)
+    }
+
+    /// The step's checks: no slice deeper than `max_penetration` (named with its cylinder,
+    /// side, slice and height), finite piston states; records the deepest penetration.
+    fn check_step(
+        &mut self,
+        res: &contact::StepResult,
+        meta: &[(usize, bool, usize, f64)],
+    ) -> Result<(), Failure> {
+        // penetration limit
+        if let Some((k, &p)) = res
+            .penetrations
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+        {
+            if p > self.settings.max_penetration {
+                let (b, side, i, z) = meta[k];
+                return Err(Failure::Deep {
+                    cylinder: self.cyls[b].rom.cylinder,
+                    side,
+                    slice: i + 1,
+                    height: z,
+                    penetration: p,
+                });
+            }
+            self.stats.max_penetration_m = self.stats.max_penetration_m.max(p);
+        }
+        if res
+            .bodies
+            .iter()
+            .any(|b| !(b.q.iter().chain(&b.v).chain(&b.a).all(|x| x.is_finite())))
+        {
+            let b = res
+                .bodies
+                .iter()
+                .position(|b| !b.q.iter().chain(&b.a).all(|x| x.is_finite()))
+                .unwrap_or(0);
+            return Err(Failure::NonFinite(format!(
+                "the piston of cylinder {}",
+                self.cyls[b].rom.cylinder
+            )));
+        }
+        Ok(())
+    }
+
+    /// Keeps what the next step needs of this one: per cylinder the summed thrust and
+    /// anti-thrust forces, the loaded locations with their forces (the lagged coupling), the
+    /// slices' states; and the coupling-lag diagnostic.
+    fn record_step(
+        &mut self,
+        res: &contact::StepResult,
+        slices: &[Slice<'_>],
+        meta: &[(usize, bool, usize, f64)],
+        after: &[SliceState],
+    ) {
+        let ns = self.setup.piston.skirt.heights.len();
         let mut per = vec![(0.0, 0.0); self.cyls.len()];
         for (k, &(b, side, _, _)) in meta.iter().enumerate() {
             if side {
@@ -878,7 +823,7 @@ impl<'a> EngineRun<'a> {
         self.last_forces = per;
         let loaded: Vec<(usize, Location, f64)> = meta
             .iter()
-            .zip(&slices)
+            .zip(slices)
             .zip(&res.forces)
             .filter(|(_, &f)| f != 0.0)
             .map(|(((b, _, _, _), sl), &f)| (*b, sl.at, f))
@@ -906,13 +851,104 @@ impl<'a> EngineRun<'a> {
         self.prev_loaded = loaded;
         self.prev_state.fill(SliceState::APART);
         for (k, &(b, side, i, _)) in meta.iter().enumerate() {
-            self.prev_state[pen_index(b, side, i)] = after[k];
+            self.prev_state[(2 * b + usize::from(!side)) * ns + i] = after[k];
         }
-        self.time = t1;
-        self.stats.steps += 1;
-        self.stats.newton_iterations += res.iterations;
-        self.stats.max_newton_per_step = self.stats.max_newton_per_step.max(res.iterations);
-        Ok(true)
+    }
+
+    /// The contact step of each cylinder on its own liner's DOFs: cylinder b's slices see the
+    /// other cylinders' residual-flexibility displacement at their DOFs, lagged one step,
+    /// u_d = sum_{loaded e, other cylinder} R_de F_e (the last step's forces gathered on the
+    /// DOFs, F_e = sum_k w_ke F_k), as an offset of their gaps.
+    fn contact_per_cylinder(
+        &mut self,
+        bodies: &[Body],
+        slices: &[Slice<'_>],
+        meta: &[(usize, bool, usize, f64)],
+        dt: f64,
+    ) -> Result<contact::StepResult, Failure> {
+        let mut out = contact::StepResult {
+            bodies: bodies.to_vec(),
+            forces: vec![0.0; slices.len()],
+            penetrations: vec![0.0; slices.len()],
+            rates: vec![0.0; slices.len()],
+            damper: vec![0.0; slices.len()],
+            clamped: vec![false; slices.len()],
+            iterations: 0,
+        };
+        // other cylinders' residual-flexibility displacement at a contact DOF, lagged:
+        // u_d = sum_{loaded e, other cylinder} R_de F_e with the last step's forces
+        // gathered on the DOFs, F_e = sum_k w_ke F_k (each DOF belongs to one cylinder's
+        // liner). R is symmetric, so u over a cylinder's slice DOFs is a sum of
+        // contiguous pieces of the loaded DOFs' rows: u[lo..hi] += F_e R_e[lo..hi].
+        let ndof = self.structure.contact_dofs();
+        let mut f_dof = vec![0.0; ndof];
+        let mut owner = vec![usize::MAX; ndof];
+        let mut touched = Vec::new();
+        for (c, at, f) in &self.prev_loaded {
+            for k in 0..2 {
+                let e = at.dofs[k];
+                if owner[e] == usize::MAX {
+                    owner[e] = *c;
+                    touched.push(e);
+                }
+                f_dof[e] += at.weights[k] * f;
+            }
+        }
+        let mut u_dof = vec![0.0; ndof];
+        for b in 0..bodies.len() {
+            let idx: Vec<usize> = (0..slices.len()).filter(|&k| slices[k].body == b).collect();
+            // the slices' DOF span on each side (slices run along a bore line)
+            let mut spans: Vec<(usize, usize)> = Vec::new();
+            for side in [true, false] {
+                let (lo, hi) = idx.iter().filter(|&&k| meta[k].1 == side).fold(
+                    (usize::MAX, 0),
+                    |(lo, hi), &k| {
+                        (
+                            lo.min(slices[k].at.dofs[0]),
+                            hi.max(slices[k].at.dofs[1] + 1),
+                        )
+                    },
+                );
+                if lo < hi {
+                    spans.push((lo, hi));
+                }
+            }
+            for &e in touched.iter().filter(|&&e| owner[e] != b) {
+                for &(lo, hi) in &spans {
+                    self.structure
+                        .rflex_axpy(&mut u_dof[lo..hi], f_dof[e], e, lo..hi);
+                }
+            }
+            let sub: Vec<Slice<'_>> = idx
+                .iter()
+                .map(|&k| {
+                    let mut sl = slices[k].clone();
+                    sl.body = 0;
+                    let [d0, d1] = sl.at.dofs;
+                    sl.gap += sl.at.weights[0] * u_dof[d0] + sl.at.weights[1] * u_dof[d1];
+                    sl
+                })
+                .collect();
+            let r = contact::step(
+                &bodies[b..b + 1],
+                &sub,
+                &mut self.structure,
+                dt,
+                self.settings.scheme,
+                self.settings.max_newton,
+            )
+            .map_err(Failure::Step)?;
+            out.bodies[b] = r.bodies[0];
+            for (j, &k) in idx.iter().enumerate() {
+                out.forces[k] = r.forces[j];
+                out.penetrations[k] = r.penetrations[j];
+                out.rates[k] = r.rates[j];
+                out.damper[k] = r.damper[j];
+                out.clamped[k] = r.clamped[j];
+            }
+            out.iterations = out.iterations.max(r.iterations);
+        }
+        Ok(out)
     }
 
     /// Whether a cylinder side touches the liner after the step (`penetrations` per slice of
