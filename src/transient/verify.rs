@@ -40,6 +40,12 @@ pub enum VerifyError {
     /// A run or a solve of the window failed, or the ROM does not fit the mesh.
     #[error("{0}")]
     Failure(String),
+    /// An engine transient of the comparison failed (`what`: which one).
+    #[error("{what}: {source}")]
+    Transient {
+        what: &'static str,
+        source: TransientError,
+    },
 }
 
 impl VerifyError {
@@ -49,7 +55,7 @@ impl VerifyError {
             VerifyError::Scene(_) => 2,
             VerifyError::SceneRom(e) => e.exit_code(),
             VerifyError::Rom(e) => e.exit_code(),
-            VerifyError::Failure(_) => 1,
+            VerifyError::Failure(_) | VerifyError::Transient { .. } => 1,
         }
     }
 }
@@ -561,7 +567,10 @@ fn largest_relative<'x>(pairs: impl Iterator<Item = (&'x f64, &'x f64)>) -> f64 
 /// reference's), the cost the wall time of all windows. The windows start from identical
 /// states, so the comparison carries no cycle-to-cycle scatter.
 pub fn engine_steps(setup: &EngineSetup, settings: &CycleSettings) -> Result<Vec<TradeoffPoint>> {
-    let fail = |e: TransientError| VerifyError::Failure(format!("speed against error: {e}"));
+    let fail = |source: TransientError| VerifyError::Transient {
+        what: "speed against error, the engine's firing slaps",
+        source,
+    };
     let run = EngineRun::new(
         setup,
         CycleSettings {

@@ -143,46 +143,8 @@ pub fn run(
             window.scheme,
             window.max_newton,
         )
-        .map_err(|f| match f {
-            contact::StepFailure::NoConvergence { iterations } => TransientError::NoConvergence {
-                crank_angle_deg: deg,
-                time_s,
-                iterations,
-                halvings: 0,
-            },
-            contact::StepFailure::Singular => TransientError::Singular {
-                crank_angle_deg: deg,
-                time_s,
-            },
-        })?;
-        if let Some((k, &p)) = res
-            .penetrations
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-        {
-            if p > window.max_penetration {
-                let (_, side, i, z) = meta[k];
-                return Err(TransientError::DeepPenetration {
-                    cylinder: 0,
-                    side: if side { "thrust" } else { "anti-thrust" },
-                    slice: i + 1,
-                    height_mm: z * 1e3,
-                    penetration_um: p * 1e6,
-                    limit_um: window.max_penetration * 1e6,
-                    crank_angle_deg: deg,
-                    time_s,
-                });
-            }
-        }
-        let mut b = res.bodies[0];
-        if !b.q.iter().chain(&b.v).chain(&b.a).all(|x| x.is_finite()) {
-            return Err(TransientError::NonFinite {
-                crank_angle_deg: deg,
-                time_s,
-                place: "the piston of the window's cylinder".into(),
-            });
-        }
+        .map_err(|f| step_failure(f, deg, time_s))?;
+        let mut b = checked_body(window, &res, &meta, deg, time_s)?;
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
         liner.commit(&locs, &res.forces);
         for (p, r) in liner
@@ -233,6 +195,63 @@ pub fn run(
     out.acceleration = from_row_vecs(acceleration);
     out.seconds = t0.elapsed().as_secs_f64();
     Ok(out)
+}
+
+/// A failed contact step of the window as the transient's error, with its crank angle and
+/// time (a fixed step: never halved).
+fn step_failure(f: contact::StepFailure, deg: f64, time_s: f64) -> TransientError {
+    match f {
+        contact::StepFailure::NoConvergence { iterations } => TransientError::NoConvergence {
+            crank_angle_deg: deg,
+            time_s,
+            iterations,
+            halvings: 0,
+        },
+        contact::StepFailure::Singular => TransientError::Singular {
+            crank_angle_deg: deg,
+            time_s,
+        },
+    }
+}
+
+/// The window's piston after a step, checked: no slice deeper than the window's limit (named
+/// with its side, slice and height), a finite state.
+fn checked_body(
+    window: &Window,
+    res: &contact::StepResult,
+    meta: &[(usize, bool, usize, f64)],
+    deg: f64,
+    time_s: f64,
+) -> Result<Body, TransientError> {
+    if let Some((k, &p)) = res
+        .penetrations
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+    {
+        if p > window.max_penetration {
+            let (_, side, i, z) = meta[k];
+            return Err(TransientError::DeepPenetration {
+                cylinder: 0,
+                side: if side { "thrust" } else { "anti-thrust" },
+                slice: i + 1,
+                height_mm: z * 1e3,
+                penetration_um: p * 1e6,
+                limit_um: window.max_penetration * 1e6,
+                crank_angle_deg: deg,
+                time_s,
+            });
+        }
+    }
+    let b = res.bodies[0];
+    if !b.q.iter().chain(&b.v).chain(&b.a).all(|x| x.is_finite()) {
+        return Err(TransientError::NonFinite {
+            crank_angle_deg: deg,
+            time_s,
+            place: "the piston of the window's cylinder".into(),
+        });
+    }
+    Ok(b)
 }
 
 /// The ROM as a [`Liner`]: a [`ModalStructure`], the mode rows of the analysis points and
