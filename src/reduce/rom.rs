@@ -817,43 +817,9 @@ fn left_out(inp: &RomInputs<'_>, n_g: usize, b: &Basis) -> Vec<String> {
 pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, RomError> {
     let t0 = Instant::now();
     check_fit(inp)?;
-    progress("reducing the liner");
-    let (liner_blocks, cc_blocks) = interface_blocks(inp)?;
     let preload = preload_loads(inp)?;
     let rows = LinerRows::new(inp, preload.liner)?;
-    let settings = CbSettings {
-        cutoff_hz: inp.cutoff_hz,
-        keep_basis: inp.keep_bases,
-    };
-    let liner = reduce(
-        &Part {
-            name: "liner",
-            mesh: inp.liner,
-            material: &inp.liner_material,
-            surface: &inp.liner_surface_mass,
-            fix: &[],
-            interfaces: &liner_blocks,
-            loads: &rows.loads,
-            outputs: &rows.outputs,
-        },
-        &settings,
-    )?;
-    drop(liner_blocks);
-    progress("reducing the crankcase");
-    let crankcase = reduce(
-        &Part {
-            name: "crankcase",
-            mesh: inp.crankcase,
-            material: &inp.crankcase_material,
-            surface: &[],
-            fix: &inp.crankcase_fix,
-            interfaces: &cc_blocks,
-            loads: &preload.crankcase,
-            outputs: &crankcase_outputs(inp)?,
-        },
-        &settings,
-    )?;
-    drop(cc_blocks);
+    let (liner, crankcase) = reduce_parts(inp, &rows, &preload.crankcase, progress)?;
     progress("assembling the engine");
     let (crankcase_map, liner_maps, n_g) = layout(&liner, &crankcase, &inp.cylinders);
     let mut placements = vec![Placement {
@@ -869,19 +835,8 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     let omega_c2 = (2.0 * std::f64::consts::PI * inp.cutoff_hz).powi(2);
     let sys = engine::system_modes(kg.clone(), &mg, omega_c2)?;
     let kept = sys.lambdas.iter().take_while(|&&l| l <= omega_c2).count();
-    // contact and point rows of every modelled cylinder; the contact rows stacked in `gc`
-    let n_lout = liner.outputs.nrows();
     let ncon = rows.thrust.len() + rows.anti.len();
-    let g_rows: Vec<Mat<f64>> = liner_maps
-        .iter()
-        .map(|map| scatter_rows(&liner.outputs, map, 0, n_lout, n_g))
-        .collect();
-    let mut gc = Mat::<f64>::zeros(ncon * g_rows.len(), n_g);
-    for (i, g) in g_rows.iter().enumerate() {
-        gc.as_mut()
-            .subrows_mut(i * ncon, ncon)
-            .copy_from(g.as_ref().subrows(0, ncon));
-    }
+    let (g_rows, gc) = output_rows(&liner, &liner_maps, ncon, n_g);
     progress("residual vectors");
     let patterns = hat_patterns(
         &[rows.thrust.len(), rows.anti.len()],
@@ -955,6 +910,75 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         crankcase_map,
         system: sys,
     })
+}
+
+/// The Craig-Bampton reductions of the liner (once, in its own frame) and of the crankcase,
+/// each with its interface fields, loads and output rows ([`reduce`]).
+fn reduce_parts(
+    inp: &RomInputs<'_>,
+    rows: &LinerRows,
+    crankcase_loads: &[Load],
+    progress: &dyn Fn(&str),
+) -> Result<(PartReduction, PartReduction), RomError> {
+    progress("reducing the liner");
+    let (liner_blocks, cc_blocks) = interface_blocks(inp)?;
+    let settings = CbSettings {
+        cutoff_hz: inp.cutoff_hz,
+        keep_basis: inp.keep_bases,
+    };
+    let liner = reduce(
+        &Part {
+            name: "liner",
+            mesh: inp.liner,
+            material: &inp.liner_material,
+            surface: &inp.liner_surface_mass,
+            fix: &[],
+            interfaces: &liner_blocks,
+            loads: &rows.loads,
+            outputs: &rows.outputs,
+        },
+        &settings,
+    )?;
+    drop(liner_blocks);
+    progress("reducing the crankcase");
+    let crankcase = reduce(
+        &Part {
+            name: "crankcase",
+            mesh: inp.crankcase,
+            material: &inp.crankcase_material,
+            surface: &[],
+            fix: &inp.crankcase_fix,
+            interfaces: &cc_blocks,
+            loads: crankcase_loads,
+            outputs: &crankcase_outputs(inp)?,
+        },
+        &settings,
+    )?;
+    drop(cc_blocks);
+    Ok((liner, crankcase))
+}
+
+/// The liner's output rows (contact DOFs, then points) scattered onto each modelled
+/// cylinder's reduced DOFs, and the contact rows of all cylinders stacked (`gc`, the first
+/// `ncon` rows of each).
+fn output_rows(
+    liner: &PartReduction,
+    liner_maps: &[Vec<usize>],
+    ncon: usize,
+    n_g: usize,
+) -> (Vec<Mat<f64>>, Mat<f64>) {
+    let n_lout = liner.outputs.nrows();
+    let g_rows: Vec<Mat<f64>> = liner_maps
+        .iter()
+        .map(|map| scatter_rows(&liner.outputs, map, 0, n_lout, n_g))
+        .collect();
+    let mut gc = Mat::<f64>::zeros(ncon * g_rows.len(), n_g);
+    for (i, g) in g_rows.iter().enumerate() {
+        gc.as_mut()
+            .subrows_mut(i * ncon, ncon)
+            .copy_from(g.as_ref().subrows(0, ncon));
+    }
+    (g_rows, gc)
 }
 
 /// One system mode, the normalised thrust-side radial amplitude at each
