@@ -154,10 +154,7 @@ fn verification_tests_and_benches_do_not_use_the_command_layer() {
 
 /// Numerical kernels allowed past 150 lines (issue 24: "kernels with an equation may be
 /// longer when splitting would hide it"), each with the equation its doc comment carries.
-const KERNELS: [(&str, &str); 3] = [
-    // Craig-Bampton reduction: constraint modes, fixed-interface modes below the cut-off,
-    // the projected K and M, one pass over the factorised interior
-    ("src/reduce/craig_bampton.rs", "reduce"),
+const KERNELS: [(&str, &str); 2] = [
     // one implicit step of the pistons in penalty contact with the condensed structure:
     // W F_A = r0 + (K_t + kappa C_d) S q and the bodies' Newmark rows, Newton on the pieces
     ("src/transient/contact.rs", "step"),
