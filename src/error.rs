@@ -4,7 +4,7 @@
 use crate::fem::model::ModelError;
 use crate::files::WriteError;
 use crate::mesh::checks::MeshError;
-use crate::mesh::gmsh::MshError;
+use crate::mesh::collect::MshError;
 use crate::scene::SceneError;
 
 #[derive(Debug, thiserror::Error)]
@@ -50,7 +50,7 @@ pub enum Error {
     Transient {
         path: std::path::PathBuf,
         #[source]
-        source: crate::transient::cycle::TransientError,
+        source: crate::transient::error::TransientError,
     },
     #[error("cavitation thresholds: {0}")]
     Thresholds(#[from] crate::cavitation::criteria::ThresholdError),

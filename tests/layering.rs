@@ -129,6 +129,48 @@ fn verification_no_module_imports_a_later_stage() {
     );
 }
 
+/// Within a stage, no two modules import each other (the transient's cycle and window did:
+/// the shared pieces now sit in `bore`, `signal` and `error`). Reads `use super::x` and
+/// `super::x::` in the code of each stage directory's files.
+#[test]
+fn verification_no_two_modules_of_a_stage_import_each_other() {
+    let mut files = Vec::new();
+    sources(Path::new("src"), &mut files);
+    let mut edges = BTreeSet::new();
+    for f in &files {
+        let (Some(dir), Some(stem)) = (f.parent(), f.file_stem()) else {
+            continue;
+        };
+        if dir == Path::new("src") || stem == "mod" {
+            continue;
+        }
+        let stage = dir.display().to_string();
+        let module = stem.to_string_lossy().to_string();
+        let text: String = std::fs::read_to_string(f)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        for (at, _) in text.match_indices("super::") {
+            for target in targets(&text[at + 7..]) {
+                if !target.is_empty() && target != module {
+                    edges.insert((stage.clone(), module.clone(), target));
+                }
+            }
+        }
+    }
+    let mutual: Vec<String> = edges
+        .iter()
+        .filter(|(s, a, b)| a < b && edges.contains(&(s.clone(), b.clone(), a.clone())))
+        .map(|(s, a, b)| format!("{s}: {a} <-> {b}"))
+        .collect();
+    assert!(
+        mutual.is_empty(),
+        "modules importing each other: {mutual:?}"
+    );
+}
+
 /// The tests and benches reach the domain through the library (`linercav::api` and the
 /// stages), never through the command layer (`linercav::app`), whose only caller is the
 /// binary; the command-line contract is tested on the binary itself (tests/cli.rs).

@@ -177,7 +177,7 @@ fn contract_simulate_time_series_agrees_with_its_json() {
             // the cycle's peak lies between the samples: the parabola's vertex through the
             // CSV's most negative sample and its neighbours (the same rule on the same series)
             let acc = col(&format!("c{k}_p{n}_acc_m_s2"));
-            let min = -linercav::transient::window::sampled_peak(&acc, 0..acc.len(), -1.0)
+            let min = -linercav::transient::signal::sampled_peak(&acc, 0..acc.len(), -1.0)
                 .expect("a series")
                 .0;
             let mean = p["peak_negative_m_s2"].as_f64().unwrap();

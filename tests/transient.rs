@@ -598,7 +598,7 @@ fn verification_engine_cycle_runs_with_bounded_energy_and_finite_peaks() {
     assert!(r.stats.energy_error.abs() < 1e-9, "{:?}", r.stats);
     // one cycle of 0.25 deg steps and the outputs' margin past its end, each base step around
     // a slap onset taken as `slap_substeps` committed sub-steps (no step rejected)
-    let margin = linercav::transient::window::fir_half_length(r.stats.dt_s, 2000.0)
+    let margin = linercav::transient::signal::fir_half_length(r.stats.dt_s, 2000.0)
         + linercav::transient::cycle::OUTPUT_DIFFERENCE_REACH;
     let m = simulation_of_small().transient.slap_substeps;
     assert_eq!(r.stats.rejected_steps, 0);

@@ -3,8 +3,8 @@
 
 use crate::error::Result;
 use crate::linalg::dense::row;
+use crate::transient::signal::low_pass;
 pub use crate::transient::verify::{compare, FullOrderReport, PointComparison};
-use crate::transient::window::low_pass;
 
 /// Writes both runs of the window, one row per step: crank angle, then for the full model and
 /// the ROM the piston's lateral displacement [um] and tilt [mrad], the net contact force toward

@@ -11,9 +11,9 @@
 //! with `**`. Every element set also becomes the node set of its elements' nodes (unless a
 //! node set has the name). Coordinates are taken as metres.
 
+use super::collect::MshError;
 use super::collect::{read_mesh_text, reorder, Collected, HEX20_ABAQUS, TET10_DECK};
 use super::element::ElementKind;
-use super::gmsh::MshError;
 use super::Mesh;
 use std::path::Path;
 

@@ -3,8 +3,16 @@
 //! ours, sets to node and element sets).
 
 use super::element::ElementKind;
-use super::gmsh::MshError;
 use super::{ElementBlock, Mesh};
+
+/// Why a mesh file could not be read: the file, the line and what was expected.
+#[derive(Debug, thiserror::Error)]
+#[error("{}{}: {msg}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
+pub struct MshError {
+    pub path: PathBuf,
+    pub line: usize,
+    pub msg: String,
+}
 use crate::files::{read_text, ReadError, LIMIT_MESH};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};

@@ -7,19 +7,11 @@
 //! when unnamed; volume groups also become element sets. Unknown sections are skipped.
 //! Binary files and older format versions are refused with a message saying what to do.
 
+use super::collect::MshError;
 use super::element::ElementKind;
 use super::{ElementBlock, Mesh};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
-use std::path::{Path, PathBuf};
-
-/// Why a mesh file could not be read: the file, the line and what was expected.
-#[derive(Debug, thiserror::Error)]
-#[error("{}{}: {msg}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
-pub struct MshError {
-    pub path: PathBuf,
-    pub line: usize,
-    pub msg: String,
-}
+use std::path::Path;
 
 /// Nodes per element for the Gmsh element types we accept as carriers of physical groups.
 fn nodes_per_type(t: u32) -> Option<usize> {

@@ -20,7 +20,7 @@ use std::collections::BTreeMap;
 
 /// Reads a mesh file by its extension: `.msh` (Gmsh MSH 4.1), `.bdf` / `.nas` (Nastran bulk
 /// data), `.inp` (Abaqus input).
-pub fn read(path: &std::path::Path) -> Result<Mesh, gmsh::MshError> {
+pub fn read(path: &std::path::Path) -> Result<Mesh, collect::MshError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -29,7 +29,7 @@ pub fn read(path: &std::path::Path) -> Result<Mesh, gmsh::MshError> {
         Some("msh") => gmsh::read(path),
         Some("bdf") | Some("nas") => nastran::read(path),
         Some("inp") => abaqus::read(path),
-        _ => Err(gmsh::MshError {
+        _ => Err(collect::MshError {
             path: path.to_path_buf(),
             line: 0,
             msg: "unknown mesh format: expected .msh (Gmsh MSH 4.1), .bdf or .nas (Nastran bulk data) or .inp (Abaqus input)".into(),

@@ -15,9 +15,9 @@
 //! anywhere in the file; without one the set is named by its id (`"7"`). Element sets: the
 //! property id of the solid elements, `"PID<n>"` (none for a blank PID). Coordinates are taken as metres.
 
+use super::collect::MshError;
 use super::collect::{read_mesh_text, reorder, Collected, HEX20_NASTRAN, TET10_DECK};
 use super::element::ElementKind;
-use super::gmsh::MshError;
 use super::Mesh;
 use std::collections::BTreeMap;
 use std::path::Path;

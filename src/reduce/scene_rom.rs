@@ -13,7 +13,7 @@ use crate::fem::element::check_mesh as check_and_compact;
 use crate::fem::surface::SurfaceMass;
 use crate::files::WriteError;
 use crate::mesh::checks::MeshError;
-use crate::mesh::gmsh::MshError;
+use crate::mesh::collect::MshError;
 use crate::mesh::{crankcase, liner, Mesh};
 use crate::scene::budget::{self, Limits};
 use crate::scene::{CrankcaseSource, MeshSource, Scene, SceneError};

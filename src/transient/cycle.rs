@@ -21,10 +21,12 @@
 //! fraction of the scale for HHT-alpha, which balances a different energy) stops the run (a
 //! numerical instability).
 
+use super::bore::{body_at_rest, push_slices, residual_displacement, BoreLines, PistonInBore};
 use super::contact::{self, Body, Location, Slice, SliceState, StepFailure};
+use super::error::TransientError;
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
-use super::window::{body_at_rest, low_pass, sampled_peak, second_difference4};
+use super::signal::{fir_half_length, low_pass, sampled_peak, second_difference4};
 use crate::linalg::dense::{from_row_vecs, row, values_mut, Dense};
 use crate::piston::Piston;
 use crate::reduce::rom::{CylinderRom, EngineRom};
@@ -78,7 +80,7 @@ pub struct CycleSettings {
     /// Accelerations at the analysis points are reported in the band of the ROM [Hz]: the sum
     /// over every integrated mode plus the quasi-static (residual) response to the contact
     /// forces, low-passed by a zero-phase FIR over the cycle
-    /// ([`super::window::low_pass`]; the ROM is accurate up to about half its cut-off, and
+    /// ([`super::signal::low_pass`]; the ROM is accurate up to about half its cut-off, and
     /// the modes above the band are kept for the contact response, not as outputs). None: the
     /// unfiltered sum.
     pub output_band_hz: Option<f64>,
@@ -107,45 +109,6 @@ pub struct EngineSetup<'a> {
     pub omega: f64,
     /// Height of the liner top in the liner frame [m].
     pub liner_top: f64,
-}
-
-/// Where and when the transient failed.
-#[derive(Debug, thiserror::Error)]
-pub enum TransientError {
-    #[error("contact iteration did not converge at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s) after {iterations} iterations even with the step halved {halvings} times")]
-    NoConvergence {
-        crank_angle_deg: f64,
-        time_s: f64,
-        iterations: usize,
-        halvings: usize,
-    },
-    #[error("deep penetration: cylinder {cylinder}, {side} side, slice {slice} (height {height_mm:.1} mm on the liner): {penetration_um:.1} um > {limit_um:.1} um at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s); the contact stiffness is too low for the load, or the step too large")]
-    DeepPenetration {
-        cylinder: usize,
-        side: &'static str,
-        slice: usize,
-        height_mm: f64,
-        penetration_um: f64,
-        limit_um: f64,
-        crank_angle_deg: f64,
-        time_s: f64,
-    },
-    #[error("the solution is not finite at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s) in {place}: check the ROM and the scene's numbers (materials, masses, contact stiffness, pressure curve)")]
-    NonFinite {
-        crank_angle_deg: f64,
-        time_s: f64,
-        /// "the piston of cylinder 3", "the structure's modal coordinates", ...
-        place: String,
-    },
-    #[error("energy growth: the structure gained {excess_j:.3e} J more than the contact forces put in (scale {scale_j:.3e} J) by crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s): the integration is unstable (scheme or step)")]
-    EnergyGrowth {
-        excess_j: f64,
-        scale_j: f64,
-        crank_angle_deg: f64,
-        time_s: f64,
-    },
-    #[error("singular contact system at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s)")]
-    Singular { crank_angle_deg: f64, time_s: f64 },
 }
 
 /// Work counters and checks of a run.
@@ -443,79 +406,6 @@ fn truncated_flexibility(rom: &EngineRom, nm: usize) -> Dense {
         }
     }
     r
-}
-
-/// Location of height `z` on a bore line with ascending node heights `zs`, DOFs from `first`.
-fn locate(zs: &[f64], z: f64, first: usize) -> Option<Location> {
-    let n = zs.len();
-    if n < 2 || z < zs[0] || z > zs[n - 1] {
-        return None;
-    }
-    let i = zs.partition_point(|&a| a <= z).clamp(1, n - 1);
-    let t = (z - zs[i - 1]) / (zs[i] - zs[i - 1]);
-    Some(Location {
-        dofs: [first + i - 1, first + i],
-        weights: [1.0 - t, t],
-    })
-}
-
-/// A cylinder's two bore lines: node heights (ascending) and the first contact DOF (thrust
-/// nodes from `first`, then the anti-thrust nodes).
-pub(crate) struct BoreLines<'a> {
-    pub thrust_z: &'a [f64],
-    pub antithrust_z: &'a [f64],
-    pub first: usize,
-}
-
-/// Piston `body` in its bore at this step: its loads (pin depth) and the bore lines it can
-/// touch, `liner_top` the height of the liner's top.
-pub(crate) struct PistonInBore<'a, 'p> {
-    pub piston: &'p Piston,
-    pub loads: &'a crate::piston::PistonLoads,
-    pub liner_top: f64,
-    pub bore: &'a BoreLines<'a>,
-    pub body: usize,
-}
-
-/// Appends the slices of piston `body` that lie on the bore lines at this step's pin depth, and
-/// their (body, thrust side, slice, height) to `meta`. A slice at height
-/// z = liner_top - pin_depth + h_i outside the bore line's node range has no liner to touch.
-pub(crate) fn push_slices<'p>(
-    at: &PistonInBore<'_, 'p>,
-    prev_penetration: &dyn Fn(bool, usize) -> f64,
-    slices: &mut Vec<Slice<'p>>,
-    meta: &mut Vec<(usize, bool, usize, f64)>,
-) {
-    let PistonInBore {
-        piston,
-        loads,
-        liner_top,
-        bore,
-        body,
-    } = *at;
-    let skirt = &piston.skirt;
-    let nt = bore.thrust_z.len();
-    for (side, zs, first) in [
-        (true, bore.thrust_z, bore.first),
-        (false, bore.antithrust_z, bore.first + nt),
-    ] {
-        for i in 0..skirt.heights.len() {
-            let z = liner_top - loads.pin_depth + skirt.heights[i];
-            if let Some(at) = locate(zs, z, first) {
-                slices.push(Slice {
-                    body,
-                    row: piston.slice_row(i, side),
-                    force_row: piston.slice_force_row(i, side, loads),
-                    gap: skirt.gaps[i],
-                    law: &skirt.laws[i],
-                    damping: piston.contact_damping,
-                    at,
-                    prev_penetration: prev_penetration(side, i),
-                });
-                meta.push((body, side, i, z));
-            }
-        }
-    }
 }
 
 impl<'a> EngineRun<'a> {
@@ -1022,7 +912,7 @@ impl<'a> EngineRun<'a> {
                 )
             })
             .unzip();
-        super::window::residual_displacement(&rom.point_residual, &locs, &forces)
+        residual_displacement(&rom.point_residual, &locs, &forces)
     }
 
     /// Runs `settings.cycles` cycles and returns the peaks averaged over the last
@@ -1192,7 +1082,7 @@ impl<'a> EngineRun<'a> {
     fn output_margin(&self, dt: f64) -> usize {
         self.settings
             .output_band_hz
-            .map_or(0, |band| super::window::fir_half_length(dt, band))
+            .map_or(0, |band| fir_half_length(dt, band))
             + OUTPUT_DIFFERENCE_REACH
     }
 

@@ -1,7 +1,7 @@
 //! The engine transient of a scene: its numerical settings and one run on the engine ROM.
 
-use super::cycle::TransientError;
 use super::cycle::{run_with_tolerance, Coupling, CycleResult, CycleSettings, EngineSetup};
+use super::error::TransientError;
 use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
 use crate::scene::{Scene, Simulation};

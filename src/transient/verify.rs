@@ -6,17 +6,19 @@
 //! scene's damping ratio at the first system mode and at the band's upper edge; the ROM's modes
 //! get zeta_j = a / (2 w_j) + b w_j / 2, which is the same damping in modal form). The point
 //! accelerations of both are low-passed to the scene's band by the same zero-phase FIR
-//! ([`super::window::low_pass`]): the ROM is meant to be accurate in its band, and
+//! ([`super::signal::low_pass`]): the ROM is meant to be accurate in its band, and
 //! the full model's content above the band (up to the mesh's limit) is not what either run
 //! reports. The error is the largest relative difference of the peak negative acceleration
 //! over the analysis points; the speed-up is the full-order wall time (assembly, factorisation
 //! and stepping) over the ROM's window stepping on the cached ROM.
 
-use super::cycle::{CycleSettings, EngineRun, EngineSetup, TransientError};
+use super::cycle::{CycleSettings, EngineRun, EngineSetup};
+use super::error::TransientError;
 use super::full_order::{FullLiner, Row};
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
-use super::window::{self, low_pass, sampled_peak, ModalLiner, Window, WindowResult};
+use super::signal::{low_pass, sampled_peak};
+use super::window::{self, ModalLiner, Window, WindowResult};
 use crate::linalg::dense::{from_rows, row, Dense};
 use crate::piston::Piston;
 use crate::reduce::full::FullSystem;
@@ -212,7 +214,7 @@ pub fn compare(
     let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
     let nc = nt + na;
     let scheme = win.scheme;
-    let fail = |e: super::cycle::TransientError, what: &str| {
+    let fail = |e: TransientError, what: &str| {
         VerifyError::Failure(format!(
             "{}: {what} window, cylinder {cylinder}: {e}",
             scene.path.display()
@@ -384,7 +386,7 @@ pub fn rom_window(
         max_penetration: settings.max_penetration,
         onset_correction: settings.onset_correction,
     };
-    let fail = |e: super::cycle::TransientError, what: &str| {
+    let fail = |e: TransientError, what: &str| {
         VerifyError::Failure(format!(
             "{}: {what} window, cylinder {cylinder}: {e}",
             scene.path.display()

@@ -1,0 +1,40 @@
+//! Where and when a transient failed.
+
+/// Where and when the transient failed.
+#[derive(Debug, thiserror::Error)]
+pub enum TransientError {
+    #[error("contact iteration did not converge at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s) after {iterations} iterations even with the step halved {halvings} times")]
+    NoConvergence {
+        crank_angle_deg: f64,
+        time_s: f64,
+        iterations: usize,
+        halvings: usize,
+    },
+    #[error("deep penetration: cylinder {cylinder}, {side} side, slice {slice} (height {height_mm:.1} mm on the liner): {penetration_um:.1} um > {limit_um:.1} um at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s); the contact stiffness is too low for the load, or the step too large")]
+    DeepPenetration {
+        cylinder: usize,
+        side: &'static str,
+        slice: usize,
+        height_mm: f64,
+        penetration_um: f64,
+        limit_um: f64,
+        crank_angle_deg: f64,
+        time_s: f64,
+    },
+    #[error("the solution is not finite at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s) in {place}: check the ROM and the scene's numbers (materials, masses, contact stiffness, pressure curve)")]
+    NonFinite {
+        crank_angle_deg: f64,
+        time_s: f64,
+        /// "the piston of cylinder 3", "the structure's modal coordinates", ...
+        place: String,
+    },
+    #[error("energy growth: the structure gained {excess_j:.3e} J more than the contact forces put in (scale {scale_j:.3e} J) by crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s): the integration is unstable (scheme or step)")]
+    EnergyGrowth {
+        excess_j: f64,
+        scale_j: f64,
+        crank_angle_deg: f64,
+        time_s: f64,
+    },
+    #[error("singular contact system at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s)")]
+    Singular { crank_angle_deg: f64, time_s: f64 },
+}
