@@ -169,10 +169,7 @@ fn default_run() -> &'static (Scene, CycleResult) {
 
 /// Largest peak negative acceleration over all cylinders and points.
 fn engine_peak(r: &CycleResult) -> f64 {
-    r.peaks
-        .iter()
-        .flat_map(|c| c.peak_negative.iter().map(|p| p.value))
-        .fold(0.0, f64::max)
+    r.peak_negative.iter().map(|p| p.value).fold(0.0, f64::max)
 }
 
 /// The thresholds follow the coolant state by the criterion's equation: at a fixed k_p,
@@ -229,9 +226,9 @@ fn validation_clearance_raises_acceleration() {
         let c = r
             .peaks
             .iter()
-            .find(|c| c.cylinder == 6)
+            .position(|c| c.cylinder == 6)
             .expect("cylinder 6");
-        c.peak_negative.iter().map(|p| p.value).collect()
+        r.peak_negative.row(c).iter().map(|p| p.value).collect()
     };
     let (p40, p80, p120) = (cyl6(&r40), cyl6(r80), cyl6(&r120));
     for k in 0..p120.len() {
@@ -420,12 +417,12 @@ fn validation_interior_point_most_active() {
             c.cylinder,
             c.worst_point
         );
-        let peaks = &r
+        let row = r
             .peaks
             .iter()
-            .find(|p| p.cylinder == c.cylinder)
-            .unwrap()
-            .peak_negative;
+            .position(|p| p.cylinder == c.cylinder)
+            .unwrap();
+        let peaks = r.peak_negative.row(row);
         let step = r.step_error.iter().find(|e| e.cylinder == c.cylinder);
         let u = |k: usize| {
             let e = step.map_or(0.0, |s| s.relative(k) * peaks[k].value);
@@ -499,12 +496,8 @@ fn validation_leaving_out_the_coolant_costs_a_few_percent() {
         |_, _| {},
     )
     .unwrap();
-    let values = |r: &CycleResult| -> Vec<f64> {
-        r.peaks
-            .iter()
-            .flat_map(|c| c.peak_negative.iter().map(|p| p.value))
-            .collect()
-    };
+    let values =
+        |r: &CycleResult| -> Vec<f64> { r.peak_negative.iter().map(|p| p.value).collect() };
     let (a, b) = (values(dry), values(&wet));
     let change: Vec<f64> = a.iter().zip(&b).map(|(x, y)| y / x - 1.0).collect();
     let mean_abs = change.iter().map(|c| c.abs()).sum::<f64>() / change.len() as f64;

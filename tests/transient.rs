@@ -587,10 +587,11 @@ fn simulate(
 fn verification_engine_cycle_runs_with_bounded_energy_and_finite_peaks() {
     let r = simulate(&[], |s| s.tolerance = None).unwrap();
     assert_eq!(r.peaks.len(), 2);
+    assert_eq!(r.peak_negative.nrows(), 2);
+    for p in &r.peak_negative {
+        assert!(p.value.is_finite() && p.value > 0.0);
+    }
     for c in &r.peaks {
-        for p in &c.peak_negative {
-            assert!(p.value.is_finite() && p.value > 0.0);
-        }
         // the quasi-static side force peaks in the expansion stroke, after firing TDC
         assert!(c.side_force.crank_angle_deg > 360.0 && c.side_force.crank_angle_deg < 420.0);
     }
@@ -626,20 +627,18 @@ fn verification_averaged_cycles_are_the_statistics_of_the_single_cycles() {
     .unwrap();
     assert_eq!(avg.stats.cycles_averaged, 3);
     assert_eq!(single[2].stats.cycles_averaged, 1);
-    for (c, cp) in avg.peaks.iter().enumerate() {
-        for (p, peak) in cp.peak_negative.iter().enumerate() {
-            let v: Vec<f64> = single
-                .iter()
-                .map(|r| r.peaks[c].peak_negative[p].value)
-                .collect();
-            let mean = v.iter().sum::<f64>() / 3.0;
-            let std = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 2.0).sqrt();
-            let max = v.iter().cloned().fold(f64::MIN, f64::max);
-            let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
-            assert!(close(peak.value, mean), "{} vs {mean}", peak.value);
-            assert!(close(peak.std, std), "{} vs {std}", peak.std);
-            assert!(close(peak.max, max), "{} vs {max}", peak.max);
-        }
+    for ((c, p), peak) in avg.peak_negative.indexed_iter() {
+        let v: Vec<f64> = single
+            .iter()
+            .map(|r| r.peak_negative[[c, p]].value)
+            .collect();
+        let mean = v.iter().sum::<f64>() / 3.0;
+        let std = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 2.0).sqrt();
+        let max = v.iter().cloned().fold(f64::MIN, f64::max);
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+        assert!(close(peak.value, mean), "{} vs {mean}", peak.value);
+        assert!(close(peak.std, std), "{} vs {std}", peak.std);
+        assert!(close(peak.max, max), "{} vs {max}", peak.max);
     }
     // the series are the last cycle's, as with one averaged cycle
     assert_eq!(
@@ -672,11 +671,7 @@ fn verification_accuracy_control_meets_its_tolerance_against_a_converged_run() {
     let controlled = simulate(&[], |_| {}).unwrap();
     let converged = simulate(&["transient.step_deg=0.00390625"], |s| s.tolerance = None).unwrap();
     let mean = |r: &linercav::transient::cycle::CycleResult| {
-        let v: Vec<f64> = r
-            .peaks
-            .iter()
-            .flat_map(|c| c.peak_negative.iter().map(|p| p.value))
-            .collect();
+        let v: Vec<f64> = r.peak_negative.iter().map(|p| p.value).collect();
         v.iter().sum::<f64>() / v.len() as f64
     };
     let err = (mean(&controlled) - mean(&converged)).abs() / mean(&converged);
@@ -757,16 +752,14 @@ fn verification_per_cylinder_coupling_matches_the_monolithic_step() {
         fast.stats.coupling_lag_m, fast.stats.max_penetration_m
     );
     assert!(fast.stats.coupling_lag_m < 0.01 * fast.stats.max_penetration_m);
-    for (a, b) in fast.peaks.iter().zip(&exact.peaks) {
-        for (x, y) in a.peak_negative.iter().zip(&b.peak_negative) {
-            println!("{} vs {}", x.value, y.value);
-            assert!(
-                (x.value - y.value).abs() < 0.02 * y.value,
-                "{} vs {}",
-                x.value,
-                y.value
-            );
-        }
+    for (x, y) in fast.peak_negative.iter().zip(&exact.peak_negative) {
+        println!("{} vs {}", x.value, y.value);
+        assert!(
+            (x.value - y.value).abs() < 0.02 * y.value,
+            "{} vs {}",
+            x.value,
+            y.value
+        );
     }
 }
 
@@ -788,11 +781,11 @@ fn verification_bounded_predictions_change_nothing() {
             with.stats.max_penetration_m.to_bits(),
             without.stats.max_penetration_m.to_bits()
         );
+        for (x, y) in with.peak_negative.iter().zip(&without.peak_negative) {
+            assert_eq!(x.value.to_bits(), y.value.to_bits(), "{x:?} vs {y:?}");
+            assert_eq!(x.crank_angle_deg, y.crank_angle_deg);
+        }
         for (a, b) in with.peaks.iter().zip(&without.peaks) {
-            for (x, y) in a.peak_negative.iter().zip(&b.peak_negative) {
-                assert_eq!(x.value.to_bits(), y.value.to_bits(), "{x:?} vs {y:?}");
-                assert_eq!(x.crank_angle_deg, y.crank_angle_deg);
-            }
             assert_eq!(a.slap_force.value.to_bits(), b.slap_force.value.to_bits());
         }
         for (a, b) in with.series.cylinders.iter().zip(&without.series.cylinders) {
@@ -824,10 +817,7 @@ fn contract_hard_cases_run_stably_or_stop_clearly() {
     assert!(e.contains("clearance_um") && e.contains("seize"), "{e}");
     // 200 um: runs, slaps harder than at 80 um
     let wide = simulate(&["piston.clearance_um=200"], |_| {}).unwrap();
-    assert!(wide
-        .peaks
-        .iter()
-        .all(|c| c.peak_negative.iter().all(|p| p.value.is_finite())));
+    assert!(wide.peak_negative.iter().all(|p| p.value.is_finite()));
     // 3000 rpm
     let fast = simulate(&["engine.speed_rpm=3000"], |_| {}).unwrap();
     assert!(fast.stats.energy_error.abs() < 1e-9);

@@ -152,7 +152,7 @@ pub fn evaluate(
     let mut best = (0.0f64, 0.0f64);
     for (ci, peaks) in res.peaks.iter().enumerate() {
         let mut pts = Vec::new();
-        for (p, neg) in peaks.peak_negative.iter().enumerate() {
+        for (p, neg) in res.peak_negative.row(ci).iter().enumerate() {
             let a = neg.value;
             let v = s
                 .cylinders

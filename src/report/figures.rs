@@ -11,7 +11,7 @@ use crate::analysis::spectrum::{rms_average, Spectrum};
 use crate::cavitation::criteria::Thresholds;
 use crate::cavitation::evaluate::{spectra, Evaluation};
 use crate::files::WriteError;
-use crate::linalg::dense::{from_row_vecs, Dense};
+use crate::linalg::dense::Dense;
 use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
 use crate::scene::Scene;
@@ -40,12 +40,7 @@ impl SweepPoint {
     /// peak negative acceleration over the points, the slap and side-force peaks, the
     /// side-force angle and the last cycle's largest |tilt|; per cylinder and point the peaks.
     pub fn of(value: f64, r: &CycleResult) -> Self {
-        let points = from_row_vecs(
-            r.peaks
-                .iter()
-                .map(|c| c.peak_negative.iter().map(|p| p.value).collect())
-                .collect(),
-        );
+        let points = r.peak_negative.map(|p| p.value);
         SweepPoint {
             value,
             peak_negative_m_s2: points
@@ -449,9 +444,10 @@ impl Figures<'_> {
                 let step = base.step_error.iter().find(|e| e.cylinder == c.cylinder);
                 base.peaks
                     .iter()
-                    .find(|b| b.cylinder == c.cylinder)
+                    .position(|b| b.cylinder == c.cylinder)
                     .map(|b| {
-                        b.peak_negative
+                        base.peak_negative
+                            .row(b)
                             .iter()
                             .enumerate()
                             .map(|(k, p)| {

@@ -119,16 +119,18 @@ impl SimulateReport {
     pub fn cylinders_of(res: &CycleResult) -> Vec<CylinderReport> {
         res.peaks
             .iter()
-            .map(|c| {
+            .enumerate()
+            .map(|(ci, c)| {
                 let step = res.step_error.iter().find(|e| e.cylinder == c.cylinder);
-                (c, step)
+                (ci, c, step)
             })
-            .map(|(c, step)| CylinderReport {
+            .map(|(ci, c, step)| CylinderReport {
                 cylinder: c.cylinder,
-                points: c
+                points: res
                     .peak_negative
+                    .row(ci)
                     .iter()
-                    .zip(&c.peak_positive)
+                    .zip(res.peak_positive.row(ci))
                     .enumerate()
                     .map(|(k, (n, p))| PointPeaks {
                         point: k + 1,

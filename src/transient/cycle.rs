@@ -30,6 +30,7 @@ use super::signal::{fir_half_length, low_pass, sampled_peak, second_difference4}
 use crate::linalg::dense::{from_row_vecs, row, values_mut, Dense};
 use crate::piston::Piston;
 use crate::reduce::rom::{CylinderRom, EngineRom};
+use ndarray::Array2;
 
 /// Numerical settings of the transient.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -255,24 +256,36 @@ impl Peak {
     }
 }
 
-/// Peaks of one cylinder over the reported cycles.
+/// The force peaks of one cylinder over the reported cycles.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct CylinderPeaks {
     pub cylinder: usize,
-    /// Per analysis point: largest negative acceleration as a positive magnitude, largest
-    /// positive acceleration.
-    pub peak_negative: Vec<Peak>,
-    pub peak_positive: Vec<Peak>,
     /// Largest |net contact force - quasi-static side force| (the dynamic slap) [N].
     pub slap_force: Peak,
     /// Largest quasi-static side force toward thrust [N].
     pub side_force: Peak,
 }
 
+/// A cycle's (or the averaged cycles') peaks: per cylinder the forces, and per cylinder
+/// (rows, in the order of `cylinders`) and analysis point (columns) the largest negative
+/// acceleration as a positive magnitude and the largest positive acceleration.
+#[derive(Clone, Debug, Default)]
+struct CyclePeaks {
+    cylinders: Vec<CylinderPeaks>,
+    negative: Array2<Peak>,
+    positive: Array2<Peak>,
+}
+
 /// Result of a run.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct CycleResult {
+    /// Per cylinder: its number and force peaks.
     pub peaks: Vec<CylinderPeaks>,
+    /// Per cylinder (rows, as `peaks`) and analysis point (columns, top to bottom): the peak
+    /// negative acceleration as a positive magnitude, and the peak positive acceleration
+    /// [m/s^2].
+    pub peak_negative: Array2<Peak>,
+    pub peak_positive: Array2<Peak>,
     pub series: Series,
     pub stats: Stats,
     /// Step-error estimate of each cylinder's firing slap ([`StepError`]).
@@ -936,8 +949,8 @@ impl<'a> EngineRun<'a> {
         let margin = self.output_margin(dt);
         let total = cycles * spc + margin;
         let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
-        let mut prev_peaks: Option<Vec<CylinderPeaks>> = None;
-        let mut kept: Vec<Vec<CylinderPeaks>> = Vec::with_capacity(averaged);
+        let mut prev_peaks: Option<CyclePeaks> = None;
+        let mut kept: Vec<CyclePeaks> = Vec::with_capacity(averaged);
         let mut last_series = None;
         let mut building: Option<Series> = None;
         let mut pending: Option<(usize, Series)> = None;
@@ -993,6 +1006,11 @@ impl<'a> EngineRun<'a> {
         let series = last_series.expect("at least one cycle");
         let mut peaks = average_peaks(&kept);
         self.stats.autocorrelation_cycles = standard_errors(&kept, &mut peaks);
+        let CyclePeaks {
+            cylinders: peaks,
+            negative: peak_negative,
+            positive: peak_positive,
+        } = peaks;
         let mut step_error: Vec<StepError> = Vec::with_capacity(snapshots.len());
         for (c, snap) in snapshots {
             let peak_h = snap.clone().window_peaks(c, window_steps, dt)?;
@@ -1006,6 +1024,8 @@ impl<'a> EngineRun<'a> {
         self.stats.step_error_estimate = mean_step_error(&step_error);
         Ok(CycleResult {
             peaks,
+            peak_negative,
+            peak_positive,
             series,
             stats: self.stats,
             step_error,
@@ -1186,49 +1206,55 @@ impl<'a> EngineRun<'a> {
         }
     }
 
-    fn peaks(&self, series: &Series) -> Vec<CylinderPeaks> {
-        series
+    /// A cycle's peaks from its series: the filtered point accelerations' peaks located
+    /// between the samples ([`sampled_peak`]), the forces' largest samples.
+    fn peaks(&self, series: &Series) -> CyclePeaks {
+        let nc = series.cylinders.len();
+        let np = series
             .cylinders
-            .iter()
-            .zip(&self.cyls)
-            .map(|(cs, cyl)| {
-                let local = |k: usize| (series.crank_angle_deg[k] - cyl.phase).rem_euclid(720.0);
-                let arg = |v: &[f64], f: &dyn Fn(f64) -> f64| -> Peak {
-                    let mut best = Peak::single(f64::NEG_INFINITY, 0.0);
-                    for (k, &x) in v.iter().enumerate() {
-                        if f(x) > best.value {
-                            best = Peak::single(f(x), local(k));
-                        }
+            .first()
+            .map_or(0, |c| c.acceleration.nrows());
+        let mut out = CyclePeaks {
+            cylinders: Vec::with_capacity(nc),
+            negative: Array2::from_elem((nc, np), Peak::default()),
+            positive: Array2::from_elem((nc, np), Peak::default()),
+        };
+        for (c, (cs, cyl)) in series.cylinders.iter().zip(&self.cyls).enumerate() {
+            let local = |k: usize| (series.crank_angle_deg[k] - cyl.phase).rem_euclid(720.0);
+            let arg = |v: &[f64], f: &dyn Fn(f64) -> f64| -> Peak {
+                let mut best = Peak::single(f64::NEG_INFINITY, 0.0);
+                for (k, &x) in v.iter().enumerate() {
+                    if f(x) > best.value {
+                        best = Peak::single(f(x), local(k));
                     }
-                    best
-                };
-                let dyn_force: Vec<f64> = (0..cs.side_force_n.len())
-                    .map(|k| cs.thrust_force_n[k] - cs.antithrust_force_n[k] - cs.side_force_n[k])
-                    .collect();
-                // the filtered accelerations are band-limited: their peaks lie between samples
-                let band_peak = |v: &[f64], sign: f64| -> Peak {
-                    match sampled_peak(v, 0..v.len(), sign) {
-                        Some((value, at)) => {
-                            let k = at.floor() as usize;
-                            let angle = local(k) + (at - k as f64) * self.settings.step_deg;
-                            Peak::single(value, angle.rem_euclid(720.0))
-                        }
-                        None => Peak::single(f64::NEG_INFINITY, 0.0),
-                    }
-                };
-                CylinderPeaks {
-                    cylinder: cs.cylinder,
-                    peak_negative: (0..cs.acceleration.nrows())
-                        .map(|p| band_peak(row(&cs.acceleration, p), -1.0))
-                        .collect(),
-                    peak_positive: (0..cs.acceleration.nrows())
-                        .map(|p| band_peak(row(&cs.acceleration, p), 1.0))
-                        .collect(),
-                    slap_force: arg(&dyn_force, &|x| x.abs()),
-                    side_force: arg(&cs.side_force_n, &|x| x),
                 }
-            })
-            .collect()
+                best
+            };
+            let dyn_force: Vec<f64> = (0..cs.side_force_n.len())
+                .map(|k| cs.thrust_force_n[k] - cs.antithrust_force_n[k] - cs.side_force_n[k])
+                .collect();
+            // the filtered accelerations are band-limited: their peaks lie between samples
+            let band_peak = |v: &[f64], sign: f64| -> Peak {
+                match sampled_peak(v, 0..v.len(), sign) {
+                    Some((value, at)) => {
+                        let k = at.floor() as usize;
+                        let angle = local(k) + (at - k as f64) * self.settings.step_deg;
+                        Peak::single(value, angle.rem_euclid(720.0))
+                    }
+                    None => Peak::single(f64::NEG_INFINITY, 0.0),
+                }
+            };
+            for p in 0..np {
+                out.negative[[c, p]] = band_peak(row(&cs.acceleration, p), -1.0);
+                out.positive[[c, p]] = band_peak(row(&cs.acceleration, p), 1.0);
+            }
+            out.cylinders.push(CylinderPeaks {
+                cylinder: cs.cylinder,
+                slap_force: arg(&dyn_force, &|x| x.abs()),
+                side_force: arg(&cs.side_force_n, &|x| x),
+            });
+        }
+        out
     }
 }
 
@@ -1327,12 +1353,10 @@ impl Record {
 }
 
 /// Largest relative change of any point's peak negative acceleration from `prev` to `peaks`.
-fn largest_change(peaks: &[CylinderPeaks], prev: &[CylinderPeaks]) -> f64 {
+fn largest_change(peaks: &CyclePeaks, prev: &CyclePeaks) -> f64 {
     let mut change: f64 = 0.0;
-    for (a, b) in peaks.iter().zip(prev) {
-        for (x, y) in a.peak_negative.iter().zip(&b.peak_negative) {
-            change = change.max((x.value - y.value).abs() / x.value.abs().max(1e-9));
-        }
+    for (x, y) in peaks.negative.iter().zip(&prev.negative) {
+        change = change.max((x.value - y.value).abs() / x.value.abs().max(1e-9));
     }
     change
 }
@@ -1351,29 +1375,28 @@ fn record_segment(v: &[f64], start: usize, lo: isize, len: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Per cylinder, the statistics of each peak over the cycles in `per_cycle` (all with the same
-/// cylinders and points, as one run gives them).
-fn average_peaks(per_cycle: &[Vec<CylinderPeaks>]) -> Vec<CylinderPeaks> {
+/// Per cylinder and point, the statistics of each peak over the cycles in `per_cycle` (all
+/// with the same cylinders and points, as one run gives them).
+fn average_peaks(per_cycle: &[CyclePeaks]) -> CyclePeaks {
     let first = &per_cycle[0];
-    let over = |pick: &dyn Fn(&[CylinderPeaks]) -> Peak| -> Peak {
-        let v: Vec<Peak> = per_cycle.iter().map(|c| pick(c)).collect();
+    let over = |pick: &dyn Fn(&CyclePeaks) -> Peak| -> Peak {
+        let v: Vec<Peak> = per_cycle.iter().map(pick).collect();
         Peak::over_cycles(&v)
     };
-    first
-        .iter()
-        .enumerate()
-        .map(|(c, cp)| CylinderPeaks {
-            cylinder: cp.cylinder,
-            peak_negative: (0..cp.peak_negative.len())
-                .map(|p| over(&|x| x[c].peak_negative[p]))
-                .collect(),
-            peak_positive: (0..cp.peak_positive.len())
-                .map(|p| over(&|x| x[c].peak_positive[p]))
-                .collect(),
-            slap_force: over(&|x| x[c].slap_force),
-            side_force: over(&|x| x[c].side_force),
-        })
-        .collect()
+    CyclePeaks {
+        cylinders: first
+            .cylinders
+            .iter()
+            .enumerate()
+            .map(|(c, cp)| CylinderPeaks {
+                cylinder: cp.cylinder,
+                slap_force: over(&|x| x.cylinders[c].slap_force),
+                side_force: over(&|x| x.cylinders[c].side_force),
+            })
+            .collect(),
+        negative: Array2::from_shape_fn(first.negative.dim(), |i| over(&|x| x.negative[i])),
+        positive: Array2::from_shape_fn(first.positive.dim(), |i| over(&|x| x.positive[i])),
+    }
 }
 
 /// Runs the engine ([`EngineRun::run`]) and, while the estimated step error of the mean peak
@@ -1412,7 +1435,7 @@ pub fn run_with_tolerance(
 /// positive rho_k (Geyer's initial positive sequence; K <= n / 3), clamped to [1, n], and
 ///   SE = s sqrt(tau / n),  s the sample standard deviation
 /// (for independent cycles tau = 1 and SE = s / sqrt(n)). Fewer than 4 cycles: tau = 1.
-pub fn standard_errors(per_cycle: &[Vec<CylinderPeaks>], peaks: &mut [CylinderPeaks]) -> f64 {
+fn standard_errors(per_cycle: &[CyclePeaks], peaks: &mut CyclePeaks) -> f64 {
     let n = per_cycle.len();
     if n < 2 {
         return 1.0;
@@ -1422,15 +1445,16 @@ pub fn standard_errors(per_cycle: &[Vec<CylinderPeaks>], peaks: &mut [CylinderPe
         per_cycle
             .iter()
             .map(|cyc| match kind {
-                0 => cyc[c].peak_negative[p].value,
-                1 => cyc[c].peak_positive[p].value,
-                _ => cyc[c].slap_force.value,
+                0 => cyc.negative[[c, p]].value,
+                1 => cyc.positive[[c, p]].value,
+                _ => cyc.cylinders[c].slap_force.value,
             })
             .collect()
     };
     let mut all: Vec<(usize, usize, usize, Vec<f64>)> = Vec::new();
-    for (c, cp) in peaks.iter().enumerate() {
-        for p in 0..cp.peak_negative.len() {
+    let np = peaks.negative.ncols();
+    for c in 0..peaks.cylinders.len() {
+        for p in 0..np {
             all.push((c, 0, p, series(c, 0, p)));
             all.push((c, 1, p, series(c, 1, p)));
         }
@@ -1462,9 +1486,9 @@ pub fn standard_errors(per_cycle: &[Vec<CylinderPeaks>], peaks: &mut [CylinderPe
     let factor = (tau / n as f64).sqrt();
     for (c, kind, p, _) in &all {
         let peak = match kind {
-            0 => &mut peaks[*c].peak_negative[*p],
-            1 => &mut peaks[*c].peak_positive[*p],
-            _ => &mut peaks[*c].slap_force,
+            0 => &mut peaks.negative[[*c, *p]],
+            1 => &mut peaks.positive[[*c, *p]],
+            _ => &mut peaks.cylinders[*c].slap_force,
         };
         peak.se = peak.std * factor;
     }
