@@ -45,6 +45,16 @@ fn sources(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
 
 /// The top-level modules named right after `crate::`: one name, or each of a group
 /// `crate::{a, b::c}`.
+/// The code of a source file: its lines without the comment lines.
+fn code_of(f: &Path) -> String {
+    std::fs::read_to_string(f)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("//"))
+        .map(|l| format!("{l}\n"))
+        .collect()
+}
+
 fn targets(after: &str) -> Vec<String> {
     let ident = |s: &str| -> String {
         s.trim_start()
@@ -103,12 +113,7 @@ fn verification_no_module_imports_a_later_stage() {
             continue; // lib.rs, main.rs
         };
         // code only: a doc comment may point at a later stage's item
-        let text: String = std::fs::read_to_string(f)
-            .unwrap()
-            .lines()
-            .filter(|l| !l.trim_start().starts_with("//"))
-            .map(|l| format!("{l}\n"))
-            .collect();
+        let text = code_of(f);
         for (at, _) in text.match_indices("crate::") {
             for target in targets(&text[at + 7..]) {
                 let Some(to) = level(&target) else { continue };
@@ -146,12 +151,7 @@ fn verification_no_two_modules_of_a_stage_import_each_other() {
         }
         let stage = dir.display().to_string();
         let module = stem.to_string_lossy().to_string();
-        let text: String = std::fs::read_to_string(f)
-            .unwrap()
-            .lines()
-            .filter(|l| !l.trim_start().starts_with("//"))
-            .map(|l| format!("{l}\n"))
-            .collect();
+        let text = code_of(f);
         for (at, _) in text.match_indices("super::") {
             for target in targets(&text[at + 7..]) {
                 if !target.is_empty() && target != module {
@@ -183,12 +183,7 @@ fn verification_tests_and_benches_do_not_use_the_command_layer() {
     let needle = ["linercav", "::app"].concat();
     let users: Vec<String> = files
         .iter()
-        .filter(|f| {
-            std::fs::read_to_string(f)
-                .unwrap()
-                .lines()
-                .any(|l| !l.trim_start().starts_with("//") && l.contains(&needle))
-        })
+        .filter(|f| code_of(f).contains(&needle))
         .map(|f| f.display().to_string())
         .collect();
     assert!(users.is_empty(), "command layer used by {users:?}");

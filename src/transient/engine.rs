@@ -47,12 +47,21 @@ pub fn run_cycle(
     settings: CycleSettings,
     on_step: impl FnMut(usize, usize),
 ) -> Result<CycleResult, TransientError> {
-    let setup = EngineSetup {
+    run_with_tolerance(
+        &setup_of(scene, rom, piston),
+        settings,
+        MAX_REFINEMENTS,
+        on_step,
+    )
+}
+
+/// The engine of `scene` on `rom` with `piston`: its firing order, crank speed and liner top.
+pub fn setup_of<'a>(scene: &'a Scene, rom: &'a EngineRom, piston: &'a Piston) -> EngineSetup<'a> {
+    EngineSetup {
         rom,
         piston,
         firing_order: &scene.engine.firing_order,
         omega: piston.kinematics.omega,
         liner_top: scene.liner_geometry.length,
-    };
-    run_with_tolerance(&setup, settings, MAX_REFINEMENTS, on_step)
+    }
 }

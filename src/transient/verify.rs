@@ -542,13 +542,7 @@ pub fn tradeoff(
             seconds: s,
         });
     }
-    let setup = EngineSetup {
-        rom,
-        piston,
-        firing_order: &scene.engine.firing_order,
-        omega: piston.kinematics.omega,
-        liner_top: scene.liner_geometry.length,
-    };
+    let setup = super::engine::setup_of(scene, rom, piston);
     out.extend(engine_steps(&setup, settings)?);
     Ok(out)
 }
