@@ -1139,11 +1139,6 @@ impl<'a> EngineRun<'a> {
         self
     }
 
-    /// The cylinder number of cylinder index `c`.
-    pub fn cylinder_number(&self, c: usize) -> usize {
-        self.cyls[c].rom.cylinder
-    }
-
     /// Runs `steps` steps of `h` from the current state and returns the peak negative
     /// acceleration of cylinder index `c`'s points over the window, filtered like the cycle's
     /// outputs and taken where the filter's ends do not reach.
