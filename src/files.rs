@@ -16,8 +16,17 @@ static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 /// Held while staged outputs are moved into place (the signal handler waits for it).
 static COMMITTING: Mutex<()> = Mutex::new(());
 
-fn register(p: &Path) {
-    lock(&TEMPORARIES).push(p.to_path_buf());
+/// Makes a temporary file or directory at `p` through `make` and registers it, both under the
+/// registry's lock: the signal handler, which takes that lock and keeps it until the process
+/// ends, sees either both or neither, so nothing made here outlives a stopping signal.
+fn make_registered<T>(
+    p: &Path,
+    make: impl FnOnce(&Path) -> std::io::Result<T>,
+) -> std::io::Result<T> {
+    let mut temporaries = lock(&TEMPORARIES);
+    let made = make(p)?;
+    temporaries.push(p.to_path_buf());
+    Ok(made)
 }
 
 fn unregister(p: &Path) {
@@ -28,13 +37,16 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Removes this process's temporary files and directories and exits with 128 + the signal's
-/// usual number (130) when SIGINT, SIGTERM or SIGHUP arrives; a move of staged outputs in
-/// progress is finished first. Called once by the command-line front end.
+/// Removes this process's temporary files and directories and exits with 130 when SIGINT,
+/// SIGTERM or SIGHUP arrives. A move of staged outputs in progress is finished first; both
+/// locks are then held until the process ends, so the working thread can neither make a new
+/// temporary nor move an output while (or after) they are removed. Called once by the
+/// command-line front end.
 pub fn install_signal_cleanup() {
     let _ = ctrlc::set_handler(|| {
         let _moving = lock(&COMMITTING);
-        for p in lock(&TEMPORARIES).drain(..) {
+        let mut temporaries = lock(&TEMPORARIES);
+        for p in temporaries.drain(..) {
             if p.is_dir() {
                 let _ = std::fs::remove_dir_all(&p);
             } else {
@@ -143,9 +155,8 @@ pub fn write_all_atomic(files: Vec<(PathBuf, Filler<'_>)>) -> Result<(), WriteEr
     let mut done: Vec<(PathBuf, PathBuf)> = Vec::new();
     for (path, fill) in files {
         let tmp = temp_path(&path);
-        register(&tmp);
         let r = (|| {
-            let file = std::fs::File::create(&tmp)?;
+            let file = make_registered(&tmp, |p| std::fs::File::create(p))?;
             let mut w = BufWriter::with_capacity(1 << 20, file);
             fill(&mut w)?;
             w.flush()?;
@@ -174,6 +185,21 @@ pub fn write_all_atomic(files: Vec<(PathBuf, Filler<'_>)>) -> Result<(), WriteEr
         unregister(&tmp);
     }
     result
+}
+
+/// Checks, before work starts, that `dir` exists or can be made and that a file can be
+/// created in it, so that work whose result could not be stored is never started.
+pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
+    let fail = |source| WriteError {
+        path: dir.to_path_buf(),
+        source,
+    };
+    std::fs::create_dir_all(dir).map_err(fail)?;
+    let probe = dir.join(format!(".probe.{}.tmp", std::process::id()));
+    make_registered(&probe, |p| std::fs::File::create(p)).map_err(fail)?;
+    let removed = std::fs::remove_file(&probe);
+    unregister(&probe);
+    removed.map_err(fail)
 }
 
 /// A set of output files written all-or-nothing: the command writes into [`OutputDir::path`]
@@ -221,8 +247,7 @@ impl OutputDir {
             temp_path(target)
         };
         let _ = std::fs::remove_dir_all(&staging);
-        std::fs::create_dir(&staging).map_err(fail)?;
-        register(&staging);
+        make_registered(&staging, |p| std::fs::create_dir(p)).map_err(fail)?;
         Ok(Self {
             target: target.to_path_buf(),
             staging,

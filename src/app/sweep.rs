@@ -95,7 +95,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     let stage = match (&req.out, shard) {
         (Some(o), None) => Some(OutputDir::create(o)?),
         (Some(o), Some(_)) => {
-            crate::reduce::cache::check_writable(o)?;
+            crate::files::check_writable(o)?;
             None
         }
         _ => None,

@@ -113,19 +113,6 @@ fn decode(bytes: &[u8], description: &str) -> Result<EngineRom, String> {
 
 use bincode::Options;
 
-/// Checks, before a build, that `dir` exists or can be made and that a file can be created in
-/// it, so that a build whose result could not be stored is never started.
-pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
-    let fail = |source| WriteError {
-        path: dir.to_path_buf(),
-        source,
-    };
-    std::fs::create_dir_all(dir).map_err(fail)?;
-    let probe = dir.join(format!(".probe.{}.tmp", std::process::id()));
-    std::fs::File::create(&probe).map_err(fail)?;
-    std::fs::remove_file(&probe).map_err(fail)
-}
-
 /// The exclusive right to build one cache entry: an advisory lock (flock) on `<entry>.lock`
 /// beside it. Processes that miss the same entry at once (the shards of an array job on a
 /// shared cache directory) queue on it: one builds and stores, the others then find the entry.
@@ -207,7 +194,7 @@ fn flock(file: &std::fs::File, op: libc::c_int) -> std::io::Result<()> {
 /// Writes a ROM made from `description` atomically.
 pub fn store(path: &Path, description: &str, rom: &EngineRom) -> Result<(), WriteError> {
     if let Some(dir) = path.parent() {
-        check_writable(dir)?;
+        crate::files::check_writable(dir)?;
     }
     let payload = bincode::options()
         .with_fixint_encoding()

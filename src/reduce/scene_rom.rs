@@ -319,7 +319,7 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions, progress: &dyn Fn(&str)) -> R
     let _lock = if opts.no_cache {
         None
     } else {
-        cache::check_writable(&dir)?;
+        crate::files::check_writable(&dir)?;
         let lock = cache::BuildLock::acquire(&path, |l| {
             log::warn!(
                 "another process is building this ROM (lock {}); waiting for it",

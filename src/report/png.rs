@@ -1,8 +1,8 @@
 //! PNG figures with plotters: an embedded DejaVu font (no system fonts needed), atomic writes
-//! (drawn to a temporary file in the target directory, then renamed), and one small chart
+//! (drawn in memory, encoded with `png`, written to a temporary file, then renamed), and one small chart
 //! helper that covers the report's line, point and threshold plots.
 
-use crate::files::WriteError;
+use crate::files::{write_atomic, WriteError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -25,36 +25,37 @@ fn fonts() {
     });
 }
 
-/// Draws a `w` x `h` PNG at `path` through `draw`, atomically.
+/// Draws a `w` x `h` PNG at `path` through `draw`: drawn into memory (24-bit RGB), encoded,
+/// and written atomically through [`write_atomic`], so an interrupted run leaves no partial
+/// figure and no temporary file.
 pub fn write_png(
     path: &Path,
     size: (u32, u32),
     draw: impl FnOnce(&Area<'_>) -> DrawResult,
 ) -> Result<(), WriteError> {
     fonts();
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
+    let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
     let r = (|| -> DrawResult {
-        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
         root.fill(&WHITE)?;
         draw(&root)?;
         root.present()?;
         Ok(())
     })();
-    let fail = |msg: String| WriteError {
-        path: path.to_path_buf(),
-        source: std::io::Error::other(msg),
-    };
     if let Err(e) = r {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(fail(format!("drawing failed: {e}")));
+        return Err(WriteError {
+            path: path.to_path_buf(),
+            source: std::io::Error::other(format!("drawing failed: {e}")),
+        });
     }
-    std::fs::rename(&tmp, path).map_err(|source| WriteError {
-        path: path.to_path_buf(),
-        source,
+    write_atomic(path, |w| {
+        let mut enc = png::Encoder::new(w, size.0, size.1);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
+        let mut out = enc.write_header().map_err(std::io::Error::other)?;
+        out.write_image_data(&rgb).map_err(std::io::Error::other)?;
+        out.finish().map_err(std::io::Error::other)
     })
 }
 
@@ -272,6 +273,7 @@ pub fn bars(
                 String::new()
             }
         })
+        .y_label_formatter(&|v| tick(*v))
         .y_desc(y_label)
         .label_style(("sans-serif", 13))
         .light_line_style(RGBColor(235, 235, 235))
