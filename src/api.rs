@@ -34,7 +34,7 @@ pub use crate::report::records::{CylinderReport, PointPeaks, SimulateReport};
 pub use crate::scene::Scene;
 use crate::scene::{MeshSource, PARTS};
 pub use crate::transient::cycle::{CycleResult, CycleSettings};
-pub use crate::transient::engine::{run_cycle, settings_of};
+pub use crate::transient::engine::{run_cycle, run_half_step, settings_of};
 pub use crate::transient::verify::TradeoffPoint;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -268,6 +268,10 @@ pub const PIN_OFFSETS_MM: [f64; 3] = [-1.0, 0.0, 1.0];
 pub struct ReportRuns {
     /// The scene's own run, on `rom`.
     pub base: CycleResult,
+    /// The whole-run step check: the scene's run repeated at half its step
+    /// ([`crate::transient::engine::run_half_step`]), and its wall time [s].
+    pub half_step: CycleResult,
+    pub half_step_seconds: f64,
     pub rom: LoadedRom,
     /// The clearance [um] and pin-offset [mm] sweeps, the scene's run included, ascending.
     pub clearance: Vec<SweepPoint>,
@@ -360,8 +364,20 @@ pub fn report_runs(
         &settings_of(sim, scene.rom.band_hz),
     )?;
     let evaluation = evaluate_scene(scene, &rom.rom, &base)?;
+    phase("whole-run step check (the scene's cycles at half the step)");
+    let t = Instant::now();
+    let step_deg = base.stats.dt_s * scene.engine.speed_rpm * 6.0;
+    let settings = settings_of(sim, scene.rom.band_hz);
+    let half_step = run_half_step(scene, &rom.rom, &piston, settings, step_deg, |_, _| {})
+        .map_err(|source| Error::Transient {
+            path: scene.path.clone(),
+            source,
+        })?;
+    let half_step_seconds = t.elapsed().as_secs_f64();
     Ok(ReportRuns {
         base,
+        half_step,
+        half_step_seconds,
         rom,
         clearance,
         pin_offset,

@@ -184,6 +184,11 @@ enum Command {
         /// cylinder (330-420 deg) and report the ROM's error and speed-up there.
         #[arg(long)]
         full_order: bool,
+        /// Also repeat every cycle at half the step (about twice the transient's time) and
+        /// report each peak's whole-run step error, which holds what the firing-slap estimate
+        /// does not: the coarse step's shift of the cycles' statistics between the slaps.
+        #[arg(long)]
+        check_step: bool,
         #[command(flatten)]
         cache: CacheArgs,
     },
@@ -385,6 +390,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             json,
             out,
             full_order,
+            check_step,
             cache,
         } => {
             let req = simulate::SimulateRequest {
@@ -393,6 +399,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 out,
                 cache: cache.options(),
                 full_order,
+                check_step,
             };
             let report = simulate::run(&req, started)?;
             print_report(json, &report, || report.to_text());

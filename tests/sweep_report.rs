@@ -132,6 +132,56 @@ fn contract_report_writes_the_figure_set() {
     assert_eq!(v["clearance_sweep"].as_array().unwrap().len(), 3);
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("## Verdict") && md.contains("![peaks.png](peaks.png)"));
+    // the report runs the whole-run step check and says so
+    assert!(v["simulate"]["step_check"]["step_deg"].as_f64().unwrap() > 0.0);
+    assert!(md.contains("Whole-run step check"), "{md}");
+}
+
+/// `simulate --check-step` adds the whole-run step check: the step of the repeated run is half
+/// the run's, every point carries the repeated run's mean and standard error, and the text
+/// output prints the check; without the flag none of it appears.
+#[test]
+fn contract_simulate_check_step_adds_the_half_step_run() {
+    let args = ["simulate", SCENE, "--set", "transient.cycles=2", "--json"];
+    let (code, plain, err) = linercav(&args);
+    assert_eq!(code, 0, "{err}");
+    let plain: serde_json::Value = serde_json::from_str(&plain).unwrap();
+    assert!(plain.get("step_check").is_none());
+    assert!(plain["cylinders"][0]["points"][0]
+        .get("peak_negative_half_step_m_s2")
+        .is_none());
+    let (code, checked, err) = linercav(&[&args[..], &["--check-step"]].concat());
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&checked).unwrap();
+    let step = v["stats"]["dt_s"].as_f64().unwrap() * v["speed_rpm"].as_f64().unwrap() * 6.0;
+    let half = v["step_check"]["step_deg"].as_f64().unwrap();
+    assert!((half - step / 2.0).abs() < 1e-9, "{half} vs {step}");
+    // the same run as without the check
+    assert_eq!(
+        v["cylinders"][0]["points"][0]["peak_negative_m_s2"],
+        plain["cylinders"][0]["points"][0]["peak_negative_m_s2"]
+    );
+    for c in v["cylinders"].as_array().unwrap() {
+        for p in c["points"].as_array().unwrap() {
+            assert!(
+                p["peak_negative_half_step_m_s2"].as_f64().unwrap() > 0.0,
+                "{p}"
+            );
+            assert!(
+                p["peak_negative_half_step_se_m_s2"].as_f64().unwrap() >= 0.0,
+                "{p}"
+            );
+        }
+    }
+    let (code, text, err) = linercav(&[
+        "simulate",
+        SCENE,
+        "--set",
+        "transient.cycles=2",
+        "--check-step",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(text.contains("whole-run step check"), "{text}");
 }
 
 /// `simulate --out` writes the last cycle's time series: one row per step of the 720 deg

@@ -3,7 +3,8 @@
 //! must run stably or stop with a clear message (two-cylinder coarse test engine).
 
 use linercav::api::{
-    get_rom, piston_of, run_cycle, settings_of, CacheOptions, CycleSettings, EngineRom, Scene,
+    get_rom, piston_of, run_cycle, run_half_step, settings_of, CacheOptions, CycleSettings,
+    EngineRom, Scene, SimulateReport,
 };
 use linercav::piston::skirt::SliceLaw;
 use linercav::transient::contact::{self, Body, Location, Slice, Structure};
@@ -669,19 +670,19 @@ fn verification_averaged_cycles_are_the_statistics_of_the_single_cycles() {
 #[test]
 fn verification_accuracy_control_meets_its_tolerance_against_a_converged_run() {
     let controlled = simulate(&[], |_| {}).unwrap();
-    let converged = simulate(&["transient.step_deg=0.00390625"], |s| s.tolerance = None).unwrap();
+    let converged = converged_small();
     let mean = |r: &linercav::transient::cycle::CycleResult| {
         let v: Vec<f64> = r.peak_negative.iter().map(|p| p.value).collect();
         v.iter().sum::<f64>() / v.len() as f64
     };
-    let err = (mean(&controlled) - mean(&converged)).abs() / mean(&converged);
+    let err = (mean(&controlled) - mean(converged)).abs() / mean(converged);
     let est = controlled.stats.step_error_estimate;
     println!(
         "step {:.4} deg after {} halving(s): mean {:.1} against converged {:.1}: error {:.2} %, estimate {:.2} %",
         controlled.stats.dt_s * 1900.0 * 6.0,
         controlled.stats.step_refinements,
         mean(&controlled),
-        mean(&converged),
+        mean(converged),
         100.0 * err,
         100.0 * est
     );
@@ -690,6 +691,75 @@ fn verification_accuracy_control_meets_its_tolerance_against_a_converged_run() {
         let d = (c.side_force.value - f.side_force.value).abs() / f.side_force.value;
         assert!(d < 1e-3, "{d}");
     }
+}
+
+/// The test engine's cycle at a fixed step 64 times finer than its default 1/4 deg, without
+/// the accuracy control (shared by the tests that compare against it).
+fn converged_small() -> &'static linercav::transient::cycle::CycleResult {
+    static RUN: OnceLock<linercav::transient::cycle::CycleResult> = OnceLock::new();
+    RUN.get_or_init(|| {
+        simulate(&["transient.step_deg=0.00390625"], |s| s.tolerance = None).unwrap()
+    })
+}
+
+/// Verification of the whole-run step check against a converged run: the test engine's cycle
+/// from rest (deterministic: no statistical margin is due) at its default settings and
+/// repeated at half the step ([`run_half_step`]), against a fixed step 64 times finer. The
+/// check's numerical uncertainty of each cylinder's worst point, max(2 |P_h - P_{h/2}|, the
+/// firing-slap estimate), must cover the actual error |P_h - P_converged| up to 1 % of the
+/// converged peak (the claim the report's ranking rests on; the 1 % allows for what is left
+/// of the reference's own step error and for the peaks' sampling). The records' fields must
+/// carry the half-step run's values.
+#[test]
+fn verification_whole_run_step_check_covers_the_error_against_a_converged_run() {
+    let scene = Scene::load(Path::new(SMALL), &[]).unwrap();
+    let piston = piston_of(&scene).unwrap();
+    let mut settings = settings_of(scene.simulation.as_ref().unwrap(), scene.rom.band_hz);
+    settings.tolerance = None;
+    let run = run_cycle(&scene, small_rom(), &piston, settings.clone(), |_, _| {}).unwrap();
+    let half = run_half_step(
+        &scene,
+        small_rom(),
+        &piston,
+        settings.clone(),
+        settings.step_deg,
+        |_, _| {},
+    )
+    .unwrap();
+    assert!((half.stats.dt_s - run.stats.dt_s / 2.0).abs() < 1e-15 * run.stats.dt_s);
+    let mut report = SimulateReport::new(&scene, &piston, &run, "test", 0.0);
+    report.add_step_check(&half, 0.0);
+    let converged = converged_small();
+    for (ci, c) in report.cylinders.iter().enumerate() {
+        let (k, w) = c
+            .points
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.peak_negative_m_s2.total_cmp(&b.1.peak_negative_m_s2))
+            .unwrap();
+        assert_eq!(
+            w.peak_negative_half_step_m_s2,
+            Some(half.peak_negative[[ci, k]].value)
+        );
+        let reference = converged.peak_negative[[ci, k]].value;
+        let error = (w.peak_negative_m_s2 - reference).abs();
+        let bound = w.numerical_uncertainty();
+        println!(
+            "cylinder {} point {}: P_h {:.1}, P_h/2 {:.1}, converged {:.1}: error {:.2} %, uncertainty {:.2} % (slap estimate {:.2} %)",
+            c.cylinder,
+            k + 1,
+            w.peak_negative_m_s2,
+            w.peak_negative_half_step_m_s2.unwrap(),
+            reference,
+            100.0 * error / reference,
+            100.0 * bound / reference,
+            100.0 * w.peak_negative_step_error_m_s2 / reference
+        );
+        assert!(error <= bound + 0.01 * reference, "cylinder {}", c.cylinder);
+    }
+    let check = report.step_check.as_ref().unwrap();
+    assert_eq!(check.cycles_averaged, run.stats.cycles_averaged);
+    assert!(check.mean_difference.is_finite() && check.mean_difference_se >= 0.0);
 }
 
 /// Verification of the report's speed-against-error curve against a converged reference: on

@@ -47,6 +47,8 @@ pub struct SimulateRequest {
     pub cache: CacheOptions,
     /// Compare with the full-order model on a window ([`super::full_order`]).
     pub full_order: bool,
+    /// Repeat every cycle at half the step ([`crate::transient::engine::run_half_step`]).
+    pub check_step: bool,
 }
 
 /// Runs `simulate`.
@@ -55,7 +57,11 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     let sim = simulation(&scene)?;
     let piston = piston_of(&scene)?;
     // refused before any work: a transient beyond the limits, an output that cannot be written
-    if let Some(est) = crate::scene::budget::transient(&scene) {
+    if let Some(mut est) = crate::scene::budget::transient(&scene) {
+        if req.check_step {
+            // the repeated run at half the step costs about twice the run
+            est.seconds *= 3.0;
+        }
         crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
     }
     let stage = req.out.as_deref().map(OutputDir::create).transpose()?;
@@ -73,6 +79,28 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     )?;
     let transient_seconds = t.elapsed().as_secs_f64();
     let mut report = SimulateReport::new(&scene, &piston, &res, loaded.cache, transient_seconds);
+    if req.check_step {
+        progress.phase("whole-run step check");
+        let t = Instant::now();
+        let step_deg = res.stats.dt_s * scene.engine.speed_rpm * 6.0;
+        let half = crate::transient::engine::run_half_step(
+            &scene,
+            &loaded.rom,
+            &piston,
+            settings_of(sim, scene.rom.band_hz),
+            step_deg,
+            |k, n| {
+                if k % 200 == 0 {
+                    progress.phase(&format!("whole-run step check: step {k} of {n}"));
+                }
+            },
+        )
+        .map_err(|source| Error::Transient {
+            path: scene.path.clone(),
+            source,
+        })?;
+        report.add_step_check(&half, t.elapsed().as_secs_f64());
+    }
     if req.full_order {
         let settings = settings_of(sim, scene.rom.band_hz);
         let cmp = compare(&scene, &loaded.rom, &piston, &settings, &|m| {

@@ -26,17 +26,19 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     let started = Instant::now();
     let scene = super::load_scene(scene_path, sets)?;
     let piston = piston_of(&scene)?;
-    // about ten transients (the scene and its two sweeps): refused before any work when beyond
+    // about ten transients (the scene, its two sweeps, the step check): refused before any work when beyond
     // the limits, as is an output directory that cannot be written
     if let Some(mut est) = crate::scene::budget::transient(&scene) {
         est.what = "the report's transients";
-        est.seconds *= (1 + CLEARANCES_UM.len() + PIN_OFFSETS_MM.len()) as f64 / 2.0;
+        // on two cores, then the whole-run step check at half the step (about two transients)
+        est.seconds *= (1 + CLEARANCES_UM.len() + PIN_OFFSETS_MM.len()) as f64 / 2.0 + 2.0;
         crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
     }
     let stage = crate::files::OutputDir::create(out)?;
     let progress = super::progress::Progress::new();
     let runs = report_runs(scene_path, sets, &scene, cache, &|m| progress.phase(m))?;
     let mut simulate = SimulateReport::new(&scene, &piston, &runs.base, runs.rom.cache, 0.0);
+    simulate.add_step_check(&runs.half_step, runs.half_step_seconds);
     simulate.seconds = started.elapsed().as_secs_f64();
     progress.phase("figures");
     let figs = Figures {
@@ -44,6 +46,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         scene: &scene,
         piston: &piston,
         base: &runs.base,
+        simulate: &simulate,
         ev: &runs.evaluation,
         clearance: &runs.clearance,
         offset: &runs.pin_offset,
@@ -52,6 +55,8 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     }
     .draw()?;
     let ranking_resolution = Report::ranking_resolution_of(&simulate, &runs.evaluation.ranking);
+    let ranking_resolution_slap_only =
+        Report::ranking_resolution_slap_only(&simulate, &runs.evaluation.ranking);
     let mut report = Report {
         scene: scene.path.display().to_string(),
         title: scene.title.clone(),
@@ -63,6 +68,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         pin_offset_sweep: runs.pin_offset,
         tradeoff: runs.tradeoff,
         ranking_resolution,
+        ranking_resolution_slap_only,
         files: figs
             .iter()
             .map(|p| stage.final_path(p).display().to_string())

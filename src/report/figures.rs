@@ -7,6 +7,7 @@
 //! `criteria.png` (CSF against Ca) and `speed_error.png`.
 
 use super::png::{bars, write_png, BarData, Chart, Mark, Rule, Series};
+use super::records::SimulateReport;
 use crate::analysis::spectrum::{rms_average, Spectrum};
 use crate::cavitation::criteria::Thresholds;
 use crate::cavitation::evaluate::{spectra, Evaluation};
@@ -110,6 +111,8 @@ pub struct Figures<'a> {
     pub scene: &'a Scene,
     pub piston: &'a Piston,
     pub base: &'a CycleResult,
+    /// The run's records: each peak's combined uncertainty.
+    pub simulate: &'a SimulateReport,
     pub ev: &'a Evaluation,
     pub clearance: &'a [SweepPoint],
     pub offset: &'a [SweepPoint],
@@ -418,7 +421,13 @@ impl Figures<'_> {
 
     /// `peaks.png`: mean peaks per cylinder and point with their uncertainty and thresholds.
     fn peaks(&self) -> Result<Vec<PathBuf>, WriteError> {
-        let Self { out, base, ev, .. } = *self;
+        let Self {
+            out,
+            base,
+            ev,
+            simulate,
+            ..
+        } = *self;
         let t = ev.thresholds;
         let mut files = Vec::new();
         // peaks per cylinder and point with thresholds
@@ -436,32 +445,22 @@ impl Figures<'_> {
             .map(|c| c.points.iter().map(|p| p.peak_negative_m_s2).collect())
             .collect();
         // whiskers: the combined standard uncertainty of each mean, sqrt(SE^2 + E^2), SE its
-        // standard error (cycles correlated) and E its estimated step error
+        // standard error (cycles correlated) and E its numerical uncertainty
         let errors: Vec<Vec<f64>> = ev
             .cylinders
             .iter()
             .map(|c| {
-                let step = base.step_error.iter().find(|e| e.cylinder == c.cylinder);
-                base.peaks
+                simulate
+                    .cylinders
                     .iter()
-                    .position(|b| b.cylinder == c.cylinder)
-                    .map(|b| {
-                        base.peak_negative
-                            .row(b)
-                            .iter()
-                            .enumerate()
-                            .map(|(k, p)| {
-                                let e = step.map_or(0.0, |s| s.relative(k) * p.value);
-                                p.se.hypot(e)
-                            })
-                            .collect()
-                    })
+                    .find(|s| s.cylinder == c.cylinder)
+                    .map(|s| s.points.iter().map(|p| p.combined_uncertainty()).collect())
                     .unwrap_or_default()
             })
             .collect();
         let n_avg = base.stats.cycles_averaged;
         let peaks_title = if n_avg > 1 {
-            format!("Peak negative liner acceleration per cylinder and point (top to bottom): mean of {n_avg} cycles +- uncertainty (standard error and step error)")
+            format!("Peak negative liner acceleration per cylinder and point (top to bottom): mean of {n_avg} cycles +- uncertainty (standard error and numerical uncertainty)")
         } else {
             "Peak negative liner acceleration per cylinder and point (top to bottom)".to_string()
         };

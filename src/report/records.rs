@@ -33,6 +33,54 @@ pub struct PointPeaks {
     /// Estimated step error of the peak negative acceleration: the relative step error of
     /// the point's firing-slap peak (`transient::cycle::StepError`) times the mean [m/s^2].
     pub peak_negative_step_error_m_s2: f64,
+    /// With the whole-run step check (`simulate --check-step`; always in the report): the
+    /// mean peak negative acceleration of the run repeated at half the step, and its standard
+    /// error [m/s^2] ([`StepCheck`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_negative_half_step_m_s2: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_negative_half_step_se_m_s2: Option<f64>,
+}
+
+impl PointPeaks {
+    /// The whole-run estimate of the step error, E_run = 2 |P_h - P_{h/2}| [m/s^2] (None
+    /// without the check). It holds the scatter of both means, standard error
+    /// 2 sqrt(SE_h^2 + SE_{h/2}^2), so it leans to the safe side.
+    pub fn run_step_error(&self) -> Option<f64> {
+        self.peak_negative_half_step_m_s2
+            .map(|half| 2.0 * (self.peak_negative_m_s2 - half).abs())
+    }
+
+    /// The peak's numerical uncertainty: the larger of the firing-slap estimate and, with the
+    /// whole-run check, E_run [m/s^2].
+    pub fn numerical_uncertainty(&self) -> f64 {
+        self.run_step_error()
+            .map_or(self.peak_negative_step_error_m_s2, |e| {
+                e.max(self.peak_negative_step_error_m_s2)
+            })
+    }
+
+    /// The combined standard uncertainty of the mean, sqrt(SE^2 + E^2), E the numerical
+    /// uncertainty [m/s^2].
+    pub fn combined_uncertainty(&self) -> f64 {
+        self.peak_negative_se_m_s2
+            .hypot(self.numerical_uncertainty())
+    }
+}
+
+/// The whole-run step check of a run: every cycle repeated at half the step
+/// ([`crate::transient::engine::run_half_step`]); per point in [`PointPeaks`].
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct StepCheck {
+    /// Step of the repeated run [deg], its averaged cycles and wall time [s].
+    pub step_deg: f64,
+    pub cycles_averaged: usize,
+    pub seconds: f64,
+    /// Relative difference of the mean of all peak negative accelerations,
+    /// (P_h - P_{h/2}) / P_{h/2}, and its standard error (the points' standard errors
+    /// averaged, as if fully correlated, per run, combined in quadrature).
+    pub mean_difference: f64,
+    pub mean_difference_se: f64,
 }
 
 /// One cylinder's results.
@@ -73,6 +121,9 @@ pub struct SimulateReport {
     pub rom_error_peak_negative: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub speedup: Option<f64>,
+    /// The whole-run step check, when run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step_check: Option<StepCheck>,
     /// Physically doubtful scene values (also printed on stderr).
     pub warnings: Vec<String>,
 }
@@ -112,7 +163,33 @@ impl SimulateReport {
             full_order: None,
             rom_error_peak_negative: None,
             speedup: None,
+            step_check: None,
         }
+    }
+
+    /// Adds the whole-run step check from `half`, the run repeated at half the step
+    /// ([`crate::transient::engine::run_half_step`]), which took `seconds`.
+    pub fn add_step_check(&mut self, half: &CycleResult, seconds: f64) {
+        let (mut sum_h, mut sum_half, mut se_h, mut se_half) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        for (c, row) in self.cylinders.iter_mut().zip(half.peak_negative.rows()) {
+            for (p, q) in c.points.iter_mut().zip(row) {
+                p.peak_negative_half_step_m_s2 = Some(q.value);
+                p.peak_negative_half_step_se_m_s2 = Some(q.se);
+                sum_h += p.peak_negative_m_s2;
+                sum_half += q.value;
+                se_h += p.peak_negative_se_m_s2;
+                se_half += q.se;
+            }
+        }
+        // the means' sums: the relative differences of the means are those of the sums
+        let scale = sum_half.abs().max(1e-12);
+        self.step_check = Some(StepCheck {
+            step_deg: half.stats.dt_s * self.speed_rpm * 6.0,
+            cycles_averaged: half.stats.cycles_averaged,
+            seconds,
+            mean_difference: (sum_h - sum_half) / scale,
+            mean_difference_se: se_h.hypot(se_half) / scale,
+        });
     }
 
     /// Per-cylinder summary of a result.
@@ -143,6 +220,8 @@ impl SimulateReport {
                         peak_negative_se_m_s2: n.se,
                         peak_negative_step_error_m_s2: step
                             .map_or(0.0, |e| e.relative(k) * n.value),
+                        peak_negative_half_step_m_s2: None,
+                        peak_negative_half_step_se_m_s2: None,
                     })
                     .collect(),
                 peak_slap_force_n: c.slap_force.value,
@@ -152,6 +231,51 @@ impl SimulateReport {
                 side_force_crank_angle_deg: c.side_force.crank_angle_deg,
             })
             .collect()
+    }
+
+    /// With the whole-run check: each cylinder's worst point as (cylinder, relative difference
+    /// (P_h - P_{h/2}) / P_{h/2}, its standard error sqrt(SE_h^2 + SE_{h/2}^2) / P_{h/2}).
+    pub fn worst_point_step_checks(&self) -> Vec<(usize, f64, f64)> {
+        self.cylinders
+            .iter()
+            .filter_map(|c| {
+                let w = c
+                    .points
+                    .iter()
+                    .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))?;
+                let half = w.peak_negative_half_step_m_s2?;
+                let se = w
+                    .peak_negative_se_m_s2
+                    .hypot(w.peak_negative_half_step_se_m_s2?);
+                let scale = half.abs().max(1e-12);
+                Some((
+                    c.cylinder,
+                    (w.peak_negative_m_s2 - half) / scale,
+                    se / scale,
+                ))
+            })
+            .collect()
+    }
+
+    /// The whole-run check as one line of text (empty without it).
+    pub fn step_check_text(&self) -> String {
+        let Some(c) = &self.step_check else {
+            return String::new();
+        };
+        let per: Vec<String> = self
+            .worst_point_step_checks()
+            .iter()
+            .map(|(cyl, d, se)| format!("{cyl}: {:+.1} ± {:.1} %", 100.0 * d, 100.0 * se))
+            .collect();
+        format!(
+            "whole-run step check (every cycle repeated at {:.4} deg, {} averaged, {:.1} s): the mean peak differs by {:+.1} ± {:.1} %; each cylinder's worst point {}; the numerical uncertainty of a peak is the larger of 2 |difference| and the firing-slap estimate",
+            c.step_deg,
+            c.cycles_averaged,
+            c.seconds,
+            100.0 * c.mean_difference,
+            100.0 * c.mean_difference_se,
+            per.join(", ")
+        )
     }
 
     pub fn to_text(&self) -> String {
@@ -228,6 +352,10 @@ impl SimulateReport {
             st.dt_s * self.speed_rpm * 6.0,
             if st.step_refinements > 0 { format!(" (halved {} time(s) to meet the tolerance)", st.step_refinements) } else { String::new() }
         );
+        if self.step_check.is_some() {
+            s += &self.step_check_text();
+            s += "\n";
+        }
         s += &format!(
             "ROM cache: {}; {:.2} s (transient {:.3} s)\n",
             self.cache, self.seconds, self.transient_seconds

@@ -22,8 +22,13 @@ pub struct Report {
     pub pin_offset_sweep: Vec<SweepPoint>,
     pub tradeoff: Vec<TradeoffPoint>,
     /// Neighbours of the cylinder ranking, separated beyond their combined statistical and
-    /// numerical uncertainty or tied ([`separations`]).
+    /// numerical uncertainty or tied ([`separations`]); the numerical uncertainty includes the
+    /// whole-run step check when it was run.
     pub ranking_resolution: Vec<RankStep>,
+    /// With the whole-run step check: the same with the firing-slap step error only (the
+    /// check's own scatter left out).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ranking_resolution_slap_only: Option<Vec<RankStep>>,
     pub files: Vec<String>,
     pub seconds: f64,
 }
@@ -32,13 +37,31 @@ impl Report {
     /// Neighbours of `ranking` separated or tied beyond their combined uncertainty
     /// ([`separations`] of [`ranked_uncertainty`]).
     pub fn ranking_resolution_of(simulate: &SimulateReport, ranking: &[usize]) -> Vec<RankStep> {
-        separations(&ranked_uncertainty(simulate, ranking))
+        separations(&ranked_uncertainty(simulate, ranking, true))
+    }
+
+    /// With the whole-run step check: the ranking's resolution with the firing-slap step
+    /// error as the numerical uncertainty (None without the check).
+    pub fn ranking_resolution_slap_only(
+        simulate: &SimulateReport,
+        ranking: &[usize],
+    ) -> Option<Vec<RankStep>> {
+        simulate
+            .step_check
+            .as_ref()
+            .map(|_| separations(&ranked_uncertainty(simulate, ranking, false)))
     }
 }
 
 /// Each ranked cylinder's worst point: (cylinder, mean peak, sqrt(SE^2 + E^2)), SE its
-/// standard error (cycles correlated) and E its estimated step error.
-fn ranked_uncertainty(simulate: &SimulateReport, ranking: &[usize]) -> Vec<(usize, f64, f64)> {
+/// standard error (cycles correlated) and E its numerical uncertainty
+/// ([`crate::report::records::PointPeaks::numerical_uncertainty`]; `whole_run` false: the
+/// firing-slap step error alone).
+fn ranked_uncertainty(
+    simulate: &SimulateReport,
+    ranking: &[usize],
+    whole_run: bool,
+) -> Vec<(usize, f64, f64)> {
     ranking
         .iter()
         .filter_map(|&cyl| {
@@ -47,33 +70,50 @@ fn ranked_uncertainty(simulate: &SimulateReport, ranking: &[usize]) -> Vec<(usiz
                 .iter()
                 .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))
                 .map(|p| {
-                    let u = p
-                        .peak_negative_se_m_s2
-                        .hypot(p.peak_negative_step_error_m_s2);
+                    let u = match whole_run {
+                        true => p.combined_uncertainty(),
+                        false => p
+                            .peak_negative_se_m_s2
+                            .hypot(p.peak_negative_step_error_m_s2),
+                    };
                     (cyl, p.peak_negative_m_s2, u)
                 })
         })
         .collect()
 }
 
+/// The whole-run step check as a sentence, which covers that shift (empty without it).
+fn step_check_sentence(simulate: &SimulateReport) -> String {
+    let text = simulate.step_check_text();
+    match text.strip_prefix("whole-run step check") {
+        Some(rest) => format!("Whole-run step check{rest}."),
+        None => "The whole-run step check was not run (`simulate --check-step`).".to_string(),
+    }
+}
+
 /// The ranking with its uncertainty as a sentence ([`separations`]).
 fn ranking_resolution(r: &Report) -> String {
-    let pairs: Vec<String> = r
-        .ranking_resolution
-        .iter()
-        .map(|s| {
-            format!(
-                "{} {} {}",
-                s.upper,
-                if s.separated { ">" } else { "~" },
-                s.lower
-            )
-        })
-        .collect();
-    format!(
-        "Ranking with its uncertainty (each cylinder's worst point; > separated by more than two combined standard uncertainties, standard error and step error; ~ tied): {}.",
-        pairs.join(", ")
-    )
+    let pairs = |steps: &[RankStep]| {
+        steps
+            .iter()
+            .map(|s| {
+                let sign = if s.separated { ">" } else { "~" };
+                format!("{} {sign} {}", s.upper, s.lower)
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut text = format!(
+        "Ranking with its uncertainty (each cylinder's worst point; > separated by more than two combined standard uncertainties, standard error and numerical uncertainty; ~ tied): {}.",
+        pairs(&r.ranking_resolution)
+    );
+    if let Some(slap) = &r.ranking_resolution_slap_only {
+        text += &format!(
+            " With the firing-slap step error alone as the numerical uncertainty (the whole-run check's scatter left out): {}.",
+            pairs(slap)
+        );
+    }
+    text
 }
 
 /// `summary.md` of report `r` of `scene` written to `out`.
@@ -91,7 +131,9 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     let n_avg = r.simulate.stats.cycles_averaged;
     if n_avg > 1 {
         let st = &r.simulate.stats;
-        let _ = writeln!(s, "Peaks are means over the last {n_avg} of {} cycles (slap on the ringing liner is not periodic), given as mean ± standard error (the cycles' correlation counted: autocorrelation time {:.2} cycles). Estimated step error of the mean peak: {:.1} % (tolerance {:.1} %, step {:.4} deg; from each cylinder's firing slap re-run at half the step, so it does not hold the coarse step's shift of the cycles' statistics, measured up to 3 % at single cylinders of the default engine: docs/verification.md). Risk and ranking use the means. {}\n", st.cycles_run, st.autocorrelation_cycles, 100.0 * st.step_error_estimate, 100.0 * r.simulate.tolerance, st.dt_s * r.speed_rpm * 6.0, ranking_resolution(r));
+        let _ = writeln!(s, "Peaks are means over the last {n_avg} of {} cycles (slap on the ringing liner is not periodic), given as mean ± standard error (the cycles' correlation counted: autocorrelation time {:.2} cycles). Estimated step error of the mean peak: {:.1} % (tolerance {:.1} %, step {:.4} deg; from each cylinder's firing slap re-run at half the step, which does not hold the coarse step's shift of the cycles' statistics between the slaps; docs/verification.md). {} Risk and ranking use the means. {}\n", st.cycles_run, st.autocorrelation_cycles, 100.0 * st.step_error_estimate, 100.0 * r.simulate.tolerance, st.dt_s * r.speed_rpm * 6.0, step_check_sentence(&r.simulate), ranking_resolution(r));
+    } else if r.simulate.step_check.is_some() {
+        let _ = writeln!(s, "{}\n", step_check_sentence(&r.simulate));
     }
     let _ = writeln!(s, "| cylinder | risk | peak negative per point [m/s^2] | Ca per point | CSF per point | slap force [kN] | side force [kN] at [deg] |\n|---|---|---|---|---|---|---|");
     for (c, cr) in ev.cylinders.iter().zip(&r.simulate.cylinders) {

@@ -55,6 +55,27 @@ pub fn run_cycle(
     )
 }
 
+/// The whole-run step check of a run made at `step_deg` [deg]: the same cycles at `step_deg` / 2
+/// (no accuracy control, no firing-slap windows). Its mean peaks P_{h/2} differ from the run's
+/// P_h by the whole step error, the slaps' own and the shift of the cycles' statistics that the
+/// coarser step makes between the slaps (which the firing-slap windows of [`StepError`] do not
+/// see); |P_h - P_converged| ~ 2 |P_h - P_{h/2}| for any order of convergence >= 1.
+///
+/// [`StepError`]: super::cycle::StepError
+pub fn run_half_step(
+    scene: &Scene,
+    rom: &EngineRom,
+    piston: &Piston,
+    mut settings: CycleSettings,
+    step_deg: f64,
+    on_step: impl FnMut(usize, usize),
+) -> Result<CycleResult, TransientError> {
+    settings.step_deg = step_deg / 2.0;
+    settings.tolerance = None;
+    settings.step_error = false;
+    run_cycle(scene, rom, piston, settings, on_step)
+}
+
 /// The engine of `scene` on `rom` with `piston`: its firing order, crank speed and liner top.
 pub fn setup_of<'a>(scene: &'a Scene, rom: &'a EngineRom, piston: &'a Piston) -> EngineSetup<'a> {
     EngineSetup {
