@@ -300,6 +300,29 @@ impl Swept {
     }
 }
 
+/// The whole-run step check of `base`, a run of `scene` on `rom`: its cycles repeated at half
+/// the step it was made at ([`run_half_step`]), with the wall time [s]; `on_step(k, n)` hears
+/// the steps.
+pub fn half_step_check(
+    scene: &Scene,
+    rom: &EngineRom,
+    piston: &Piston,
+    base: &CycleResult,
+    on_step: impl FnMut(usize, usize),
+) -> Result<(CycleResult, f64)> {
+    let t = Instant::now();
+    let step_deg = base.stats.dt_s * scene.engine.speed_rpm * 6.0;
+    let settings = settings_of(simulation(scene)?, scene.rom.band_hz);
+    let half =
+        run_half_step(scene, rom, piston, settings, step_deg, on_step).map_err(|source| {
+            Error::Transient {
+                path: scene.path.clone(),
+                source,
+            }
+        })?;
+    Ok((half, t.elapsed().as_secs_f64()))
+}
+
 /// Runs the report's transients of `scene` (loaded from `path` with `sets`): the scene, its
 /// clearance sweep over [`CLEARANCES_UM`] and pin-offset sweep over [`PIN_OFFSETS_MM`] (the
 /// scene's own values not run twice) in parallel on shared ROMs, the speed-against-error
@@ -357,23 +380,12 @@ pub fn report_runs(
     let rom = roms.swap_remove(rom_of[0]);
     phase("speed against error (window runs)");
     let piston = piston_of(scene)?;
-    let tradeoff = crate::transient::verify::tradeoff(
-        scene,
-        &rom.rom,
-        &piston,
-        &settings_of(sim, scene.rom.band_hz),
-    )?;
+    let settings = settings_of(sim, scene.rom.band_hz);
+    let tradeoff = crate::transient::verify::tradeoff(scene, &rom.rom, &piston, &settings)?;
     let evaluation = evaluate_scene(scene, &rom.rom, &base)?;
     phase("whole-run step check (the scene's cycles at half the step)");
-    let t = Instant::now();
-    let step_deg = base.stats.dt_s * scene.engine.speed_rpm * 6.0;
-    let settings = settings_of(sim, scene.rom.band_hz);
-    let half_step = run_half_step(scene, &rom.rom, &piston, settings, step_deg, |_, _| {})
-        .map_err(|source| Error::Transient {
-            path: scene.path.clone(),
-            source,
-        })?;
-    let half_step_seconds = t.elapsed().as_secs_f64();
+    let (half_step, half_step_seconds) =
+        half_step_check(scene, &rom.rom, &piston, &base, |_, _| {})?;
     Ok(ReportRuns {
         base,
         half_step,

@@ -315,6 +315,16 @@ fn regression_a_taken_output_name_writes_nothing() {
     );
 }
 
+/// A cache directory holding the test engine's ROM (kept while the directory lives), and its
+/// path.
+fn small_rom_cache() -> (tempfile::TempDir, String) {
+    let cache = tempfile::tempdir().unwrap();
+    let cache_dir = cache.path().to_str().unwrap().to_string();
+    let (c, _, err) = linercav(&["rom", SMALL, "--cache-dir", &cache_dir]);
+    assert_eq!(c, 0, "{err}");
+    (cache, cache_dir)
+}
+
 /// Names in a directory with their contents (directories as "<dir>").
 fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut v: Vec<(String, Vec<u8>)> = match std::fs::read_dir(dir) {
@@ -337,10 +347,7 @@ fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
 /// moments are spread over the whole run (measured first), including the writing at its end.
 #[test]
 fn verification_a_signal_leaves_outputs_as_they_were_or_complete() {
-    let cache = tempfile::tempdir().unwrap();
-    let cache_dir = cache.path().to_str().unwrap().to_string();
-    let (c, _, err) = linercav(&["rom", SMALL, "--cache-dir", &cache_dir]);
-    assert_eq!(c, 0, "{err}");
+    let (_cache, cache_dir) = small_rom_cache();
     let commands: Vec<(Vec<&str>, Vec<&str>)> = vec![
         (
             vec!["simulate", SMALL],
@@ -441,10 +448,7 @@ fn verification_a_signal_leaves_outputs_as_they_were_or_complete() {
 /// over the first 30 ms would then miss the race with a chance of about (1 - 1/200)^400 = 13 %.
 #[test]
 fn verification_a_signal_at_start_up_leaves_no_temporary() {
-    let cache = tempfile::tempdir().unwrap();
-    let cache_dir = cache.path().to_str().unwrap().to_string();
-    let (c, _, err) = linercav(&["rom", SMALL, "--cache-dir", &cache_dir]);
-    assert_eq!(c, 0, "{err}");
+    let (_cache, cache_dir) = small_rom_cache();
     let out = tempfile::tempdir().unwrap();
     std::fs::write(out.path().join("keep.txt"), "a file of the user's").unwrap();
     let before = snapshot(out.path());

@@ -70,39 +70,27 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     let loaded = get_rom(&scene, &req.cache)?;
     progress.phase("transient");
     let t = Instant::now();
+    let settings = settings_of(sim, scene.rom.band_hz);
     let res = run_cycle(
         &scene,
         &loaded.rom,
         &piston,
-        settings_of(sim, scene.rom.band_hz),
+        settings.clone(),
         Some(&progress),
     )?;
     let transient_seconds = t.elapsed().as_secs_f64();
     let mut report = SimulateReport::new(&scene, &piston, &res, loaded.cache, transient_seconds);
     if req.check_step {
         progress.phase("whole-run step check");
-        let t = Instant::now();
-        let step_deg = res.stats.dt_s * scene.engine.speed_rpm * 6.0;
-        let half = crate::transient::engine::run_half_step(
-            &scene,
-            &loaded.rom,
-            &piston,
-            settings_of(sim, scene.rom.band_hz),
-            step_deg,
-            |k, n| {
+        let (half, seconds) =
+            crate::api::half_step_check(&scene, &loaded.rom, &piston, &res, |k, n| {
                 if k % 200 == 0 {
                     progress.phase(&format!("whole-run step check: step {k} of {n}"));
                 }
-            },
-        )
-        .map_err(|source| Error::Transient {
-            path: scene.path.clone(),
-            source,
-        })?;
-        report.add_step_check(&half, t.elapsed().as_secs_f64());
+            })?;
+        report.add_step_check(&half, seconds);
     }
     if req.full_order {
-        let settings = settings_of(sim, scene.rom.band_hz);
         let cmp = compare(&scene, &loaded.rom, &piston, &settings, &|m| {
             progress.phase(m)
         })?;

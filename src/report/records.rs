@@ -96,6 +96,15 @@ pub struct CylinderReport {
     pub side_force_crank_angle_deg: f64,
 }
 
+impl CylinderReport {
+    /// The point with the largest mean peak negative acceleration.
+    pub fn worst_point(&self) -> Option<&PointPeaks> {
+        self.points
+            .iter()
+            .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))
+    }
+}
+
 /// What `simulate` prints.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SimulateReport {
@@ -239,10 +248,7 @@ impl SimulateReport {
         self.cylinders
             .iter()
             .filter_map(|c| {
-                let w = c
-                    .points
-                    .iter()
-                    .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))?;
+                let w = c.worst_point()?;
                 let half = w.peak_negative_half_step_m_s2?;
                 let se = w
                     .peak_negative_se_m_s2
@@ -330,10 +336,7 @@ impl SimulateReport {
             .cylinders
             .iter()
             .filter_map(|c| {
-                let w = c
-                    .points
-                    .iter()
-                    .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))?;
+                let w = c.worst_point()?;
                 let rel = w.peak_negative_se_m_s2 / w.peak_negative_m_s2.abs().max(1e-12);
                 (rel > 0.02).then(|| format!("cylinder {} ({:.1} %)", c.cylinder, 100.0 * rel))
             })

@@ -66,18 +66,15 @@ fn ranked_uncertainty(
         .iter()
         .filter_map(|&cyl| {
             let c = simulate.cylinders.iter().find(|c| c.cylinder == cyl)?;
-            c.points
-                .iter()
-                .max_by(|a, b| a.peak_negative_m_s2.total_cmp(&b.peak_negative_m_s2))
-                .map(|p| {
-                    let u = match whole_run {
-                        true => p.combined_uncertainty(),
-                        false => p
-                            .peak_negative_se_m_s2
-                            .hypot(p.peak_negative_step_error_m_s2),
-                    };
-                    (cyl, p.peak_negative_m_s2, u)
-                })
+            c.worst_point().map(|p| {
+                let u = match whole_run {
+                    true => p.combined_uncertainty(),
+                    false => p
+                        .peak_negative_se_m_s2
+                        .hypot(p.peak_negative_step_error_m_s2),
+                };
+                (cyl, p.peak_negative_m_s2, u)
+            })
         })
         .collect()
 }
