@@ -378,14 +378,17 @@ pub fn report_runs(
         mut roms, rom_of, ..
     } = variants;
     let rom = roms.swap_remove(rom_of[0]);
-    phase("speed against error (window runs)");
     let piston = piston_of(scene)?;
     let settings = settings_of(sim, scene.rom.band_hz);
-    let tradeoff = crate::transient::verify::tradeoff(scene, &rom.rom, &piston, &settings)?;
+    // the speed-against-error windows and the whole-run step check side by side
+    phase("speed against error (window runs) and whole-run step check (half the step)");
+    let (tradeoff, check) = rayon::join(
+        || crate::transient::verify::tradeoff(scene, &rom.rom, &piston, &settings),
+        || half_step_check(scene, &rom.rom, &piston, &base, |_, _| {}),
+    );
+    let tradeoff = tradeoff?;
+    let (half_step, half_step_seconds) = check?;
     let evaluation = evaluate_scene(scene, &rom.rom, &base)?;
-    phase("whole-run step check (the scene's cycles at half the step)");
-    let (half_step, half_step_seconds) =
-        half_step_check(scene, &rom.rom, &piston, &base, |_, _| {})?;
     Ok(ReportRuns {
         base,
         half_step,
