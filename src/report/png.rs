@@ -1,6 +1,6 @@
 //! PNG figures with plotters: an embedded DejaVu font (no system fonts needed), atomic writes
-//! (drawn in memory, encoded with `png`, written to a temporary file, then renamed), and one small chart
-//! helper that covers the report's line, point and threshold plots.
+//! (drawn in memory, encoded with `png`, written to a temporary file, then renamed), and one
+//! small chart helper that covers the report's line, point and threshold plots.
 
 use crate::files::{write_atomic, WriteError};
 use plotters::coord::Shift;
