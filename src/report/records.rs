@@ -358,6 +358,8 @@ impl SimulateReport {
         if self.step_check.is_some() {
             s += &self.step_check_text();
             s += "\n";
+        } else {
+            s += "  (from each cylinder's firing slap re-run at half the step; what the coarse step shifts between the slaps is not in it: --check-step measures it)\n";
         }
         s += &format!(
             "ROM cache: {}; {:.2} s (transient {:.3} s)\n",
