@@ -191,10 +191,10 @@ pub struct RawRom {
     #[serde(default = "default_harmonics")]
     pub interface_harmonics: usize,
     /// Residual vectors of the contact loads: a hat-shaped load pattern every this many
-    /// bore-line nodes per side (1: every node; 0: none, static correction only). Default 1:
-    /// only then does the ROM match the full-order model on the slap window (default engine:
-    /// 0.13 % against 49 % without; README, "full-order window"), at ~4x the modes and ~1.6x
-    /// the cycle time of 0.
+    /// bore-line nodes per side (1: every node; 0: none, static correction only). They give the
+    /// liner wall its local mass at the slap: with them the ROM matches the full-order model on
+    /// the slap window (default 2 on the default engine: 1.25 %; every node 0.13 %; none ~50 %;
+    /// docs/physics.md), every node at ~1.5x the modes and cycle time of every 2nd node.
     #[serde(default = "default_residual_spacing")]
     pub residual_vector_spacing: usize,
     /// Cylinders whose liners are modelled (1-based); empty = all.

@@ -31,6 +31,7 @@ use crate::linalg::dense::{from_row_vecs, row, values_mut, Dense};
 use crate::piston::Piston;
 use crate::reduce::rom::{CylinderRom, EngineRom};
 use ndarray::Array2;
+use rayon::prelude::*;
 
 /// Numerical settings of the transient.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -1011,16 +1012,25 @@ impl<'a> EngineRun<'a> {
             negative: peak_negative,
             positive: peak_positive,
         } = peaks;
-        let mut step_error: Vec<StepError> = Vec::with_capacity(snapshots.len());
-        for (c, snap) in snapshots {
-            let peak_h = snap.clone().window_peaks(c, window_steps, dt)?;
-            let peak_half_h = snap.window_peaks(c, 2 * window_steps, 0.5 * dt)?;
-            step_error.push(StepError {
-                cylinder: self.cyls[c].rom.cylinder,
-                peak_h,
-                peak_half_h,
-            });
-        }
+        // the windows are independent runs from their own states: on every core
+        let step_error = snapshots
+            .into_par_iter()
+            .map(|(c, snap)| {
+                let half = snap.clone();
+                let (peak_h, peak_half_h) = rayon::join(
+                    move || snap.window_peaks(c, window_steps, dt),
+                    move || half.window_peaks(c, 2 * window_steps, 0.5 * dt),
+                );
+                Ok(StepError {
+                    cylinder: self.cyls[c].rom.cylinder,
+                    peak_h: peak_h?,
+                    peak_half_h: peak_half_h?,
+                })
+            })
+            .collect::<Vec<Result<StepError, TransientError>>>()
+            .into_iter()
+            // the first failing window in time order, as a serial run would report it
+            .collect::<Result<Vec<StepError>, TransientError>>()?;
         self.stats.step_error_estimate = mean_step_error(&step_error);
         Ok(CycleResult {
             peaks,

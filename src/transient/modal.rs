@@ -23,17 +23,20 @@ use super::scheme::ModalIntegrator;
 use crate::linalg::dense::{from_faer, row, values, values_mut, Dense};
 use crate::linalg::kernels::{axpy, dot, dot_pair};
 use nalgebra::DMatrix;
+use std::sync::Arc;
 
-/// ROM structure state of a transient.
+/// ROM structure state of a transient. What does not change during a run (the mode rows,
+/// residual flexibility, preload, the step matrices once formed) is shared between clones: the
+/// step-error windows clone the running engine several times a cycle.
 #[derive(Clone)]
 pub struct ModalStructure {
     pub integrator: ModalIntegrator,
     /// Contact DOF rows (contact DOFs x modes), row-major.
-    rows: Dense,
-    rflex: Dense,
-    preload: Vec<f64>,
+    rows: Arc<Dense>,
+    rflex: Arc<Dense>,
+    preload: Arc<[f64]>,
     /// sqrt(sum_j phi_dj^2 / omega_j^2) per contact DOF (+inf with a mode at omega = 0).
-    static_norm: Vec<f64>,
+    static_norm: Arc<[f64]>,
     /// Whether the residual flexibility is used.
     pub static_correction: bool,
     /// Whether [`Structure::predicted_bound`] offers its bound (false: every prediction exact).
@@ -43,7 +46,7 @@ pub struct ModalStructure {
     pub blocks: Option<Vec<std::ops::Range<usize>>>,
     /// Per step size and static-correction flag (key: dt bits, flag): S = Phi D Phi^T over
     /// the contact DOFs and T = S + R (T = S without the static correction).
-    step_compliance: Vec<(u64, bool, Dense, Dense)>,
+    step_compliance: Vec<(u64, bool, Arc<(Dense, Dense)>)>,
     /// Index into `step_compliance` of the current step.
     current: usize,
     // per-step data: locations, predictor (u, u') per DOF (NaN: not yet formed)
@@ -73,7 +76,7 @@ impl ModalStructure {
         }
         let k = integrator.stiffness();
         let rigid = k.iter().any(|&w2| w2 <= 0.0);
-        let static_norm = (0..ndof)
+        let static_norm: Arc<[f64]> = (0..ndof)
             .map(|d| {
                 if rigid {
                     return f64::INFINITY;
@@ -88,9 +91,9 @@ impl ModalStructure {
             .collect();
         Self {
             integrator,
-            rows,
-            rflex,
-            preload,
+            rows: Arc::new(rows),
+            rflex: Arc::new(rflex),
+            preload: preload.into(),
             static_norm,
             static_correction: true,
             bound_predictions: true,
@@ -109,7 +112,7 @@ impl ModalStructure {
         // dt changes S by the same relative amount, far below every tolerance of the run
         let dt = self.integrator.dt();
         let key = dt.to_bits();
-        if let Some(k) = self.step_compliance.iter().position(|(b, sc, _, _)| {
+        if let Some(k) = self.step_compliance.iter().position(|(b, sc, _)| {
             *sc == self.static_correction && (f64::from_bits(*b) - dt).abs() <= 1e-9 * dt
         }) {
             self.current = k;
@@ -149,7 +152,7 @@ impl ModalStructure {
             }
         }
         self.step_compliance
-            .push((key, self.static_correction, s, t));
+            .push((key, self.static_correction, Arc::new((s, t))));
         self.current = self.step_compliance.len() - 1;
     }
 
@@ -277,7 +280,7 @@ impl Structure for ModalStructure {
     fn compliance(&mut self, active: &[usize]) -> (DMatrix<f64>, DMatrix<f64>) {
         let na = active.len();
         let kv = self.integrator.velocity_factor();
-        let (_, _, s, t) = &self.step_compliance[self.current];
+        let (s, t) = &*self.step_compliance[self.current].2;
         let mut g = DMatrix::<f64>::zeros(na, na);
         let mut gv = DMatrix::<f64>::zeros(na, na);
         for a in 0..na {
@@ -298,14 +301,19 @@ impl Structure for ModalStructure {
     /// (G F)_i = sum_d w_id sum_e T_de F_e with the forces gathered on the DOFs,
     /// F_e = sum_k w_ke F_k.
     fn response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
-        self.apply_step_matrix(&self.step_compliance[self.current].3, 1.0, active, forces)
+        self.apply_step_matrix(
+            &self.step_compliance[self.current].2 .1,
+            1.0,
+            active,
+            forces,
+        )
     }
 
     /// (G_v F)_i = gamma / (beta dt) sum_d w_id sum_e S_de F_e (the residual flexibility
     /// responds quasi-statically: no velocity).
     fn velocity_response(&self, active: &[usize], forces: &[f64]) -> Vec<f64> {
         let kv = self.integrator.velocity_factor();
-        self.apply_step_matrix(&self.step_compliance[self.current].2, kv, active, forces)
+        self.apply_step_matrix(&self.step_compliance[self.current].2 .0, kv, active, forces)
     }
 }
 
