@@ -25,6 +25,9 @@ use crate::linalg::kernels::{axpy, dot, dot_pair};
 use nalgebra::DMatrix;
 use std::sync::Arc;
 
+/// The DOF-level step matrices of one step size, (S, T), shared between clones.
+type StepMatrices = Arc<(Dense, Dense)>;
+
 /// ROM structure state of a transient. What does not change during a run (the mode rows,
 /// residual flexibility, preload, the step matrices once formed) is shared between clones: the
 /// step-error windows clone the running engine several times a cycle.
@@ -46,7 +49,7 @@ pub struct ModalStructure {
     pub blocks: Option<Vec<std::ops::Range<usize>>>,
     /// Per step size and static-correction flag (key: dt bits, flag): S = Phi D Phi^T over
     /// the contact DOFs and T = S + R (T = S without the static correction).
-    step_compliance: Vec<(u64, bool, Arc<(Dense, Dense)>)>,
+    step_compliance: Vec<(u64, bool, StepMatrices)>,
     /// Index into `step_compliance` of the current step.
     current: usize,
     // per-step data: locations, predictor (u, u') per DOF (NaN: not yet formed)
