@@ -30,7 +30,7 @@ type StepMatrices = Arc<(Dense, Dense)>;
 
 /// ROM structure state of a transient. What does not change during a run (the mode rows,
 /// residual flexibility, preload, the step matrices once formed) is shared between clones: the
-/// step-error windows clone the running engine several times a cycle.
+/// step-error windows clone the running engine 18 times a run (six snapshots, two runs each).
 #[derive(Clone)]
 pub struct ModalStructure {
     pub integrator: ModalIntegrator,
