@@ -191,10 +191,7 @@ fn verification_tests_and_benches_do_not_use_the_command_layer() {
 
 /// Numerical kernels allowed past 150 lines (issue 24: "kernels with an equation may be
 /// longer when splitting would hide it"), each with the equation its doc comment carries.
-const KERNELS: [(&str, &str); 2] = [
-    // one implicit step of the pistons in penalty contact with the condensed structure:
-    // W F_A = r0 + (K_t + kappa C_d) S q and the bodies' Newmark rows, Newton on the pieces
-    ("src/transient/contact.rs", "step"),
+const KERNELS: [(&str, &str); 1] = [
     // shift-invert Lanczos (ARPACK reverse communication) with its certification hooks
     ("src/eigen/shift_invert.rs", "solve_modes"),
 ];

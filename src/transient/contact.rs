@@ -231,6 +231,12 @@ pub enum StepFailure {
 }
 
 /// Solves one step of size `dt` with the structure's `scheme` (Newmark beta, gamma; HHT alpha).
+///
+/// A piecewise-linear Newton on the slices' law pieces: each iteration solves the step's
+/// linear problem for the active set ([`Step::solve_active`]), then moves every slice to the
+/// piece its new penetration lies on ([`Step::next_pieces`]); it has converged when no slice
+/// changes. After a third of `max_iterations` only the most violated slice changes per
+/// iteration (guards against cycling).
 pub fn step(
     bodies: &[Body],
     slices: &[Slice<'_>],
@@ -239,78 +245,15 @@ pub fn step(
     scheme: Scheme,
     max_iterations: usize,
 ) -> Result<StepResult, StepFailure> {
-    let Scheme { beta, gamma, alpha } = scheme;
-    let nb = bodies.len();
-    let nq = 2 * nb;
-    let kappa = gamma / (beta * dt);
-    let c_acc = 1.0 / (beta * dt * dt);
-    // Newmark predictors of the bodies
-    let qh: Vec<[f64; 2]> = bodies
-        .iter()
-        .map(|b| {
-            let f = |k: usize| b.q[k] + dt * b.v[k] + dt * dt * (0.5 - beta) * b.a[k];
-            [f(0), f(1)]
-        })
-        .collect();
-    let vh: Vec<[f64; 2]> = bodies
-        .iter()
-        .map(|b| {
-            let f = |k: usize| b.v[k] + dt * (1.0 - gamma) * b.a[k];
-            [f(0), f(1)]
-        })
-        .collect();
+    let st = Step::new(bodies, slices, dt, scheme);
     let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
     structure.prepare(&locs);
-    // exact predictions where a slice may touch: at slices in contact or damped at the last
-    // step, and wherever the penetration's upper bound (the structure's interval) reaches the
-    // law's onset; the others are apart and keep that bound as their penetration
-    let mut pred: Vec<Option<(f64, f64)>> = vec![None; slices.len()];
-    let bounds: Vec<Option<(f64, f64)>> = slices
-        .iter()
-        .enumerate()
-        .map(|(i, s)| {
-            let touching = s.prev_penetration > 0.0 || s.law.piece(s.prev_penetration).mask != 0;
-            if touching {
-                None
-            } else {
-                structure.predicted_bound(i)
-            }
-        })
-        .collect();
-    let threshold: Vec<f64> = slices.iter().map(|s| s.law.onset().min(0.0)).collect();
-    // penetration of slice i at body coordinates qb and extra structure displacement `extra`
-    let penetration = |i: usize,
-                       qb: [f64; 2],
-                       extra: f64,
-                       pred: &mut [Option<(f64, f64)>],
-                       structure: &dyn Structure| {
-        let s = &slices[i];
-        let base = s.row[0] * qb[0] + s.row[1] * qb[1] - s.gap;
-        if pred[i].is_none() {
-            if let Some((centre, radius)) = bounds[i] {
-                let upper = base - (centre - radius) - extra;
-                if upper <= threshold[i] {
-                    return upper;
-                }
-            }
-            pred[i] = Some(structure.predicted(i));
-        }
-        base - pred[i].expect("set above").0 - extra
-    };
+    let mut pred = Predictions::new(slices, &*structure);
     // penetration of each slice without new contact forces: first guess of the pieces
-    let dot = |r: [f64; 2], q: [f64; 2]| r[0] * q[0] + r[1] * q[1];
     let mut pen: Vec<f64> = (0..slices.len())
-        .map(|i| penetration(i, qh[slices[i].body], 0.0, &mut pred, &*structure))
+        .map(|i| pred.penetration(i, st.qh[slices[i].body], 0.0, &*structure))
         .collect();
-    // per slice: elastic piece (mask), damper acting this step (penetrating at the last
-    // step), damped force clamped at zero
-    #[derive(Clone, Copy)]
-    struct State {
-        mask: u8,
-        damped: bool,
-        clamped: bool,
-    }
-    let mut pieces: Vec<State> = slices
+    let mut pieces: Vec<Piece> = slices
         .iter()
         .zip(&pen)
         .map(|(s, &p)| {
@@ -318,7 +261,7 @@ pub fn step(
             // contact); a slice the predictor finds penetrating starts in contact
             let prev = s.law.piece(s.prev_penetration).mask;
             let mask = if prev != 0 { prev } else { s.law.piece(p).mask };
-            State {
+            Piece {
                 mask,
                 damped: s.prev_penetration > 0.0 && s.damping != 0.0,
                 clamped: false,
@@ -331,13 +274,197 @@ pub fn step(
         let active: Vec<usize> = (0..slices.len())
             .filter(|&i| pieces[i].mask != 0 && !pieces[i].clamped)
             .collect();
-        let na = active.len();
         // compliance of the active set (reused while the set is unchanged)
         if g_cache.as_ref().is_none_or(|(a, _, _)| *a != active) {
             let (g, gv) = structure.compliance(&active);
             g_cache = Some((active.clone(), g, gv));
         }
         let (_, g, gv) = g_cache.as_ref().expect("set above");
+        let (q, fa) = st.solve_active(&active, &pieces, g, gv, &pred)?;
+        let mut forces = vec![0.0; slices.len()];
+        for (r, &i) in active.iter().enumerate() {
+            forces[i] = fa[r];
+        }
+        // displacement at every slice includes the compliance to the active forces; the
+        // velocity too (the damper's argument, and the rate the onset correction needs)
+        let (extra, vel) = if active.is_empty() {
+            (vec![0.0; slices.len()], vec![0.0; slices.len()])
+        } else {
+            (
+                structure.response(&active, &fa),
+                structure.velocity_response(&active, &fa),
+            )
+        };
+        let mut rates = vec![0.0; slices.len()];
+        let (changes, worst) = st.next_pieces(
+            &q,
+            (&extra, &vel),
+            &pieces,
+            &mut pred,
+            &*structure,
+            (&mut pen, &mut rates),
+        );
+        if changes.is_empty() {
+            return Ok(st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it));
+        }
+        if it <= max_iterations / 3 {
+            for (i, next) in changes {
+                pieces[i] = next;
+            }
+        } else if let Some((i, _)) = worst {
+            let next = changes
+                .iter()
+                .find(|(k, _)| *k == i)
+                .expect("the worst is a change")
+                .1;
+            pieces[i] = next;
+        }
+    }
+    Err(StepFailure::NoConvergence {
+        iterations: max_iterations,
+    })
+}
+
+/// A slice's place on its law during the Newton iterations: the elastic piece (mask), whether
+/// the damper acts this step (penetrating at the last step), whether the damped force is
+/// clamped at zero.
+#[derive(Clone, Copy)]
+struct Piece {
+    mask: u8,
+    damped: bool,
+    clamped: bool,
+}
+
+/// The slices whose piece changes in an iteration, with their next piece, and the most
+/// violated of them (slice, violation as a penetration [m]).
+type PieceChanges = (Vec<(usize, Piece)>, Option<(usize, f64)>);
+
+/// The structure's predicted displacement and velocity at the slices, formed only where a
+/// slice may touch: at slices in contact or damped at the last step, and wherever the
+/// penetration's upper bound (the structure's interval) reaches the law's onset; the others
+/// are apart and keep that bound as their penetration.
+struct Predictions<'s, 'a> {
+    slices: &'s [Slice<'a>],
+    bounds: Vec<Option<(f64, f64)>>,
+    threshold: Vec<f64>,
+    exact: Vec<Option<(f64, f64)>>,
+}
+
+impl<'s, 'a> Predictions<'s, 'a> {
+    fn new(slices: &'s [Slice<'a>], structure: &dyn Structure) -> Self {
+        let bounds = slices
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let touching =
+                    s.prev_penetration > 0.0 || s.law.piece(s.prev_penetration).mask != 0;
+                if touching {
+                    None
+                } else {
+                    structure.predicted_bound(i)
+                }
+            })
+            .collect();
+        Self {
+            slices,
+            bounds,
+            threshold: slices.iter().map(|s| s.law.onset().min(0.0)).collect(),
+            exact: vec![None; slices.len()],
+        }
+    }
+
+    /// Penetration of slice `i` at body coordinates `qb` with the extra structure
+    /// displacement `extra`, p = s . q - gap - u~ - extra (the bound's upper end where that
+    /// keeps it apart).
+    fn penetration(
+        &mut self,
+        i: usize,
+        qb: [f64; 2],
+        extra: f64,
+        structure: &dyn Structure,
+    ) -> f64 {
+        let s = &self.slices[i];
+        let base = s.row[0] * qb[0] + s.row[1] * qb[1] - s.gap;
+        if self.exact[i].is_none() {
+            if let Some((centre, radius)) = self.bounds[i] {
+                let upper = base - (centre - radius) - extra;
+                if upper <= self.threshold[i] {
+                    return upper;
+                }
+            }
+            self.exact[i] = Some(structure.predicted(i));
+        }
+        base - self.exact[i].expect("set above").0 - extra
+    }
+
+    /// The exact prediction (u~, u~') of a slice that has one (every penetrating slice).
+    fn exact(&self, i: usize) -> (f64, f64) {
+        self.exact[i].expect("a penetrating slice has its prediction")
+    }
+}
+
+/// The step's fixed data: bodies, slices, their Newmark predictors and the scheme's factors.
+struct Step<'s, 'a> {
+    bodies: &'s [Body],
+    slices: &'s [Slice<'a>],
+    dt: f64,
+    scheme: Scheme,
+    /// Newmark predictors q~ = q + dt v + dt^2 (1/2 - beta) a and v~ = v + dt (1 - gamma) a.
+    qh: Vec<[f64; 2]>,
+    vh: Vec<[f64; 2]>,
+    /// kappa = gamma / (beta dt) (velocity per displacement), 1 / (beta dt^2).
+    kappa: f64,
+    c_acc: f64,
+}
+
+fn dot2(r: [f64; 2], q: [f64; 2]) -> f64 {
+    r[0] * q[0] + r[1] * q[1]
+}
+
+impl<'s, 'a> Step<'s, 'a> {
+    fn new(bodies: &'s [Body], slices: &'s [Slice<'a>], dt: f64, scheme: Scheme) -> Self {
+        let Scheme { beta, gamma, .. } = scheme;
+        let qh = bodies
+            .iter()
+            .map(|b| {
+                let f = |k: usize| b.q[k] + dt * b.v[k] + dt * dt * (0.5 - beta) * b.a[k];
+                [f(0), f(1)]
+            })
+            .collect();
+        let vh = bodies
+            .iter()
+            .map(|b| {
+                let f = |k: usize| b.v[k] + dt * (1.0 - gamma) * b.a[k];
+                [f(0), f(1)]
+            })
+            .collect();
+        Self {
+            bodies,
+            slices,
+            dt,
+            scheme,
+            qh,
+            vh,
+            kappa: gamma / (beta * dt),
+            c_acc: 1.0 / (beta * dt * dt),
+        }
+    }
+
+    /// The linear step on the active set A with its pieces F_i = a_i + kt_i p_i (+ c_d p'_i
+    /// where damped): the slice forces as affine functions of the body coordinates,
+    /// W F_A = r0 + (Kt + kappa Cd) S q with W = I + Kt G + Cd G_v, then the bodies'
+    /// M / (beta dt^2) (q - q~) = (1 + alpha) (f + B^T F_A) - alpha f_n; returns (q, F_A).
+    fn solve_active(
+        &self,
+        active: &[usize],
+        pieces: &[Piece],
+        g: &DMatrix<f64>,
+        gv: &DMatrix<f64>,
+        pred: &Predictions<'_, '_>,
+    ) -> Result<(DVector<f64>, Vec<f64>), StepFailure> {
+        let (slices, kappa) = (self.slices, self.kappa);
+        let na = active.len();
+        let nq = 2 * self.bodies.len();
         // linear pieces
         let mut kt = vec![0.0; na];
         let mut av = vec![0.0; na];
@@ -357,10 +484,10 @@ pub fn step(
             for (c2, _) in active.iter().enumerate() {
                 w[(r, c2)] += kt[r] * g[(r, c2)] + cd[r] * gv[(r, c2)];
             }
-            let (u, du) = pred[i].expect("active slices have their prediction");
+            let (u, du) = pred.exact(i);
             let b = s.body;
             rhs[(r, 0)] = av[r] - kt[r] * (s.gap + u)
-                + cd[r] * (dot(s.row, vh[b]) - kappa * dot(s.row, qh[b]) - du);
+                + cd[r] * (dot2(s.row, self.vh[b]) - kappa * dot2(s.row, self.qh[b]) - du);
             let f = kt[r] + kappa * cd[r];
             rhs[(r, 1 + 2 * b)] = f * s.row[0];
             rhs[(r, 2 + 2 * b)] = f * s.row[1];
@@ -370,20 +497,36 @@ pub fn step(
         } else {
             rhs.clone()
         };
-        // body system
+        let q = self.solve_bodies(active, &sol)?;
+        // forces of the active slices
+        let fa = (0..na)
+            .map(|r| sol[(r, 0)] + (0..nq).map(|c| sol[(r, 1 + c)] * q[c]).sum::<f64>())
+            .collect();
+        Ok((q, fa))
+    }
+
+    /// The bodies' coordinates with the active slice forces F_A = sol0 + sol_q q eliminated.
+    fn solve_bodies(
+        &self,
+        active: &[usize],
+        sol: &DMatrix<f64>,
+    ) -> Result<DVector<f64>, StepFailure> {
+        let alpha = self.scheme.alpha;
+        let nq = 2 * self.bodies.len();
+        let c_acc = self.c_acc;
         let mut a = DMatrix::<f64>::zeros(nq, nq);
         let mut bvec = DVector::<f64>::zeros(nq);
-        for (k, body) in bodies.iter().enumerate() {
+        for (k, body) in self.bodies.iter().enumerate() {
             for i in 0..2 {
                 for j in 0..2 {
                     a[(2 * k + i, 2 * k + j)] = body.mass[i][j] * c_acc;
-                    bvec[2 * k + i] += body.mass[i][j] * c_acc * qh[k][j];
+                    bvec[2 * k + i] += body.mass[i][j] * c_acc * self.qh[k][j];
                 }
                 bvec[2 * k + i] += (1.0 + alpha) * body.force[i] - alpha * body.applied[i];
             }
         }
         for (r, &i) in active.iter().enumerate() {
-            let s = &slices[i];
+            let s = &self.slices[i];
             let row = 2 * s.body;
             for d in 0..2 {
                 let fr = (1.0 + alpha) * s.force_row[d];
@@ -393,50 +536,40 @@ pub fn step(
                 }
             }
         }
-        let q = a.lu().solve(&bvec).ok_or(StepFailure::Singular)?;
-        // forces of the active slices, new displacements and penetrations
-        let mut fa = vec![0.0; na];
-        for r in 0..na {
-            fa[r] = sol[(r, 0)] + (0..nq).map(|c| sol[(r, 1 + c)] * q[c]).sum::<f64>();
-        }
-        let mut forces = vec![0.0; slices.len()];
-        for (r, &i) in active.iter().enumerate() {
-            forces[i] = fa[r];
-        }
-        // displacement at every slice includes the compliance to the active forces
-        let extra = if na > 0 {
-            structure.response(&active, &fa)
-        } else {
-            vec![0.0; slices.len()]
-        };
-        // penetration rate p' = s . q' - u' at every penetrating slice (q' by the Newmark
-        // update, u' = u'~ + G_v F): the damper's argument, and the rate the onset
-        // correction needs
-        let vel = if na > 0 {
-            structure.velocity_response(&active, &fa)
-        } else {
-            vec![0.0; slices.len()]
-        };
-        let body_v = |b: usize| {
-            [
-                vh[b][0] + kappa * (q[2 * b] - qh[b][0]),
-                vh[b][1] + kappa * (q[2 * b + 1] - qh[b][1]),
-            ]
-        };
-        // new pieces; after many iterations change only the most violated slice per
-        // iteration (guards against cycling of the piecewise-linear Newton)
+        a.lu().solve(&bvec).ok_or(StepFailure::Singular)
+    }
+
+    /// Body `b`'s velocity at the new time, v~ + kappa (q - q~).
+    fn body_velocity(&self, q: &DVector<f64>, b: usize) -> [f64; 2] {
+        let (vh, qh) = (self.vh[b], self.qh[b]);
+        [
+            vh[0] + self.kappa * (q[2 * b] - qh[0]),
+            vh[1] + self.kappa * (q[2 * b + 1] - qh[1]),
+        ]
+    }
+
+    /// Every slice's new penetration and (where penetrating) rate p' = s . q' - u', u' =
+    /// u'~ + G_v F, written into `pen` and `rates`; returns the slices whose piece changes
+    /// with their next piece, and the most violated one (violation as a penetration).
+    fn next_pieces(
+        &self,
+        q: &DVector<f64>,
+        (extra, vel): (&[f64], &[f64]),
+        pieces: &[Piece],
+        pred: &mut Predictions<'_, '_>,
+        structure: &dyn Structure,
+        (pen, rates): (&mut [f64], &mut [f64]),
+    ) -> PieceChanges {
         let mut worst: Option<(usize, f64)> = None;
-        let mut changes: Vec<(usize, State)> = Vec::new();
-        let mut rates = vec![0.0; slices.len()];
-        for i in 0..slices.len() {
-            let s = &slices[i];
+        let mut changes: Vec<(usize, Piece)> = Vec::new();
+        for (i, s) in self.slices.iter().enumerate() {
             let qb = [q[2 * s.body], q[2 * s.body + 1]];
-            pen[i] = penetration(i, qb, extra[i], &mut pred, &*structure);
+            pen[i] = pred.penetration(i, qb, extra[i], structure);
             let mask = s.law.piece(pen[i]).mask;
-            let mut next = State { mask, ..pieces[i] };
+            let mut next = Piece { mask, ..pieces[i] };
             if mask != 0 {
-                let du = pred[i].expect("a penetrating slice has its prediction").1 + vel[i];
-                rates[i] = dot(s.row, body_v(s.body)) - du;
+                let du = pred.exact(i).1 + vel[i];
+                rates[i] = dot2(s.row, self.body_velocity(q, s.body)) - du;
             }
             if mask == 0 {
                 // a slice that parts loses its damper for the rest of the step: the law
@@ -466,63 +599,59 @@ pub fn step(
                 }
             }
         }
-        let changed = !changes.is_empty();
-        if it <= max_iterations / 3 {
-            for (i, next) in changes {
-                pieces[i] = next;
+        (changes, worst)
+    }
+
+    /// The converged step: bodies at the new time (a = (q - q~) / (beta dt^2), v = v~ + gamma
+    /// dt a, the total generalised force for HHT's next step), and every slice's force,
+    /// penetration, rate, damper part F - F_e(p) and clamp.
+    fn result(
+        &self,
+        q: &DVector<f64>,
+        active: &[usize],
+        fa: &[f64],
+        pieces: &[Piece],
+        (forces, pen, rates): (Vec<f64>, Vec<f64>, Vec<f64>),
+        iterations: usize,
+    ) -> StepResult {
+        let gamma = self.scheme.gamma;
+        let mut out = Vec::with_capacity(self.bodies.len());
+        for (k, body) in self.bodies.iter().enumerate() {
+            let mut b = *body;
+            for d in 0..2 {
+                let qn = q[2 * k + d];
+                let an = (qn - self.qh[k][d]) * self.c_acc;
+                b.q[d] = qn;
+                b.a[d] = an;
+                b.v[d] = self.vh[k][d] + gamma * self.dt * an;
             }
-        } else if let Some((i, _)) = worst {
-            let next = changes
-                .iter()
-                .find(|(k, _)| *k == i)
-                .expect("the worst is a change")
-                .1;
-            pieces[i] = next;
+            b.applied = body.force;
+            out.push(b);
         }
-        if !changed {
-            let mut out = Vec::with_capacity(nb);
-            for (k, body) in bodies.iter().enumerate() {
-                let mut b = *body;
-                for d in 0..2 {
-                    let qn = q[2 * k + d];
-                    let an = (qn - qh[k][d]) * c_acc;
-                    b.q[d] = qn;
-                    b.a[d] = an;
-                    b.v[d] = vh[k][d] + gamma * dt * an;
-                }
-                b.applied = body.force;
-                out.push(b);
+        for (r, &i) in active.iter().enumerate() {
+            let s = &self.slices[i];
+            for d in 0..2 {
+                out[s.body].applied[d] += s.force_row[d] * fa[r];
             }
-            for (r, &i) in active.iter().enumerate() {
-                let s = &slices[i];
-                for d in 0..2 {
-                    out[s.body].applied[d] += s.force_row[d] * fa[r];
+        }
+        let damper = (0..self.slices.len())
+            .map(|i| {
+                let st = pieces[i];
+                if st.mask != 0 && st.damped && !st.clamped {
+                    self.slices[i].damping * rates[i]
+                } else {
+                    0.0
                 }
-            }
-            // the damper part of each slice force: F - F_e(p), as the linear piece has it
-            let damper = (0..slices.len())
-                .map(|i| {
-                    let st = pieces[i];
-                    if st.mask != 0 && st.damped && !st.clamped {
-                        slices[i].damping * rates[i]
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
-            let clamped = pieces.iter().map(|st| st.clamped).collect();
-            return Ok(StepResult {
-                bodies: out,
-                forces,
-                penetrations: pen,
-                rates,
-                damper,
-                clamped,
-                iterations: it,
-            });
+            })
+            .collect();
+        StepResult {
+            bodies: out,
+            forces,
+            penetrations: pen,
+            rates,
+            damper,
+            clamped: pieces.iter().map(|st| st.clamped).collect(),
+            iterations,
         }
     }
-    Err(StepFailure::NoConvergence {
-        iterations: max_iterations,
-    })
 }
