@@ -144,6 +144,12 @@ fn regression_hostile_scene_values_are_refused_before_work() {
             "piston.skirt_length_mm",
         ),
         ("simulate", vec!["cavitation.gap_mm=1e-308"], "1e-308 mm"),
+        // a clearance of a kilometre ran and printed "-0" peaks (the piston never touched)
+        (
+            "simulate",
+            vec!["piston.clearance_um=1e9"],
+            "piston.clearance_um",
+        ),
         (
             "rom",
             vec!["liner.mesh.radial=9223372036854775807"],

@@ -389,7 +389,8 @@ pub struct RawPiston {
     /// Skirt length [mm] and skirt top above the pin axis [mm].
     pub skirt_length_mm: f64,
     pub pin_below_skirt_top_mm: f64,
-    /// Cold diametral clearance at the widest skirt height [um], >= 0.
+    /// Cold diametral clearance at the widest skirt height [um], >= 0; at most 2 % of the bore
+    /// (warned above 0.5 %: running clearances are 0.05-0.2 %).
     pub clearance_um: f64,
     /// Radial barrel drop at the farther skirt end [um], >= 0, and the widest height below the
     /// pin [mm].

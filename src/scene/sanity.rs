@@ -21,6 +21,12 @@ const SMALL_GAP: f64 = 1e-3;
 /// Lowest useful response band [Hz]: the engine orders lie below, the structure's modes far
 /// above.
 const MIN_BAND_HZ: f64 = 100.0;
+/// Cold diametral skirt clearances as fractions of the bore: running clearances of engine
+/// pistons lie near 0.05-0.2 % (the study sweeps 40-120 um at 115 mm, 0.03-0.1 %); beyond 0.5 %
+/// the piston is worn past any service limit, beyond 2 % its tilt (~ clearance / skirt length)
+/// leaves the small-angle secondary-motion model and the skirt no longer guides it.
+const WIDE_CLEARANCE: f64 = 0.005;
+const MAX_CLEARANCE: f64 = 0.02;
 /// Young's moduli of structural metals and composites lie within this range [Pa].
 const YOUNG_RANGE: (f64, f64) = (1e9, 1e12);
 
@@ -69,6 +75,31 @@ pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
                     num(skirt.length * 1e3),
                     num(scene.liner_geometry.length * 1e3)
                 ),
+            ));
+        }
+        let (clearance, bore) = (skirt.clearance, scene.engine.bore);
+        let said = || {
+            format!(
+                "{} um is {} % of the {} mm bore",
+                num(clearance * 1e6),
+                num(100.0 * clearance / bore),
+                num(bore * 1e3)
+            )
+        };
+        if clearance > MAX_CLEARANCE * bore {
+            return Err(err(
+                "piston.clearance_um",
+                format!(
+                    "{}: at most {} % (running clearances are 0.05-0.2 %; beyond, the skirt no longer guides the piston)",
+                    said(),
+                    num(100.0 * MAX_CLEARANCE)
+                ),
+            ));
+        }
+        if clearance > WIDE_CLEARANCE * bore {
+            warnings.push(format!(
+                "piston.clearance_um = {}: worn beyond any service limit (running clearances are 0.05-0.2 %)",
+                said()
             ));
         }
         let t = &sim.transient;

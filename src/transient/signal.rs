@@ -105,7 +105,8 @@ pub fn sampled_peak(y: &[f64], range: std::ops::Range<usize>, sign: f64) -> Opti
     let k = range
         .clone()
         .reduce(|a, b| if sign * y[b] > sign * y[a] { b } else { a })?;
-    let g = sign * y[k];
+    // + 0.0: a flat record's peak is 0, not -0 (sign * 0.0 is -0.0 for sign = -1)
+    let g = sign * y[k] + 0.0;
     if k == 0 || k + 1 >= y.len() {
         return Some((g, k as f64));
     }
@@ -187,6 +188,14 @@ mod tests {
         assert_eq!(sampled_peak(&[3.0, 1.0, 0.0], 0..3, 1.0), Some((3.0, 0.0)));
         assert_eq!(sampled_peak(&[1.0, 1.0, 1.0], 0..3, 1.0), Some((1.0, 0.0)));
         assert_eq!(sampled_peak(&[1.0], 1..1, 1.0), None);
+    }
+
+    /// Regression: a record that never moves (a piston that never touched) gave the negative
+    /// peak -0.0, printed "-0".
+    #[test]
+    fn regression_a_flat_record_peaks_at_plus_zero() {
+        let (p, _) = sampled_peak(&[0.0; 5], 0..5, -1.0).expect("non-empty range");
+        assert!(p == 0.0 && p.is_sign_positive(), "{p:?}");
     }
 
     #[test]
