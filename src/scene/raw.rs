@@ -516,9 +516,10 @@ pub struct RawTransient {
     /// repeated, at most twice (each costs twice the time); what was reached is reported
     /// (`stats.step_error_estimate`, per point `peak_negative_step_error_m_s2`). Measured on
     /// the default engine at 0.25 deg with its slap sub-steps (pooled realisations,
-    /// benches/convergence.sh): estimate 2.2 %, error of the mean against a step 64 times
-    /// finer +0.3 %, the cylinders' worst points -2.1 .. +3.2 % (their estimates 0.4-2.2 %
-    /// under-state cylinders 3 and 5: 1.4 and 0.6 % against 2.6 and 3.2 %).
+    /// benches/convergence.sh): estimate 2.1 %, error of the mean against a step 64 times
+    /// finer +0.24 %, the cylinders' worst points -1.9 .. +2.9 % (their estimates 0.4-2.0 %
+    /// under-state cylinders 1, 3, 4 and 5: 2.0, 1.3, 1.3 and 0.6 % against 2.9, 2.0, 1.9 and
+    /// 2.8 %; `simulate --check-step` measures the whole step error).
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
     /// Sub-steps per base step while a slap is resolved, 1-64 (1: none; default 3). A base
