@@ -150,6 +150,16 @@ fn contract_simulate_check_step_adds_the_half_step_run() {
     assert!(plain["cylinders"][0]["points"][0]
         .get("peak_negative_half_step_m_s2")
         .is_none());
+    // without the check the numerical uncertainty is the firing-slap estimate, and says so
+    assert_eq!(plain["numerical_uncertainty_scope"], "firing_slaps");
+    for c in plain["cylinders"].as_array().unwrap() {
+        for p in c["points"].as_array().unwrap() {
+            assert_eq!(
+                p["peak_negative_numerical_uncertainty_m_s2"], p["peak_negative_step_error_m_s2"],
+                "{p}"
+            );
+        }
+    }
     let (code, checked, err) = linercav(&[&args[..], &["--check-step"]].concat());
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&checked).unwrap();
@@ -171,8 +181,18 @@ fn contract_simulate_check_step_adds_the_half_step_run() {
                 p["peak_negative_half_step_se_m_s2"].as_f64().unwrap() >= 0.0,
                 "{p}"
             );
+            // with it: the larger of the firing-slap estimate and 2 |P_h - P_h/2|
+            let num = |k: &str| p[k].as_f64().unwrap();
+            let run = 2.0 * (num("peak_negative_m_s2") - num("peak_negative_half_step_m_s2")).abs();
+            let expected = run.max(num("peak_negative_step_error_m_s2"));
+            assert_eq!(
+                num("peak_negative_numerical_uncertainty_m_s2"),
+                expected,
+                "{p}"
+            );
         }
     }
+    assert_eq!(v["numerical_uncertainty_scope"], "whole_run");
     let (code, text, err) = linercav(&[
         "simulate",
         SCENE,
