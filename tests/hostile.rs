@@ -732,3 +732,30 @@ fn regression_step_error_window_at_high_speed() {
     let e = v["stats"]["step_error_estimate"].as_f64().unwrap();
     assert!(e.is_finite() && e > 0.0, "estimate {e}");
 }
+
+/// Doubtful values are warned about, not refused, and the default scene has none: a clearance
+/// worn past 0.5 % of the bore; an average that takes in the first cycle, which starts from
+/// rest (a one-cycle run has no other and is not warned about).
+#[test]
+fn contract_doubtful_values_are_warned_about() {
+    use linercav::scene::Scene;
+    let warnings = |sets: &[&str]| -> Vec<String> {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        Scene::load(Path::new("models/engine.toml"), &sets)
+            .unwrap()
+            .warnings
+    };
+    assert!(warnings(&[]).is_empty(), "{:?}", warnings(&[]));
+    let wide = warnings(&["piston.clearance_um=700"]);
+    assert!(
+        wide.iter().any(|w| w.contains("piston.clearance_um")),
+        "{wide:?}"
+    );
+    assert!(warnings(&["piston.clearance_um=500"]).is_empty());
+    let all = warnings(&["transient.cycles=21", "transient.averaged_cycles=21"]);
+    assert!(
+        all.iter().any(|w| w.contains("transient.averaged_cycles")),
+        "{all:?}"
+    );
+    assert!(warnings(&["transient.cycles=1", "transient.averaged_cycles=1"]).is_empty());
+}

@@ -490,8 +490,9 @@ pub struct RawTransient {
     pub step_deg: f64,
     /// Engine cycles run from rest, >= 1.
     pub cycles: usize,
-    /// The last this many cycles are averaged (>= 1; more than `cycles`: all of them; default
-    /// 1: the last cycle alone). Each reported peak is the mean over them of the per-cycle peak, with
+    /// The last this many cycles are averaged (>= 1; more than `cycles`: all of them, warned
+    /// when that includes the start-up cycle from rest of a run of several; default 1: the
+    /// last cycle alone). Each reported peak is the mean over them of the per-cycle peak, with
     /// its sample standard deviation and largest value: piston slap on a ringing liner is not
     /// periodic (the default engine's consecutive cycles differ by 20-40 %), so one cycle's
     /// peak is one draw, and the mean is the quantity that converges with the step.

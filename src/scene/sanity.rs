@@ -103,6 +103,13 @@ pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
             ));
         }
         let t = &sim.transient;
+        if t.cycles > 1 && t.averaged_cycles >= t.cycles {
+            warnings.push(format!(
+                "transient.averaged_cycles: all {} cycles are averaged, the first too, which starts from rest; average at most {} (transient.cycles - 1)",
+                t.cycles,
+                t.cycles - 1
+            ));
+        }
         let dt = t.step_deg / (6.0 * scene.engine.speed_rpm);
         let samples = 1.0 / (scene.rom.band_hz * dt);
         let what = format!(
