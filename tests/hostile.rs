@@ -150,6 +150,17 @@ fn regression_hostile_scene_values_are_refused_before_work() {
             vec!["piston.clearance_um=1e9"],
             "piston.clearance_um",
         ),
+        // a pin or centre of gravity outside the piston ended in "deep penetration" (exit 1)
+        (
+            "simulate",
+            vec!["piston.pin_offset_mm=-60"],
+            "piston.pin_offset_mm",
+        ),
+        (
+            "simulate",
+            vec!["piston.cg_offset_mm=500"],
+            "piston.cg_offset_mm",
+        ),
         (
             "rom",
             vec!["liner.mesh.radial=9223372036854775807"],
@@ -734,7 +745,7 @@ fn regression_step_error_window_at_high_speed() {
 }
 
 /// Doubtful values are warned about, not refused, and the default scene has none: a clearance
-/// worn past 0.5 % of the bore; an average that takes in the first cycle, which starts from
+/// worn past 0.5 % of the bore; a pin offset beyond 5 % of it; an average that takes in the first cycle, which starts from
 /// rest (a one-cycle run has no other and is not warned about).
 #[test]
 fn contract_doubtful_values_are_warned_about() {
@@ -752,6 +763,12 @@ fn contract_doubtful_values_are_warned_about() {
         "{wide:?}"
     );
     assert!(warnings(&["piston.clearance_um=500"]).is_empty());
+    let offset = warnings(&["piston.pin_offset_mm=10"]);
+    assert!(
+        offset.iter().any(|w| w.contains("piston.pin_offset_mm")),
+        "{offset:?}"
+    );
+    assert!(warnings(&["piston.pin_offset_mm=-1"]).is_empty());
     let all = warnings(&["transient.cycles=21", "transient.averaged_cycles=21"]);
     assert!(
         all.iter().any(|w| w.contains("transient.averaged_cycles")),

@@ -373,10 +373,11 @@ pub struct RawPiston {
     /// Centre of gravity above the pin axis [mm] (negative: below).
     #[serde(default)]
     pub cg_above_pin_mm: f64,
-    /// Centre of gravity beside the pin toward thrust [mm].
+    /// Centre of gravity beside the pin toward thrust [mm]; less than the bore's radius.
     #[serde(default)]
     pub cg_offset_mm: f64,
-    /// Pin offset from the piston axis toward the thrust side [mm] (paper sweeps -1..+1).
+    /// Pin offset from the piston axis toward the thrust side [mm] (paper sweeps -1..+1); less
+    /// than the bore's radius, warned beyond 5 % of the bore (engines use 0-2 %).
     #[serde(default)]
     pub pin_offset_mm: f64,
     /// Crankshaft axis offset from the bore axis toward thrust [mm].

@@ -27,6 +27,10 @@ const MIN_BAND_HZ: f64 = 100.0;
 /// leaves the small-angle secondary-motion model and the skirt no longer guides it.
 const WIDE_CLEARANCE: f64 = 0.005;
 const MAX_CLEARANCE: f64 = 0.02;
+/// Pin offsets as fractions of the bore: 0-2 % in engines (the study's +-1 mm at 115 mm is
+/// 0.9 %); warned beyond 5 %. The pin axis and the centre of gravity lie inside the piston:
+/// offsets of half the bore or more are refused.
+const WIDE_PIN_OFFSET: f64 = 0.05;
 /// Young's moduli of structural metals and composites lie within this range [Pa].
 const YOUNG_RANGE: (f64, f64) = (1e9, 1e12);
 
@@ -100,6 +104,28 @@ pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
             warnings.push(format!(
                 "piston.clearance_um = {}: worn beyond any service limit (running clearances are 0.05-0.2 %)",
                 said()
+            ));
+        }
+        for (key, offset) in [
+            ("piston.pin_offset_mm", sim.piston.pin_offset),
+            ("piston.cg_offset_mm", sim.piston.cg_lateral),
+        ] {
+            if offset.abs() >= 0.5 * bore {
+                return Err(err(
+                    key,
+                    format!(
+                        "{} mm lies outside the piston (the bore's radius is {} mm)",
+                        num(offset * 1e3),
+                        num(0.5 * bore * 1e3)
+                    ),
+                ));
+            }
+        }
+        if sim.piston.pin_offset.abs() > WIDE_PIN_OFFSET * bore {
+            warnings.push(format!(
+                "piston.pin_offset_mm = {} is {} % of the bore (pin offsets are 0-2 %)",
+                num(sim.piston.pin_offset * 1e3),
+                num(100.0 * sim.piston.pin_offset.abs() / bore)
             ));
         }
         let t = &sim.transient;
