@@ -132,7 +132,8 @@ impl Assembler {
         }
     }
 
-    /// Assembles K and M of the whole mesh with one material.
+    /// Assembles K and M of the whole mesh: each element with the mesh's own material when it
+    /// carries a deck's ([`Mesh::material_of`]), else with `mat`.
     pub fn assemble(&self, mesh: &Mesh, mat: &Elastic) -> Result<StiffnessMass, AssemblyError> {
         let nnz = self.pattern.nnz();
         let mut k = vec![0.0; nnz];
@@ -147,12 +148,10 @@ impl Assembler {
                 .par_iter()
                 .enumerate()
                 .map(|(i, (kind, nodes))| {
-                    stiffness_mass(*kind, &mesh.coords_of(nodes), mat).map_err(|source| {
-                        AssemblyError {
-                            element: c * CHUNK * rayon::current_num_threads().max(1) + i,
-                            source,
-                        }
-                    })
+                    let element = c * CHUNK * rayon::current_num_threads().max(1) + i;
+                    let mat = mesh.material_of(element, mat);
+                    stiffness_mass(*kind, &mesh.coords_of(nodes), mat)
+                        .map_err(|source| AssemblyError { element, source })
                 })
                 .collect();
             for ((_, nodes), km) in chunk.iter().zip(mats) {

@@ -12,7 +12,7 @@
 //! node set has the name). Coordinates are taken as metres.
 
 use super::collect::MshError;
-use super::collect::{read_mesh_text, reorder, Collected, HEX20_ABAQUS, TET10_DECK};
+use super::collect::{read_mesh_text, Loc, reorder, Collected, HEX20_ABAQUS, TET10_DECK};
 use super::element::ElementKind;
 use super::Mesh;
 use std::path::Path;
@@ -152,7 +152,7 @@ fn set_ids(
 
 /// Parses an input file; `path` is used in messages only.
 pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
-    let mut c = Collected::default();
+    let mut c = Collected::new(path);
     let mut block = Block::Skip;
     // an element whose ids continue on the next line: (line, numbers so far)
     let mut pending: Option<(usize, Vec<i64>)> = None;
@@ -205,11 +205,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                             ))
                         })?;
                 }
-                c.nodes.push((id, x, line));
+                c.nodes.push((id, x, Loc::main(line)));
                 if let Some(n) = nset {
                     c.node_sets
                         .entry(n.clone())
-                        .or_insert((Vec::new(), line))
+                        .or_insert((Vec::new(), Loc::main(line)))
                         .0
                         .push(id);
                 }
@@ -244,11 +244,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                     ElementKind::Hex20 => reorder(*kind, &HEX20_ABAQUS, &got[1..]),
                     _ => got[1..].to_vec(),
                 };
-                c.elements.push((got[0], *kind, ids, first));
+                c.elements.push((got[0], *kind, ids, Loc::main(first)));
                 if let Some(e) = elset {
                     c.element_sets
                         .entry(e.clone())
-                        .or_insert((Vec::new(), first))
+                        .or_insert((Vec::new(), Loc::main(first)))
                         .0
                         .push(got[0]);
                 }
@@ -265,7 +265,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                     &mut c.element_sets
                 };
                 sets.entry(name.clone())
-                    .or_insert((Vec::new(), line))
+                    .or_insert((Vec::new(), Loc::main(line)))
                     .0
                     .extend(ids);
             }
@@ -278,7 +278,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
             msg: "the file ends inside an element's node list".into(),
         });
     }
-    c.into_mesh(path)
+    c.into_mesh()
 }
 
 #[cfg(test)]

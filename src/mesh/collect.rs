@@ -3,7 +3,7 @@
 //! ours, sets to node and element sets).
 
 use super::element::ElementKind;
-use super::{ElementBlock, Mesh};
+use super::{DeckMaterial, ElementBlock, Mesh, NO_MATERIAL};
 
 /// Why a mesh file could not be read: the file, the line and what was expected.
 #[derive(Debug, thiserror::Error)]
@@ -17,15 +17,37 @@ use crate::files::{read_text, ReadError, LIMIT_MESH};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
-/// A deck's contents by id, each record with the line it came from (for messages).
+/// Where a record of a deck came from: an index into [`Collected::files`] and a 1-based line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Loc {
+    pub file: usize,
+    pub line: usize,
+}
+
+impl Loc {
+    /// A line of the main file.
+    pub fn main(line: usize) -> Self {
+        Loc { file: 0, line }
+    }
+}
+
+/// A deck's contents by id, each record with the file and line it came from (for messages).
+/// Coordinates are in the basic (rectangular, global) system of the deck, in the deck's unit;
+/// material constants in the deck's unit system.
 #[derive(Default)]
 pub(crate) struct Collected {
-    pub nodes: Vec<(i64, [f64; 3], usize)>,
-    /// (element id, kind, node ids in our order, line)
-    pub elements: Vec<(i64, ElementKind, Vec<i64>, usize)>,
-    /// name -> (node ids, line of the set's first record)
-    pub node_sets: BTreeMap<String, (Vec<i64>, usize)>,
-    pub element_sets: BTreeMap<String, (Vec<i64>, usize)>,
+    /// The main file first, then every included file in the order first read.
+    pub files: Vec<PathBuf>,
+    pub nodes: Vec<(i64, [f64; 3], Loc)>,
+    /// (element id, kind, node ids in our order, where)
+    pub elements: Vec<(i64, ElementKind, Vec<i64>, Loc)>,
+    /// name -> (node ids, where the set's first record is)
+    pub node_sets: BTreeMap<String, (Vec<i64>, Loc)>,
+    pub element_sets: BTreeMap<String, (Vec<i64>, Loc)>,
+    /// Materials by name (`MAT1 <id>`, an Abaqus material's name): constants and definition.
+    pub materials: BTreeMap<String, (crate::scene::spec::Elastic, Loc)>,
+    /// Element id -> (material name, where the assignment was made: PSOLID, *SOLID SECTION).
+    pub element_material: HashMap<i64, (String, Loc)>,
 }
 
 /// Reorders a quadratic element's nodes from a deck's edge convention to ours: the corners
@@ -102,31 +124,48 @@ fn err(path: &Path, line: usize, msg: String) -> MshError {
 }
 
 impl Collected {
+    /// A collection whose main file is `path`.
+    pub fn new(path: &Path) -> Self {
+        Collected {
+            files: vec![path.to_path_buf()],
+            ..Default::default()
+        }
+    }
+
+    /// An error at `loc`.
+    pub fn err_at(&self, loc: Loc, msg: String) -> MshError {
+        err(&self.files[loc.file.min(self.files.len() - 1)], loc.line, msg)
+    }
+
     /// The mesh: nodes in deck order, elements grouped by kind (in deck order within a kind),
     /// node sets as given, element sets as element indices, and each element set also as the
     /// node set of its elements' nodes unless a node set has its name.
-    pub fn into_mesh(self, path: &Path) -> Result<Mesh, MshError> {
-        let path: PathBuf = path.to_path_buf();
+    pub fn into_mesh(self) -> Result<Mesh, MshError> {
+        if self.files.is_empty() {
+            return Err(err(Path::new("?"), 0, "no file was read".into()));
+        }
+        let at = |loc: Loc, msg: String| self.err_at(loc, msg);
         if self.nodes.is_empty() || self.elements.is_empty() {
-            return Err(err(
-                &path,
-                0,
+            return Err(at(
+                Loc::main(0),
                 "no nodes or no solid elements (expected nodes and 4/10-node tetrahedra or 8/20-node hexahedra)".into(),
             ));
         }
         let mut index: HashMap<i64, usize> = HashMap::with_capacity(self.nodes.len());
         let mut nodes = Vec::with_capacity(self.nodes.len());
-        for (id, x, line) in self.nodes {
+        for &(id, x, loc) in &self.nodes {
+            if id <= 0 {
+                return Err(at(loc, format!("node id {id}: ids must be positive integers")));
+            }
             if index.insert(id, nodes.len()).is_some() {
-                return Err(err(&path, line, format!("node {id} defined twice")));
+                return Err(at(loc, format!("node {id} defined twice")));
             }
             nodes.push(x);
         }
-        let node = |id: i64, line: usize, what: &str| {
+        let node = |id: i64, loc: Loc, what: &str| {
             index.get(&id).copied().ok_or_else(|| {
-                err(
-                    &path,
-                    line,
+                at(
+                    loc,
                     format!("{what} refers to node {id}, which is not defined"),
                 )
             })
@@ -134,8 +173,11 @@ impl Collected {
         let mut by_kind: BTreeMap<ElementKind, Vec<(i64, Vec<usize>)>> = BTreeMap::new();
         let mut seen = HashMap::new();
         for (eid, kind, ids, line) in &self.elements {
+            if *eid <= 0 {
+                return Err(at(*line, format!("element id {eid}: ids must be positive integers")));
+            }
             if seen.insert(*eid, *line).is_some() {
-                return Err(err(&path, *line, format!("element {eid} defined twice")));
+                return Err(at(*line, format!("element {eid} defined twice")));
             }
             let conn = ids
                 .iter()
@@ -161,6 +203,7 @@ impl Collected {
             blocks,
             ..Default::default()
         };
+        self.assign_materials(&mut mesh, &element_index)?;
         for (name, (ids, line)) in &self.node_sets {
             let set: BTreeSet<usize> = ids
                 .iter()
@@ -173,8 +216,7 @@ impl Collected {
             let mut elements = Vec::with_capacity(ids.len());
             for e in ids {
                 let Some(&g) = element_index.get(e) else {
-                    return Err(err(
-                        &path,
+                    return Err(at(
                         *line,
                         format!("element set '{name}' refers to element {e}, which is not a solid element of the file"),
                     ));
@@ -196,6 +238,48 @@ impl Collected {
             mesh.element_sets.insert(name.clone(), elements);
         }
         Ok(mesh)
+    }
+
+    /// The deck's materials as a table and each element's index into it ([`NO_MATERIAL`] for
+    /// an element no property or section reaches); nothing when the deck defines none.
+    fn assign_materials(
+        &self,
+        mesh: &mut Mesh,
+        element_index: &HashMap<i64, usize>,
+    ) -> Result<(), MshError> {
+        if self.materials.is_empty() && self.element_material.is_empty() {
+            return Ok(());
+        }
+        let names: Vec<&String> = self.materials.keys().collect();
+        mesh.materials = self
+            .materials
+            .iter()
+            .map(|(name, (elastic, _))| DeckMaterial {
+                name: name.clone(),
+                elastic: *elastic,
+            })
+            .collect();
+        mesh.element_material = vec![NO_MATERIAL; mesh.num_elements()];
+        for (eid, (name, loc)) in &self.element_material {
+            let Some(&g) = element_index.get(eid) else {
+                continue; // a property of an element that is not a solid of the file
+            };
+            let k = names.binary_search(&name).map_err(|_| {
+                self.err_at(
+                    *loc,
+                    format!(
+                        "material '{name}' is not defined (the deck defines: {})",
+                        if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
+                        }
+                    ),
+                )
+            })?;
+            mesh.element_material[g] = k as u32;
+        }
+        Ok(())
     }
 }
 

@@ -129,8 +129,7 @@ impl Lattice<'_> {
             mesh: Mesh {
                 nodes,
                 blocks: vec![ElementBlock { kind, conn }],
-                node_sets: Default::default(),
-                element_sets: Default::default(),
+                ..Default::default()
             },
             keys,
         }

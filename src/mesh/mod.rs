@@ -66,9 +66,109 @@ pub struct Mesh {
     pub node_sets: BTreeMap<String, Vec<usize>>,
     /// Named element sets (volume physical groups), as global element indices in block order.
     pub element_sets: BTreeMap<String, Vec<usize>>,
+    /// Materials a deck defines (Nastran MAT1 through PSOLID, Abaqus *MATERIAL through *SOLID
+    /// SECTION), SI once [`Mesh::to_si`] has run; empty for meshes without materials.
+    pub materials: Vec<DeckMaterial>,
+    /// Index into `materials` of every element (global index in block order), or
+    /// [`NO_MATERIAL`]; empty when `materials` is.
+    pub element_material: Vec<u32>,
+}
+
+/// An element of a deck that no section or property gives a material.
+pub const NO_MATERIAL: u32 = u32::MAX;
+
+/// A material of a deck: its name there (`MAT1 3`, `*MATERIAL, NAME=steel`) and its constants.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeckMaterial {
+    pub name: String,
+    pub elastic: crate::scene::spec::Elastic,
+}
+
+/// The length unit of a mesh file's coordinates: metres (and SI constants), or millimetres
+/// in the mm-t-s system (E in MPa, rho in t/mm^3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshUnit {
+    #[default]
+    M,
+    Mm,
+}
+
+impl MeshUnit {
+    /// Parses `"m"` or `"mm"`.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "m" => Some(Self::M),
+            "mm" => Some(Self::Mm),
+            _ => None,
+        }
+    }
+    /// Metres per unit of length.
+    pub fn metres(self) -> f64 {
+        match self {
+            Self::M => 1.0,
+            Self::Mm => 1e-3,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::M => "m",
+            Self::Mm => "mm",
+        }
+    }
 }
 
 impl Mesh {
+    /// Converts a mesh read in `unit` to SI: x_SI = s x with s the metres per unit; in the
+    /// mm-t-s system E_SI = 1e6 E (MPa -> Pa) and rho_SI = 1e12 rho (t/mm^3 -> kg/m^3).
+    pub fn to_si(&mut self, unit: MeshUnit) {
+        if unit == MeshUnit::M {
+            return;
+        }
+        let s = unit.metres();
+        for p in &mut self.nodes {
+            for x in p.iter_mut() {
+                *x *= s;
+            }
+        }
+        for m in &mut self.materials {
+            m.elastic.young *= 1e6;
+            m.elastic.density *= 1e12;
+        }
+    }
+    /// Replaces a deck's materials by one given material (the scene's `material` key or the
+    /// `--youngs/--poisson/--density` flags win over the deck).
+    pub fn clear_materials(&mut self) {
+        self.materials.clear();
+        self.element_material.clear();
+    }
+    /// The material of element `e` (global index): the deck's, else `fallback`.
+    pub fn material_of<'a>(
+        &'a self,
+        e: usize,
+        fallback: &'a crate::scene::spec::Elastic,
+    ) -> &'a crate::scene::spec::Elastic {
+        match self.element_material.get(e) {
+            Some(&k) if k != NO_MATERIAL => &self.materials[k as usize].elastic,
+            _ => fallback,
+        }
+    }
+    /// The first element (global index) without a deck material, if the deck has materials.
+    pub fn element_without_material(&self) -> Option<usize> {
+        self.element_material.iter().position(|&k| k == NO_MATERIAL)
+    }
+    /// Axis-aligned bounding box (min, max) of the nodes.
+    pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &self.nodes {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        (lo, hi)
+    }
     pub fn num_elements(&self) -> usize {
         self.blocks.iter().map(|b| b.len()).sum()
     }

@@ -16,7 +16,7 @@
 //! property id of the solid elements, `"PID<n>"` (none for a blank PID). Coordinates are taken as metres.
 
 use super::collect::MshError;
-use super::collect::{read_mesh_text, reorder, Collected, HEX20_NASTRAN, TET10_DECK};
+use super::collect::{read_mesh_text, Loc, reorder, Collected, HEX20_NASTRAN, TET10_DECK};
 use super::element::ElementKind;
 use super::Mesh;
 use std::collections::BTreeMap;
@@ -120,9 +120,9 @@ fn cards(text: &str) -> (Vec<Card>, BTreeMap<i64, String>) {
 /// Parses bulk data; `path` is used in messages only.
 pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
     let (cards, names) = cards(text);
-    let mut c = Collected::default();
-    let mut sets: BTreeMap<i64, (Vec<i64>, usize)> = BTreeMap::new();
-    let mut props: BTreeMap<i64, (Vec<i64>, usize)> = BTreeMap::new();
+    let mut c = Collected::new(path);
+    let mut sets: BTreeMap<i64, (Vec<i64>, Loc)> = BTreeMap::new();
+    let mut props: BTreeMap<i64, (Vec<i64>, Loc)> = BTreeMap::new();
     for card in &cards {
         let at = |msg: String| MshError {
             path: path.to_path_buf(),
@@ -157,7 +157,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                         ))
                     })?;
                 }
-                c.nodes.push((id, x, card.line));
+                c.nodes.push((id, x, Loc::main(card.line)));
             }
             "CTETRA" | "CHEXA" => {
                 let eid = int(0, "element id")?;
@@ -190,11 +190,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                     ElementKind::Hex20 => reorder(kind, &HEX20_NASTRAN, &ids),
                     _ => ids,
                 };
-                c.elements.push((eid, kind, ids, card.line));
+                c.elements.push((eid, kind, ids, Loc::main(card.line)));
                 if let Some(pid) = pid {
                     props
                         .entry(pid)
-                        .or_insert((Vec::new(), card.line))
+                        .or_insert((Vec::new(), Loc::main(card.line)))
                         .0
                         .push(eid);
                 }
@@ -210,7 +210,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
                     .map(|s| s.as_str())
                     .filter(|s| !s.is_empty())
                     .collect();
-                let entry = sets.entry(sid).or_insert((Vec::new(), card.line));
+                let entry = sets.entry(sid).or_insert((Vec::new(), Loc::main(card.line)));
                 let mut k = 0;
                 while k < f.len() {
                     let a: i64 = f[k]
@@ -245,7 +245,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
     for (pid, v) in props {
         c.element_sets.insert(format!("PID{pid}"), v);
     }
-    c.into_mesh(path)
+    c.into_mesh()
 }
 
 #[cfg(test)]
