@@ -68,7 +68,8 @@ pub fn evaluate_scene(scene: &Scene, rom: &EngineRom, result: &CycleResult) -> R
     ))
 }
 
-/// Where the model of a command comes from: a scene part, or a bare mesh file with a material.
+/// Where the model of a command comes from: a scene part, or a bare mesh file in its unit
+/// with a material (None: the deck's own).
 #[derive(Clone, Debug)]
 pub enum ModelInput {
     Scene {
@@ -78,7 +79,8 @@ pub enum ModelInput {
     },
     Mesh {
         mesh: PathBuf,
-        material: Elastic,
+        unit: crate::mesh::MeshUnit,
+        material: Option<Elastic>,
         fix: Vec<String>,
     },
 }
@@ -86,7 +88,10 @@ pub enum ModelInput {
 /// A checked mesh with its material, the sets to fix, and the mesh-check findings.
 pub struct LoadedPart {
     pub mesh: Mesh,
+    /// The given material, or (when `material_source` is deck) the deck's first: each element
+    /// carries its own then.
     pub material: Elastic,
+    pub material_source: crate::mesh::import::MaterialSource,
     pub fix: Vec<String>,
     pub checks: CheckReport,
     pub label: String,
@@ -95,54 +100,95 @@ pub struct LoadedPart {
     pub guard_modes: usize,
 }
 
-fn read_mesh(source: &MeshSource) -> Result<(Mesh, Option<String>)> {
-    Ok(match source {
-        MeshSource::Liner { geometry, meshing } => (liner::generate(geometry, meshing), None),
-        MeshSource::File(p) => (crate::mesh::read(p)?, Some(p.display().to_string())),
-    })
+/// A part's mesh: generated, or a file read in `unit`, with its material resolved.
+fn read_mesh(
+    source: &MeshSource,
+    unit: crate::mesh::MeshUnit,
+    unit_key: &str,
+    given: Option<Elastic>,
+    material_key: &str,
+) -> Result<(Mesh, Option<String>, Elastic, crate::mesh::import::MaterialSource)> {
+    use crate::mesh::import;
+    match source {
+        MeshSource::Liner { geometry, meshing } => {
+            let m = given.ok_or_else(|| Error::Argument {
+                flag: material_key.into(),
+                msg: "missing: the parametric mesh needs a material".into(),
+            })?;
+            Ok((liner::generate(geometry, meshing), None, m, import::MaterialSource::Given))
+        }
+        MeshSource::File(p) => {
+            let mut mesh = import::read_si(p, unit, unit_key)
+                .map_err(crate::reduce::scene_rom::SceneRomError::from)?;
+            let (m, src) = import::resolve_material(&mut mesh, given, p, material_key)
+                .map_err(crate::reduce::scene_rom::SceneRomError::from)?;
+            Ok((mesh, Some(p.display().to_string()), m, src))
+        }
+    }
 }
 
 /// Resolves a [`ModelInput`] to a checked mesh and material. `extra_fix` adds sets to fix.
 pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart> {
-    let (mesh, file, material, mut fix, label, shift_hz, guard_modes) = match input {
-        ModelInput::Scene { scene, part, sets } => {
-            let sc = load_scene(scene, sets)?;
-            let p = sc.part(part).ok_or_else(|| Error::Argument {
-                flag: format!("{}: part '{part}'", scene.display()),
-                msg: format!("unknown; the scene has: {}", PARTS.join(", ")),
-            })?;
-            let (mesh, file) = read_mesh(&p.source)?;
-            (
+    let (mesh, file, material, material_source, mut fix, label, shift_hz, guard_modes) =
+        match input {
+            ModelInput::Scene { scene, part, sets } => {
+                let sc = load_scene(scene, sets)?;
+                let p = sc.part(part).ok_or_else(|| Error::Argument {
+                    flag: format!("{}: part '{part}'", scene.display()),
+                    msg: format!("unknown; the scene has: {}", PARTS.join(", ")),
+                })?;
+                let (mut mesh, file, material, src) = read_mesh(
+                    &p.source,
+                    p.mesh_unit,
+                    &format!("{part}.mesh_unit"),
+                    p.material,
+                    &format!("{part}.material"),
+                )?;
+                for (name, b) in &p.box_sets {
+                    crate::mesh::find::box_set(&mut mesh, part, name, b);
+                }
+                (
+                    mesh,
+                    file,
+                    material,
+                    src,
+                    p.fix.clone(),
+                    format!("{} / {part}", scene.display()),
+                    sc.solver.shift_hz,
+                    sc.solver.guard_modes,
+                )
+            }
+            ModelInput::Mesh {
                 mesh,
-                file,
-                p.material,
-                p.fix.clone(),
-                format!("{} / {part}", scene.display()),
-                sc.solver.shift_hz,
-                sc.solver.guard_modes,
-            )
-        }
-        ModelInput::Mesh {
-            mesh,
-            material,
-            fix,
-        } => {
-            material.validate().map_err(|m| Error::Argument {
-                flag: "material".into(),
-                msg: m.to_string(),
-            })?;
-            let m = crate::mesh::read(mesh)?;
-            (
-                m,
-                Some(mesh.display().to_string()),
-                *material,
-                fix.clone(),
-                mesh.display().to_string(),
-                100.0,
-                4,
-            )
-        }
-    };
+                unit,
+                material,
+                fix,
+            } => {
+                if let Some(m) = material {
+                    m.validate().map_err(|m| Error::Argument {
+                        flag: "--youngs/--poisson/--density".into(),
+                        msg: m.to_string(),
+                    })?;
+                }
+                let (m, file, material, src) = read_mesh(
+                    &MeshSource::File(mesh.clone()),
+                    *unit,
+                    "--unit",
+                    *material,
+                    "--youngs/--poisson/--density",
+                )?;
+                (
+                    m,
+                    file,
+                    material,
+                    src,
+                    fix.clone(),
+                    mesh.display().to_string(),
+                    100.0,
+                    4,
+                )
+            }
+        };
     fix.extend_from_slice(extra_fix);
     let mut mesh = mesh;
     if let Some(f) = &file {
@@ -161,6 +207,7 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
     Ok(LoadedPart {
         mesh,
         material,
+        material_source,
         fix,
         checks,
         label,

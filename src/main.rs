@@ -42,7 +42,11 @@ struct ModelArgs {
     /// Abaqus input (.inp), by extension.
     #[arg(long, conflicts_with = "scene")]
     mesh: Option<PathBuf>,
-    /// Young's modulus [Pa] (with --mesh).
+    /// Length unit of --mesh: m (SI constants) or mm (mm-t-s: E in MPa, rho in t/mm^3).
+    #[arg(long, value_name = "m|mm", default_value = "m", value_parser = ["m", "mm"])]
+    unit: String,
+    /// Young's modulus [Pa] (with --mesh; optional when the mesh defines its materials, and
+    /// then it overrides them, with --poisson and --density; SI whatever --unit).
     #[arg(long, value_name = "PA", allow_negative_numbers = true)]
     youngs: Option<f64>,
     /// Poisson's ratio (with --mesh).
@@ -65,19 +69,31 @@ impl ModelArgs {
                 sets: self.sets.clone(),
             }),
             (None, Some(mesh)) => {
-                let need = |v: Option<f64>, flag: &str| {
-                    v.ok_or_else(|| Error::Argument {
-                        flag: "--mesh".into(),
-                        msg: format!("needs {flag}"),
-                    })
+                let unit = linercav::mesh::MeshUnit::parse(&self.unit).ok_or_else(|| {
+                    Error::Argument {
+                        flag: "--unit".into(),
+                        msg: format!("expected m or mm, got {}", self.unit),
+                    }
+                })?;
+                let material = match (self.youngs, self.poisson, self.density) {
+                    (None, None, None) => None,
+                    // SI whatever the mesh's unit, as the flags' names say
+                    (Some(young), Some(poisson), Some(density)) => Some(Elastic {
+                        young,
+                        poisson,
+                        density,
+                    }),
+                    _ => {
+                        return Err(Error::Argument {
+                            flag: "--youngs/--poisson/--density".into(),
+                            msg: "give all three, or none to use the mesh's own materials".into(),
+                        })
+                    }
                 };
                 Ok(ModelInput::Mesh {
                     mesh: mesh.clone(),
-                    material: Elastic {
-                        young: need(self.youngs, "--youngs PA")?,
-                        poisson: need(self.poisson, "--poisson NU")?,
-                        density: need(self.density, "--density KG_M3")?,
-                    },
+                    unit,
+                    material,
                     fix: Vec::new(),
                 })
             }

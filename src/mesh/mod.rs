@@ -9,12 +9,15 @@ pub mod checks;
 pub(crate) mod collect;
 pub mod crankcase;
 pub mod element;
+pub mod find;
+pub mod import;
 pub mod gmsh;
 pub mod lattice;
 pub mod liner;
 pub mod merge;
 pub mod nastran;
 
+pub use crate::scene::spec::MeshUnit;
 pub use element::ElementKind;
 use std::collections::BTreeMap;
 
@@ -35,6 +38,67 @@ pub fn read(path: &std::path::Path) -> Result<Mesh, collect::MshError> {
             msg: "unknown mesh format: expected .msh (Gmsh MSH 4.1), .bdf or .nas (Nastran bulk data) or .inp (Abaqus input)".into(),
         }),
     }
+}
+
+/// A mesh file and every file it includes (Nastran `INCLUDE`, Abaqus `*INCLUDE`), nested, each
+/// once, in the order found: what a cache key must hash. Unreadable includes are left to the
+/// reader to report.
+pub fn deck_files(path: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = vec![path.to_path_buf()];
+    let mut k = 0;
+    while k < out.len() && out.len() < 4096 {
+        let p = out[k].clone();
+        k += 1;
+        let Ok(text) = crate::files::read_text(&p, crate::files::LIMIT_MESH) else {
+            continue;
+        };
+        let dir = p.parent().unwrap_or(std::path::Path::new("."));
+        for inc in include_names(&text) {
+            let q = dir.join(inc);
+            if !out.contains(&q) {
+                out.push(q);
+            }
+        }
+    }
+    out
+}
+
+/// File names of the include lines of a deck's text: `INCLUDE 'name'` (a quoted name may go on
+/// over lines) or `INCLUDE name`, and `*INCLUDE, INPUT=name`.
+fn include_names(text: &str) -> Vec<String> {
+    let mut names = Vec::new();
+    let mut lines = text.lines();
+    while let Some(l) = lines.next() {
+        let t = l.trim_start();
+        let up = t.to_ascii_uppercase();
+        if up.starts_with("*INCLUDE") {
+            if let Some(k) = up.find("INPUT=") {
+                let v = t[k + 6..].split(',').next().unwrap_or("").trim();
+                names.push(v.trim_matches('"').trim_matches('\'').to_string());
+            }
+        } else if up.starts_with("INCLUDE") {
+            let rest = t[7..].trim();
+            if let Some(q) = rest.strip_prefix('\'') {
+                let mut name = String::new();
+                let mut part = q.to_string();
+                loop {
+                    if let Some(end) = part.find('\'') {
+                        name.push_str(part[..end].trim());
+                        break;
+                    }
+                    name.push_str(part.trim());
+                    match lines.next() {
+                        Some(n) => part = n.to_string(),
+                        None => break,
+                    }
+                }
+                names.push(name);
+            } else if !rest.is_empty() {
+                names.push(rest.split_whitespace().next().unwrap_or("").to_string());
+            }
+        }
+    }
+    names
 }
 
 /// A block of elements of one kind, connectivity flattened (`kind.num_nodes()` per element).
@@ -82,40 +146,6 @@ pub const NO_MATERIAL: u32 = u32::MAX;
 pub struct DeckMaterial {
     pub name: String,
     pub elastic: crate::scene::spec::Elastic,
-}
-
-/// The length unit of a mesh file's coordinates: metres (and SI constants), or millimetres
-/// in the mm-t-s system (E in MPa, rho in t/mm^3).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum MeshUnit {
-    #[default]
-    M,
-    Mm,
-}
-
-impl MeshUnit {
-    /// Parses `"m"` or `"mm"`.
-    pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "m" => Some(Self::M),
-            "mm" => Some(Self::Mm),
-            _ => None,
-        }
-    }
-    /// Metres per unit of length.
-    pub fn metres(self) -> f64 {
-        match self {
-            Self::M => 1.0,
-            Self::Mm => 1e-3,
-        }
-    }
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::M => "m",
-            Self::Mm => "mm",
-        }
-    }
 }
 
 impl Mesh {

@@ -16,7 +16,7 @@ use faer::Mat;
 use std::time::Instant;
 
 /// Version of the ROM layout; part of the cache key (5: matrices stored as ndarray arrays).
-pub const ROM_FORMAT: u32 = 5;
+pub const ROM_FORMAT: u32 = 6;
 
 /// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
 /// system modes along the stated direction.
@@ -75,6 +75,8 @@ pub struct RomInfo {
     /// cut-off is lowered to 2/3 of its value: an upper estimate of the truncation error.
     pub estimated_error: f64,
     pub left_out: Vec<String>,
+    /// Interfaces, points and materials found on imported meshes (none for generated ones).
+    pub interfaces: Option<crate::mesh::find::FoundInterfaces>,
 }
 
 /// The cached engine reduced-order model.
@@ -891,6 +893,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         build_seconds: t0.elapsed().as_secs_f64(),
         estimated_error,
         left_out: left_out(inp, n_g, &basis),
+        interfaces: None,
     };
     let rom = EngineRom {
         frequencies_hz: sys.lambdas[..kept]

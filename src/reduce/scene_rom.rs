@@ -14,7 +14,9 @@ use crate::fem::surface::SurfaceMass;
 use crate::files::WriteError;
 use crate::mesh::checks::MeshError;
 use crate::mesh::collect::MshError;
-use crate::mesh::{crankcase, liner, Mesh};
+use crate::fem::material::Elastic;
+use crate::mesh::find::{self, FoundInterfaces, LinerShape};
+use crate::mesh::{crankcase, import, liner, Mesh, MeshUnit};
 use crate::scene::budget::{self, Limits};
 use crate::scene::{CrankcaseSource, MeshSource, Scene, SceneError};
 use std::path::{Path, PathBuf};
@@ -32,6 +34,8 @@ pub enum SceneRomError {
     },
     #[error(transparent)]
     Msh(#[from] MshError),
+    #[error(transparent)]
+    Import(#[from] crate::mesh::import::ImportError),
     #[error("{}: {source}", file.as_deref().unwrap_or("mesh"))]
     Mesh {
         file: Option<String>,
@@ -103,14 +107,20 @@ pub struct LoadedRom {
     pub replaced: Option<String>,
 }
 
+/// BLAKE3 of a mesh file and of every file it includes (in the order found).
 fn file_digest(path: &Path) -> Result<String> {
-    let bytes = crate::files::read_regular(path, crate::files::LIMIT_MESH).map_err(|source| {
-        SceneRomError::MeshFile {
-            path: path.to_path_buf(),
-            source,
-        }
-    })?;
-    Ok(blake3::hash(&bytes).to_hex().to_string())
+    let mut h = blake3::Hasher::new();
+    for p in crate::mesh::deck_files(path) {
+        let bytes = crate::files::read_regular(&p, crate::files::LIMIT_MESH).map_err(|source| {
+            SceneRomError::MeshFile {
+                path: p.clone(),
+                source,
+            }
+        })?;
+        h.update(&(bytes.len() as u64).to_le_bytes());
+        h.update(&bytes);
+    }
+    Ok(h.finalize().to_hex().to_string())
 }
 
 /// The scene's crankcase; the engine model needs one.
@@ -123,15 +133,140 @@ fn crankcase_of(scene: &Scene) -> Result<&crate::scene::Crankcase> {
         })
 }
 
-/// Loads and checks the liner and crankcase meshes of a scene.
-pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
-    let cc = crankcase_of(scene)?;
-    let (mut lm, lfile) = match &scene.liner.source {
-        MeshSource::Liner { geometry, meshing } => (liner::generate(geometry, meshing), None),
-        MeshSource::File(p) => (crate::mesh::read(p)?, Some(p.display().to_string())),
+/// A scene's meshes, SI, in their frames, with every set the build needs, and what was found.
+pub struct EngineMeshes {
+    pub liner: Mesh,
+    pub crankcase: Mesh,
+    pub liner_material: Elastic,
+    pub crankcase_material: Elastic,
+    /// The liner's radii and heights (measured on a file's mesh, else the scene's).
+    pub shape: LinerShape,
+    /// Guide band [z0, z1] in the liner frame [m].
+    pub guide: [f64; 2],
+    /// What was found on imported meshes (None when both are generated).
+    pub found: Option<FoundInterfaces>,
+}
+
+/// The scene's liner shape (the generator's).
+fn scene_shape(scene: &Scene) -> LinerShape {
+    let g = &scene.liner_geometry;
+    LinerShape {
+        inner_radius: g.inner_diameter / 2.0,
+        outer_radius: g.outer_diameter / 2.0,
+        flange_radius: g.flange_outer_diameter / 2.0,
+        length: g.length,
+        seat_z: g.length - g.flange_height,
+        tol: 1e-6 * g.length,
+    }
+}
+
+/// Reads one part's mesh (generated, or a file in its unit with its box sets and material).
+fn part_mesh(
+    generated: impl FnOnce() -> Mesh,
+    file: Option<&Path>,
+    unit: MeshUnit,
+    part: &str,
+    given: Option<Elastic>,
+) -> Result<(Mesh, Elastic, String)> {
+    let key = format!("{part}.material");
+    let Some(p) = file else {
+        let m = given.ok_or_else(|| SceneError::Field {
+            path: p_or_scene(),
+            key: key.clone(),
+            msg: "missing".into(),
+        })?;
+        return Ok((generated(), m, format!("{part}: scene")));
     };
+    let mut mesh = import::read_si(p, unit, &format!("{part}.mesh_unit"))?;
+    let (m, src) = import::resolve_material(&mut mesh, given, p, &key)?;
+    let note = match src {
+        import::MaterialSource::Given => format!("{part}: scene (overrides the deck's)"),
+        import::MaterialSource::Deck => format!(
+            "{part}: deck ({})",
+            mesh.materials
+                .iter()
+                .map(|m| m.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    Ok((mesh, m, note))
+}
+
+fn p_or_scene() -> PathBuf {
+    PathBuf::from("scene")
+}
+
+/// Loads and checks the liner and crankcase meshes of a scene: files read in their units,
+/// materials resolved, both put into their frames with every set (found from the geometry where
+/// a deck does not name it; box sets of the scene added), then checked.
+pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
+    let cc = crankcase_of(scene)?;
+    let lfile = match &scene.liner.source {
+        MeshSource::File(p) => Some(p.as_path()),
+        MeshSource::Liner { .. } => None,
+    };
+    let cfile = match &cc.source {
+        CrankcaseSource::File(p) => Some(p.as_path()),
+        CrankcaseSource::Parametric { .. } => None,
+    };
+    let (mut lm, liner_material, lnote) = part_mesh(
+        || match &scene.liner.source {
+            MeshSource::Liner { geometry, meshing } => liner::generate(geometry, meshing),
+            MeshSource::File(_) => unreachable!("a file is read"),
+        },
+        lfile,
+        scene.liner.mesh_unit,
+        "liner",
+        scene.liner.material,
+    )?;
+    let (mut cm, crankcase_material, cnote) = part_mesh(
+        || match &cc.source {
+            CrankcaseSource::Parametric { geometry, meshing } => {
+                crankcase::generate(geometry, meshing)
+            }
+            CrankcaseSource::File(_) => unreachable!("a file is read"),
+        },
+        cfile,
+        cc.mesh_unit,
+        "crankcase",
+        cc.material,
+    )?;
+    let mut boxes = Vec::new();
+    for (name, b) in &cc.box_sets {
+        boxes.push(find::box_set(&mut cm, "crankcase", name, b));
+    }
+    let imported = lfile.is_some() || cfile.is_some();
+    let axis_x = axis_x(scene);
+    let depths = &scene.liner_geometry.analysis_depths;
+    let mut found = if imported {
+        let frame = import::EngineFrame {
+            axis_x: &axis_x,
+            depths,
+            bore: scene.engine.bore,
+            liner_unit_key: "liner.mesh_unit",
+            crankcase_unit_key: "crankcase.mesh_unit",
+        };
+        Some(import::complete_engine(
+            &mut lm,
+            &mut cm,
+            scene_shape(scene),
+            lfile,
+            cfile,
+            &frame,
+        )?)
+    } else {
+        None
+    };
+    for (name, b) in &scene.liner.box_sets {
+        boxes.push(find::box_set(&mut lm, "liner", name, b));
+    }
+    if let Some(f) = found.as_mut() {
+        f.sets.extend(boxes);
+        f.materials = vec![lnote, cnote];
+    }
     check_and_compact(&mut lm).map_err(|source| SceneRomError::Mesh {
-        file: lfile.clone(),
+        file: lfile.map(|p| p.display().to_string()),
         source,
     })?;
     for sm in liner_surface_mass(scene) {
@@ -139,23 +274,17 @@ pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
             return Err(SceneRomError::WetSurface {
                 path: scene.path.clone(),
                 set: sm.set.clone(),
-                file: lfile.clone(),
+                file: lfile.map(|p| p.display().to_string()),
                 msg: e.to_string(),
             });
         }
     }
-    let (mut cm, cfile) = match &cc.source {
-        CrankcaseSource::Parametric { geometry, meshing } => {
-            (crankcase::generate(geometry, meshing), None)
-        }
-        CrankcaseSource::File(p) => (crate::mesh::read(p)?, Some(p.display().to_string())),
-    };
     check_and_compact(&mut cm).map_err(|source| SceneRomError::Mesh {
-        file: cfile,
+        file: cfile.map(|p| p.display().to_string()),
         source,
     })?;
     // a mesh from a file is sized only once read: the engine model it makes is checked now
-    if lfile.is_some() || matches!(cc.source, CrankcaseSource::File(_)) {
+    if imported {
         let dofs = 3 * (cm.nodes.len() + scene.rom.cylinders.len() * lm.nodes.len());
         let est = budget::fe_model(dofs, "the ROM build");
         Limits::of(scene).check(scene, &est)?;
@@ -169,7 +298,32 @@ pub fn load_meshes(scene: &Scene) -> Result<(Mesh, Mesh)> {
             });
         }
     }
-    Ok((lm, cm))
+    let shape = found
+        .as_ref()
+        .and_then(|f| f.liner)
+        .unwrap_or_else(|| scene_shape(scene));
+    let g = &scene.liner_geometry;
+    let guide = found
+        .as_ref()
+        .and_then(|f| f.guide_band)
+        .unwrap_or([g.guide_bottom, g.guide_bottom + g.guide_height]);
+    Ok(EngineMeshes {
+        liner: lm,
+        crankcase: cm,
+        liner_material,
+        crankcase_material,
+        shape,
+        guide,
+        found,
+    })
+}
+
+/// Bore axis x of every cylinder of the engine frame: x_c = (c - (N - 1) / 2) p, c 0-based.
+pub fn axis_x(scene: &Scene) -> Vec<f64> {
+    let e = &scene.engine;
+    (0..e.cylinders)
+        .map(|c| (c as f64 - (e.cylinders as f64 - 1.0) / 2.0) * e.cylinder_pitch)
+        .collect()
 }
 
 /// The canonical description hashed into the cache key.
@@ -179,13 +333,13 @@ pub fn key_description(scene: &Scene) -> Result<String> {
         MeshSource::Liner { geometry, meshing } => {
             serde_json::json!({"geometry": geometry, "meshing": meshing})
         }
-        MeshSource::File(p) => serde_json::json!({"file": file_digest(p)?}),
+        MeshSource::File(p) => serde_json::json!({"file": file_digest(p)?, "unit": scene.liner.mesh_unit, "sets": scene.liner.box_sets}),
     };
     let cc_src = match &cc.source {
         CrankcaseSource::Parametric { geometry, meshing } => {
             serde_json::json!({"geometry": geometry, "meshing": meshing})
         }
-        CrankcaseSource::File(p) => serde_json::json!({"file": file_digest(p)?}),
+        CrankcaseSource::File(p) => serde_json::json!({"file": file_digest(p)?, "unit": cc.mesh_unit, "sets": cc.box_sets}),
     };
     let mut d = serde_json::json!({
         "format": ROM_FORMAT,
@@ -232,42 +386,34 @@ pub fn build_rom(
     keep_bases: bool,
     progress: &dyn Fn(&str),
 ) -> Result<(RomBuild, Mesh, Mesh)> {
-    let (lm, cm) = load_meshes(scene)?;
-    let inputs = rom_inputs(scene, &lm, &cm, keep_bases);
-    let b = build(&inputs, progress)?;
-    Ok((b, lm, cm))
+    let em = load_meshes(scene)?;
+    let inputs = rom_inputs(scene, &em, keep_bases);
+    let mut b = build(&inputs, progress)?;
+    b.rom.info.interfaces = em.found.clone();
+    Ok((b, em.liner, em.crankcase))
 }
 
 /// The ROM build inputs of a scene whose meshes are loaded.
-pub fn rom_inputs<'a>(
-    scene: &Scene,
-    lm: &'a Mesh,
-    cm: &'a Mesh,
-    keep_bases: bool,
-) -> RomInputs<'a> {
+pub fn rom_inputs<'a>(scene: &Scene, em: &'a EngineMeshes, keep_bases: bool) -> RomInputs<'a> {
     let cc = scene
         .crankcase
         .as_ref()
         .expect("load_meshes checked the crankcase");
-    let g = &scene.liner_geometry;
     let e = &scene.engine;
-    let axis_x: Vec<f64> = (0..e.cylinders)
-        .map(|c| (c as f64 - (e.cylinders as f64 - 1.0) / 2.0) * e.cylinder_pitch)
-        .collect();
     RomInputs {
-        liner: lm,
-        liner_material: scene.liner.material,
+        liner: &em.liner,
+        liner_material: em.liner_material,
         liner_surface_mass: liner_surface_mass(scene),
-        crankcase: cm,
-        crankcase_material: cc.material,
+        crankcase: &em.crankcase,
+        crankcase_material: em.crankcase_material,
         crankcase_fix: cc.fix.clone(),
-        liner_outer_radius: g.outer_diameter / 2.0,
-        flange_radius: g.flange_outer_diameter / 2.0,
-        seat_z: g.length - g.flange_height,
-        guide_height: g.guide_height,
-        guide_bottom: g.guide_bottom,
-        analysis_points: g.analysis_depths.len(),
-        axis_x,
+        liner_outer_radius: em.shape.outer_radius,
+        flange_radius: em.shape.flange_radius,
+        seat_z: em.shape.seat_z,
+        guide_height: em.guide[1] - em.guide[0],
+        guide_bottom: em.guide[0],
+        analysis_points: scene.liner_geometry.analysis_depths.len(),
+        axis_x: axis_x(scene),
         pitch: e.cylinder_pitch,
         cylinders: scene.rom.cylinders.clone(),
         clamp_force: cc.clamp_force,
@@ -373,8 +519,8 @@ pub struct SceneFullModes {
 /// scene's shift, certified (Sturm count with the scene's guard modes): the reference of
 /// `modes --assembly --full` and `rom-tradeoff`.
 pub fn full_modes(scene: &Scene, count: usize) -> Result<SceneFullModes> {
-    let (lm, cm) = load_meshes(scene)?;
-    let inp = rom_inputs(scene, &lm, &cm, false);
+    let em = load_meshes(scene)?;
+    let inp = rom_inputs(scene, &em, false);
     let axis_x = inp.axis_x.clone();
     let system = super::full::FullSystem::build(&inp)?;
     let (sol, _) = crate::eigen::modal::certified_modes(
@@ -398,8 +544,8 @@ pub fn full_modes(scene: &Scene, count: usize) -> Result<SceneFullModes> {
     Ok(SceneFullModes {
         modes,
         system,
-        liner_mesh: lm,
-        crankcase_mesh: cm,
+        liner_mesh: em.liner.clone(),
+        crankcase_mesh: em.crankcase.clone(),
         axis_x,
     })
 }

@@ -69,8 +69,13 @@ pub enum MeshSource {
 pub struct Part {
     pub name: String,
     pub source: MeshSource,
-    pub material: Elastic,
+    /// The scene's material; `None` when the mesh file's own materials are used.
+    pub material: Option<Elastic>,
     pub fix: Vec<String>,
+    /// Unit of a mesh file's lengths (and constants).
+    pub mesh_unit: spec::MeshUnit,
+    /// Node sets defined by boxes, [m] in the part's frame.
+    pub box_sets: Vec<(String, [f64; 6])>,
 }
 
 /// Modal solver settings.
@@ -101,7 +106,12 @@ pub enum CrankcaseSource {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Crankcase {
     pub source: CrankcaseSource,
-    pub material: Elastic,
+    /// The scene's material; `None` when the mesh file's own materials are used.
+    pub material: Option<Elastic>,
+    /// Unit of a mesh file's lengths (and constants).
+    pub mesh_unit: spec::MeshUnit,
+    /// Node sets defined by boxes, [m] in the engine frame.
+    pub box_sets: Vec<(String, [f64; 6])>,
     pub fix: Vec<String>,
     /// Clamp force on each liner flange [N].
     pub clamp_force: f64,
@@ -390,8 +400,10 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
     };
     let liner = Part {
         name: "liner".into(),
+        material: part_material(&c, "liner", &l.material, &source, &material)?,
+        mesh_unit: mesh_unit(&c, "liner.mesh_unit", &l.mesh_unit, l.mesh_file.is_some())?,
+        box_sets: box_sets(&c, "liner.sets", &l.sets)?,
         source,
-        material: material("liner.material", &l.material)?,
         fix: l.fix.clone(),
     };
     let solver = Solver {
@@ -1147,10 +1159,81 @@ fn validate_crankcase(
         None => CrankcaseSource::Parametric { geometry, meshing },
     };
     let clamp_force = c.positive("crankcase.flange_clamp_kn", cc.flange_clamp_kn)? * 1e3;
+    let file = matches!(source, CrankcaseSource::File(_));
     Ok(Crankcase {
+        material: match &cc.material {
+            Some(name) => Some(material("crankcase.material", name)?),
+            None if file => None,
+            None => {
+                return Err(c.err(
+                    "crankcase.material",
+                    "missing: the parametric crankcase needs a material (name an entry of [materials])",
+                ))
+            }
+        },
+        mesh_unit: mesh_unit(c, "crankcase.mesh_unit", &cc.mesh_unit, file)?,
+        box_sets: box_sets(c, "crankcase.sets", &cc.sets)?,
         source,
-        material: material("crankcase.material", &cc.material)?,
         fix: cc.fix.clone(),
         clamp_force,
     })
+}
+
+/// A part's material: the named entry of `[materials]`, required unless the mesh is a file
+/// (whose own materials are then used).
+fn part_material(
+    c: &Checker<'_>,
+    part: &str,
+    name: &Option<String>,
+    source: &MeshSource,
+    material: &dyn Fn(&str, &str) -> Result<Elastic, SceneError>,
+) -> Result<Option<Elastic>, SceneError> {
+    let key = format!("{part}.material");
+    match (name, source) {
+        (Some(n), _) => Ok(Some(material(&key, n)?)),
+        (None, MeshSource::File(_)) => Ok(None),
+        (None, _) => Err(c.err(
+            &key,
+            "missing: the parametric mesh needs a material (name an entry of [materials])",
+        )),
+    }
+}
+
+/// A mesh file's unit: "m" (default) or "mm"; only meaningful with a mesh file.
+fn mesh_unit(
+    c: &Checker<'_>,
+    key: &str,
+    raw: &Option<String>,
+    file: bool,
+) -> Result<spec::MeshUnit, SceneError> {
+    let Some(u) = raw else {
+        return Ok(spec::MeshUnit::M);
+    };
+    let unit = spec::MeshUnit::parse(u)
+        .ok_or_else(|| c.err(key, format!("expected \"m\" or \"mm\", got \"{u}\"")))?;
+    if !file {
+        return Err(c.err(key, "applies to a mesh_file only (the parametric mesh is built in SI)"));
+    }
+    Ok(unit)
+}
+
+/// Box sets of a part, converted from mm to m; each box must have finite, ordered corners.
+fn box_sets(
+    c: &Checker<'_>,
+    key: &str,
+    raw: &std::collections::BTreeMap<String, raw::RawBoxSet>,
+) -> Result<Vec<(String, [f64; 6])>, SceneError> {
+    let mut out = Vec::new();
+    for (name, b) in raw {
+        let v = b.box_mm;
+        let ordered = (0..3).all(|a| v[a] <= v[a + 3]);
+        if !v.iter().all(|x| x.is_finite() && x.abs() < 1e6) || !ordered {
+            return Err(c.err(
+                &format!("{key}.{name}.box_mm"),
+                format!("expected [x0, y0, z0, x1, y1, z1] in mm with finite values below 1e6 and x0 <= x1, y0 <= y1, z0 <= z1, got {v:?}"),
+            ));
+        }
+        out.push((name.clone(), v.map(|x| x * 1e-3)));
+    }
+    Ok(out)
 }

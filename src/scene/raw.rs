@@ -132,8 +132,20 @@ fn default_gap_mm() -> f64 {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawCrankcase {
-    /// Name of an entry of `[materials]`.
-    pub material: String,
+    /// Name of an entry of `[materials]`; required for the parametric mesh; with a
+    /// `mesh_file` that defines materials (MAT1/PSOLID, *MATERIAL/*SOLID SECTION) optional,
+    /// and when given it replaces the deck's materials.
+    #[serde(default)]
+    pub material: Option<String>,
+    /// Length unit of `mesh_file`: "m" (default; SI constants) or "mm" (the mm-t-s system:
+    /// E in MPa, rho in t/mm^3).
+    #[serde(default)]
+    pub mesh_unit: Option<String>,
+    /// Node sets of the crankcase defined by geometry: `[crankcase.sets.NAME] box_mm = [x0,
+    /// y0, z0, x1, y1, z1]` selects the nodes inside the box (the crankcase mesh's frame, the
+    /// engine frame, in mm whatever the mesh's unit), e.g. the fixed set named in `fix`.
+    #[serde(default)]
+    pub sets: BTreeMap<String, RawBoxSet>,
     /// Deck plate thickness below the liner flange seat [mm].
     pub deck_thickness_mm: f64,
     /// Water-jacket outer wall thickness at the thrust/anti-thrust side, at the cylinder centre
@@ -160,6 +172,14 @@ pub struct RawCrankcase {
     #[serde(default)]
     pub mesh_file: Option<String>,
     pub mesh: RawCrankcaseMesh,
+}
+
+/// A node set defined by geometry.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawBoxSet {
+    /// The box's corners [x0, y0, z0, x1, y1, z1] [mm], x0 <= x1, y0 <= y1, z0 <= z1.
+    pub box_mm: [f64; 6],
 }
 
 /// Density of the parametric crankcase mesh.
@@ -269,8 +289,18 @@ pub struct RawMaterial {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawLiner {
-    /// Name of an entry of `[materials]`.
-    pub material: String,
+    /// Name of an entry of `[materials]`; required for the parametric mesh; with a
+    /// `mesh_file` that defines materials optional, and when given it replaces them.
+    #[serde(default)]
+    pub material: Option<String>,
+    /// Length unit of `mesh_file`: "m" (default; SI constants) or "mm" (the mm-t-s system:
+    /// E in MPa, rho in t/mm^3).
+    #[serde(default)]
+    pub mesh_unit: Option<String>,
+    /// Node sets of the liner defined by geometry: `[liner.sets.NAME] box_mm = [x0, y0, z0,
+    /// x1, y1, z1]` in the liner's own frame (axis z, z = 0 at the liner bottom), mm.
+    #[serde(default)]
+    pub sets: BTreeMap<String, RawBoxSet>,
     /// Outer (coolant-side) diameter [mm].
     pub outer_diameter_mm: f64,
     /// Inner (bore) diameter [mm].

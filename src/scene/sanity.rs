@@ -178,8 +178,12 @@ fn materials(scene: &Scene, warnings: &mut Vec<String>) {
             ));
         }
     };
-    check("liner", &scene.liner.material);
+    if let Some(m) = &scene.liner.material {
+        check("liner", m);
+    }
     if let Some(c) = &scene.crankcase {
-        check("crankcase", &c.material);
+        if let Some(m) = &c.material {
+            check("crankcase", m);
+        }
     }
 }

@@ -209,3 +209,38 @@ pub enum ThresholdSpec {
         k_p_pa_per_m_s2: Option<f64>,
     },
 }
+
+/// The length unit of a mesh file's coordinates: metres (and SI constants), or millimetres
+/// in the mm-t-s system (E in MPa, rho in t/mm^3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshUnit {
+    #[default]
+    M,
+    Mm,
+}
+
+impl MeshUnit {
+    /// Parses `"m"` or `"mm"`.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "m" => Some(Self::M),
+            "mm" => Some(Self::Mm),
+            _ => None,
+        }
+    }
+    /// Metres per unit of length.
+    pub fn metres(self) -> f64 {
+        match self {
+            Self::M => 1.0,
+            Self::Mm => 1e-3,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::M => "m",
+            Self::Mm => "mm",
+        }
+    }
+}
+

@@ -223,15 +223,15 @@ pub fn compare(
     // --- full-order window
     let t_full = Instant::now();
     progress("full-order window: assembling the full model");
-    let (lm, cm) = load_meshes(scene)?;
-    let inp = rom_inputs(scene, &lm, &cm, false);
+    let em = load_meshes(scene)?;
+    let inp = rom_inputs(scene, &em, false);
     let sys = FullSystem::build(&inp)?;
     let inst = inp
         .cylinders
         .iter()
         .position(|&c| c == cylinder)
         .expect("ROM and scene model the same cylinders");
-    let (contact, points) = liner_rows(&sys, &lm, inst, nc, crom.point_modes.nrows())?;
+    let (contact, points) = liner_rows(&sys, &em.liner, inst, nc, crom.point_modes.nrows())?;
     progress("full-order window: preload (static solve)");
     let preload = full_preload(&sys, &inp, &contact)?;
     let pre_scale = preload.iter().fold(0.0f64, |m, v| m.max(v.abs()));

@@ -1,0 +1,563 @@
+//! Interfaces and analysis points found from the geometry of imported liner and crankcase
+//! meshes, for decks that carry none of linercav's set names.
+//!
+//! Frames (those of the parametric generators, [`super::liner`], [`super::crankcase`]):
+//! - the liner's own frame: z the bore axis, z = 0 at the liner bottom, the flange at the top;
+//!   x, y as in the engine frame (thrust side +y);
+//! - the engine frame: x along the crankshaft, cylinder c's bore axis at
+//!   x_c = (c - (N + 1) / 2) p, y = 0, z up along the bores, thrust side +y.
+//!
+//! The liner ([`place_liner`]): its axis is the principal axis of inertia of its nodes whose
+//! moment stands apart from the other two (an axisymmetric body has two equal transverse
+//! moments), snapped to a coordinate axis when within 1e-9 of one; its centre the least-squares
+//! circle (Kasa fit: x^2 + y^2 = 2 a x + 2 b y + c) through the bore's nodes; its top the end
+//! with the larger radius (the flange). The mesh is moved rigidly into the liner's frame:
+//! p' = R (p - c) - z_min e_z, with R the smallest rotation taking the axis to +z.
+//! Radii: bore r_i = min r, outer wall r_o = max r over the middle 40 % of the length, flange
+//! r_f = max r; the flange underside z_s = min z of the nodes with r > r_o + tol.
+//!
+//! The crankcase ([`seat_crankcase`]): each bore's counterbore floor is the highest crankcase
+//! node in the annulus r_o - tol <= r <= r_f - tol around the bore axis; the crankcase is moved
+//! along z so that cylinder 1's floor meets the liner's flange underside. The guide band is the
+//! lowest z-band of the crankcase's bore surface r = r_o (element faces with at least three
+//! corners on it) below the seat; the band that meets the seat (a deck bore) is not coupled.
+//!
+//! Tolerance: tol = 0.02 h, h the median element edge of the part (its local mesh size): well
+//! below a coolant gap and a wall, well above the roundoff of a deck's coordinates.
+
+use super::Mesh;
+use std::collections::BTreeMap;
+
+/// Why an interface or point could not be found.
+#[derive(Debug, thiserror::Error)]
+#[error("{part}: {msg}")]
+pub struct FindError {
+    pub part: String,
+    pub msg: String,
+}
+
+fn fail(part: &str, msg: String) -> FindError {
+    FindError {
+        part: part.into(),
+        msg,
+    }
+}
+
+/// The liner's shape in its own frame [m].
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LinerShape {
+    pub inner_radius: f64,
+    pub outer_radius: f64,
+    pub flange_radius: f64,
+    pub length: f64,
+    /// Height of the flange underside above the liner bottom.
+    pub seat_z: f64,
+    /// Tolerance of the liner's surfaces (0.02 of its median element edge).
+    pub tol: f64,
+}
+
+/// How a set came to be: named in the deck, found from the geometry, or a scene box.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FoundSet {
+    pub part: String,
+    pub name: String,
+    /// "deck", "geometry", "box" or "generator".
+    pub source: String,
+    pub nodes: usize,
+    /// What was found: radii, heights, areas, distances [m, m^2].
+    pub detail: String,
+}
+
+/// What was found on a pair of imported meshes, for the output and `rom --json`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FoundInterfaces {
+    pub liner: Option<LinerShape>,
+    /// Rigid motion applied to the liner mesh: the axis found (deck frame) and the centre.
+    pub liner_axis: Option<[f64; 3]>,
+    pub liner_centre: Option<[f64; 3]>,
+    /// z shift applied to the crankcase to seat cylinder 1's liner [m].
+    pub crankcase_shift_z: f64,
+    /// Guide band [z0, z1] in the liner frame [m].
+    pub guide_band: Option<[f64; 2]>,
+    pub sets: Vec<FoundSet>,
+    /// Which material each part used: "liner: scene" or "crankcase: deck (MAT1 1, MAT1 2)".
+    pub materials: Vec<String>,
+}
+
+/// Median of the first corner edge of every element: the part's typical mesh size h [m].
+pub fn mesh_size(mesh: &Mesh) -> f64 {
+    let mut h: Vec<f64> = mesh
+        .elements()
+        .map(|(_, n)| dist(&mesh.nodes[n[0]], &mesh.nodes[n[1]]))
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .collect();
+    if h.is_empty() {
+        return 0.0;
+    }
+    let k = h.len() / 2;
+    let (_, m, _) = h.select_nth_unstable_by(k, |a, b| a.total_cmp(b));
+    *m
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// The principal axis of the nodes' second moments that stands apart from the other two.
+fn principal_axis(nodes: &[[f64; 3]]) -> [f64; 3] {
+    let n = nodes.len().max(1) as f64;
+    let mut c = [0.0; 3];
+    for p in nodes {
+        for a in 0..3 {
+            c[a] += p[a] / n;
+        }
+    }
+    let mut cov = nalgebra::Matrix3::<f64>::zeros();
+    for p in nodes {
+        let d = nalgebra::Vector3::new(p[0] - c[0], p[1] - c[1], p[2] - c[2]);
+        cov += d * d.transpose();
+    }
+    let eig = nalgebra::SymmetricEigen::new(cov);
+    let mut idx = [0usize, 1, 2];
+    idx.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
+    let l = idx.map(|i| eig.eigenvalues[i]);
+    let pick = if l[2] - l[1] > l[1] - l[0] {
+        idx[2]
+    } else {
+        idx[0]
+    };
+    let v = eig.eigenvectors.column(pick);
+    let mut axis = [v[0], v[1], v[2]];
+    for a in 0..3 {
+        if axis[a].abs() > 1.0 - 1e-9 {
+            axis = [0.0; 3];
+            axis[a] = 1.0;
+        }
+    }
+    axis
+}
+
+/// The rotation R (rows) taking unit vector `a` to +z: Rodrigues about a x e_z; a half turn
+/// about x when a = -z.
+fn rotation_to_z(a: [f64; 3]) -> [[f64; 3]; 3] {
+    let c = a[2];
+    if c > 1.0 - 1e-15 {
+        return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    }
+    if c < -1.0 + 1e-15 {
+        return [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]];
+    }
+    // k = a x e_z = (a_y, -a_x, 0), |k| = sin(theta); R = I + [k]x + [k]x^2 / (1 + c)
+    let (kx, ky) = (a[1], -a[0]);
+    let f = 1.0 / (1.0 + c);
+    [
+        [1.0 - f * ky * ky, f * kx * ky, ky],
+        [f * kx * ky, 1.0 - f * kx * kx, -kx],
+        [-ky, kx, c],
+    ]
+}
+
+fn apply(r: &[[f64; 3]; 3], p: [f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|i| r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2])
+}
+
+/// Least-squares circle through points (x, y): (centre, radius), Kasa's linear fit.
+fn circle_fit(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
+    let mut a = nalgebra::Matrix3::<f64>::zeros();
+    let mut b = nalgebra::Vector3::<f64>::zeros();
+    for p in pts {
+        let row = nalgebra::Vector3::new(2.0 * p[0], 2.0 * p[1], 1.0);
+        a += row * row.transpose();
+        b += row * (p[0] * p[0] + p[1] * p[1]);
+    }
+    let s = a.lu().solve(&b)?;
+    let r2 = s[2] + s[0] * s[0] + s[1] * s[1];
+    (r2 > 0.0).then(|| ([s[0], s[1]], r2.sqrt()))
+}
+
+/// Moves a liner mesh into its own frame and measures it (module docs). Returns the shape,
+/// the axis found and the centre of the bottom.
+pub fn place_liner(mesh: &mut Mesh) -> Result<(LinerShape, [f64; 3], [f64; 3]), FindError> {
+    let h = mesh_size(mesh);
+    if mesh.nodes.len() < 8 || h <= 0.0 {
+        return Err(fail("liner", "too few nodes to find its axis".into()));
+    }
+    let tol = 0.02 * h;
+    let axis = principal_axis(&mesh.nodes);
+    let rot = rotation_to_z(axis);
+    let mut pts: Vec<[f64; 3]> = mesh.nodes.iter().map(|&p| apply(&rot, p)).collect();
+    // centre: the bore's circle, refined once from the nodes' mean
+    let mean = |pts: &[[f64; 3]]| {
+        let n = pts.len() as f64;
+        [0, 1].map(|a| pts.iter().map(|p| p[a]).sum::<f64>() / n)
+    };
+    let mut c = mean(&pts);
+    for _ in 0..2 {
+        let r = |p: &[f64; 3]| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sqrt();
+        let rmin = pts.iter().map(r).fold(f64::INFINITY, f64::min);
+        let bore: Vec<[f64; 2]> = pts
+            .iter()
+            .filter(|p| r(p) < rmin + 0.25 * h)
+            .map(|p| [p[0], p[1]])
+            .collect();
+        if let Some((cc, _)) = circle_fit(&bore) {
+            c = cc;
+        }
+    }
+    let zmin = pts.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+    for p in &mut pts {
+        *p = [p[0] - c[0], p[1] - c[1], p[2] - zmin];
+    }
+    let length = pts.iter().map(|p| p[2]).fold(0.0, f64::max);
+    // the flange end is the top
+    let rmax_near = |top: bool| {
+        pts.iter()
+            .filter(|p| if top { p[2] > 0.9 * length } else { p[2] < 0.1 * length })
+            .map(|p| p[0].hypot(p[1]))
+            .fold(0.0, f64::max)
+    };
+    let mut axis_out = axis;
+    if rmax_near(false) > rmax_near(true) + tol {
+        for p in &mut pts {
+            *p = [p[0], -p[1], length - p[2]];
+        }
+        axis_out = axis.map(|v| -v);
+    }
+    let centre_deck = {
+        // the bottom centre in the deck's frame: R^T (c, zmin) for the unflipped frame
+        let q = [c[0], c[1], zmin];
+        [0, 1, 2].map(|i| rot[0][i] * q[0] + rot[1][i] * q[1] + rot[2][i] * q[2])
+    };
+    mesh.nodes = pts;
+    let shape = measure_liner(mesh, tol)?;
+    Ok((shape, axis_out, centre_deck))
+}
+
+/// Radii and heights of a liner in its own frame (module docs).
+fn measure_liner(mesh: &Mesh, tol: f64) -> Result<LinerShape, FindError> {
+    let r = |p: &[f64; 3]| p[0].hypot(p[1]);
+    let length = mesh.nodes.iter().map(|p| p[2]).fold(0.0, f64::max);
+    let inner = mesh.nodes.iter().map(r).fold(f64::INFINITY, f64::min);
+    let outer = mesh
+        .nodes
+        .iter()
+        .filter(|p| p[2] > 0.3 * length && p[2] < 0.7 * length)
+        .map(r)
+        .fold(0.0, f64::max);
+    let flange = mesh.nodes.iter().map(r).fold(0.0, f64::max);
+    if !(inner > 0.0 && outer > inner + tol) {
+        return Err(fail(
+            "liner",
+            format!("no tube found: bore radius {inner:.6} m, outer radius {outer:.6} m"),
+        ));
+    }
+    let seat_z = mesh
+        .nodes
+        .iter()
+        .filter(|p| r(p) > outer + tol)
+        .map(|p| p[2])
+        .fold(f64::INFINITY, f64::min);
+    if flange <= outer + tol || !seat_z.is_finite() {
+        return Err(fail(
+            "liner",
+            "no top flange found (no node outside the wall's outer radius): name the set 'flange_seat' in the deck".into(),
+        ));
+    }
+    Ok(LinerShape {
+        inner_radius: inner,
+        outer_radius: outer,
+        flange_radius: flange,
+        length,
+        seat_z,
+        tol,
+    })
+}
+
+/// The analysis-point and band inputs of the liner's sets.
+pub struct LinerTargets<'a> {
+    /// Guide band [z0, z1] in the liner frame [m].
+    pub guide: [f64; 2],
+    /// Depths of the analysis points below the liner top [m].
+    pub depths: &'a [f64],
+}
+
+/// Adds to a liner in its own frame the sets the later stages use that it does not name
+/// (sets named in the deck win); returns what each set is and where it came from.
+pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<FoundSet> {
+    let tol = s.tol;
+    let r = |p: &[f64; 3]| p[0].hypot(p[1]);
+    let on_outer = |p: &[f64; 3]| (r(p) - s.outer_radius).abs() < tol;
+    let thrust = |p: &[f64; 3], sign: f64| p[0].abs() < tol && sign * p[1] > 0.0;
+    let [g0, g1] = t.guide;
+    let pi = std::f64::consts::PI;
+    let (ro, rf) = (s.outer_radius, s.flange_radius);
+    type Pred<'p> = Box<dyn Fn(&[f64; 3]) -> bool + 'p>;
+    let rules: Vec<(String, Pred<'_>, String)> = vec![
+        (
+            "flange_seat".into(),
+            Box::new(|p| (p[2] - s.seat_z).abs() < tol && r(p) > ro - tol),
+            format!("z = {:.6} m, r {:.6}..{:.6} m, area {:.4e} m^2", s.seat_z, ro, rf, pi * (rf * rf - ro * ro)),
+        ),
+        (
+            "flange_top".into(),
+            Box::new(|p| (p[2] - s.length).abs() < tol && r(p) > ro - tol),
+            format!("z = {:.6} m", s.length),
+        ),
+        (
+            "lower_guide".into(),
+            Box::new(move |p| on_outer(p) && p[2] > g0 - tol && p[2] < g1 + tol),
+            format!("r = {ro:.6} m, z {g0:.6}..{g1:.6} m, area {:.4e} m^2", 2.0 * pi * ro * (g1 - g0)),
+        ),
+        (
+            "bore_thrust".into(),
+            Box::new(|p| (r(p) - s.inner_radius).abs() < tol && thrust(p, 1.0)),
+            format!("r = {:.6} m, +y", s.inner_radius),
+        ),
+        (
+            "bore_antithrust".into(),
+            Box::new(|p| (r(p) - s.inner_radius).abs() < tol && thrust(p, -1.0)),
+            format!("r = {:.6} m, -y", s.inner_radius),
+        ),
+        (
+            "outer_thrust".into(),
+            Box::new(|p| on_outer(p) && thrust(p, 1.0) && p[2] < s.seat_z + tol),
+            format!("r = {ro:.6} m, +y, z <= {:.6} m", s.seat_z),
+        ),
+        (
+            super::liner::COOLANT_WETTED.into(),
+            Box::new(move |p| on_outer(p) && p[2] > g1 - tol && p[2] < s.seat_z + tol),
+            format!("r = {ro:.6} m, z {g1:.6}..{:.6} m, area {:.4e} m^2", s.seat_z, 2.0 * pi * ro * (s.seat_z - g1)),
+        ),
+    ];
+    let mut out = Vec::new();
+    for (name, pred, detail) in rules {
+        out.push(add_set(mesh, "liner", &name, &*pred, detail));
+    }
+    for (k, &d) in t.depths.iter().enumerate() {
+        let target = [0.0, ro, s.length - d];
+        let name = format!("point_{}", k + 1);
+        out.push(add_point(mesh, "liner", &name, target, &|p| on_outer(p)));
+    }
+    for name in ["bore_thrust", "bore_antithrust", "outer_thrust"] {
+        let nodes = &mesh.nodes;
+        if let Some(v) = mesh.node_sets.get_mut(name) {
+            v.sort_by(|&a, &b| nodes[a][2].total_cmp(&nodes[b][2]));
+        }
+    }
+    out
+}
+
+/// Adds node set `name` of the nodes satisfying `pred` unless the mesh names it.
+fn add_set(
+    mesh: &mut Mesh,
+    part: &str,
+    name: &str,
+    pred: &dyn Fn(&[f64; 3]) -> bool,
+    detail: String,
+) -> FoundSet {
+    if let Some(v) = mesh.node_sets.get(name) {
+        return found(part, name, "deck", v.len(), String::new());
+    }
+    let nodes: Vec<usize> = (0..mesh.nodes.len())
+        .filter(|&n| pred(&mesh.nodes[n]))
+        .collect();
+    let count = nodes.len();
+    mesh.node_sets.insert(name.into(), nodes);
+    found(part, name, "geometry", count, detail)
+}
+
+/// Adds the single-node set `name`: the node nearest `target` among those satisfying `pred`.
+fn add_point(
+    mesh: &mut Mesh,
+    part: &str,
+    name: &str,
+    target: [f64; 3],
+    pred: &dyn Fn(&[f64; 3]) -> bool,
+) -> FoundSet {
+    if let Some(v) = mesh.node_sets.get(name) {
+        return found(part, name, "deck", v.len(), String::new());
+    }
+    let best = (0..mesh.nodes.len())
+        .filter(|&n| pred(&mesh.nodes[n]))
+        .map(|n| (dist(&mesh.nodes[n], &target), n))
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    match best {
+        Some((d, n)) => {
+            let p = mesh.nodes[n];
+            mesh.node_sets.insert(name.into(), vec![n]);
+            let detail = format!(
+                "node at ({:.6}, {:.6}, {:.6}) m, {:.3e} m from ({:.6}, {:.6}, {:.6})",
+                p[0], p[1], p[2], d, target[0], target[1], target[2]
+            );
+            found(part, name, "geometry", 1, detail)
+        }
+        None => {
+            mesh.node_sets.insert(name.into(), Vec::new());
+            found(part, name, "geometry", 0, "no candidate node".into())
+        }
+    }
+}
+
+fn found(part: &str, name: &str, source: &str, nodes: usize, detail: String) -> FoundSet {
+    FoundSet {
+        part: part.into(),
+        name: name.into(),
+        source: source.into(),
+        nodes,
+        detail,
+    }
+}
+
+/// Radius of `p` about the bore axis at x = `xc`, y = 0.
+fn radius_about(p: &[f64; 3], xc: f64) -> f64 {
+    (p[0] - xc).hypot(p[1])
+}
+
+/// The counterbore floor of the bore at `xc`: the highest node in the annulus under the flange.
+fn counterbore_z(cm: &Mesh, xc: f64, s: &LinerShape, tol: f64) -> Option<f64> {
+    let z = cm
+        .nodes
+        .iter()
+        .filter(|p| {
+            let r = radius_about(p, xc);
+            r > s.outer_radius - tol && r < s.flange_radius - tol
+        })
+        .map(|p| p[2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    z.is_finite().then_some(z)
+}
+
+/// Moves the crankcase along z so that cylinder 1's counterbore floor meets the liner's flange
+/// underside; returns the shift [m].
+pub fn seat_crankcase(cm: &mut Mesh, axis_x: &[f64], s: &LinerShape) -> Result<f64, FindError> {
+    let tol = 0.02 * mesh_size(cm);
+    let x1 = axis_x.first().copied().unwrap_or(0.0);
+    let z = counterbore_z(cm, x1, s, tol).ok_or_else(|| {
+        fail(
+            "crankcase",
+            format!(
+                "no counterbore under the liner flange of cylinder 1 (no node at radius {:.6}..{:.6} m around x = {x1:.6} m, y = 0): the crankcase must be in the engine frame (bore axes at x_c = (c - (N+1)/2) pitch, y = 0, z up), or name the sets seat_<c>",
+                s.outer_radius, s.flange_radius
+            ),
+        )
+    })?;
+    let shift = s.seat_z - z;
+    if shift.abs() > 1e-12 * s.length {
+        for p in &mut cm.nodes {
+            p[2] += shift;
+        }
+    }
+    Ok(shift)
+}
+
+/// The guide band [z0, z1] of the bore at `xc`: the lowest z-band of crankcase element faces on
+/// the liner's outer radius below the seat (module docs).
+pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<[f64; 2]> {
+    let tol = 0.02 * mesh_size(cm);
+    let mut spans: Vec<[f64; 2]> = Vec::new();
+    for (kind, nodes) in cm.elements() {
+        let on: Vec<f64> = nodes[..kind.num_corners()]
+            .iter()
+            .map(|&n| cm.nodes[n])
+            .filter(|p| (radius_about(p, xc) - s.outer_radius).abs() < tol)
+            .map(|p| p[2])
+            .collect();
+        if on.len() >= 3 {
+            let lo = on.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = on.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            if hi > lo + tol && hi < s.seat_z + tol {
+                spans.push([lo, hi]);
+            }
+        }
+    }
+    spans.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    let mut bands: Vec<[f64; 2]> = Vec::new();
+    for sp in spans {
+        match bands.last_mut() {
+            Some(b) if sp[0] <= b[1] + tol => b[1] = b[1].max(sp[1]),
+            _ => bands.push(sp),
+        }
+    }
+    let below_seat: Vec<[f64; 2]> = bands
+        .iter()
+        .copied()
+        .filter(|b| b[1] < s.seat_z - tol)
+        .collect();
+    below_seat.first().or(bands.first()).copied()
+}
+
+/// The crankcase's interface and point inputs.
+pub struct CrankcaseTargets<'a> {
+    pub axis_x: &'a [f64],
+    /// Heights of the analysis points in the liner frame [m].
+    pub analysis_z: &'a [f64],
+}
+
+/// Adds to a seated crankcase the sets it does not name: per bore `seat_c`, `guide_c`,
+/// `point_c_k`, and `deck_top`; returns what each set is and where it came from.
+pub fn crankcase_sets(
+    cm: &mut Mesh,
+    s: &LinerShape,
+    t: &CrankcaseTargets<'_>,
+) -> Result<Vec<FoundSet>, FindError> {
+    let tol = 0.02 * mesh_size(cm);
+    let mut out = Vec::new();
+    for (c, &xc) in t.axis_x.iter().enumerate() {
+        let k = c + 1;
+        let (ro, rf, zs) = (s.outer_radius, s.flange_radius, s.seat_z);
+        let seat = move |p: &[f64; 3]| {
+            (p[2] - zs).abs() < tol && radius_about(p, xc) < rf + tol
+        };
+        out.push(add_set(cm, "crankcase", &format!("seat_{k}"), &seat, format!("z = {zs:.6} m, r <= {rf:.6} m")));
+        let name = format!("guide_{k}");
+        if !cm.node_sets.contains_key(&name) {
+            let [g0, g1] = guide_band(cm, xc, s).ok_or_else(|| {
+                fail("crankcase", format!("cylinder {k}: no bore surface at the liner's outer radius {ro:.6} m below the seat (the liner's guide band): name the set {name}"))
+            })?;
+            let guide = move |p: &[f64; 3]| {
+                (radius_about(p, xc) - ro).abs() < tol && p[2] > g0 - tol && p[2] < g1 + tol
+            };
+            out.push(add_set(cm, "crankcase", &name, &guide, format!("r = {ro:.6} m, z {g0:.6}..{g1:.6} m")));
+        }
+        for (j, &z) in t.analysis_z.iter().enumerate() {
+            let name = format!("point_{k}_{}", j + 1);
+            let beyond = move |p: &[f64; 3]| p[1] > ro + tol;
+            out.push(add_point(cm, "crankcase", &name, [xc, ro, z], &beyond));
+        }
+    }
+    let zs = s.seat_z;
+    out.push(add_set(cm, "crankcase", "deck_top", &|p| (p[2] - zs).abs() < tol, format!("z = {zs:.6} m")));
+    Ok(out)
+}
+
+/// A scene's box set: the nodes inside [x0, x1] x [y0, y1] x [z0, z1] [m].
+pub fn box_set(mesh: &mut Mesh, part: &str, name: &str, b: &[f64; 6]) -> FoundSet {
+    let inside = |p: &[f64; 3]| (0..3).all(|a| p[a] >= b[a] && p[a] <= b[a + 3]);
+    let nodes: Vec<usize> = (0..mesh.nodes.len())
+        .filter(|&n| inside(&mesh.nodes[n]))
+        .collect();
+    let count = nodes.len();
+    mesh.node_sets.insert(name.into(), nodes);
+    let detail = format!(
+        "box ({:.6}, {:.6}, {:.6})..({:.6}, {:.6}, {:.6}) m",
+        b[0], b[1], b[2], b[3], b[4], b[5]
+    );
+    found(part, name, "box", count, detail)
+}
+
+/// Guide band of a crankcase that names its `guide_1` set: the set's z-range.
+pub fn named_guide_band(cm: &Mesh) -> Option<[f64; 2]> {
+    let g = cm.node_set("guide_1")?;
+    let z = g.iter().map(|&n| cm.nodes[n][2]);
+    let lo = z.clone().fold(f64::INFINITY, f64::min);
+    let hi = z.fold(f64::NEG_INFINITY, f64::max);
+    (lo.is_finite() && hi >= lo).then_some([lo, hi])
+}
+
+/// Node counts of a mesh's sets (for messages).
+pub fn set_counts(mesh: &Mesh) -> BTreeMap<String, usize> {
+    mesh.node_sets
+        .iter()
+        .map(|(k, v)| (k.clone(), v.len()))
+        .collect()
+}

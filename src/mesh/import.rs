@@ -1,0 +1,232 @@
+//! Meshes from files as the later stages need them: read in their unit and converted to SI,
+//! refused when their size is implausible for that unit, their materials resolved (the deck's
+//! per element, or one given material that overrides them), and, for an engine, moved into the
+//! liner's and the engine's frames with the interface and point sets found from the geometry
+//! ([`super::find`]) where the decks do not name them.
+
+use super::find::{self, FoundInterfaces, LinerShape};
+use super::{Mesh, MeshUnit};
+use crate::scene::spec::Elastic;
+use std::path::{Path, PathBuf};
+
+/// Why an imported mesh cannot be used: the file, the key or flag at fault, and why.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    #[error(transparent)]
+    Msh(#[from] super::collect::MshError),
+    #[error("{}: {msg} (unit from {key})", path.display())]
+    Implausible {
+        path: PathBuf,
+        key: String,
+        msg: String,
+    },
+    #[error("{}: {msg} ({key})", path.display())]
+    Material {
+        path: PathBuf,
+        key: String,
+        msg: String,
+    },
+    #[error("{}: {source}", path.display())]
+    Find {
+        path: PathBuf,
+        #[source]
+        source: find::FindError,
+    },
+}
+
+/// Largest extent of any part linercav models, [m] (a marine engine's block is ~20 m long).
+pub const MAX_EXTENT_M: f64 = 30.0;
+/// Smallest extent: below this a part is no engine component (a metre deck read as mm).
+pub const MIN_EXTENT_M: f64 = 5e-3;
+
+/// Reads `path` in `unit`, converts it to SI and refuses a size implausible for the unit;
+/// `unit_key` names the scene key or flag that set the unit (for the message).
+pub fn read_si(path: &Path, unit: MeshUnit, unit_key: &str) -> Result<Mesh, ImportError> {
+    let mut mesh = super::read(path)?;
+    mesh.to_si(unit);
+    check_extent(&mesh, path, unit, unit_key)?;
+    Ok(mesh)
+}
+
+/// Refuses a mesh whose largest extent lies outside [MIN_EXTENT_M, MAX_EXTENT_M].
+pub fn check_extent(
+    mesh: &Mesh,
+    path: &Path,
+    unit: MeshUnit,
+    unit_key: &str,
+) -> Result<(), ImportError> {
+    let (lo, hi) = mesh.bounding_box();
+    let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+    if (MIN_EXTENT_M..=MAX_EXTENT_M).contains(&extent) {
+        return Ok(());
+    }
+    let other = match unit {
+        MeshUnit::M => "mm",
+        MeshUnit::Mm => "m",
+    };
+    Err(ImportError::Implausible {
+        path: path.to_path_buf(),
+        key: unit_key.into(),
+        msg: format!(
+            "the mesh is {} m across read in {}: no engine part is smaller than {} m or larger than {} m; is the deck in {other}? set {unit_key} accordingly",
+            crate::text::num(extent),
+            unit.name(),
+            MIN_EXTENT_M,
+            MAX_EXTENT_M
+        ),
+    })
+}
+
+/// Where the material of a part came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MaterialSource {
+    /// The scene's `material` key or the command's flags (overriding a deck's).
+    Given,
+    /// The deck's own materials, per element.
+    Deck,
+}
+
+/// Resolves a part's material: `given` wins (the deck's materials are dropped), else every
+/// element must have the deck's. Returns the nominal material (the given one, or the deck's
+/// first: only a fallback, each element carries its own) and where it came from.
+pub fn resolve_material(
+    mesh: &mut Mesh,
+    given: Option<Elastic>,
+    path: &Path,
+    key: &str,
+) -> Result<(Elastic, MaterialSource), ImportError> {
+    if let Some(m) = given {
+        mesh.clear_materials();
+        return Ok((m, MaterialSource::Given));
+    }
+    let bad = |msg: String| ImportError::Material {
+        path: path.to_path_buf(),
+        key: key.into(),
+        msg,
+    };
+    if mesh.materials.is_empty() {
+        return Err(bad(
+            "the mesh defines no material: give one".into(),
+        ));
+    }
+    if let Some(e) = mesh.element_without_material() {
+        return Err(bad(format!(
+            "element {} (the {}th of the file's solids in kind order) has no material: assign it a section/property, or give a material",
+            e + 1,
+            e + 1
+        )));
+    }
+    for m in &mesh.materials {
+        m.elastic
+            .validate()
+            .map_err(|msg| bad(format!("material '{}': {msg}", m.name)))?;
+    }
+    Ok((mesh.materials[0].elastic, MaterialSource::Deck))
+}
+
+/// The liner's place and the crankcase's targets, from the scene.
+pub struct EngineFrame<'a> {
+    pub axis_x: &'a [f64],
+    /// Depths of the analysis points below the liner top [m].
+    pub depths: &'a [f64],
+    /// The scene's bore [m] (the found bore must match it).
+    pub bore: f64,
+    /// Keys naming the units of the two meshes (for messages).
+    pub liner_unit_key: &'a str,
+    pub crankcase_unit_key: &'a str,
+}
+
+/// Puts an engine's meshes into their frames and completes their sets (module docs of
+/// [`find`]): a liner from a file is moved into its own frame and measured; a crankcase from a
+/// file is seated on it; each set the later stages need and the deck does not name is found.
+/// `liner_file` / `crankcase_file` are the files (None for a generated mesh, which has all).
+pub fn complete_engine(
+    liner: &mut Mesh,
+    crankcase: &mut Mesh,
+    generated_shape: LinerShape,
+    liner_file: Option<&Path>,
+    crankcase_file: Option<&Path>,
+    frame: &EngineFrame<'_>,
+) -> Result<FoundInterfaces, ImportError> {
+    let mut found = FoundInterfaces::default();
+    let shape = match liner_file {
+        Some(p) => {
+            let (s, axis, centre) =
+                find::place_liner(liner).map_err(|source| ImportError::Find {
+                    path: p.to_path_buf(),
+                    source,
+                })?;
+            check_bore(p, &s, frame)?;
+            found.liner_axis = Some(axis);
+            found.liner_centre = Some(centre);
+            s
+        }
+        None => generated_shape,
+    };
+    found.liner = Some(shape);
+    if let Some(p) = crankcase_file {
+        let need_seat = (1..=frame.axis_x.len()).any(|c| crankcase.node_set(&format!("seat_{c}")).is_none());
+        if need_seat {
+            found.crankcase_shift_z = find::seat_crankcase(crankcase, frame.axis_x, &shape)
+                .map_err(|source| ImportError::Find {
+                    path: p.to_path_buf(),
+                    source,
+                })?;
+        }
+        let analysis_z: Vec<f64> = frame.depths.iter().map(|d| shape.length - d).collect();
+        let targets = find::CrankcaseTargets {
+            axis_x: frame.axis_x,
+            analysis_z: &analysis_z,
+        };
+        found.sets.extend(
+            find::crankcase_sets(crankcase, &shape, &targets).map_err(|source| {
+                ImportError::Find {
+                    path: p.to_path_buf(),
+                    source,
+                }
+            })?,
+        );
+    }
+    if let Some(p) = liner_file {
+        let guide = find::named_guide_band(crankcase).ok_or_else(|| ImportError::Find {
+            path: p.to_path_buf(),
+            source: find::FindError {
+                part: "crankcase".into(),
+                msg: "no guide_1 set: the liner's guide band cannot be placed".into(),
+            },
+        })?;
+        found.guide_band = Some(guide);
+        let t = find::LinerTargets {
+            guide,
+            depths: frame.depths,
+        };
+        let mut sets = find::liner_sets(liner, &shape, &t);
+        sets.append(&mut found.sets);
+        found.sets = sets;
+    }
+    Ok(found)
+}
+
+/// The found bore must be the scene's: a ratio near 1000 or 1/1000 is a unit mistake.
+fn check_bore(path: &Path, s: &LinerShape, frame: &EngineFrame<'_>) -> Result<(), ImportError> {
+    let d = 2.0 * s.inner_radius;
+    let ratio = d / frame.bore;
+    if (ratio - 1.0).abs() <= 0.01 {
+        return Ok(());
+    }
+    let hint = if ratio > 100.0 || ratio < 0.01 {
+        format!("; set {} to the deck's unit", frame.liner_unit_key)
+    } else {
+        String::new()
+    };
+    Err(ImportError::Implausible {
+        path: path.to_path_buf(),
+        key: frame.liner_unit_key.into(),
+        msg: format!(
+            "the liner mesh's bore is {} mm, the scene's engine.bore_mm is {} mm{hint}",
+            crate::text::num(d * 1e3),
+            crate::text::num(frame.bore * 1e3)
+        ),
+    })
+}
