@@ -137,6 +137,37 @@ fn principal_axis(nodes: &[[f64; 3]]) -> [f64; 3] {
     axis
 }
 
+/// The axis `a` or -a, whichever points to the flange: the end (last 10 % of the length) whose
+/// nodes lie farther from the axis through the nodes' mean.
+fn toward_flange(nodes: &[[f64; 3]], a: [f64; 3], tol: f64) -> [f64; 3] {
+    let n = nodes.len().max(1) as f64;
+    let c = [0, 1, 2].map(|k| nodes.iter().map(|p| p[k]).sum::<f64>() / n);
+    let proj = |p: &[f64; 3]| -> (f64, f64) {
+        let d = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
+        let t = d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
+        let r2 = d.iter().map(|x| x * x).sum::<f64>() - t * t;
+        (t, r2.max(0.0).sqrt())
+    };
+    let (lo, hi) = nodes.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+        let t = proj(p).0;
+        (lo.min(t), hi.max(t))
+    });
+    let span = hi - lo;
+    let rmax = |near_hi: bool| {
+        nodes
+            .iter()
+            .map(proj)
+            .filter(|(t, _)| if near_hi { *t > hi - 0.1 * span } else { *t < lo + 0.1 * span })
+            .map(|(_, r)| r)
+            .fold(0.0, f64::max)
+    };
+    if rmax(false) > rmax(true) + tol {
+        a.map(|v| -v)
+    } else {
+        a
+    }
+}
+
 /// The rotation R (rows) taking unit vector `a` to +z: Rodrigues about a x e_z; a half turn
 /// about x when a = -z.
 fn rotation_to_z(a: [f64; 3]) -> [[f64; 3]; 3] {
@@ -183,7 +214,7 @@ pub fn place_liner(mesh: &mut Mesh) -> Result<(LinerShape, [f64; 3], [f64; 3]), 
         return Err(fail("liner", "too few nodes to find its axis".into()));
     }
     let tol = 0.02 * h;
-    let axis = principal_axis(&mesh.nodes);
+    let axis = toward_flange(&mesh.nodes, principal_axis(&mesh.nodes), tol);
     let rot = rotation_to_z(axis);
     let mut pts: Vec<[f64; 3]> = mesh.nodes.iter().map(|&p| apply(&rot, p)).collect();
     // centre: the bore's circle, refined once from the nodes' mean
@@ -208,21 +239,6 @@ pub fn place_liner(mesh: &mut Mesh) -> Result<(LinerShape, [f64; 3], [f64; 3]), 
     for p in &mut pts {
         *p = [p[0] - c[0], p[1] - c[1], p[2] - zmin];
     }
-    let length = pts.iter().map(|p| p[2]).fold(0.0, f64::max);
-    // the flange end is the top
-    let rmax_near = |top: bool| {
-        pts.iter()
-            .filter(|p| if top { p[2] > 0.9 * length } else { p[2] < 0.1 * length })
-            .map(|p| p[0].hypot(p[1]))
-            .fold(0.0, f64::max)
-    };
-    let mut axis_out = axis;
-    if rmax_near(false) > rmax_near(true) + tol {
-        for p in &mut pts {
-            *p = [p[0], -p[1], length - p[2]];
-        }
-        axis_out = axis.map(|v| -v);
-    }
     let centre_deck = {
         // the bottom centre in the deck's frame: R^T (c, zmin) for the unflipped frame
         let q = [c[0], c[1], zmin];
@@ -230,7 +246,7 @@ pub fn place_liner(mesh: &mut Mesh) -> Result<(LinerShape, [f64; 3], [f64; 3]), 
     };
     mesh.nodes = pts;
     let shape = measure_liner(mesh, tol)?;
-    Ok((shape, axis_out, centre_deck))
+    Ok((shape, axis, centre_deck))
 }
 
 /// Radii and heights of a liner in its own frame (module docs).
@@ -451,7 +467,7 @@ pub fn seat_crankcase(cm: &mut Mesh, axis_x: &[f64], s: &LinerShape) -> Result<f
 }
 
 /// The guide band [z0, z1] of the bore at `xc`: the lowest z-band of crankcase element faces on
-/// the liner's outer radius below the seat (module docs).
+/// the liner's outer radius between the liner's bottom and its seat (module docs).
 pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<[f64; 2]> {
     let tol = 0.02 * mesh_size(cm);
     let mut spans: Vec<[f64; 2]> = Vec::new();
@@ -465,7 +481,8 @@ pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<[f64; 2]> {
         if on.len() >= 3 {
             let lo = on.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = on.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            if hi > lo + tol && hi < s.seat_z + tol {
+            // faces along the liner, between its bottom and its seat
+            if hi > lo + tol && lo > -tol && hi < s.seat_z + tol {
                 spans.push([lo, hi]);
             }
         }
