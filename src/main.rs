@@ -341,10 +341,16 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         png: Option<PathBuf>,
     },
-    /// Write the part's mesh as Gmsh MSH 4.1 ASCII, node sets as physical groups.
+    /// Write a part's mesh (--part liner|crankcase of a scene, or --mesh) by the output's
+    /// extension: .msh (Gmsh MSH 4.1), .bdf/.nas (Nastran bulk data), .inp (Abaqus input), in
+    /// --unit (m, or mm with E in MPa and rho in t/mm^3), with its node sets (generated, named
+    /// or found from the geometry) and materials.
     ExportMesh {
         #[command(flatten)]
         model: ModelArgs,
+        /// Write no node or element sets (a deck as another tool would hold it).
+        #[arg(long)]
+        no_sets: bool,
         /// Output file.
         #[arg(long)]
         out: PathBuf,
@@ -484,8 +490,13 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             let r = cavitation::calibrate(&req)?;
             print_report(json, &r, || cavitation::calibration_text(&r));
         }
-        Command::ExportMesh { model, out } => {
-            let n = export::export_mesh(&model.input()?, &out)?;
+        Command::ExportMesh {
+            model,
+            no_sets,
+            out,
+        } => {
+            let unit = linercav::mesh::MeshUnit::parse(&model.unit).unwrap_or_default();
+            let n = export::export_mesh(&model.input()?, &out, unit, !no_sets)?;
             println!("wrote {} ({n} nodes)", out.display());
         }
     }

@@ -5,7 +5,9 @@ use super::{load_part, ModelInput};
 use crate::error::{Error, Result};
 use crate::fem::model::FeModel;
 use crate::files as atomic;
-use crate::mesh::gmsh;
+use crate::mesh::import::MaterialSource;
+use crate::mesh::write::{write_mesh, DeckFormat, WriteOptions};
+use crate::mesh::MeshUnit;
 use crate::report::mtx;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -75,9 +77,50 @@ pub fn export_matrices(
     })
 }
 
-/// Writes the part's (checked) mesh as MSH 4.1 ASCII with its node sets as physical groups.
-pub fn export_mesh(input: &ModelInput, out: &Path) -> Result<usize> {
-    let part = load_part(input, &[])?;
-    atomic::write_atomic(out, |w| gmsh::write(&part.mesh, &mut { w }))?;
-    Ok(part.mesh.nodes.len())
+/// Writes a part's mesh by the output's extension (`.msh` Gmsh MSH 4.1, `.bdf`/`.nas` Nastran
+/// bulk data, `.inp` Abaqus input) in `unit`, with its node sets (generated, named in a deck,
+/// or found from the geometry) unless `sets` is false, and its material(s). A scene part comes
+/// from the engine model when the scene has a crankcase (both parts placed, every set found);
+/// the liner alone otherwise. Returns the number of nodes written.
+pub fn export_mesh(input: &ModelInput, out: &Path, unit: MeshUnit, sets: bool) -> Result<usize> {
+    if DeckFormat::of_path(out).is_none() {
+        return Err(Error::Argument {
+            flag: format!("--out {}", out.display()),
+            msg: "unknown format: expected .msh (Gmsh MSH 4.1), .bdf or .nas (Nastran bulk data) or .inp (Abaqus input)".into(),
+        });
+    }
+    let (mesh, material) = match input {
+        ModelInput::Scene { scene, part, sets } if part == "crankcase" || has_crankcase(scene, sets)? => {
+            let sc = crate::api::load_scene(scene, sets)?;
+            let em = crate::reduce::scene_rom::load_meshes(&sc)?;
+            let given = |m: Option<_>, e| m.map(|_| e);
+            match part.as_str() {
+                "liner" => (em.liner, given(sc.liner.material, em.liner_material)),
+                "crankcase" => (em.crankcase, given(sc.crankcase.as_ref().and_then(|c| c.material), em.crankcase_material)),
+                other => {
+                    return Err(Error::Argument {
+                        flag: format!("--part {other}"),
+                        msg: "expected liner or crankcase".into(),
+                    })
+                }
+            }
+        }
+        _ => {
+            let part = load_part(input, &[])?;
+            let given = (part.material_source == MaterialSource::Given).then_some(part.material);
+            (part.mesh, given)
+        }
+    };
+    let opts = WriteOptions {
+        unit,
+        sets,
+        material,
+    };
+    write_mesh(out, &mesh, &opts)?;
+    Ok(mesh.nodes.len())
+}
+
+/// Whether the scene at `path` has a crankcase (its parts are then exported from the engine).
+fn has_crankcase(path: &Path, sets: &[String]) -> Result<bool> {
+    Ok(crate::api::load_scene(path, sets)?.crankcase.is_some())
 }

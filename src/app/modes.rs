@@ -42,6 +42,8 @@ pub struct ModesReport {
     pub ncv: usize,
     pub timings: Timings,
     pub warnings: Vec<String>,
+    /// Where the material came from: "given" (scene key or flags) or "deck" (per element).
+    pub material: String,
 }
 
 /// Runs the modal analysis; `started` is the process start so `seconds` covers everything.
@@ -64,6 +66,24 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
         });
     }
     let (nodes, elements) = (part.mesh.nodes.len(), part.mesh.num_elements());
+    let material = match part.material_source {
+        crate::mesh::import::MaterialSource::Given => "given".to_string(),
+        crate::mesh::import::MaterialSource::Deck => format!(
+            "deck: {}",
+            part.mesh
+                .materials
+                .iter()
+                .map(|m| format!(
+                    "{} (E {} Pa, nu {}, rho {} kg/m^3)",
+                    m.name,
+                    crate::text::num(m.elastic.young),
+                    crate::text::num(m.elastic.poisson),
+                    crate::text::num(m.elastic.density)
+                ))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
     progress.phase("assembling K and M");
     let mut model = FeModel::build(part.mesh, &part.material, &part.fix)?;
     if req.count >= model.n_free() {
@@ -108,6 +128,7 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
         ncv: sol.modes.ncv,
         timings: model.timings.clone(),
         warnings: part.checks.warnings,
+        material,
     })
 }
 

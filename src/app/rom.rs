@@ -56,6 +56,9 @@ pub struct RomReport {
     pub left_out: Vec<String>,
     pub cache_file: Option<String>,
     pub first_frequencies_hz: Vec<f64>,
+    /// Interfaces, points and materials found on imported meshes (absent for generated ones).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interfaces: Option<crate::mesh::find::FoundInterfaces>,
 }
 
 impl RomReport {
@@ -80,6 +83,7 @@ impl RomReport {
             left_out: i.left_out.clone(),
             cache_file: l.cache_file.as_ref().map(|p| p.display().to_string()),
             first_frequencies_hz: l.rom.frequencies_hz.iter().take(20).copied().collect(),
+            interfaces: i.interfaces.clone(),
         }
     }
 
@@ -125,8 +129,45 @@ impl RomReport {
             .map(|f| format!("{f:.1}"))
             .collect();
         let _ = writeln!(s, "  first modes [Hz]: {}", f.join(", "));
+        if let Some(found) = &self.interfaces {
+            s.push_str(&interfaces_text(found));
+        }
         s
     }
+}
+
+/// What was found on imported meshes, one line per set.
+pub fn interfaces_text(f: &crate::mesh::find::FoundInterfaces) -> String {
+    use std::fmt::Write;
+    let mut s = String::from("  imported meshes:\n");
+    for m in &f.materials {
+        let _ = writeln!(s, "    material  {m}");
+    }
+    if let Some(l) = &f.liner {
+        let _ = writeln!(
+            s,
+            "    liner     bore r {:.3} mm, outer r {:.3} mm, flange r {:.3} mm, length {:.3} mm, seat at {:.3} mm",
+            l.inner_radius * 1e3,
+            l.outer_radius * 1e3,
+            l.flange_radius * 1e3,
+            l.length * 1e3,
+            l.seat_z * 1e3
+        );
+    }
+    if let Some([g0, g1]) = f.guide_band {
+        let _ = writeln!(s, "    guide     z {:.3}..{:.3} mm (liner frame)", g0 * 1e3, g1 * 1e3);
+    }
+    if f.crankcase_shift_z != 0.0 {
+        let _ = writeln!(s, "    crankcase moved by {:.3} mm along z to seat the liners", f.crankcase_shift_z * 1e3);
+    }
+    for set in &f.sets {
+        let _ = writeln!(
+            s,
+            "    {:<9} {:<16} {:>6} nodes  {:<8} {}",
+            set.part, set.name, set.nodes, set.source, set.detail
+        );
+    }
+    s
 }
 
 pub use crate::reduce::rom::ShapeMode;

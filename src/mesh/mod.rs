@@ -15,6 +15,7 @@ pub mod gmsh;
 pub mod lattice;
 pub mod liner;
 pub mod merge;
+pub mod write;
 pub mod nastran;
 
 pub use crate::scene::spec::MeshUnit;
