@@ -1,5 +1,9 @@
 //! Engines as decks: interfaces and points found from the geometry against the generator's
-//! exact sets, units, materials from decks.
+//! exact sets, units, materials from decks, the small engine taken out as mm decks (an Abaqus
+//! part/instance liner, a Nastran crankcase over nested INCLUDEs with MAT1/PSOLID) and back in.
+
+mod common;
+use common::{json, linercav, linercav_output};
 
 use linercav::api::load_scene;
 use linercav::mesh::find::LinerShape;
@@ -105,4 +109,148 @@ fn same_set(mesh: &Mesh, name: &str, want: &[usize], part: &str) {
         got.len(),
         want.len()
     );
+}
+
+const SMALL: &str = "tests/fixtures/engine_small.toml";
+
+/// Writes the small engine's liner as an Abaqus part/instance deck in mm (the instance moved
+/// by (100, 50, 300) mm) and its crankcase as a Nastran deck in mm whose grids and elements sit
+/// in nested INCLUDE files (one name quoted over two lines), both with their materials and no
+/// set; returns the scene text that uses them (no `material` keys, the fixed set as a box).
+fn small_engine_as_decks(dir: &Path) -> String {
+    let d = |f: &str| dir.join(f).display().to_string();
+    for (part, file) in [("liner", "liner.inp"), ("crankcase", "flat.bdf")] {
+        let (code, _, err) = linercav(&[
+            "export-mesh", SMALL, "--part", part, "--unit", "mm", "--no-sets", "--out", &d(file),
+        ]);
+        assert_eq!(code, 0, "{err}");
+    }
+    let inp = std::fs::read_to_string(dir.join("liner.inp")).unwrap();
+    assert!(!inp.contains("*NSET"));
+    let inp = inp.replace("*END INSTANCE", "100.0, 50.0, 300.0\n*END INSTANCE");
+    std::fs::write(dir.join("liner.inp"), inp).unwrap();
+    let flat = std::fs::read_to_string(dir.join("flat.bdf")).unwrap();
+    assert!(!flat.lines().any(|l| l.starts_with("SET1")));
+    let lines: Vec<&str> = flat.lines().collect();
+    let first_elem = lines.iter().position(|l| l.starts_with("CHEXA") || l.starts_with("CTETRA")).unwrap();
+    let first_mat = lines.iter().position(|l| l.starts_with("$ material") || l.starts_with("MAT1")).unwrap();
+    let grids = &lines[1..first_elem];
+    let elems = &lines[first_elem..first_mat];
+    let half = elems.len() / 2 - elems.len() / 2 % 2;
+    let split = (half..elems.len()).find(|&k| elems[k].starts_with('C')).unwrap();
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    std::fs::write(dir.join("grids.bdf"), grids.join("\n") + "\n").unwrap();
+    std::fs::write(
+        dir.join("sub/elems.bdf"),
+        elems[..split].join("\n") + "\nINCLUDE 'more.bdf'\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("sub/more.bdf"), elems[split..].join("\n") + "\n").unwrap();
+    let main = format!(
+        "BEGIN BULK\nINCLUDE 'grids.bdf'\nINCLUDE 'sub/\n  elems.bdf'\n{}\n",
+        lines[first_mat..].join("\n")
+    );
+    std::fs::write(dir.join("crankcase.bdf"), main).unwrap();
+    let scene = std::fs::read_to_string(SMALL).unwrap();
+    let mut out = String::new();
+    let mut section = String::new();
+    for l in scene.lines() {
+        if l.starts_with('[') {
+            section = l.split('#').next().unwrap().trim().to_string();
+        }
+        let key = l.split('=').next().unwrap().trim();
+        if key == "material" && (section == "[liner]" || section == "[crankcase]") {
+            continue;
+        }
+        if key == "cache_dir" {
+            out += &format!("cache_dir = \"{}\"\n", d("cache"));
+            continue;
+        }
+        out += l;
+        out += "\n";
+        if section == "[liner]" && l.starts_with("[liner]") {
+            out += "mesh_file = \"liner.inp\"\nmesh_unit = \"mm\"\n";
+        }
+        if l.starts_with("[crankcase]") {
+            out += "mesh_file = \"crankcase.bdf\"\nmesh_unit = \"mm\"\n";
+        }
+    }
+    out += "\n[crankcase.sets.pan_rail]\nbox_mm = [-2000.0, -2000.0, -180.5, 2000.0, 2000.0, -179.5]\n";
+    out
+}
+
+fn frequencies(v: &serde_json::Value) -> Vec<f64> {
+    v["first_frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+/// Verification: the small engine taken out as mm decks without set names or material keys
+/// and read back gives the parametric engine's system frequencies. The decks hold the same
+/// meshes (12-17 significant digits), the found sets are the generator's (see above), the
+/// materials come from the decks: only roundoff separates the two models. The tolerance was
+/// first set at 1e-7; measured, the ROM's system frequencies move by up to 4.6e-8 (1.6e-7 with
+/// the moved instance) when the same mesh only passes through a 16-column Nastran deck in
+/// metres (coordinates rounded at 1e-13): the Craig-Bampton chain amplifies roundoff near the
+/// close pairs (1860.4 / 1861.9 Hz). 1e-6 is the bound here, 1,000 times below the issue's
+/// 0.1 %; the amplification is noted in the CHANGELOG as something to look into.
+#[test]
+fn verification_small_engine_as_mm_decks_gives_the_parametric_frequencies() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_engine_as_decks(dir.path());
+    let sp = dir.path().join("engine.toml");
+    std::fs::write(&sp, scene).unwrap();
+    let sp = sp.display().to_string();
+    let param = json(&linercav_output(&["rom", SMALL, "--json", "--no-cache"]));
+    let decks = json(&linercav_output(&["rom", &sp, "--json", "--no-cache"]));
+    let (a, b) = (frequencies(&param), frequencies(&decks));
+    assert_eq!(a.len(), b.len());
+    assert!(a.len() >= 10);
+    for (k, (fa, fb)) in a.iter().zip(&b).enumerate() {
+        assert!((fa - fb).abs() <= 1e-6 * fa, "mode {k}: {fa} Hz parametric, {fb} Hz decks");
+    }
+    let found = &decks["interfaces"];
+    let sets = found["sets"].as_array().unwrap();
+    let source = |part: &str, name: &str| {
+        sets.iter()
+            .find(|s| s["part"] == part && s["name"] == name)
+            .map(|s| s["source"].as_str().unwrap().to_string())
+    };
+    assert_eq!(source("liner", "flange_seat").as_deref(), Some("geometry"));
+    assert_eq!(source("crankcase", "guide_2").as_deref(), Some("geometry"));
+    assert_eq!(source("crankcase", "pan_rail").as_deref(), Some("box"));
+    let mats = found["materials"].as_array().unwrap();
+    assert!(mats.iter().all(|m| m.as_str().unwrap().contains("deck")), "{mats:?}");
+    // the liner instance was moved by (100, 50, 300) mm: placing it back is what the equal
+    // frequencies above show; the generated engine reports nothing found
+    assert!(param["interfaces"].is_null());
+}
+
+/// Verification: `modes --mesh liner.inp --unit mm` without material flags takes the deck's
+/// material and gives the modes of the scene's liner (same mesh, same material: 1e-6 relative
+/// is the bound, roundoff is far below it); the same deck read in metres is refused
+/// (exit 2) naming --unit, before any solve.
+#[test]
+fn verification_modes_of_an_mm_deck_with_its_own_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = dir.path().join("liner.inp").display().to_string();
+    let (code, _, err) = linercav(&[
+        "export-mesh", SMALL, "--part", "liner", "--unit", "mm", "--no-sets", "--out", &deck,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let scene = json(&linercav_output(&["modes", SMALL, "--part", "liner", "--count", "12", "--json"]));
+    let mesh = json(&linercav_output(&["modes", "--mesh", &deck, "--unit", "mm", "--count", "12", "--json"]));
+    let (a, b) = (common::freqs(&scene), common::freqs(&mesh));
+    for (k, (fa, fb)) in a.iter().zip(&b).enumerate().skip(6) {
+        assert!((fa - fb).abs() <= 1e-6 * fa, "mode {k}: {fa} vs {fb}");
+    }
+    assert!(mesh["material"].as_str().unwrap().starts_with("deck"));
+    let (code, _, err) = linercav(&["modes", "--mesh", &deck, "--unit", "m", "--count", "12"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--unit") && err.contains("liner.inp"), "{err}");
+    // refused on reading: the message is the size check's, not a failed certification
+    assert!(err.contains("across read in m"), "{err}");
 }
