@@ -107,7 +107,12 @@ fn read_mesh(
     unit_key: &str,
     given: Option<Elastic>,
     material_key: &str,
-) -> Result<(Mesh, Option<String>, Elastic, crate::mesh::import::MaterialSource)> {
+) -> Result<(
+    Mesh,
+    Option<String>,
+    Elastic,
+    crate::mesh::import::MaterialSource,
+)> {
     use crate::mesh::import;
     match source {
         MeshSource::Liner { geometry, meshing } => {
@@ -115,7 +120,12 @@ fn read_mesh(
                 flag: material_key.into(),
                 msg: "missing: the parametric mesh needs a material".into(),
             })?;
-            Ok((liner::generate(geometry, meshing), None, m, import::MaterialSource::Given))
+            Ok((
+                liner::generate(geometry, meshing),
+                None,
+                m,
+                import::MaterialSource::Given,
+            ))
         }
         MeshSource::File(p) => {
             let mut mesh = import::read_si(p, unit, unit_key)
@@ -129,66 +139,66 @@ fn read_mesh(
 
 /// Resolves a [`ModelInput`] to a checked mesh and material. `extra_fix` adds sets to fix.
 pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart> {
-    let (mesh, file, material, material_source, mut fix, label, shift_hz, guard_modes) =
-        match input {
-            ModelInput::Scene { scene, part, sets } => {
-                let sc = load_scene(scene, sets)?;
-                let p = sc.part(part).ok_or_else(|| Error::Argument {
-                    flag: format!("{}: part '{part}'", scene.display()),
-                    msg: format!("unknown; the scene has: {}", PARTS.join(", ")),
-                })?;
-                let (mut mesh, file, material, src) = read_mesh(
-                    &p.source,
-                    p.mesh_unit,
-                    &format!("{part}.mesh_unit"),
-                    p.material,
-                    &format!("{part}.material"),
-                )?;
-                for (name, b) in &p.box_sets {
-                    crate::mesh::find::box_set(&mut mesh, part, name, b);
-                }
-                (
-                    mesh,
-                    file,
-                    material,
-                    src,
-                    p.fix.clone(),
-                    format!("{} / {part}", scene.display()),
-                    sc.solver.shift_hz,
-                    sc.solver.guard_modes,
-                )
+    let (mesh, file, material, material_source, mut fix, label, shift_hz, guard_modes) = match input
+    {
+        ModelInput::Scene { scene, part, sets } => {
+            let sc = load_scene(scene, sets)?;
+            let p = sc.part(part).ok_or_else(|| Error::Argument {
+                flag: format!("{}: part '{part}'", scene.display()),
+                msg: format!("unknown; the scene has: {}", PARTS.join(", ")),
+            })?;
+            let (mut mesh, file, material, src) = read_mesh(
+                &p.source,
+                p.mesh_unit,
+                &format!("{part}.mesh_unit"),
+                p.material,
+                &format!("{part}.material"),
+            )?;
+            for (name, b) in &p.box_sets {
+                crate::mesh::find::box_set(&mut mesh, part, name, b);
             }
-            ModelInput::Mesh {
+            (
                 mesh,
-                unit,
+                file,
                 material,
-                fix,
-            } => {
-                if let Some(m) = material {
-                    m.validate().map_err(|m| Error::Argument {
-                        flag: "--youngs/--poisson/--density".into(),
-                        msg: m.to_string(),
-                    })?;
-                }
-                let (m, file, material, src) = read_mesh(
-                    &MeshSource::File(mesh.clone()),
-                    *unit,
-                    "--unit",
-                    *material,
-                    "--youngs/--poisson/--density",
-                )?;
-                (
-                    m,
-                    file,
-                    material,
-                    src,
-                    fix.clone(),
-                    mesh.display().to_string(),
-                    100.0,
-                    4,
-                )
+                src,
+                p.fix.clone(),
+                format!("{} / {part}", scene.display()),
+                sc.solver.shift_hz,
+                sc.solver.guard_modes,
+            )
+        }
+        ModelInput::Mesh {
+            mesh,
+            unit,
+            material,
+            fix,
+        } => {
+            if let Some(m) = material {
+                m.validate().map_err(|m| Error::Argument {
+                    flag: "--youngs/--poisson/--density".into(),
+                    msg: m.to_string(),
+                })?;
             }
-        };
+            let (m, file, material, src) = read_mesh(
+                &MeshSource::File(mesh.clone()),
+                *unit,
+                "--unit",
+                *material,
+                "--youngs/--poisson/--density",
+            )?;
+            (
+                m,
+                file,
+                material,
+                src,
+                fix.clone(),
+                mesh.display().to_string(),
+                100.0,
+                4,
+            )
+        }
+    };
     fix.extend_from_slice(extra_fix);
     let mut mesh = mesh;
     if let Some(f) = &file {

@@ -69,12 +69,11 @@ impl ModelArgs {
                 sets: self.sets.clone(),
             }),
             (None, Some(mesh)) => {
-                let unit = linercav::mesh::MeshUnit::parse(&self.unit).ok_or_else(|| {
-                    Error::Argument {
+                let unit =
+                    linercav::mesh::MeshUnit::parse(&self.unit).ok_or_else(|| Error::Argument {
                         flag: "--unit".into(),
                         msg: format!("expected m or mm, got {}", self.unit),
-                    }
-                })?;
+                    })?;
                 let material = match (self.youngs, self.poisson, self.density) {
                     (None, None, None) => None,
                     // SI whatever the mesh's unit, as the flags' names say

@@ -21,7 +21,11 @@ fn default_meshes() -> (Mesh, Mesh, LinerShape, Vec<f64>, Vec<f64>, f64) {
     };
     let lm = liner::generate(geometry, meshing);
     let cc = scene.crankcase.as_ref().unwrap();
-    let CrankcaseSource::Parametric { geometry: cg, meshing: cmesh } = &cc.source else {
+    let CrankcaseSource::Parametric {
+        geometry: cg,
+        meshing: cmesh,
+    } = &cc.source
+    else {
         panic!("the default crankcase is parametric")
     };
     let cm = crankcase::generate(cg, cmesh);
@@ -101,8 +105,16 @@ fn same_set(mesh: &Mesh, name: &str, want: &[usize], part: &str) {
     use std::collections::BTreeSet;
     let got: BTreeSet<usize> = mesh.node_sets[name].iter().copied().collect();
     let want: BTreeSet<usize> = want.iter().copied().collect();
-    let extra: Vec<_> = got.difference(&want).take(3).map(|&n| mesh.nodes[n]).collect();
-    let missing: Vec<_> = want.difference(&got).take(3).map(|&n| mesh.nodes[n]).collect();
+    let extra: Vec<_> = got
+        .difference(&want)
+        .take(3)
+        .map(|&n| mesh.nodes[n])
+        .collect();
+    let missing: Vec<_> = want
+        .difference(&got)
+        .take(3)
+        .map(|&n| mesh.nodes[n])
+        .collect();
     assert!(
         extra.is_empty() && missing.is_empty(),
         "{part} set {name}: {} found, {} expected; extra at {extra:?}, missing at {missing:?}",
@@ -121,7 +133,15 @@ fn small_engine_as_decks(dir: &Path) -> String {
     let d = |f: &str| dir.join(f).display().to_string();
     for (part, file) in [("liner", "liner.inp"), ("crankcase", "flat.bdf")] {
         let (code, _, err) = linercav(&[
-            "export-mesh", SMALL, "--part", part, "--unit", "mm", "--no-sets", "--out", &d(file),
+            "export-mesh",
+            SMALL,
+            "--part",
+            part,
+            "--unit",
+            "mm",
+            "--no-sets",
+            "--out",
+            &d(file),
         ]);
         assert_eq!(code, 0, "{err}");
     }
@@ -132,12 +152,20 @@ fn small_engine_as_decks(dir: &Path) -> String {
     let flat = std::fs::read_to_string(dir.join("flat.bdf")).unwrap();
     assert!(!flat.lines().any(|l| l.starts_with("SET1")));
     let lines: Vec<&str> = flat.lines().collect();
-    let first_elem = lines.iter().position(|l| l.starts_with("CHEXA") || l.starts_with("CTETRA")).unwrap();
-    let first_mat = lines.iter().position(|l| l.starts_with("$ material") || l.starts_with("MAT1")).unwrap();
+    let first_elem = lines
+        .iter()
+        .position(|l| l.starts_with("CHEXA") || l.starts_with("CTETRA"))
+        .unwrap();
+    let first_mat = lines
+        .iter()
+        .position(|l| l.starts_with("$ material") || l.starts_with("MAT1"))
+        .unwrap();
     let grids = &lines[1..first_elem];
     let elems = &lines[first_elem..first_mat];
     let half = elems.len() / 2 - elems.len() / 2 % 2;
-    let split = (half..elems.len()).find(|&k| elems[k].starts_with('C')).unwrap();
+    let split = (half..elems.len())
+        .find(|&k| elems[k].starts_with('C'))
+        .unwrap();
     std::fs::create_dir_all(dir.join("sub")).unwrap();
     std::fs::write(dir.join("grids.bdf"), grids.join("\n") + "\n").unwrap();
     std::fs::write(
@@ -210,7 +238,10 @@ fn verification_small_engine_as_mm_decks_gives_the_parametric_frequencies() {
     assert_eq!(a.len(), b.len());
     assert!(a.len() >= 10);
     for (k, (fa, fb)) in a.iter().zip(&b).enumerate() {
-        assert!((fa - fb).abs() <= 1e-6 * fa, "mode {k}: {fa} Hz parametric, {fb} Hz decks");
+        assert!(
+            (fa - fb).abs() <= 1e-6 * fa,
+            "mode {k}: {fa} Hz parametric, {fb} Hz decks"
+        );
     }
     let found = &decks["interfaces"];
     let sets = found["sets"].as_array().unwrap();
@@ -223,7 +254,10 @@ fn verification_small_engine_as_mm_decks_gives_the_parametric_frequencies() {
     assert_eq!(source("crankcase", "guide_2").as_deref(), Some("geometry"));
     assert_eq!(source("crankcase", "pan_rail").as_deref(), Some("box"));
     let mats = found["materials"].as_array().unwrap();
-    assert!(mats.iter().all(|m| m.as_str().unwrap().contains("deck")), "{mats:?}");
+    assert!(
+        mats.iter().all(|m| m.as_str().unwrap().contains("deck")),
+        "{mats:?}"
+    );
     // the liner instance was moved by (100, 50, 300) mm: placing it back is what the equal
     // frequencies above show; the generated engine reports nothing found
     assert!(param["interfaces"].is_null());
@@ -238,11 +272,23 @@ fn verification_modes_of_an_mm_deck_with_its_own_material() {
     let dir = tempfile::tempdir().unwrap();
     let deck = dir.path().join("liner.inp").display().to_string();
     let (code, _, err) = linercav(&[
-        "export-mesh", SMALL, "--part", "liner", "--unit", "mm", "--no-sets", "--out", &deck,
+        "export-mesh",
+        SMALL,
+        "--part",
+        "liner",
+        "--unit",
+        "mm",
+        "--no-sets",
+        "--out",
+        &deck,
     ]);
     assert_eq!(code, 0, "{err}");
-    let scene = json(&linercav_output(&["modes", SMALL, "--part", "liner", "--count", "12", "--json"]));
-    let mesh = json(&linercav_output(&["modes", "--mesh", &deck, "--unit", "mm", "--count", "12", "--json"]));
+    let scene = json(&linercav_output(&[
+        "modes", SMALL, "--part", "liner", "--count", "12", "--json",
+    ]));
+    let mesh = json(&linercav_output(&[
+        "modes", "--mesh", &deck, "--unit", "mm", "--count", "12", "--json",
+    ]));
     let (a, b) = (common::freqs(&scene), common::freqs(&mesh));
     for (k, (fa, fb)) in a.iter().zip(&b).enumerate().skip(6) {
         assert!((fa - fb).abs() <= 1e-6 * fa, "mode {k}: {fa} vs {fb}");

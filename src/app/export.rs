@@ -90,13 +90,21 @@ pub fn export_mesh(input: &ModelInput, out: &Path, unit: MeshUnit, sets: bool) -
         });
     }
     let (mesh, material) = match input {
-        ModelInput::Scene { scene, part, sets } if part == "crankcase" || has_crankcase(scene, sets)? => {
+        ModelInput::Scene { scene, part, sets }
+            if part == "crankcase" || has_crankcase(scene, sets)? =>
+        {
             let sc = crate::api::load_scene(scene, sets)?;
             let em = crate::reduce::scene_rom::load_meshes(&sc)?;
             let given = |m: Option<_>, e| m.map(|_| e);
             match part.as_str() {
                 "liner" => (em.liner, given(sc.liner.material, em.liner_material)),
-                "crankcase" => (em.crankcase, given(sc.crankcase.as_ref().and_then(|c| c.material), em.crankcase_material)),
+                "crankcase" => (
+                    em.crankcase,
+                    given(
+                        sc.crankcase.as_ref().and_then(|c| c.material),
+                        em.crankcase_material,
+                    ),
+                ),
                 other => {
                     return Err(Error::Argument {
                         flag: format!("--part {other}"),

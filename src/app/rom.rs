@@ -155,10 +155,19 @@ pub fn interfaces_text(f: &crate::mesh::find::FoundInterfaces) -> String {
         );
     }
     if let Some([g0, g1]) = f.guide_band {
-        let _ = writeln!(s, "    guide     z {:.3}..{:.3} mm (liner frame)", g0 * 1e3, g1 * 1e3);
+        let _ = writeln!(
+            s,
+            "    guide     z {:.3}..{:.3} mm (liner frame)",
+            g0 * 1e3,
+            g1 * 1e3
+        );
     }
     if f.crankcase_shift_z != 0.0 {
-        let _ = writeln!(s, "    crankcase moved by {:.3} mm along z to seat the liners", f.crankcase_shift_z * 1e3);
+        let _ = writeln!(
+            s,
+            "    crankcase moved by {:.3} mm along z to seat the liners",
+            f.crankcase_shift_z * 1e3
+        );
     }
     for set in &f.sets {
         let _ = writeln!(

@@ -134,7 +134,11 @@ impl Collected {
 
     /// An error at `loc`.
     pub fn err_at(&self, loc: Loc, msg: String) -> MshError {
-        err(&self.files[loc.file.min(self.files.len() - 1)], loc.line, msg)
+        err(
+            &self.files[loc.file.min(self.files.len() - 1)],
+            loc.line,
+            msg,
+        )
     }
 
     /// The mesh: nodes in deck order, elements grouped by kind (in deck order within a kind),
@@ -155,7 +159,10 @@ impl Collected {
         let mut nodes = Vec::with_capacity(self.nodes.len());
         for &(id, x, loc) in &self.nodes {
             if id <= 0 {
-                return Err(at(loc, format!("node id {id}: ids must be positive integers")));
+                return Err(at(
+                    loc,
+                    format!("node id {id}: ids must be positive integers"),
+                ));
             }
             if index.insert(id, nodes.len()).is_some() {
                 return Err(at(loc, format!("node {id} defined twice")));
@@ -174,7 +181,10 @@ impl Collected {
         let mut seen = HashMap::new();
         for (eid, kind, ids, line) in &self.elements {
             if *eid <= 0 {
-                return Err(at(*line, format!("element id {eid}: ids must be positive integers")));
+                return Err(at(
+                    *line,
+                    format!("element id {eid}: ids must be positive integers"),
+                ));
             }
             if seen.insert(*eid, *line).is_some() {
                 return Err(at(*line, format!("element {eid} defined twice")));
@@ -272,7 +282,11 @@ impl Collected {
                         if names.is_empty() {
                             "none".to_string()
                         } else {
-                            names.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
+                            names
+                                .iter()
+                                .map(|s| s.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
                         }
                     ),
                 )

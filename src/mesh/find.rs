@@ -148,16 +148,24 @@ fn toward_flange(nodes: &[[f64; 3]], a: [f64; 3], tol: f64) -> [f64; 3] {
         let r2 = d.iter().map(|x| x * x).sum::<f64>() - t * t;
         (t, r2.max(0.0).sqrt())
     };
-    let (lo, hi) = nodes.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-        let t = proj(p).0;
-        (lo.min(t), hi.max(t))
-    });
+    let (lo, hi) = nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            let t = proj(p).0;
+            (lo.min(t), hi.max(t))
+        });
     let span = hi - lo;
     let rmax = |near_hi: bool| {
         nodes
             .iter()
             .map(proj)
-            .filter(|(t, _)| if near_hi { *t > hi - 0.1 * span } else { *t < lo + 0.1 * span })
+            .filter(|(t, _)| {
+                if near_hi {
+                    *t > hi - 0.1 * span
+                } else {
+                    *t < lo + 0.1 * span
+                }
+            })
             .map(|(_, r)| r)
             .fold(0.0, f64::max)
     };
@@ -312,7 +320,13 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
         (
             "flange_seat".into(),
             Box::new(|p| (p[2] - s.seat_z).abs() < tol && r(p) > ro - tol),
-            format!("z = {:.6} m, r {:.6}..{:.6} m, area {:.4e} m^2", s.seat_z, ro, rf, pi * (rf * rf - ro * ro)),
+            format!(
+                "z = {:.6} m, r {:.6}..{:.6} m, area {:.4e} m^2",
+                s.seat_z,
+                ro,
+                rf,
+                pi * (rf * rf - ro * ro)
+            ),
         ),
         (
             "flange_top".into(),
@@ -322,7 +336,10 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
         (
             "lower_guide".into(),
             Box::new(move |p| on_outer(p) && p[2] > g0 - tol && p[2] < g1 + tol),
-            format!("r = {ro:.6} m, z {g0:.6}..{g1:.6} m, area {:.4e} m^2", 2.0 * pi * ro * (g1 - g0)),
+            format!(
+                "r = {ro:.6} m, z {g0:.6}..{g1:.6} m, area {:.4e} m^2",
+                2.0 * pi * ro * (g1 - g0)
+            ),
         ),
         (
             "bore_thrust".into(),
@@ -342,7 +359,11 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
         (
             super::liner::COOLANT_WETTED.into(),
             Box::new(move |p| on_outer(p) && p[2] > g1 - tol && p[2] < s.seat_z + tol),
-            format!("r = {ro:.6} m, z {g1:.6}..{:.6} m, area {:.4e} m^2", s.seat_z, 2.0 * pi * ro * (s.seat_z - g1)),
+            format!(
+                "r = {ro:.6} m, z {g1:.6}..{:.6} m, area {:.4e} m^2",
+                s.seat_z,
+                2.0 * pi * ro * (s.seat_z - g1)
+            ),
         ),
     ];
     let mut out = Vec::new();
@@ -354,6 +375,14 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
         let name = format!("point_{}", k + 1);
         out.push(add_point(mesh, "liner", &name, target, &|p| on_outer(p)));
     }
+    let h = s.tol / 0.02;
+    for (name, radius, sign) in [
+        ("bore_thrust", s.inner_radius, 1.0),
+        ("bore_antithrust", s.inner_radius, -1.0),
+        ("outer_thrust", s.outer_radius, 1.0),
+    ] {
+        widen_line(mesh, &mut out, name, radius, sign, h, s);
+    }
     for name in ["bore_thrust", "bore_antithrust", "outer_thrust"] {
         let nodes = &mesh.nodes;
         if let Some(v) = mesh.node_sets.get_mut(name) {
@@ -361,6 +390,53 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
         }
     }
     out
+}
+
+/// A line set found with fewer than three nodes (an unstructured mesh has no nodes exactly on
+/// the thrust line) is widened: the surface nodes within h/2 of the line, at each height the
+/// one nearest to it.
+fn widen_line(
+    mesh: &mut Mesh,
+    out: &mut [FoundSet],
+    name: &str,
+    radius: f64,
+    sign: f64,
+    h: f64,
+    s: &LinerShape,
+) {
+    let Some(f) = out
+        .iter_mut()
+        .find(|f| f.name == name && f.source == "geometry")
+    else {
+        return;
+    };
+    if f.nodes >= 3 {
+        return;
+    }
+    let mut cand: Vec<usize> = (0..mesh.nodes.len())
+        .filter(|&n| {
+            let p = mesh.nodes[n];
+            (p[0].hypot(p[1]) - radius).abs() < s.tol
+                && p[0].abs() < 0.5 * h
+                && sign * p[1] > 0.0
+                && (name != "outer_thrust" || p[2] < s.seat_z + s.tol)
+        })
+        .collect();
+    cand.sort_by(|&a, &b| mesh.nodes[a][2].total_cmp(&mesh.nodes[b][2]));
+    let mut line: Vec<usize> = Vec::new();
+    for n in cand {
+        match line.last_mut() {
+            Some(last) if (mesh.nodes[n][2] - mesh.nodes[*last][2]).abs() < 0.25 * h => {
+                if mesh.nodes[n][0].abs() < mesh.nodes[*last][0].abs() {
+                    *last = n;
+                }
+            }
+            _ => line.push(n),
+        }
+    }
+    f.nodes = line.len();
+    f.detail += &format!(" (widened to within {:.6} m of the line)", 0.5 * h);
+    mesh.node_sets.insert(name.into(), line);
 }
 
 /// Adds node set `name` of the nodes satisfying `pred` unless the mesh names it.
@@ -522,10 +598,14 @@ pub fn crankcase_sets(
     for (c, &xc) in t.axis_x.iter().enumerate() {
         let k = c + 1;
         let (ro, rf, zs) = (s.outer_radius, s.flange_radius, s.seat_z);
-        let seat = move |p: &[f64; 3]| {
-            (p[2] - zs).abs() < tol && radius_about(p, xc) < rf + tol
-        };
-        out.push(add_set(cm, "crankcase", &format!("seat_{k}"), &seat, format!("z = {zs:.6} m, r <= {rf:.6} m")));
+        let seat = move |p: &[f64; 3]| (p[2] - zs).abs() < tol && radius_about(p, xc) < rf + tol;
+        out.push(add_set(
+            cm,
+            "crankcase",
+            &format!("seat_{k}"),
+            &seat,
+            format!("z = {zs:.6} m, r <= {rf:.6} m"),
+        ));
         let name = format!("guide_{k}");
         if !cm.node_sets.contains_key(&name) {
             let [g0, g1] = guide_band(cm, xc, s).ok_or_else(|| {
@@ -534,7 +614,13 @@ pub fn crankcase_sets(
             let guide = move |p: &[f64; 3]| {
                 (radius_about(p, xc) - ro).abs() < tol && p[2] > g0 - tol && p[2] < g1 + tol
             };
-            out.push(add_set(cm, "crankcase", &name, &guide, format!("r = {ro:.6} m, z {g0:.6}..{g1:.6} m")));
+            out.push(add_set(
+                cm,
+                "crankcase",
+                &name,
+                &guide,
+                format!("r = {ro:.6} m, z {g0:.6}..{g1:.6} m"),
+            ));
         }
         for (j, &z) in t.analysis_z.iter().enumerate() {
             let name = format!("point_{k}_{}", j + 1);
@@ -543,7 +629,13 @@ pub fn crankcase_sets(
         }
     }
     let zs = s.seat_z;
-    out.push(add_set(cm, "crankcase", "deck_top", &|p| (p[2] - zs).abs() < tol, format!("z = {zs:.6} m")));
+    out.push(add_set(
+        cm,
+        "crankcase",
+        "deck_top",
+        &|p| (p[2] - zs).abs() < tol,
+        format!("z = {zs:.6} m"),
+    ));
     Ok(out)
 }
 

@@ -106,9 +106,7 @@ pub fn resolve_material(
         msg,
     };
     if mesh.materials.is_empty() {
-        return Err(bad(
-            "the mesh defines no material: give one".into(),
-        ));
+        return Err(bad("the mesh defines no material: give one".into()));
     }
     if let Some(e) = mesh.element_without_material() {
         return Err(bad(format!(
@@ -166,7 +164,8 @@ pub fn complete_engine(
     };
     found.liner = Some(shape);
     if let Some(p) = crankcase_file {
-        let need_seat = (1..=frame.axis_x.len()).any(|c| crankcase.node_set(&format!("seat_{c}")).is_none());
+        let need_seat =
+            (1..=frame.axis_x.len()).any(|c| crankcase.node_set(&format!("seat_{c}")).is_none());
         if need_seat {
             found.crankcase_shift_z = find::seat_crankcase(crankcase, frame.axis_x, &shape)
                 .map_err(|source| ImportError::Find {

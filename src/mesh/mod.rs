@@ -10,13 +10,13 @@ pub(crate) mod collect;
 pub mod crankcase;
 pub mod element;
 pub mod find;
-pub mod import;
 pub mod gmsh;
+pub mod import;
 pub mod lattice;
 pub mod liner;
 pub mod merge;
-pub mod write;
 pub mod nastran;
+pub mod write;
 
 pub use crate::scene::spec::MeshUnit;
 pub use element::ElementKind;

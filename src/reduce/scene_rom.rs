@@ -10,11 +10,11 @@
 use super::cache::{self, CacheReadError, Lookup};
 use super::rom::{build, EngineRom, RomBuild, RomError, RomInputs, ROM_FORMAT};
 use crate::fem::element::check_mesh as check_and_compact;
+use crate::fem::material::Elastic;
 use crate::fem::surface::SurfaceMass;
 use crate::files::WriteError;
 use crate::mesh::checks::MeshError;
 use crate::mesh::collect::MshError;
-use crate::fem::material::Elastic;
 use crate::mesh::find::{self, FoundInterfaces, LinerShape};
 use crate::mesh::{crankcase, import, liner, Mesh, MeshUnit};
 use crate::scene::budget::{self, Limits};
@@ -333,13 +333,17 @@ pub fn key_description(scene: &Scene) -> Result<String> {
         MeshSource::Liner { geometry, meshing } => {
             serde_json::json!({"geometry": geometry, "meshing": meshing})
         }
-        MeshSource::File(p) => serde_json::json!({"file": file_digest(p)?, "unit": scene.liner.mesh_unit, "sets": scene.liner.box_sets}),
+        MeshSource::File(p) => {
+            serde_json::json!({"file": file_digest(p)?, "unit": scene.liner.mesh_unit, "sets": scene.liner.box_sets})
+        }
     };
     let cc_src = match &cc.source {
         CrankcaseSource::Parametric { geometry, meshing } => {
             serde_json::json!({"geometry": geometry, "meshing": meshing})
         }
-        CrankcaseSource::File(p) => serde_json::json!({"file": file_digest(p)?, "unit": cc.mesh_unit, "sets": cc.box_sets}),
+        CrankcaseSource::File(p) => {
+            serde_json::json!({"file": file_digest(p)?, "unit": cc.mesh_unit, "sets": cc.box_sets})
+        }
     };
     let mut d = serde_json::json!({
         "format": ROM_FORMAT,

@@ -1164,12 +1164,10 @@ fn validate_crankcase(
         material: match &cc.material {
             Some(name) => Some(material("crankcase.material", name)?),
             None if file => None,
-            None => {
-                return Err(c.err(
-                    "crankcase.material",
-                    "missing: the parametric crankcase needs a material (name an entry of [materials])",
-                ))
-            }
+            None => return Err(c.err(
+                "crankcase.material",
+                "missing: the parametric crankcase needs a material (name an entry of [materials])",
+            )),
         },
         mesh_unit: mesh_unit(c, "crankcase.mesh_unit", &cc.mesh_unit, file)?,
         box_sets: box_sets(c, "crankcase.sets", &cc.sets)?,
@@ -1212,7 +1210,10 @@ fn mesh_unit(
     let unit = spec::MeshUnit::parse(u)
         .ok_or_else(|| c.err(key, format!("expected \"m\" or \"mm\", got \"{u}\"")))?;
     if !file {
-        return Err(c.err(key, "applies to a mesh_file only (the parametric mesh is built in SI)"));
+        return Err(c.err(
+            key,
+            "applies to a mesh_file only (the parametric mesh is built in SI)",
+        ));
     }
     Ok(unit)
 }
