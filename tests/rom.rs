@@ -75,8 +75,9 @@ fn rom_against_full(sc: &Scene) {
 #[test]
 fn verification_reused_liner_reduction_equals_reducing_a_placed_copy() {
     let sc = scene(&[]);
-    let (lm, cm) = load_meshes(&sc).unwrap();
-    let inp = rom_inputs(&sc, &lm, &cm, false);
+    let em = load_meshes(&sc).unwrap();
+    let lm = em.liner.clone();
+    let inp = rom_inputs(&sc, &em, false);
     let settings = CbSettings {
         cutoff_hz: inp.cutoff_hz,
         keep_basis: false,
@@ -456,7 +457,8 @@ fn contract_guide_depth_moves_the_guide_band_on_both_parts() {
         let g = sc.liner_geometry.clone();
         assert!((g.guide_bottom - bottom).abs() < 1e-12);
         let top = bottom + g.guide_height;
-        let (lm, cm) = load_meshes(&sc).unwrap();
+        let em = load_meshes(&sc).unwrap();
+        let (lm, cm) = (&em.liner, &em.crankcase);
         let tol = 1e-9;
         let guide = &lm.node_sets["lower_guide"];
         assert!(!guide.is_empty());

@@ -214,7 +214,7 @@ fn check_bore(path: &Path, s: &LinerShape, frame: &EngineFrame<'_>) -> Result<()
     if (ratio - 1.0).abs() <= 0.01 {
         return Ok(());
     }
-    let hint = if ratio > 100.0 || ratio < 0.01 {
+    let hint = if !(0.01..=100.0).contains(&ratio) {
         format!("; set {} to the deck's unit", frame.liner_unit_key)
     } else {
         String::new()
