@@ -24,7 +24,10 @@ fn bench(c: &mut Criterion) {
         unreachable!()
     };
     let mesh = generate(geometry, meshing);
-    let mat = scene.liner.material.expect("the default liner names its material");
+    let mat = scene
+        .liner
+        .material
+        .expect("the default liner names its material");
     let dofs = DofMap::free(mesh.nodes.len());
     let mut g = c.benchmark_group("liner_32x2_hex20");
     g.sample_size(10);

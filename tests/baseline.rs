@@ -465,7 +465,8 @@ fn validation_leaving_out_the_coolant_costs_a_few_percent() {
     let wet_scene = Scene::load(Path::new(SCENE), &sets).unwrap();
     let mu = wet_scene.cavitation.layer_mass_per_area.unwrap();
     let g = &wet_scene.liner_geometry;
-    let wall = wet_scene.liner.material.unwrap().density * (g.outer_diameter - g.inner_diameter) / 2.0;
+    let wall =
+        wet_scene.liner.material.unwrap().density * (g.outer_diameter - g.inner_diameter) / 2.0;
     let ratio = mu / wall;
     let wet_rom = get_rom(&wet_scene, &CacheOptions::default(), &|_| {})
         .unwrap()

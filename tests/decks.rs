@@ -300,3 +300,85 @@ fn verification_modes_of_an_mm_deck_with_its_own_material() {
     // refused on reading: the message is the size check's, not a failed certification
     assert!(err.contains("across read in m"), "{err}");
 }
+
+/// The first `n` frequencies [Hz] of a cantilevered box mesh.
+fn cantilever_frequencies(
+    mesh: Mesh,
+    fallback: &linercav::fem::material::Elastic,
+    n: usize,
+) -> Vec<f64> {
+    let mut model =
+        linercav::fem::model::FeModel::build(mesh, fallback, &["x0".to_string()]).unwrap();
+    let sol = model
+        .modes(n, -(2.0 * std::f64::consts::PI * 10.0).powi(2), 4)
+        .unwrap();
+    (0..n).map(|j| sol.modes.frequency_hz(j)).collect()
+}
+
+/// Verification: deck materials are assembled per element. A cantilevered box whose two halves
+/// carry materials A and A gives the modes of the box with A (to roundoff: the same matrices);
+/// B = A with E four times larger gives every frequency exactly twice as high (f ~ sqrt(E/rho)
+/// for a body of one material); halves A and B lie strictly between the two.
+#[test]
+fn verification_deck_materials_are_assembled_per_element() {
+    use linercav::fem::material::Elastic;
+    use linercav::mesh::{DeckMaterial, NO_MATERIAL};
+    let a = Elastic {
+        young: 110e9,
+        poisson: 0.28,
+        density: 7200.0,
+    };
+    let b = Elastic {
+        young: 4.0 * 110e9,
+        ..a
+    };
+    let base = common::box_mesh(
+        linercav::fem::shape::ElementKind::Hex8,
+        [8, 2, 2],
+        [0.4, 0.05, 0.05],
+        0.0,
+    );
+    let with = |first: Elastic, second: Elastic| {
+        let mut m = base.clone();
+        m.materials = vec![
+            DeckMaterial {
+                name: "first".into(),
+                elastic: first,
+            },
+            DeckMaterial {
+                name: "second".into(),
+                elastic: second,
+            },
+        ];
+        let ne = m.num_elements();
+        m.element_material = vec![NO_MATERIAL; ne];
+        for (e, (_, nodes)) in base.elements().enumerate() {
+            let x: f64 = nodes.iter().map(|&k| base.nodes[k][0]).sum::<f64>() / nodes.len() as f64;
+            m.element_material[e] = if x < 0.2 { 0 } else { 1 };
+        }
+        m
+    };
+    let plain = cantilever_frequencies(base.clone(), &a, 6);
+    let aa = cantilever_frequencies(with(a, a), &b, 6);
+    let bb = cantilever_frequencies(with(b, b), &a, 6);
+    let ab = cantilever_frequencies(with(a, b), &a, 6);
+    for k in 0..6 {
+        assert!(
+            (aa[k] - plain[k]).abs() <= 1e-10 * plain[k],
+            "mode {k}: {} vs {}",
+            aa[k],
+            plain[k]
+        );
+        assert!(
+            (bb[k] - 2.0 * plain[k]).abs() <= 1e-10 * plain[k],
+            "mode {k}: {} vs 2 x {}",
+            bb[k],
+            plain[k]
+        );
+        assert!(
+            ab[k] > plain[k] * (1.0 + 1e-6) && ab[k] < bb[k] * (1.0 - 1e-6),
+            "mode {k}: {}",
+            ab[k]
+        );
+    }
+}
