@@ -313,8 +313,10 @@ fn contract_bad_input_is_refused_cleanly() {
     refused(&a, "crankshaft", None);
 }
 
-/// A scene that models the coolant layer on an imported liner needs the wet surface as a
-/// physical group: without it, exit 2 before any build, naming the key, the set and the file.
+/// A scene that models the coolant layer on an imported liner needs the wet surface: without
+/// the physical group it is found from the geometry (issue 36); a group of that name that
+/// covers no element face is refused (exit 2) before any build, naming the key, the set and
+/// the file.
 #[test]
 fn contract_coolant_layer_on_an_imported_liner_needs_its_wet_surface() {
     let dir = tempfile::tempdir().unwrap();
@@ -325,23 +327,41 @@ fn contract_coolant_layer_on_an_imported_liner_needs_its_wet_surface() {
     assert!(linercav(&args).status.success());
     let text = std::fs::read_to_string(&msh).unwrap();
     assert!(text.contains("\"coolant_wetted\""), "exported with the set");
+    let cache = format!("{}", dir.path().join("cache").display());
+    let rom = |file: &Path| {
+        let set_file = format!("liner.mesh_file={}", file.display());
+        let mut a: Vec<String> = vec!["rom".into()];
+        a.extend(small_scene_args().iter().map(|s| s.to_string()));
+        a.extend([
+            "--set".into(),
+            set_file,
+            "--set".into(),
+            "cavitation.coolant_mass=layer".into(),
+        ]);
+        a.extend(["--cache-dir".into(), cache.clone(), "--json".into()]);
+        a
+    };
+    // without the group, the wet surface is found from the geometry (issue 36)
     let dry = dir.path().join("dry.msh");
     std::fs::write(&dry, text.replace("\"coolant_wetted\"", "\"outer\"")).unwrap();
-    let set_file = format!("liner.mesh_file={}", dry.display());
-    let cache = format!("{}", dir.path().join("cache").display());
-    let mut a = vec!["rom"];
-    a.extend(small_scene_args());
-    a.extend([
-        "--set",
-        &set_file,
-        "--set",
-        "cavitation.coolant_mass=layer",
-        "--cache-dir",
-        &cache,
-    ]);
-    refused(&a, "coolant_wetted", None);
-    refused(&a, "dry.msh", None);
-    refused(&a, "cavitation.coolant_mass", None);
+    let a = rom(&dry);
+    let v = json(&linercav(&a.iter().map(|s| s.as_str()).collect::<Vec<_>>()));
+    let sets = v["interfaces"]["sets"].as_array().unwrap();
+    assert!(sets
+        .iter()
+        .any(|s| s["name"] == "coolant_wetted" && s["source"] == "geometry"));
+    // a group of that name in the file wins, and one that covers no element face is refused
+    let bad = dir.path().join("bad.msh");
+    let t = text
+        .replace("\"coolant_wetted\"", "\"outer\"")
+        .replace("\"point_1\"", "\"coolant_wetted\"");
+    std::fs::write(&bad, t).unwrap();
+    let a = rom(&bad);
+    let a: Vec<&str> = a.iter().map(|s| s.as_str()).collect();
+    let a = &a[..a.len() - 1];
+    refused(a, "coolant_wetted", None);
+    refused(a, "bad.msh", None);
+    refused(a, "cavitation.coolant_mass", None);
 }
 
 /// Regression (issue 23): fewer modes asked than a free body's six rigid-body modes used to be

@@ -382,3 +382,21 @@ fn verification_deck_materials_are_assembled_per_element() {
         );
     }
 }
+
+/// Regression (issue 40): an empty `mesh_file` was read as the scene's directory ("cannot read
+/// mesh file small/"); it is refused naming the key.
+#[test]
+fn regression_empty_mesh_file_is_refused_by_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(SMALL)
+        .unwrap()
+        .replace("[liner]\n", "[liner]\nmesh_file = \"\"\n");
+    let p = dir.path().join("engine.toml");
+    std::fs::write(&p, text).unwrap();
+    let (code, _, err) = linercav(&["rom", &p.display().to_string(), "--no-cache"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("liner.mesh_file") && err.contains("is empty"),
+        "{err}"
+    );
+}

@@ -395,7 +395,7 @@ fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
     let base = path.parent().unwrap_or(Path::new("."));
     let liner_geometry = geometry.clone();
     let source = match &l.mesh_file {
-        Some(f) => MeshSource::File(base.join(f)),
+        Some(f) => MeshSource::File(base.join(mesh_file(&c, "liner.mesh_file", f)?)),
         None => MeshSource::Liner { geometry, meshing },
     };
     let liner = Part {
@@ -1155,7 +1155,7 @@ fn validate_crankcase(
         axial_size: c.mm("crankcase.mesh.axial_size_mm", m.axial_size_mm)?,
     };
     let source = match &cc.mesh_file {
-        Some(f) => CrankcaseSource::File(base.join(f)),
+        Some(f) => CrankcaseSource::File(base.join(mesh_file(c, "crankcase.mesh_file", f)?)),
         None => CrankcaseSource::Parametric { geometry, meshing },
     };
     let clamp_force = c.positive("crankcase.flange_clamp_kn", cc.flange_clamp_kn)? * 1e3;
@@ -1237,4 +1237,16 @@ fn box_sets(
         out.push((name.clone(), v.map(|x| x * 1e-3)));
     }
     Ok(out)
+}
+
+/// A mesh file name: not blank (an empty one joined the scene's directory: "cannot read mesh
+/// file small/").
+fn mesh_file<'f>(c: &Checker<'_>, key: &str, f: &'f str) -> Result<&'f str, SceneError> {
+    if f.trim().is_empty() {
+        return Err(c.err(
+            key,
+            "is empty: give the mesh file's path (relative to the scene file), or leave the key out for the parametric mesh",
+        ));
+    }
+    Ok(f)
 }
