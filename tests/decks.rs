@@ -69,7 +69,6 @@ fn verification_found_sets_equal_the_generators() {
         depths: &depths,
         bore,
         liner_unit_key: "liner.mesh_unit",
-        crankcase_unit_key: "crankcase.mesh_unit",
     };
     let found = complete_engine(
         &mut lm,

@@ -26,7 +26,6 @@
 //! below a coolant gap and a wall, well above the roundoff of a deck's coordinates.
 
 use super::Mesh;
-use std::collections::BTreeMap;
 
 /// Why an interface or point could not be found.
 #[derive(Debug, thiserror::Error)]
@@ -661,12 +660,4 @@ pub fn named_guide_band(cm: &Mesh) -> Option<[f64; 2]> {
     let lo = z.clone().fold(f64::INFINITY, f64::min);
     let hi = z.fold(f64::NEG_INFINITY, f64::max);
     (lo.is_finite() && hi >= lo).then_some([lo, hi])
-}
-
-/// Node counts of a mesh's sets (for messages).
-pub fn set_counts(mesh: &Mesh) -> BTreeMap<String, usize> {
-    mesh.node_sets
-        .iter()
-        .map(|(k, v)| (k.clone(), v.len()))
-        .collect()
 }

@@ -110,8 +110,7 @@ pub fn resolve_material(
     }
     if let Some(e) = mesh.element_without_material() {
         return Err(bad(format!(
-            "element {} (the {}th of the file's solids in kind order) has no material: assign it a section/property, or give a material",
-            e + 1,
+            "solid element number {} (counted in kind order) has no material: assign it a section/property, or give a material",
             e + 1
         )));
     }
@@ -130,9 +129,8 @@ pub struct EngineFrame<'a> {
     pub depths: &'a [f64],
     /// The scene's bore [m] (the found bore must match it).
     pub bore: f64,
-    /// Keys naming the units of the two meshes (for messages).
+    /// Key naming the liner mesh's unit (for messages).
     pub liner_unit_key: &'a str,
-    pub crankcase_unit_key: &'a str,
 }
 
 /// Puts an engine's meshes into their frames and completes their sets (module docs of

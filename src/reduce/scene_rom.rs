@@ -167,13 +167,14 @@ fn part_mesh(
     unit: MeshUnit,
     part: &str,
     given: Option<Elastic>,
+    scene_path: &Path,
 ) -> Result<(Mesh, Elastic, String)> {
     let key = format!("{part}.material");
     let Some(p) = file else {
         let m = given.ok_or_else(|| SceneError::Field {
-            path: p_or_scene(),
+            path: scene_path.to_path_buf(),
             key: key.clone(),
-            msg: "missing".into(),
+            msg: "missing: the parametric mesh needs a material".into(),
         })?;
         return Ok((generated(), m, format!("{part}: scene")));
     };
@@ -191,10 +192,6 @@ fn part_mesh(
         ),
     };
     Ok((mesh, m, note))
-}
-
-fn p_or_scene() -> PathBuf {
-    PathBuf::from("scene")
 }
 
 /// Loads and checks the liner and crankcase meshes of a scene: files read in their units,
@@ -219,6 +216,7 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
         scene.liner.mesh_unit,
         "liner",
         scene.liner.material,
+        &scene.path,
     )?;
     let (mut cm, crankcase_material, cnote) = part_mesh(
         || match &cc.source {
@@ -231,6 +229,7 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
         cc.mesh_unit,
         "crankcase",
         cc.material,
+        &scene.path,
     )?;
     let mut boxes = Vec::new();
     for (name, b) in &cc.box_sets {
@@ -245,7 +244,6 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
             depths,
             bore: scene.engine.bore,
             liner_unit_key: "liner.mesh_unit",
-            crankcase_unit_key: "crankcase.mesh_unit",
         };
         Some(import::complete_engine(
             &mut lm,
