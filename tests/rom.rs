@@ -49,7 +49,7 @@ fn verification_default_engine_rom_matches_full_coupled_model() {
 }
 
 fn rom_against_full(sc: &Scene) {
-    let (b, _, _) = build_rom(sc, true, &|_| {}).unwrap();
+    let (b, _, _) = build_rom(sc, true, None, &|_| {}).unwrap();
     let half = sc.rom.cutoff_hz / 2.0;
     let n = b.rom.frequencies_hz.iter().filter(|&&f| f < half).count();
     assert!(n >= 10, "only {n} modes below half the cut-off");

@@ -35,6 +35,7 @@ pub fn build_rom(scene: &Scene, keep_bases: bool) -> Result<(RomBuild, Mesh, Mes
     Ok(crate::reduce::scene_rom::build_rom(
         scene,
         keep_bases,
+        None,
         &|m| bar.phase(m),
     )?)
 }
@@ -111,8 +112,12 @@ impl RomReport {
             let st = &p.stats;
             let _ = writeln!(
                 s,
-                "  {:<10} x{}  {} DOFs -> {} interface + {} modes (<= {:.0} Hz) + {} attachment, {:.1} s",
-                p.name, p.copies, st.full_dofs, st.constraint_modes, st.normal_modes, st.highest_mode_hz, st.attachment_modes, st.seconds
+                "  {:<10} x{}  {} DOFs -> {} interface + {} modes (<= {:.0} Hz) + {} attachment, {}",
+                p.name, p.copies, st.full_dofs, st.constraint_modes, st.normal_modes, st.highest_mode_hz, st.attachment_modes,
+                match p.source {
+                    crate::reduce::part_cache::Source::Reduced => format!("{:.1} s", st.seconds),
+                    crate::reduce::part_cache::Source::Cached => "from the component cache".to_string(),
+                }
             );
         }
         let _ = writeln!(

@@ -167,6 +167,20 @@ impl Llt<'_> {
         );
     }
 
+    /// Solves A X = B in place on the calling thread (callers that solve several blocks in
+    /// parallel themselves).
+    pub fn solve_block_serial(&self, rhs: MatMut<'_, f64>) {
+        let k = rhs.ncols();
+        let sym = &self.analysis.symbolic;
+        let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<f64>(k, Par::Seq));
+        LltRef::new(sym, &self.l).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            Par::Seq,
+            MemStack::new(&mut mem),
+        );
+    }
+
     /// Solves A x = b in place for one vector.
     pub fn solve_vec(&self, x: &mut [f64]) {
         let n = x.len();

@@ -1,23 +1,37 @@
-//! On-disk cache of engine ROMs.
+//! On-disk cache of engine ROMs and of the parts' reductions they are assembled from
+//! ([`super::part_cache`]).
 //!
 //! File `rom-<key>.bin` in the cache directory, `key` the BLAKE3 hash of the canonical JSON of
-//! everything the reduction depends on (its description is made by the `rom` command). Layout: magic `LCAVROM\0`,
+//! everything the reduction depends on (its description is made by the `rom` command). Layout:
+//! magic (`LCAVROM\0` for a ROM, `LCAVPRT\0` for a part),
 //! format version (u32 LE), payload length (u64 LE), BLAKE3 hash of the payload (32 bytes),
-//! payload (bincode of the key description and the [`EngineRom`]). A file is trusted only when
+//! payload (bincode of the key description and the entry). A file is trusted only when
 //! it is a regular file whose magic, version, length and hash match, whose stored key
-//! description is the one asked for, and whose ROM passes [`EngineRom::validate`]; otherwise it
+//! description is the one asked for, and whose entry passes its `validate` ([`EngineRom::validate`] for a ROM); otherwise it
 //! is reported and rebuilt. Files are written to a temporary name and renamed.
 
 use super::rom::{EngineRom, ROM_FORMAT};
 use crate::files::{read_regular, write_atomic, ReadError, WriteError};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8; 8] = b"LCAVROM\0";
 const HEADER: usize = 8 + 4 + 8 + 32;
 
+/// What a cache file can hold: its magic and its own consistency check.
+pub trait Entry: serde::Serialize + serde::de::DeserializeOwned {
+    const MAGIC: &'static [u8; 8];
+    fn validate(&self) -> Result<(), String>;
+}
+
+impl Entry for EngineRom {
+    const MAGIC: &'static [u8; 8] = b"LCAVROM\0";
+    fn validate(&self) -> Result<(), String> {
+        EngineRom::validate(self).map_err(|e| format!("inconsistent ROM: {e}"))
+    }
+}
+
 /// Outcome of a cache lookup.
-pub enum Lookup {
-    Hit(Box<EngineRom>),
+pub enum Lookup<T = EngineRom> {
+    Hit(Box<T>),
     Miss,
     /// A file was there but failed the integrity check (reason).
     Corrupt(String),
@@ -43,8 +57,8 @@ pub struct CacheReadError {
     pub source: ReadError,
 }
 
-/// Reads and verifies a cached ROM made from `description`.
-pub fn load(path: &Path, description: &str) -> Result<Lookup, CacheReadError> {
+/// Reads and verifies a cache entry made from `description`.
+pub fn load<T: Entry>(path: &Path, description: &str) -> Result<Lookup<T>, CacheReadError> {
     // the stored payload never exceeds what the machine can hold
     let limit = crate::machine::available_memory();
     let bytes = match read_regular(path, limit) {
@@ -75,12 +89,12 @@ pub fn load(path: &Path, description: &str) -> Result<Lookup, CacheReadError> {
     })
 }
 
-fn decode(bytes: &[u8], description: &str) -> Result<EngineRom, String> {
+fn decode<T: Entry>(bytes: &[u8], description: &str) -> Result<T, String> {
     if bytes.len() < HEADER {
         return Err(format!("truncated header ({} bytes)", bytes.len()));
     }
-    if &bytes[..8] != MAGIC {
-        return Err("not a linercav ROM file".into());
+    if &bytes[..8] != T::MAGIC {
+        return Err("not a linercav cache file of this kind".into());
     }
     let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
     if version != ROM_FORMAT {
@@ -98,7 +112,7 @@ fn decode(bytes: &[u8], description: &str) -> Result<EngineRom, String> {
         return Err("checksum mismatch (corrupt file)".into());
     }
     // bincode's length prefixes are bounded by the payload it reads from
-    let (stored, rom): (String, EngineRom) = bincode::options()
+    let (stored, entry): (String, T) = bincode::options()
         .with_fixint_encoding()
         .with_limit(len)
         .deserialize(payload)
@@ -106,9 +120,8 @@ fn decode(bytes: &[u8], description: &str) -> Result<EngineRom, String> {
     if stored != description {
         return Err("made from other inputs than its name says (a copied or forged file)".into());
     }
-    rom.validate()
-        .map_err(|e| format!("inconsistent ROM: {e}"))?;
-    Ok(rom)
+    entry.validate()?;
+    Ok(entry)
 }
 
 use bincode::Options;
@@ -191,17 +204,17 @@ fn flock(file: &std::fs::File, op: libc::c_int) -> std::io::Result<()> {
     }
 }
 
-/// Writes a ROM made from `description` atomically.
-pub fn store(path: &Path, description: &str, rom: &EngineRom) -> Result<(), WriteError> {
+/// Writes a cache entry made from `description` atomically.
+pub fn store<T: Entry>(path: &Path, description: &str, entry: &T) -> Result<(), WriteError> {
     if let Some(dir) = path.parent() {
         crate::files::check_writable(dir)?;
     }
     let payload = bincode::options()
         .with_fixint_encoding()
-        .serialize(&(description, rom))
-        .expect("ROM serialises");
+        .serialize(&(description, entry))
+        .expect("cache entries serialise");
     write_atomic(path, |w| {
-        w.write_all(MAGIC)?;
+        w.write_all(T::MAGIC)?;
         w.write_all(&ROM_FORMAT.to_le_bytes())?;
         w.write_all(&(payload.len() as u64).to_le_bytes())?;
         w.write_all(blake3::hash(&payload).as_bytes())?;

@@ -20,9 +20,11 @@ use crate::fem::dofs::{DofMap, FIXED};
 use crate::fem::material::Elastic;
 use crate::fem::model::{FeModel, ModelError};
 use crate::fem::surface::SurfaceMass;
+use crate::linalg::sparse::Pattern;
 use crate::mesh::Mesh;
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
+use rayon::prelude::*;
 use std::ops::Range;
 use std::time::Instant;
 
@@ -126,18 +128,6 @@ pub struct CbSettings {
     pub keep_basis: bool,
 }
 
-fn columns_solve(llt: &crate::linalg::factor::Llt<'_>, mut rhs: Mat<f64>) -> Mat<f64> {
-    let n = rhs.ncols();
-    let chunk = 64;
-    let mut c0 = 0;
-    while c0 < n {
-        let c1 = (c0 + chunk).min(n);
-        llt.solve_in_place(rhs.as_mut().subcols_mut(c0, c1 - c0));
-        c0 = c1;
-    }
-    rhs
-}
-
 /// One part to reduce.
 #[derive(Clone, Copy)]
 pub struct Part<'a> {
@@ -183,10 +173,6 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
     let (lambdas, modes_b) = fixed_interface_modes(p, &inner, &llt, settings.cutoff_hz, &tick)?;
     tick("modes");
     let b_to_a = interior_to_full(&full, &inner);
-    let (phi_c, interface_cols) = constraint_modes(p, &full, &llt, &b_to_a);
-    let nc = phi_c.ncols();
-    tick(&format!("{nc} constraint modes"));
-    let f_a = load_matrix(&full, p.loads);
     let interior = Interior {
         full: &full,
         llt: &llt,
@@ -194,23 +180,30 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
         lambdas: &lambdas,
         modes: &modes_b,
     };
-    let att = attachment_modes(part, &interior, &f_a, &phi_c, &tick)?;
-    drop(llt);
+    let (nc, nl) = (
+        p.interfaces.iter().map(|b| b.psi.ncols()).sum::<usize>(),
+        p.loads.len(),
+    );
     let nm = lambdas.len();
-    let na_cols = att.ncols();
-    // assemble the basis in full numbering
-    let nr = nc + nm + na_cols;
-    let mut phi = Mat::<f64>::zeros(na, nr);
-    phi.as_mut().subcols_mut(0, nc).copy_from(&phi_c);
-    drop(phi_c);
+    // one dense block holds the basis as it is built: [Phi_c | Phi_n | U], U the attachment
+    // candidates, later replaced in place by the kept, M-orthonormal Phi_a
+    let mut phi = Mat::<f64>::zeros(na, nc + nm + nl + nc);
+    let interface_cols = constraint_modes(p, &interior, phi.as_mut().subcols_mut(0, nc));
+    tick(&format!("{nc} constraint modes"));
     for j in 0..nm {
         for bi in 0..nb {
             phi[(b_to_a[bi], nc + j)] = modes_b[(bi, j)];
         }
     }
-    phi.as_mut().subcols_mut(nc + nm, na_cols).copy_from(&att);
-    drop(att);
-    let (k, m) = project(&full, &phi, &tick);
+    let f_a = load_matrix(&full, p.loads);
+    let (known, candidates) = phi.as_mut().split_at_col_mut(nc + nm);
+    attachment_candidates(&interior, &f_a, known.as_ref().subcols(0, nc), candidates);
+    tick(&format!("{} attachment candidates", nl + nc));
+    drop(llt);
+    let na_cols = orthonormalise_attachments(part, &full, &mut phi, nc + nm)?;
+    let nr = nc + nm + na_cols;
+    let k = lower_gram(&full.km.pattern, &full.km.k, phi.as_ref());
+    let m = lower_gram(&full.km.pattern, &full.km.m, phi.as_ref());
     tick(&format!("projected onto {nr} coordinates"));
     log_conditioning(part, &k, &m);
     let loads_r = phi.transpose() * &f_a;
@@ -358,18 +351,20 @@ fn interior_to_full(full: &FeModel, inner: &FeModel) -> Vec<usize> {
     b_to_a
 }
 
-/// Constraint modes (full DOFs x interface shapes): the boundary displaced by one interface
-/// shape psi, the interior in static equilibrium u_i = -K_ii^-1 K_ib psi; and each
+/// Columns per block of right-hand sides: a 64-column block solve costs about a tenth per
+/// column of a single-vector solve (the factor is read once per block).
+const PANEL: usize = 64;
+
+/// Constraint modes written into `phi_c` (full DOFs x interface shapes, zero on entry): the
+/// boundary displaced by one interface shape psi, the interior in static equilibrium
+/// u_i = -K_ii^-1 K_ib psi, solved in blocks of [`PANEL`] columns on both cores. Returns each
 /// interface's columns.
 fn constraint_modes(
     p: &Part<'_>,
-    full: &FeModel,
-    llt: &crate::linalg::factor::Llt<'_>,
-    b_to_a: &[usize],
-) -> (Mat<f64>, Vec<Range<usize>>) {
-    let (na, nb) = (full.n_free(), b_to_a.len());
-    let nc: usize = p.interfaces.iter().map(|b| b.psi.ncols()).sum();
-    let mut g = Mat::<f64>::zeros(na, nc);
+    interior: &Interior<'_>,
+    mut phi_c: MatMut<'_, f64>,
+) -> Vec<Range<usize>> {
+    let full = interior.full;
     let mut interface_cols = Vec::new();
     let mut col = 0;
     for b in p.interfaces {
@@ -379,7 +374,7 @@ fn constraint_modes(
                 for i in 0..3 {
                     let d = full.dofs.dof[3 * node + i];
                     if d != FIXED {
-                        g[(d, col + j)] = b.psi[(3 * a + i, j)];
+                        phi_c[(d, col + j)] = b.psi[(3 * a + i, j)];
                     }
                 }
             }
@@ -387,21 +382,16 @@ fn constraint_modes(
         interface_cols.push(col..col + b.psi.ncols());
         col += b.psi.ncols();
     }
-    let kg = sparse_times(full, false, &g);
-    let mut rhs = Mat::<f64>::zeros(nb, nc);
-    for j in 0..nc {
-        for bi in 0..nb {
-            rhs[(bi, j)] = -kg[(b_to_a[bi], j)];
+    phi_c.par_col_chunks_mut(PANEL).for_each(|mut panel| {
+        let kg = sparse_times(&full.km.pattern, &full.km.k, panel.as_ref());
+        let mut rhs = interior.gather(kg.as_ref());
+        for v in rhs.col_iter_mut().flat_map(|c| c.iter_mut()) {
+            *v = -*v;
         }
-    }
-    let sol = columns_solve(llt, rhs);
-    let mut phi_c = g;
-    for j in 0..nc {
-        for bi in 0..nb {
-            phi_c[(b_to_a[bi], j)] = sol[(bi, j)];
-        }
-    }
-    (phi_c, interface_cols)
+        interior.llt.solve_block_serial(rhs.as_mut());
+        interior.scatter(rhs.as_ref(), panel.as_mut());
+    });
+    interface_cols
 }
 
 /// The attachment loads as columns over the full model's DOFs (full DOFs x loads).
@@ -420,7 +410,7 @@ fn load_matrix(full: &FeModel, loads: &[Load]) -> Mat<f64> {
     f_a
 }
 
-/// The interior problem the attachment modes are solved on.
+/// The interior problem the constraint and attachment modes are solved on.
 struct Interior<'a> {
     full: &'a FeModel,
     llt: &'a crate::linalg::factor::Llt<'a>,
@@ -430,76 +420,98 @@ struct Interior<'a> {
     modes: &'a Mat<f64>,
 }
 
-/// Residual attachment modes, M-orthonormalised (full DOFs x kept columns): for each load
-/// column f (the attachment loads `f_a`, then the inertia loads M Phi_c of the constraint
-/// modes, the modal-truncation augmentation) u = K_ii^-1 f - Phi_n Lambda^-1 Phi_n^T f; the
-/// block is M-orthonormalised through the eigen-decomposition of its Gram matrix U^T M U,
-/// dropping directions below 1e-10 of the largest (dependent load shapes). The MTA columns
-/// carry the quasi-static inertia of the interface motion that the truncated fixed-interface
-/// modes miss, lifting CB accuracy from O((f/f_c)^2) towards O((f/f_c)^4).
-fn attachment_modes(
-    part: &str,
-    interior: &Interior<'_>,
-    f_a: &Mat<f64>,
-    phi_c: &Mat<f64>,
-    tick: &dyn Fn(&str),
-) -> Result<Mat<f64>, ReduceError> {
-    let Interior {
-        full,
-        llt,
-        b_to_a,
-        lambdas,
-        modes: modes_b,
-    } = *interior;
-    let (na, nb) = (full.n_free(), b_to_a.len());
-    let (nl, nc) = (f_a.ncols(), phi_c.ncols());
-    let m_phi_c = sparse_times(full, true, phi_c);
-    let nlt = nl + nc;
-    let mut att = Mat::<f64>::zeros(nb, nlt);
-    for j in 0..nl {
-        for bi in 0..nb {
-            att[(bi, j)] = f_a[(b_to_a[bi], j)];
-        }
+impl Interior<'_> {
+    /// The interior rows of a block over the full model's DOFs.
+    fn gather(&self, x: MatRef<'_, f64>) -> Mat<f64> {
+        Mat::from_fn(self.b_to_a.len(), x.ncols(), |bi, j| {
+            x[(self.b_to_a[bi], j)]
+        })
     }
-    for j in 0..nc {
-        for bi in 0..nb {
-            att[(bi, nl + j)] = m_phi_c[(b_to_a[bi], j)];
-        }
-    }
-    drop(m_phi_c);
-    let nl = nlt;
-    let f_b = att.clone();
-    let mut att = columns_solve(llt, att);
-    let nm = lambdas.len();
-    if nm > 0 && nl > 0 {
-        // u -= Phi_n Lambda^-1 Phi_n^T f
-        let mut pf = modes_b.transpose() * &f_b;
-        for r in 0..nm {
-            for j in 0..nl {
-                pf[(r, j)] /= lambdas[r];
+    /// Writes interior rows into a block over the full model's DOFs.
+    fn scatter(&self, x: MatRef<'_, f64>, mut y: MatMut<'_, f64>) {
+        for j in 0..x.ncols() {
+            for (bi, &a) in self.b_to_a.iter().enumerate() {
+                y[(a, j)] = x[(bi, j)];
             }
         }
-        matmul(
-            att.as_mut(),
-            Accum::Add,
-            modes_b.as_ref(),
-            pf.as_ref(),
-            -1.0,
-            Par::rayon(0),
-        );
     }
-    tick(&format!("{nl} attachment modes"));
-    if nl == 0 {
-        return Ok(Mat::zeros(na, 0));
+}
+
+/// Residual attachment candidates written into `u` (full DOFs x (loads + constraint modes),
+/// zero on entry): for each load column f (the attachment loads `f_a`, then the inertia loads
+/// M Phi_c of the constraint modes, the modal-truncation augmentation)
+/// u = K_ii^-1 f - Phi_n Lambda^-1 Phi_n^T f on the interior, zero on the boundary; in blocks
+/// of [`PANEL`] columns on both cores. The MTA columns carry the quasi-static inertia of the
+/// interface motion that the truncated fixed-interface modes miss, lifting CB accuracy from
+/// O((f/f_c)^2) towards O((f/f_c)^4).
+fn attachment_candidates(
+    interior: &Interior<'_>,
+    f_a: &Mat<f64>,
+    phi_c: MatRef<'_, f64>,
+    u: MatMut<'_, f64>,
+) {
+    let full = interior.full;
+    let nl = f_a.ncols();
+    let (lambdas, modes_b) = (interior.lambdas, interior.modes);
+    u.par_col_chunks_mut(PANEL)
+        .enumerate()
+        .for_each(|(p, mut panel)| {
+            let (j0, w) = (p * PANEL, panel.ncols());
+            // the panel's loads over the full DOFs: columns of f_a, then M Phi_c
+            let mut f = Mat::<f64>::zeros(full.n_free(), w);
+            let n_loads = nl.saturating_sub(j0).min(w);
+            f.as_mut()
+                .subcols_mut(0, n_loads)
+                .copy_from(f_a.as_ref().subcols(j0.min(nl), n_loads));
+            if n_loads < w {
+                let c0 = j0 + n_loads - nl;
+                let mphi =
+                    sparse_times(&full.km.pattern, &full.km.m, phi_c.subcols(c0, w - n_loads));
+                f.as_mut()
+                    .subcols_mut(n_loads, w - n_loads)
+                    .copy_from(&mphi);
+            }
+            let f_b = interior.gather(f.as_ref());
+            drop(f);
+            let mut x = f_b.clone();
+            interior.llt.solve_block_serial(x.as_mut());
+            if !lambdas.is_empty() {
+                // u -= Phi_n Lambda^-1 Phi_n^T f
+                let mut pf = modes_b.transpose() * &f_b;
+                for (r, lam) in lambdas.iter().enumerate() {
+                    for j in 0..w {
+                        pf[(r, j)] /= lam;
+                    }
+                }
+                matmul(
+                    x.as_mut(),
+                    Accum::Add,
+                    modes_b.as_ref(),
+                    pf.as_ref(),
+                    -1.0,
+                    Par::Seq,
+                );
+            }
+            interior.scatter(x.as_ref(), panel.as_mut());
+        });
+}
+
+/// M-orthonormalises the attachment candidates U, the columns `a0..` of `phi`, in place:
+/// through the eigen-decomposition U^T M U = V S V^T of their Gram matrix, keeping the
+/// directions with s > 1e-10 max s (dependent load shapes dropped), Phi_a = U V_k S_k^-1/2,
+/// computed one row block at a time over U's first columns; `phi` is truncated to
+/// [.. | Phi_a]. Returns the number of kept columns.
+fn orthonormalise_attachments(
+    part: &str,
+    full: &FeModel,
+    phi: &mut Mat<f64>,
+    a0: usize,
+) -> Result<usize, ReduceError> {
+    let nu = phi.ncols() - a0;
+    if nu == 0 {
+        return Ok(0);
     }
-    let mut att_a = Mat::<f64>::zeros(na, nl);
-    for j in 0..nl {
-        for bi in 0..nb {
-            att_a[(b_to_a[bi], j)] = att[(bi, j)];
-        }
-    }
-    let m_att = sparse_times(full, true, &att_a);
-    let gram = att_a.transpose() * &m_att;
+    let gram = lower_gram(&full.km.pattern, &full.km.m, phi.as_ref().subcols(a0, nu));
     let evd = gram
         .self_adjoint_eigen(faer::Side::Lower)
         .map_err(|e| ReduceError::Other {
@@ -507,42 +519,61 @@ fn attachment_modes(
             msg: format!("attachment modes: eigen-decomposition failed: {e:?}"),
         })?;
     let s = evd.S().column_vector();
-    let smax = (0..nl).map(|i| s[i]).fold(0.0f64, f64::max);
-    let keep: Vec<usize> = (0..nl).filter(|&i| s[i] > 1e-10 * smax).collect();
-    let u = evd.U();
-    let tr = Mat::from_fn(nl, keep.len(), |r, c| u[(r, keep[c])] / s[keep[c]].sqrt());
-    Ok(&att_a * &tr)
+    let smax = (0..nu).map(|i| s[i]).fold(0.0f64, f64::max);
+    let keep: Vec<usize> = (0..nu).filter(|&i| s[i] > 1e-10 * smax).collect();
+    let v = evd.U();
+    let tr = Mat::from_fn(nu, keep.len(), |r, c| v[(r, keep[c])] / s[keep[c]].sqrt());
+    let nk = keep.len();
+    let rows = phi.nrows();
+    let mut u = phi.as_mut().subcols_mut(a0, nu);
+    let mut r0 = 0;
+    while r0 < rows {
+        let h = (rows - r0).min(4096);
+        let block = u.as_ref().subrows(r0, h) * &tr;
+        u.as_mut()
+            .subrows_mut(r0, h)
+            .subcols_mut(0, nk)
+            .copy_from(&block);
+        r0 += h;
+    }
+    phi.truncate(rows, a0 + nk);
+    Ok(nk)
 }
 
-/// K_r = Phi^T K Phi and M_r = Phi^T M Phi, symmetrised.
-fn project(full: &FeModel, phi: &Mat<f64>, tick: &dyn Fn(&str)) -> (Mat<f64>, Mat<f64>) {
-    let nr = phi.ncols();
-    let kphi = sparse_times(full, false, phi);
-    let mut k = Mat::<f64>::zeros(nr, nr);
-    matmul(
-        k.as_mut(),
-        Accum::Replace,
-        phi.transpose(),
-        kphi.as_ref(),
-        1.0,
-        Par::rayon(0),
-    );
-    drop(kphi);
-    tick("K_r");
-    let mphi = sparse_times(full, true, phi);
-    let mut m = Mat::<f64>::zeros(nr, nr);
-    matmul(
-        m.as_mut(),
-        Accum::Replace,
-        phi.transpose(),
-        mphi.as_ref(),
-        1.0,
-        Par::rayon(0),
-    );
-    drop(mphi);
-    symmetrise(&mut k);
-    symmetrise(&mut m);
-    (k, m)
+/// X^T A X for a symmetric sparse A and a dense block X, in blocks of [`PANEL`] columns on both
+/// cores: each block j gives Y_j = A X_j and the block column (X^T A X)_{i >= j, j} =
+/// X_{i >= j}^T Y_j (the lower triangle, half the products); the upper triangle is the
+/// mirror, the diagonal blocks averaged with their transposes.
+fn lower_gram(pattern: &Pattern, values: &[f64], x: MatRef<'_, f64>) -> Mat<f64> {
+    let nr = x.ncols();
+    let mut c = Mat::<f64>::zeros(nr, nr);
+    c.as_mut()
+        .par_col_chunks_mut(PANEL)
+        .enumerate()
+        .for_each(|(p, mut col)| {
+            let (j0, w) = (p * PANEL, col.ncols());
+            let y = sparse_times(pattern, values, x.subcols(j0, w));
+            matmul(
+                col.as_mut().subrows_mut(j0, nr - j0),
+                Accum::Replace,
+                x.subcols(j0, nr - j0).transpose(),
+                y.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+        });
+    for j in 0..nr {
+        for i in j + 1..nr {
+            let v = if i / PANEL == j / PANEL {
+                0.5 * (c[(i, j)] + c[(j, i)])
+            } else {
+                c[(i, j)]
+            };
+            c[(i, j)] = v;
+            c[(j, i)] = v;
+        }
+    }
+    c
 }
 
 /// With info logging: the extreme eigenvalues of K_r and M_r scaled by M_r's diagonal (a
@@ -589,11 +620,10 @@ fn output_rows(full: &FeModel, outputs: &[Output], phi: &Mat<f64>) -> Mat<f64> {
     out
 }
 
-/// K X or M X for the full model's sparse matrix and a dense block X.
-fn sparse_times(model: &FeModel, mass: bool, x: &Mat<f64>) -> Mat<f64> {
-    let vals = if mass { &model.km.m } else { &model.km.k };
+/// A X for a symmetric sparse A and a dense block X.
+fn sparse_times(pattern: &Pattern, values: &[f64], x: MatRef<'_, f64>) -> Mat<f64> {
     let mut y = Mat::<f64>::zeros(x.nrows(), x.ncols());
-    model.km.pattern.mul_dense(vals, x.as_ref(), y.as_mut());
+    pattern.mul_dense(values, x, y.as_mut());
     y
 }
 

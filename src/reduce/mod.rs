@@ -6,5 +6,6 @@ pub mod craig_bampton;
 pub mod engine;
 pub mod full;
 pub mod interface;
+pub mod part_cache;
 pub mod rom;
 pub mod scene_rom;

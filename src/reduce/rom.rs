@@ -3,12 +3,13 @@
 //! correction and preload.
 
 use super::craig_bampton::{
-    reduce, CbSettings, CbStats, InterfaceBlock, Load, Output, Part, PartReduction,
+    CbSettings, CbStats, InterfaceBlock, Load, Output, Part, PartReduction,
 };
 use super::engine::{
     self, assemble, hz, residual_flexibility, static_solve, Dense, Placement, SystemModes,
 };
 use super::interface::{self, Direction, InterfaceShape};
+use super::part_cache::{reduce_cached, PartCacheError, Source};
 use crate::fem::material::Elastic;
 use crate::fem::surface::SurfaceMass;
 use crate::mesh::Mesh;
@@ -16,7 +17,7 @@ use faer::Mat;
 use std::time::Instant;
 
 /// Version of the ROM layout; part of the cache key (5: matrices stored as ndarray arrays).
-pub const ROM_FORMAT: u32 = 6;
+pub const ROM_FORMAT: u32 = 7;
 
 /// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
 /// system modes along the stated direction.
@@ -55,6 +56,8 @@ pub struct PartInfo {
     pub stats: CbStats,
     /// How many copies of this reduction the engine uses.
     pub copies: usize,
+    /// Reduced in the build, or read from the component cache.
+    pub source: Source,
 }
 
 /// What the ROM holds and how it was made.
@@ -207,6 +210,9 @@ pub struct RomInputs<'a> {
     pub residual_vector_spacing: usize,
     /// Keep full bases for recovery (mode shapes on the meshes).
     pub keep_bases: bool,
+    /// The component cache directory: each part's reduction read from it or stored in it
+    /// ([`super::part_cache`]; not with `keep_bases`).
+    pub part_cache: Option<std::path::PathBuf>,
 }
 
 /// Failures of the ROM build, naming part and set.
@@ -222,6 +228,19 @@ pub enum RomError {
     },
     #[error("engine assembly: {0}")]
     System(#[from] engine::SystemError),
+    /// The component cache could not be read or written (the reduction itself succeeded or
+    /// was not started).
+    #[error(transparent)]
+    PartCache(PartCacheError),
+}
+
+impl From<PartCacheError> for RomError {
+    fn from(e: PartCacheError) -> Self {
+        match e {
+            PartCacheError::Reduce(r) => RomError::Reduce(r),
+            other => RomError::PartCache(other),
+        }
+    }
 }
 
 impl RomError {
@@ -230,7 +249,7 @@ impl RomError {
         use super::craig_bampton::ReduceError;
         use crate::fem::model::ModelError;
         match self {
-            RomError::Set { .. } => 2,
+            RomError::Set { .. } | RomError::PartCache(_) => 2,
             RomError::Reduce(ReduceError::Interface { .. }) => 2,
             RomError::Reduce(ReduceError::TooManyModes { .. }) => 2,
             RomError::Reduce(ReduceError::Model {
@@ -821,7 +840,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     check_fit(inp)?;
     let preload = preload_loads(inp)?;
     let rows = LinerRows::new(inp, preload.liner)?;
-    let (liner, crankcase) = reduce_parts(inp, &rows, &preload.crankcase, progress)?;
+    let (liner, crankcase, sources) = reduce_parts(inp, &rows, &preload.crankcase, progress)?;
     progress("assembling the engine");
     let (crankcase_map, liner_maps, n_g) = layout(&liner, &crankcase, &inp.cylinders);
     let mut placements = vec![Placement {
@@ -883,11 +902,13 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
                 name: "liner".into(),
                 stats: liner.stats.clone(),
                 copies: inp.cylinders.len(),
+                source: sources[0],
             },
             PartInfo {
                 name: "crankcase".into(),
                 stats: crankcase.stats.clone(),
                 copies: 1,
+                source: sources[1],
             },
         ],
         build_seconds: t0.elapsed().as_secs_f64(),
@@ -916,49 +937,51 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
 }
 
 /// The Craig-Bampton reductions of the liner (once, in its own frame) and of the crankcase,
-/// each with its interface fields, loads and output rows ([`reduce`]).
+/// each with its interface fields, loads and output rows ([`reduce`]), through the component
+/// cache when the inputs name one; the two run at once (the eigen-solves take turns: ARPACK
+/// is not re-entrant, and each part's block solves and products use both cores).
 fn reduce_parts(
     inp: &RomInputs<'_>,
     rows: &LinerRows,
     crankcase_loads: &[Load],
     progress: &dyn Fn(&str),
-) -> Result<(PartReduction, PartReduction), RomError> {
-    progress("reducing the liner");
+) -> Result<(PartReduction, PartReduction, [Source; 2]), RomError> {
+    progress("reducing the liner and the crankcase");
     let (liner_blocks, cc_blocks) = interface_blocks(inp)?;
     let settings = CbSettings {
         cutoff_hz: inp.cutoff_hz,
         keep_basis: inp.keep_bases,
     };
-    let liner = reduce(
-        &Part {
-            name: "liner",
-            mesh: inp.liner,
-            material: &inp.liner_material,
-            surface: &inp.liner_surface_mass,
-            fix: &[],
-            interfaces: &liner_blocks,
-            loads: &rows.loads,
-            outputs: &rows.outputs,
-        },
-        &settings,
-    )?;
-    drop(liner_blocks);
-    progress("reducing the crankcase");
-    let crankcase = reduce(
-        &Part {
-            name: "crankcase",
-            mesh: inp.crankcase,
-            material: &inp.crankcase_material,
-            surface: &[],
-            fix: &inp.crankcase_fix,
-            interfaces: &cc_blocks,
-            loads: crankcase_loads,
-            outputs: &crankcase_outputs(inp)?,
-        },
-        &settings,
-    )?;
-    drop(cc_blocks);
-    Ok((liner, crankcase))
+    let cc_outputs = crankcase_outputs(inp)?;
+    let dir = inp.part_cache.as_deref();
+    let liner = Part {
+        name: "liner",
+        mesh: inp.liner,
+        material: &inp.liner_material,
+        surface: &inp.liner_surface_mass,
+        fix: &[],
+        interfaces: &liner_blocks,
+        loads: &rows.loads,
+        outputs: &rows.outputs,
+    };
+    let crankcase = Part {
+        name: "crankcase",
+        mesh: inp.crankcase,
+        material: &inp.crankcase_material,
+        surface: &[],
+        fix: &inp.crankcase_fix,
+        interfaces: &cc_blocks,
+        loads: crankcase_loads,
+        outputs: &cc_outputs,
+    };
+    let (l, c) = std::thread::scope(|s| {
+        let l = s.spawn(|| reduce_cached(&liner, &settings, dir));
+        let c = reduce_cached(&crankcase, &settings, dir);
+        (l.join(), c)
+    });
+    let (l, ls) = l.unwrap_or_else(|p| std::panic::resume_unwind(p))?;
+    let (c, cs) = c?;
+    Ok((l, c, [ls, cs]))
 }
 
 /// The liner's output rows (contact DOFs, then points) scattered onto each modelled

@@ -381,15 +381,18 @@ pub fn liner_surface_mass(scene: &Scene) -> Vec<SurfaceMass> {
         .collect()
 }
 
-/// Builds the ROM of a loaded scene (no cache). `keep_bases` keeps full bases for recovery;
-/// `progress` is told each phase.
+/// Builds the ROM of a loaded scene (not through the ROM cache; through the component cache
+/// `part_cache` when given). `keep_bases` keeps full bases for recovery; `progress` is told
+/// each phase.
 pub fn build_rom(
     scene: &Scene,
     keep_bases: bool,
+    part_cache: Option<&Path>,
     progress: &dyn Fn(&str),
 ) -> Result<(RomBuild, Mesh, Mesh)> {
     let em = load_meshes(scene)?;
-    let inputs = rom_inputs(scene, &em, keep_bases);
+    let mut inputs = rom_inputs(scene, &em, keep_bases);
+    inputs.part_cache = part_cache.map(Path::to_path_buf);
     let mut b = build(&inputs, progress)?;
     b.rom.info.interfaces = em.found.clone();
     Ok((b, em.liner, em.crankcase))
@@ -424,6 +427,7 @@ pub fn rom_inputs<'a>(scene: &Scene, em: &'a EngineMeshes, keep_bases: bool) -> 
         harmonics: scene.rom.harmonics,
         residual_vector_spacing: scene.rom.residual_vector_spacing,
         keep_bases,
+        part_cache: None,
     }
 }
 
@@ -481,7 +485,8 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions, progress: &dyn Fn(&str)) -> R
         }
         Some(lock)
     };
-    let (b, _, _) = build_rom(scene, false, progress)?;
+    let part_cache = (!opts.no_cache).then_some(dir.as_path());
+    let (b, _, _) = build_rom(scene, false, part_cache, progress)?;
     let rom = b.rom.clone();
     if rom.info.system_modes == 0 {
         return Err(SceneRomError::NoSystemMode {

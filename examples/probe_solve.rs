@@ -1,0 +1,58 @@
+use linercav::fem::model::FeModel;
+use std::time::Instant;
+fn main() {
+    let scene =
+        linercav::scene::Scene::load(std::path::Path::new("models/engine.toml"), &[]).unwrap();
+    let em = linercav::reduce::scene_rom::load_meshes(&scene).unwrap();
+    let cc = scene.crankcase.as_ref().unwrap();
+    let t = Instant::now();
+    let m = FeModel::build(em.crankcase.clone(), &em.crankcase_material, &cc.fix).unwrap();
+    println!(
+        "build {:.2}s n={} nnz={} factor_nnz={}",
+        t.elapsed().as_secs_f64(),
+        m.n_free(),
+        m.km.pattern.nnz(),
+        m.analysis.factor_nnz()
+    );
+    let t = Instant::now();
+    let llt = m.analysis.llt(&m.km.pattern, &m.km.shifted(-1e4)).unwrap();
+    println!("llt {:.2}s", t.elapsed().as_secs_f64());
+    let n = m.n_free();
+    let mut x = vec![1.0; n];
+    let t = Instant::now();
+    for _ in 0..20 {
+        llt.solve_vec(&mut x);
+    }
+    println!("solve_vec x20 {:.3}s", t.elapsed().as_secs_f64());
+    let mut y = vec![0.0; n];
+    let t = Instant::now();
+    for _ in 0..20 {
+        m.km.pattern.matvec(&m.km.m, &x, &mut y);
+    }
+    println!("matvec x20 {:.3}s", t.elapsed().as_secs_f64());
+    let mut b = faer::Mat::<f64>::from_fn(n, 64, |i, j| ((i + j) % 7) as f64);
+    let t = Instant::now();
+    llt.solve_in_place(b.as_mut());
+    println!("solve 64 cols {:.3}s", t.elapsed().as_secs_f64());
+    let mut b = faer::Mat::<f64>::from_fn(n, 256, |i, j| ((i + j) % 7) as f64);
+    let t = Instant::now();
+    llt.solve_in_place(b.as_mut());
+    println!("solve 256 cols {:.3}s", t.elapsed().as_secs_f64());
+    let llt0 = m.analysis.llt(&m.km.pattern, &m.km.k).unwrap();
+    for (tol, ncv) in [(f64::EPSILON, 0usize), (1e-10, 0)] {
+        let mut s = linercav::eigen::EigenSettings::new(54, 0.0);
+        s.tol = tol;
+        s.ncv = ncv;
+        let t = Instant::now();
+        let md = linercav::eigen::solve_modes(
+            n,
+            &s,
+            |x, y| m.km.pattern.matvec(&m.km.m, x, y),
+            |x| llt0.solve_vec(x),
+        )
+        .unwrap();
+        println!("tol {tol:e} ncv {} solves {} restarts {} {:.2}s  f53 {:.9} solve {:.2} mass {:.2} arpack {:.2}", md.ncv, md.solves, md.restarts, t.elapsed().as_secs_f64(), md.frequency_hz(53), md.seconds_solve, md.seconds_mass, md.seconds_arpack);
+    }
+}
+#[allow(dead_code)]
+fn unused() {}

@@ -1,0 +1,242 @@
+//! The component cache: each part's Craig-Bampton reduction stored on its own, keyed by the
+//! part's own inputs, so a what-if that changes the liner re-reduces the liner only and the
+//! engine ROM is assembled from the cached crankcase in seconds.
+//!
+//! Key: BLAKE3 of everything [`super::craig_bampton::reduce`] reads, in a fixed binary order
+//! (the format version, the part's name, its mesh: nodes, elements, materials; the node sets it
+//! uses; its material, surface masses, fixed sets, interface shapes, loads and outputs; the
+//! cut-off). Hashing the loaded inputs rather than the scene keys means nothing a reduction
+//! depends on can be left out of its key. File `part-<name>-<key>.bin` beside the ROM files,
+//! with the same integrity checks (magic, version, length, checksum, stored key, consistency).
+
+use super::cache::{self, CacheReadError, Entry, Lookup};
+use super::craig_bampton::{CbSettings, CbStats, Part, PartReduction};
+use super::rom::ROM_FORMAT;
+use crate::fem::dofs::DofMap;
+use crate::files::WriteError;
+use crate::linalg::dense::{from_faer, Dense};
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// A part's reduction as stored (no basis).
+#[derive(Serialize, Deserialize)]
+pub struct StoredPart {
+    k: Dense,
+    m: Dense,
+    interface_cols: Vec<Range<usize>>,
+    modes: Range<usize>,
+    mode_frequencies_hz: Vec<f64>,
+    attachments: Range<usize>,
+    outputs: Dense,
+    loads: Dense,
+    dof: Vec<usize>,
+    n_free: usize,
+    stats: CbStats,
+}
+
+impl Entry for StoredPart {
+    const MAGIC: &'static [u8; 8] = b"LCAVPRT\0";
+    /// The reduced matrices square and finite, the column ranges inside them.
+    fn validate(&self) -> Result<(), String> {
+        let n = self.k.nrows();
+        let shapes_ok = self.k.ncols() == n
+            && self.m.dim() == (n, n)
+            && self.outputs.ncols() == n
+            && self.loads.nrows() == n;
+        let ranges_ok = self
+            .interface_cols
+            .iter()
+            .chain([&self.modes, &self.attachments])
+            .all(|r| r.start <= r.end && r.end <= n)
+            && self.mode_frequencies_hz.len() == self.modes.len();
+        let finite = [&self.k, &self.m, &self.outputs, &self.loads]
+            .iter()
+            .all(|d| d.iter().all(|v| v.is_finite()));
+        if shapes_ok && ranges_ok && finite {
+            Ok(())
+        } else {
+            Err("inconsistent part reduction (shapes, ranges or non-finite values)".into())
+        }
+    }
+}
+
+fn to_faer(d: &Dense) -> Mat<f64> {
+    Mat::from_fn(d.nrows(), d.ncols(), |i, j| d[[i, j]])
+}
+
+impl StoredPart {
+    fn of(r: &PartReduction) -> Self {
+        Self {
+            k: from_faer(&r.k),
+            m: from_faer(&r.m),
+            interface_cols: r.interface_cols.clone(),
+            modes: r.modes.clone(),
+            mode_frequencies_hz: r.mode_frequencies_hz.clone(),
+            attachments: r.attachments.clone(),
+            outputs: from_faer(&r.outputs),
+            loads: from_faer(&r.loads),
+            dof: r.dofs.dof.clone(),
+            n_free: r.dofs.n_free,
+            stats: r.stats.clone(),
+        }
+    }
+    fn into_reduction(self) -> PartReduction {
+        PartReduction {
+            k: to_faer(&self.k),
+            m: to_faer(&self.m),
+            interface_cols: self.interface_cols,
+            modes: self.modes,
+            mode_frequencies_hz: self.mode_frequencies_hz,
+            attachments: self.attachments,
+            outputs: to_faer(&self.outputs),
+            loads: to_faer(&self.loads),
+            basis: None,
+            dofs: DofMap {
+                dof: self.dof,
+                n_free: self.n_free,
+            },
+            stats: self.stats,
+        }
+    }
+}
+
+/// Feeds numbers to a hasher in a fixed little-endian layout.
+struct KeyHasher(blake3::Hasher);
+
+impl KeyHasher {
+    fn usize(&mut self, v: usize) {
+        self.0.update(&(v as u64).to_le_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        self.0.update(&v.to_bits().to_le_bytes());
+    }
+    fn str(&mut self, s: &str) {
+        self.usize(s.len());
+        self.0.update(s.as_bytes());
+    }
+    fn list(&mut self, v: &[usize]) {
+        self.usize(v.len());
+        v.iter().for_each(|&x| self.usize(x));
+    }
+    fn floats(&mut self, v: &[f64]) {
+        self.usize(v.len());
+        v.iter().for_each(|&x| self.f64(x));
+    }
+    fn set(&mut self, p: &Part<'_>, name: &str) {
+        self.str(name);
+        self.list(p.mesh.node_set(name).unwrap_or(&[]));
+    }
+}
+
+/// The cache key of one part's reduction (32 hex characters): see the module doc.
+pub fn key(p: &Part<'_>, settings: &CbSettings) -> String {
+    let mut h = KeyHasher(blake3::Hasher::new());
+    h.usize(ROM_FORMAT as usize);
+    h.str(p.name);
+    let mesh = p.mesh;
+    h.floats(mesh.nodes.as_flattened());
+    h.usize(mesh.blocks.len());
+    for b in &mesh.blocks {
+        h.str(&format!("{:?}", b.kind));
+        h.list(&b.conn);
+    }
+    h.usize(mesh.materials.len());
+    for m in &mesh.materials {
+        h.floats(&[m.elastic.young, m.elastic.poisson, m.elastic.density]);
+    }
+    h.list(
+        &mesh
+            .element_material
+            .iter()
+            .map(|&m| m as usize)
+            .collect::<Vec<_>>(),
+    );
+    let e = p.material;
+    h.floats(&[e.young, e.poisson, e.density]);
+    h.usize(p.surface.len());
+    for s in p.surface {
+        h.set(p, &s.set);
+        h.f64(s.mass_per_area);
+    }
+    h.usize(p.fix.len());
+    p.fix.iter().for_each(|f| h.set(p, f));
+    h.usize(p.interfaces.len());
+    for b in p.interfaces {
+        h.set(p, &b.set);
+        h.usize(b.psi.ncols());
+        let psi: Vec<f64> = (0..b.psi.ncols())
+            .flat_map(|j| (0..b.psi.nrows()).map(move |i| b.psi[(i, j)]))
+            .collect();
+        h.floats(&psi);
+    }
+    h.usize(p.loads.len());
+    for l in p.loads {
+        h.usize(l.entries.len());
+        for (node, f) in &l.entries {
+            h.usize(*node);
+            h.floats(f);
+        }
+    }
+    h.usize(p.outputs.len());
+    for o in p.outputs {
+        h.usize(o.node);
+        h.floats(&o.dir);
+    }
+    h.f64(settings.cutoff_hz);
+    h.0.finalize().to_hex()[..32].to_string()
+}
+
+/// Path of a part's entry in the cache directory.
+pub fn path_for(dir: &Path, part: &str, key: &str) -> PathBuf {
+    dir.join(format!("part-{part}-{key}.bin"))
+}
+
+/// Where a reduction came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Source {
+    /// Reduced in this run.
+    Reduced,
+    /// Read from the component cache.
+    Cached,
+}
+
+/// The reduction of `p`: from the cache directory `dir` when a valid entry exists, else
+/// reduced (and stored when `dir` is given). A corrupt entry is reported and replaced.
+pub fn reduce_cached(
+    p: &Part<'_>,
+    settings: &CbSettings,
+    dir: Option<&Path>,
+) -> Result<(PartReduction, Source), PartCacheError> {
+    let Some(dir) = dir.filter(|_| !settings.keep_basis) else {
+        return Ok((super::craig_bampton::reduce(p, settings)?, Source::Reduced));
+    };
+    let key = key(p, settings);
+    let path = path_for(dir, p.name, &key);
+    match cache::load::<StoredPart>(&path, &key)? {
+        Lookup::Hit(stored) => return Ok((stored.into_reduction(), Source::Cached)),
+        Lookup::Corrupt(reason) => {
+            log::warn!(
+                "{}: {reason}; reducing the {} again",
+                path.display(),
+                p.name
+            )
+        }
+        Lookup::Miss => {}
+    }
+    let r = super::craig_bampton::reduce(p, settings)?;
+    cache::store(&path, &key, &StoredPart::of(&r))?;
+    Ok((r, Source::Reduced))
+}
+
+/// Failures of a cached reduction.
+#[derive(Debug, thiserror::Error)]
+pub enum PartCacheError {
+    #[error(transparent)]
+    Reduce(#[from] super::craig_bampton::ReduceError),
+    #[error(transparent)]
+    Read(#[from] CacheReadError),
+    #[error(transparent)]
+    Write(#[from] WriteError),
+}
