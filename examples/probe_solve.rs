@@ -38,21 +38,11 @@ fn main() {
     let t = Instant::now();
     llt.solve_in_place(b.as_mut());
     println!("solve 256 cols {:.3}s", t.elapsed().as_secs_f64());
-    let llt0 = m.analysis.llt(&m.km.pattern, &m.km.k).unwrap();
-    for (tol, ncv) in [(f64::EPSILON, 0usize), (1e-10, 0)] {
-        let mut s = linercav::eigen::EigenSettings::new(54, 0.0);
-        s.tol = tol;
-        s.ncv = ncv;
-        let t = Instant::now();
-        let md = linercav::eigen::solve_modes(
-            n,
-            &s,
-            |x, y| m.km.pattern.matvec(&m.km.m, x, y),
-            |x| llt0.solve_vec(x),
-        )
-        .unwrap();
-        println!("tol {tol:e} ncv {} solves {} restarts {} {:.2}s  f53 {:.9} solve {:.2} mass {:.2} arpack {:.2}", md.ncv, md.solves, md.restarts, t.elapsed().as_secs_f64(), md.frequency_hz(53), md.seconds_solve, md.seconds_mass, md.seconds_arpack);
+    let x = faer::Mat::<f64>::from_fn(n, 64, |i, j| ((i + j) % 7) as f64);
+    let mut y = faer::Mat::<f64>::zeros(n, 64);
+    let t = Instant::now();
+    for _ in 0..5 {
+        m.km.pattern.mul_dense(&m.km.k, x.as_ref(), y.as_mut());
     }
+    println!("mul_dense 64 cols x5 {:.3}s", t.elapsed().as_secs_f64());
 }
-#[allow(dead_code)]
-fn unused() {}

@@ -127,33 +127,9 @@ pub fn system_modes(
         let kchol = ks
             .llt(Side::Lower)
             .map_err(|_| SystemError::StiffnessSingular)?;
-        let mut ys = y.as_ref().subcols(0, p).to_owned();
         let before: Vec<f64> = lambdas[..p].to_vec();
-        for _ in 0..3 {
-            let w = kchol.solve(&ms * &ys);
-            let mut kp = w.transpose() * (&ks * &w);
-            let mut mp = w.transpose() * (&ms * &w);
-            symmetrise(&mut kp);
-            symmetrise(&mut mp);
-            let cp = mp
-                .llt(Side::Lower)
-                .map_err(|_| SystemError::MassNotPositive)?;
-            let ap = standard_form(cp.L(), kp);
-            let e = ap
-                .self_adjoint_eigen(Side::Lower)
-                .map_err(|_| SystemError::Eigen)?;
-            let mut q = e.U().to_owned();
-            faer::linalg::triangular_solve::solve_upper_triangular_in_place(
-                cp.L().transpose(),
-                q.as_mut(),
-                faer::Par::rayon(0),
-            );
-            ys = &w * &q;
-            let sv = e.S().column_vector();
-            for i in 0..p {
-                lambdas[i] = sv[i];
-            }
-        }
+        let (ritz, ys) = subspace_refine(&ks, &ms, &kchol, y.as_ref().subcols(0, p).to_owned())?;
+        lambdas[..p].copy_from_slice(&ritz);
         y.as_mut().subcols_mut(0, p).copy_from(&ys);
         if log::log_enabled!(log::Level::Info) {
             let change = (0..p)
@@ -179,6 +155,74 @@ pub fn system_modes(
         vectors: y,
         k,
     })
+}
+
+/// Three passes of subspace iteration with K'^-1 M' from the block `ys` (Rayleigh-Ritz each
+/// pass, K' = `kchol` factorised once): W = K'^-1 M' Y, (W^T K' W) x = lambda (W^T M' W) x,
+/// Y = W X. Returns the Ritz values (ascending, upper bounds of the exact eigenvalues,
+/// converging at (lambda_i / lambda_{p+1})^k) and the M'-orthonormal Ritz vectors.
+fn subspace_refine(
+    ks: &Mat<f64>,
+    ms: &Mat<f64>,
+    kchol: &faer::linalg::solvers::Llt<f64>,
+    mut ys: Mat<f64>,
+) -> Result<(Vec<f64>, Mat<f64>), SystemError> {
+    let p = ys.ncols();
+    let mut ritz = vec![0.0; p];
+    for _ in 0..3 {
+        let w = kchol.solve(ms * &ys);
+        let mut kp = w.transpose() * (ks * &w);
+        let mut mp = w.transpose() * (ms * &w);
+        symmetrise(&mut kp);
+        symmetrise(&mut mp);
+        let cp = mp
+            .llt(Side::Lower)
+            .map_err(|_| SystemError::MassNotPositive)?;
+        let ap = standard_form(cp.L(), kp);
+        let e = ap
+            .self_adjoint_eigen(Side::Lower)
+            .map_err(|_| SystemError::Eigen)?;
+        let mut q = e.U().to_owned();
+        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+            cp.L().transpose(),
+            q.as_mut(),
+            faer::Par::rayon(0),
+        );
+        ys = &w * &q;
+        let sv = e.S().column_vector();
+        for (i, r) in ritz.iter_mut().enumerate() {
+            *r = sv[i];
+        }
+    }
+    Ok((ritz, ys))
+}
+
+/// The lowest eigenvalues of K y = lambda M y refined from a start block (columns: vectors in
+/// the coordinates of K and M, e.g. the modes of a nearby system) by [`subspace_refine`] after
+/// the unit-modal-mass scaling of [`system_modes`]: as many Ritz values as start vectors,
+/// without the dense solve of the whole spectrum.
+pub fn refined_eigenvalues(
+    k: &Mat<f64>,
+    m: &Mat<f64>,
+    start: faer::MatRef<'_, f64>,
+) -> Result<Vec<f64>, SystemError> {
+    let n = k.nrows();
+    let d: Vec<f64> = (0..n)
+        .map(|i| {
+            if m[(i, i)] > 0.0 {
+                1.0 / m[(i, i)].sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let ks = Mat::from_fn(n, n, |i, j| d[i] * k[(i, j)] * d[j]);
+    let ms = Mat::from_fn(n, n, |i, j| d[i] * m[(i, j)] * d[j]);
+    let kchol = ks
+        .llt(Side::Lower)
+        .map_err(|_| SystemError::StiffnessSingular)?;
+    let ys = Mat::from_fn(n, start.ncols(), |i, j| start[(i, j)] / d[i]);
+    Ok(subspace_refine(&ks, &ms, &kchol, ys)?.0)
 }
 
 /// All eigenvalues of K y = lambda M y (ascending), rigid-body zeros allowed (diagnostics and

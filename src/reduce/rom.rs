@@ -766,7 +766,9 @@ fn cylinder_rom(a: &Assembled<'_>, cyl: usize, g_all: &Mat<f64>, offset: usize) 
 
 /// Error estimate of the Craig-Bampton truncation: the largest relative change of the system
 /// frequencies in the band when the parts' mode cut-off is lowered to 2/3 (NaN when that
-/// smaller system cannot be solved).
+/// smaller system cannot be solved). The smaller system's band eigenvalues are refined from
+/// the full system's modes restricted to its coordinates (block as large as the system's
+/// refined block) rather than solved densely from scratch.
 fn truncation_error(
     inp: &RomInputs<'_>,
     parts: &[(&PartReduction, &[usize])],
@@ -787,12 +789,15 @@ fn truncation_error(
     let kk = Mat::from_fn(idx.len(), idx.len(), |i, j| kg[(idx[i], idx[j])]);
     let mm = Mat::from_fn(idx.len(), idx.len(), |i, j| mg[(idx[i], idx[j])]);
     let band = (2.0 * std::f64::consts::PI * inp.band_hz).powi(2);
-    match engine::system_modes(kk, &mm, band) {
-        Ok(s2) => sys
-            .lambdas
+    let in_band = sys.lambdas.iter().take_while(|&&l| l <= band).count();
+    let cut = (2.0 * std::f64::consts::PI * inp.cutoff_hz).powi(2);
+    let kept = sys.lambdas.iter().take_while(|&&l| l <= cut).count();
+    let p = idx.len().min(400.max(3 * kept / 2)).max(in_band);
+    let start = Mat::from_fn(idx.len(), p, |i, j| sys.vectors[(idx[i], j)]);
+    match engine::refined_eigenvalues(&kk, &mm, start.as_ref()) {
+        Ok(l2) => sys.lambdas[..in_band]
             .iter()
-            .zip(&s2.lambdas)
-            .take_while(|(l, _)| **l <= band)
+            .zip(&l2)
             .map(|(a, b)| (hz(*b) - hz(*a)).abs() / hz(*a))
             .fold(0.0, f64::max),
         Err(_) => f64::NAN,
