@@ -147,6 +147,13 @@ enum Command {
         json: bool,
         #[command(flatten)]
         cache: CacheArgs,
+        /// Reduce only component I of the engine's N = 2 (1 liner, 2 crankcase) into the
+        /// component cache and stop: one task of a job array; a later `rom` assembles the
+        /// engine from the cached components in seconds. `auto` takes I/N from a Slurm job
+        /// array (SLURM_ARRAY_TASK_ID/MIN/MAX) or a Kubernetes Indexed Job
+        /// (JOB_COMPLETION_INDEX, N = 2).
+        #[arg(long, value_name = "I/N|auto")]
+        component: Option<String>,
     },
     /// What the reduction costs: the ROM built at several cut-off factors against one full
     /// coupled FE solve (frequency error and MAC of the modes below the band, build times);
@@ -388,7 +395,8 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             sets,
             json,
             cache,
-        } => rom_command(&scene, &sets, json, &cache, started)?,
+            component,
+        } => rom_command(&scene, &sets, json, &cache, component.as_deref(), started)?,
         Command::RomTradeoff {
             scene,
             sets,
@@ -502,15 +510,22 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
     Ok(())
 }
 
-/// `rom`: the engine ROM from the cache or built, described.
+/// `rom`: the engine ROM from the cache or built, described; with `--component` one
+/// component's reduction into the component cache.
 fn rom_command(
     scene: &std::path::Path,
     sets: &[String],
     json: bool,
     cache: &CacheArgs,
+    component: Option<&str>,
     started: Instant,
 ) -> Result<(), Error> {
     let sc = linercav::api::load_scene(scene, sets)?;
+    if let Some(c) = component {
+        let done = rom::reduce_component(&sc, &cache.options(), c)?;
+        print_report(json, &done, || rom::component_text(&done));
+        return Ok(());
+    }
     let loaded = rom::get_rom(&sc, &cache.options())?;
     let mut report = rom::RomReport::new(&loaded);
     report.seconds = started.elapsed().as_secs_f64();

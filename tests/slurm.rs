@@ -1,5 +1,6 @@
 //! A sharded sweep through a real Slurm: the repository's `examples/slurm/submit.sh` chains
-//! the ROM job, a 3-task array job and the merge job on a single-node Slurm that
+//! the component array job (liner and crankcase reduced as two tasks), the ROM job that
+//! assembles the engine from them, a 3-task array job and the merge job on a single-node Slurm that
 //! `scripts/slurm-local.sh` installs (Debian's slurmctld, slurmd and munge), configures and
 //! starts; the merged `sweep.csv` must equal the unsharded sweep's byte for byte.
 //!
@@ -122,8 +123,12 @@ fn validation_sharded_sweep_through_real_slurm_equals_the_unsharded_sweep() {
         String::from_utf8_lossy(&o.stderr)
     );
     let ids: Vec<&str> = ids.split_whitespace().collect();
-    assert_eq!(ids.len(), 3, "ROM, array and merge job ids: {ids:?}");
-    let state = wait_for(ids[2], Duration::from_secs(600));
+    assert_eq!(
+        ids.len(),
+        4,
+        "component, ROM, array and merge job ids: {ids:?}"
+    );
+    let state = wait_for(ids[3], Duration::from_secs(600));
     let logs = dir.path().join("merged.work/logs");
     let log_text = || {
         std::fs::read_dir(&logs)
@@ -145,6 +150,33 @@ fn validation_sharded_sweep_through_real_slurm_equals_the_unsharded_sweep() {
         state.starts_with("COMPLETED"),
         "merge job {state}\n{}",
         log_text()
+    );
+    // the components were reduced by their tasks and the ROM job assembled the engine from
+    // the component cache
+    let cache = dir.path().join("merged.work/cache");
+    for part in ["liner", "crankcase"] {
+        let found = std::fs::read_dir(&cache).unwrap().any(|e| {
+            e.unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with(&format!("part-{part}-"))
+        });
+        assert!(
+            found,
+            "no {part} component in {}\n{}",
+            cache.display(),
+            log_text()
+        );
+    }
+    let rom_log = log_text();
+    assert!(
+        rom_log.contains("component 1/2 (liner)") && rom_log.contains("component 2/2 (crankcase)"),
+        "{rom_log}"
+    );
+    assert_eq!(
+        rom_log.matches("from the component cache").count(),
+        2,
+        "the ROM job must find both components cached\n{rom_log}"
     );
     // three shards, two runs each
     for i in 1..=3 {

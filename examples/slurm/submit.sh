@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# Submits a sharded linercav sweep to Slurm as three jobs chained by dependencies:
-#   1. rom.sbatch    builds the ROM once into the shared cache (later jobs only load it),
-#   2. shard.sbatch  an array job, one task per shard (`linercav sweep` takes its shard from
+# Submits a sharded linercav sweep to Slurm as four jobs chained by dependencies:
+#   1. components.sbatch  a 2-task array: the liner's and the crankcase's reductions, each
+#                    into the shared component cache (`linercav rom --component auto`),
+#   2. rom.sbatch    assembles the engine ROM from the cached components (seconds),
+#   3. shard.sbatch  an array job, one task per shard (`linercav sweep` takes its shard from
 #                    SLURM_ARRAY_TASK_ID/MIN/MAX), each writing part-I-of-N.json,
-#   3. merge.sbatch  `linercav sweep-merge`: checks every run is there once, writes the outputs.
+#   4. merge.sbatch  `linercav sweep-merge`: checks every run is there once, writes the outputs.
 # Each job starts only when the one before succeeded (afterok); a failed shard leaves the merge
 # pending with reason DependencyNeverSatisfied (cancel it, fix, resubmit the shard and merge).
 #
@@ -17,7 +19,7 @@
 #   WORK=OUT_DIR.work  shared directory (all nodes): ROM cache, parts, logs
 #   LINERCAV=linercav  the binary (on a shared path or installed on every node)
 #   SBATCH_ARGS=""     extra sbatch options for all three jobs (partition, account, time ...)
-# prints the three job ids: ROM, array, merge.
+# prints the four job ids: components, ROM, array, merge.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 if [ $# -lt 3 ]; then
@@ -36,11 +38,13 @@ export LINERCAV=${LINERCAV:-$(command -v linercav)}
 export SCENE=$scene CACHE=$work/cache PARTS=$work/parts OUT=$out
 export SETS_ARGS="${sets[*]:-}" SWEEP_ARGS="$*"
 common=(--parsable --chdir "$work" ${SBATCH_ARGS:-})
+components=$(sbatch "${common[@]}" --job-name linercav-components --cpus-per-task "${CPUS:-2}" \
+  --array 1-2 --output "$work/logs/component-%A_%a.out" "$here/components.sbatch")
 rom=$(sbatch "${common[@]}" --job-name linercav-rom --cpus-per-task "${CPUS:-2}" \
-  --output "$work/logs/rom-%j.out" "$here/rom.sbatch")
+  --dependency "afterok:$components" --output "$work/logs/rom-%j.out" "$here/rom.sbatch")
 array=$(sbatch "${common[@]}" --job-name linercav-shard --cpus-per-task "${CPUS:-2}" \
   --dependency "afterok:$rom" --array "1-$shards" \
   --output "$work/logs/shard-%A_%a.out" "$here/shard.sbatch")
 merge=$(sbatch "${common[@]}" --job-name linercav-merge --cpus-per-task 1 \
   --dependency "afterok:$array" --output "$work/logs/merge-%j.out" "$here/merge.sbatch")
-echo "$rom $array $merge"
+echo "$components $rom $array $merge"

@@ -35,6 +35,9 @@ pub struct ModesReport {
     pub max_residual: f64,
     pub m_orthogonality_error: f64,
     pub sturm: Option<crate::eigen::certify::SturmCheck>,
+    /// Modes the first Lanczos solve missed (found by the Sturm count) and a second solve
+    /// recovered; 0 when none was missed.
+    pub recovered_modes: usize,
     pub shift_hz: f64,
     pub factor_nnz: usize,
     pub solves: usize,
@@ -121,6 +124,7 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
         max_residual,
         m_orthogonality_error: sol.m_orthogonality,
         sturm: sol.sturm,
+        recovered_modes: sol.recovered,
         shift_hz,
         factor_nnz: model.analysis.factor_nnz(),
         solves: sol.modes.solves,
@@ -169,6 +173,12 @@ impl ModesReport {
             ),
             None => "Sturm check: no spectral gap among the computed modes, not certified\n".into(),
         };
+        if self.recovered_modes > 0 {
+            s += &format!(
+                "recovered: the first Lanczos solve missed {} mode(s) the Sturm count found; solved again\n",
+                self.recovered_modes
+            );
+        }
         s += &format!(
             "work: {} solves, {} M-products, ncv {}, factor nnz {}\ntime: {:.2} s (assembly {:.2}, ordering {:.2}, factorisation {:.2}, eigen {:.2}, certification {:.2})\n",
             self.solves, self.mass_products, self.ncv, self.factor_nnz, self.seconds,

@@ -214,3 +214,57 @@ impl ShapesReport {
         s
     }
 }
+
+/// `rom --component I/N|auto`: one component's reduction into the component cache
+/// ([`crate::reduce::scene_rom::reduce_component`]); `I/N` parsed as a sweep's shard, `auto`
+/// from the scheduler's environment.
+pub fn reduce_component(
+    scene: &Scene,
+    opts: &crate::reduce::scene_rom::CacheOptions,
+    arg: &str,
+) -> Result<crate::reduce::scene_rom::ComponentDone> {
+    use crate::scene::design::Shard;
+    let count = crate::reduce::rom::COMPONENTS.len();
+    let task = if arg == "auto" {
+        Shard::from_env(&|k| std::env::var(k).ok(), Some(count))?.ok_or_else(|| {
+            crate::scene::SceneError::Field {
+                path: scene.path.clone(),
+                key: "--component auto".into(),
+                msg: "no scheduler task in the environment (SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX): give --component I/2".into(),
+            }
+        })?
+    } else {
+        Shard::parse(arg)?
+    };
+    if task.count != count {
+        return Err(crate::scene::SceneError::Field {
+            path: scene.path.clone(),
+            key: "--component".into(),
+            msg: format!(
+                "the engine has {count} components (liner, crankcase), the task names {} (an array of {count} tasks is needed)",
+                task.count
+            ),
+        }
+        .into());
+    }
+    Ok(crate::reduce::scene_rom::reduce_component(
+        scene, opts, task.index,
+    )?)
+}
+
+/// Text of a component task's outcome.
+pub fn component_text(d: &crate::reduce::scene_rom::ComponentDone) -> String {
+    format!(
+        "component {}/{} ({}): {} DOFs -> {} reduced, {} in {:.1} s\n",
+        d.index,
+        d.count,
+        d.component,
+        d.full_dofs,
+        d.reduced_dofs,
+        match d.source {
+            crate::reduce::part_cache::Source::Reduced => "reduced into the component cache",
+            crate::reduce::part_cache::Source::Cached => "already in the component cache",
+        },
+        d.seconds
+    )
+}

@@ -34,6 +34,8 @@ pub struct ModalSolution {
     pub m_orthogonality: f64,
     pub sturm: Option<SturmCheck>,
     pub sigma: f64,
+    /// Modes the first Lanczos solve missed and a second one found (0: none missed).
+    pub recovered: usize,
 }
 
 impl FeModel {
@@ -53,9 +55,19 @@ impl FeModel {
     }
 }
 
+/// Re-solves after a Sturm count that finds more eigenvalues below its shift than were
+/// computed (modes the Lanczos iteration missed): at most this many times.
+const RECOVERY_ATTEMPTS: usize = 2;
+
 /// The lowest `count` modes of (K, M) on an analysed pattern, certified: shift-invert ARPACK
 /// with K - sigma M = L L^T, residuals, M-orthogonality, and a Sturm count at a shift placed in
 /// a spectral gap found among `guard` extra modes.
+///
+/// When the count finds more eigenvalues below its shift than were computed, the missed modes
+/// are recovered by the solver itself: solved again with every counted eigenvalue plus the
+/// guard asked for and another start vector (up to [`RECOVERY_ATTEMPTS`] times), each result
+/// certified anew; `recovered` tells how many modes the first solve had missed. A count below
+/// the computed number (spurious eigenvalues) is reported, not retried.
 pub fn certified_modes(
     km: &StiffnessMass,
     analysis: &Analysis,
@@ -65,42 +77,42 @@ pub fn certified_modes(
 ) -> Result<(ModalSolution, Timings), ModalError> {
     let mut timings = Timings::default();
     let n = km.pattern.n;
-    let nev = (count + guard).min(n.saturating_sub(1)).max(count);
-    let t = Instant::now();
-    let shifted = km.shifted(sigma);
-    let llt = analysis.llt(&km.pattern, &shifted)?;
-    drop(shifted);
-    timings.factorisation = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let pattern = &km.pattern;
-    let m = &km.m;
-    let all = solve_modes(
-        n,
-        &EigenSettings::new(nev, sigma),
-        |x, y| pattern.matvec(m, x, y),
-        |x| llt.solve_vec(x),
-    )?;
-    drop(llt);
-    timings.eigen = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let sturm = match certify::sturm_shift(&all.eigenvalues, count, 1e-4) {
-        Some((sigma_c, expected)) => {
-            let found = analysis.negative_pivots(&km.pattern, &km.shifted(sigma_c))?;
-            Some(SturmCheck {
-                shift_hz: sigma_c.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
-                expected,
-                found,
-                ok: found == expected,
-            })
+    let mut nev = (count + guard).min(n.saturating_sub(1)).max(count);
+    let mut attempt = 0;
+    let mut recovered = 0;
+    let (all, sturm) = loop {
+        let (all, t) = lanczos(km, analysis, nev, sigma, attempt as u64)?;
+        timings.factorisation += t.0;
+        timings.eigen += t.1;
+        let t = Instant::now();
+        let sturm = sturm_check(km, analysis, &all.eigenvalues, count)?;
+        timings.certification += t.elapsed().as_secs_f64();
+        match &sturm {
+            Some(st) if st.found > st.expected && attempt < RECOVERY_ATTEMPTS => {
+                let missed = st.found - st.expected;
+                log::warn!(
+                    "the Sturm count at {:.1} Hz found {} eigenvalues below, {} were computed: solving again for the {missed} missed",
+                    st.shift_hz, st.found, st.expected
+                );
+                if attempt == 0 {
+                    recovered = missed;
+                }
+                nev = (st.found + guard.max(missed)).min(n.saturating_sub(1));
+                attempt += 1;
+            }
+            _ => break (all, sturm),
         }
-        None => None,
     };
+    if sturm.as_ref().is_some_and(|s| !s.ok) {
+        recovered = 0;
+    }
+    let t = Instant::now();
     let mut modes = all;
     modes.eigenvalues.truncate(count);
     modes.vectors.truncate(count * n);
     let residuals = certify::residuals(km, &modes, sigma);
     let m_orthogonality = certify::m_orthogonality_error(km, &modes);
-    timings.certification = t.elapsed().as_secs_f64();
+    timings.certification += t.elapsed().as_secs_f64();
     Ok((
         ModalSolution {
             modes,
@@ -108,7 +120,57 @@ pub fn certified_modes(
             m_orthogonality,
             sturm,
             sigma,
+            recovered,
         },
         timings,
     ))
+}
+
+/// One shift-invert Lanczos solve of `nev` modes: factorises K - sigma M, runs ARPACK with the
+/// start vector of `seed`, lets the factor go. Returns the modes and (factorisation, eigen)
+/// seconds.
+fn lanczos(
+    km: &StiffnessMass,
+    analysis: &Analysis,
+    nev: usize,
+    sigma: f64,
+    seed: u64,
+) -> Result<(Modes, (f64, f64)), ModalError> {
+    let t = Instant::now();
+    let shifted = km.shifted(sigma);
+    let llt = analysis.llt(&km.pattern, &shifted)?;
+    drop(shifted);
+    let t_factor = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let (pattern, m) = (&km.pattern, &km.m);
+    let mut settings = EigenSettings::new(nev, sigma);
+    settings.seed = seed;
+    let modes = solve_modes(
+        km.pattern.n,
+        &settings,
+        |x, y| pattern.matvec(m, x, y),
+        |x| llt.solve_vec(x),
+    )?;
+    Ok((modes, (t_factor, t.elapsed().as_secs_f64())))
+}
+
+/// The Sturm certificate of computed eigenvalues: the negative pivots of K - sigma_c M at a
+/// shift in the first spectral gap at or above mode `count` ([`certify::sturm_shift`]); None
+/// when the computed spectrum offers no gap.
+fn sturm_check(
+    km: &StiffnessMass,
+    analysis: &Analysis,
+    eigenvalues: &[f64],
+    count: usize,
+) -> Result<Option<SturmCheck>, ModalError> {
+    let Some((sigma_c, expected)) = certify::sturm_shift(eigenvalues, count, 1e-4) else {
+        return Ok(None);
+    };
+    let found = analysis.negative_pivots(&km.pattern, &km.shifted(sigma_c))?;
+    Ok(Some(SturmCheck {
+        shift_hz: sigma_c.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
+        expected,
+        found,
+        ok: found == expected,
+    }))
 }

@@ -24,6 +24,9 @@ pub struct EigenSettings {
     pub tol: f64,
     /// Maximum number of implicit restarts.
     pub max_restarts: usize,
+    /// Start-vector sequence (0: the default; another value gives another start vector, for
+    /// a second solve after a missed mode).
+    pub seed: u64,
 }
 
 impl EigenSettings {
@@ -34,6 +37,7 @@ impl EigenSettings {
             ncv: 0,
             tol: f64::EPSILON,
             max_restarts: 500,
+            seed: 0,
         }
     }
 }
@@ -102,9 +106,10 @@ pub enum EigenError {
     Lapack { routine: String, argument: i32 },
 }
 
-/// Deterministic start vector (a fixed linear congruential sequence), so runs are repeatable.
-fn start_vector(n: usize) -> Vec<f64> {
-    let mut s: u64 = 0x2545_f491_4f6c_dd1d;
+/// Deterministic start vector (a fixed linear congruential sequence from `seed`), so runs are
+/// repeatable.
+fn start_vector(n: usize, seed: u64) -> Vec<f64> {
+    let mut s: u64 = 0x2545_f491_4f6c_dd1d ^ seed.wrapping_mul(0x9e37_79b9_7f4a_7c15);
     (0..n)
         .map(|_| {
             s = s
@@ -144,7 +149,7 @@ pub fn solve_modes(
         });
     }
     let lworkl = ncv * (ncv + 8);
-    let mut resid = start_vector(n);
+    let mut resid = start_vector(n, settings.seed);
     let mut v = vec![0.0; n * ncv];
     let mut workd = vec![0.0; 3 * n];
     let mut workl = vec![0.0; lworkl];

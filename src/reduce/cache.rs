@@ -19,11 +19,14 @@ const HEADER: usize = 8 + 4 + 8 + 32;
 /// What a cache file can hold: its magic and its own consistency check.
 pub trait Entry: serde::Serialize + serde::de::DeserializeOwned {
     const MAGIC: &'static [u8; 8];
+    /// Format version in the header: an entry of another version is rebuilt.
+    const FORMAT: u32;
     fn validate(&self) -> Result<(), String>;
 }
 
 impl Entry for EngineRom {
     const MAGIC: &'static [u8; 8] = b"LCAVROM\0";
+    const FORMAT: u32 = ROM_FORMAT;
     fn validate(&self) -> Result<(), String> {
         EngineRom::validate(self).map_err(|e| format!("inconsistent ROM: {e}"))
     }
@@ -97,8 +100,8 @@ fn decode<T: Entry>(bytes: &[u8], description: &str) -> Result<T, String> {
         return Err("not a linercav cache file of this kind".into());
     }
     let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-    if version != ROM_FORMAT {
-        return Err(format!("format version {version}, expected {ROM_FORMAT}"));
+    if version != T::FORMAT {
+        return Err(format!("format version {version}, expected {}", T::FORMAT));
     }
     let len = u64::from_le_bytes(bytes[12..20].try_into().expect("8 bytes"));
     let payload = &bytes[HEADER..];
@@ -215,7 +218,7 @@ pub fn store<T: Entry>(path: &Path, description: &str, entry: &T) -> Result<(), 
         .expect("cache entries serialise");
     write_atomic(path, |w| {
         w.write_all(T::MAGIC)?;
-        w.write_all(&ROM_FORMAT.to_le_bytes())?;
+        w.write_all(&T::FORMAT.to_le_bytes())?;
         w.write_all(&(payload.len() as u64).to_le_bytes())?;
         w.write_all(blake3::hash(&payload).as_bytes())?;
         w.write_all(&payload)

@@ -11,7 +11,6 @@
 
 use super::cache::{self, CacheReadError, Entry, Lookup};
 use super::craig_bampton::{CbSettings, CbStats, Part, PartReduction};
-use super::rom::ROM_FORMAT;
 use crate::fem::dofs::DofMap;
 use crate::files::WriteError;
 use crate::linalg::dense::{from_faer, Dense};
@@ -19,6 +18,10 @@ use faer::Mat;
 use serde::{Deserialize, Serialize};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+
+/// Version of the stored part reductions and of their key (raise it when the reduction's
+/// method or stored layout changes).
+pub const PART_FORMAT: u32 = 1;
 
 /// A part's reduction as stored (no basis).
 #[derive(Serialize, Deserialize)]
@@ -38,6 +41,7 @@ pub struct StoredPart {
 
 impl Entry for StoredPart {
     const MAGIC: &'static [u8; 8] = b"LCAVPRT\0";
+    const FORMAT: u32 = PART_FORMAT;
     /// The reduced matrices square and finite, the column ranges inside them.
     fn validate(&self) -> Result<(), String> {
         let n = self.k.nrows();
@@ -133,7 +137,7 @@ impl KeyHasher {
 /// The cache key of one part's reduction (32 hex characters): see the module doc.
 pub fn key(p: &Part<'_>, settings: &CbSettings) -> String {
     let mut h = KeyHasher(blake3::Hasher::new());
-    h.usize(ROM_FORMAT as usize);
+    h.usize(PART_FORMAT as usize);
     h.str(p.name);
     let mesh = p.mesh;
     h.floats(mesh.nodes.as_flattened());

@@ -231,14 +231,14 @@ pub enum RomError {
     /// The component cache could not be read or written (the reduction itself succeeded or
     /// was not started).
     #[error(transparent)]
-    PartCache(PartCacheError),
+    PartCache(Box<PartCacheError>),
 }
 
 impl From<PartCacheError> for RomError {
     fn from(e: PartCacheError) -> Self {
         match e {
             PartCacheError::Reduce(r) => RomError::Reduce(r),
-            other => RomError::PartCache(other),
+            other => RomError::PartCache(Box::new(other)),
         }
     }
 }
@@ -842,10 +842,9 @@ fn left_out(inp: &RomInputs<'_>, n_g: usize, b: &Basis) -> Vec<String> {
 /// needs.
 pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, RomError> {
     let t0 = Instant::now();
-    check_fit(inp)?;
-    let preload = preload_loads(inp)?;
-    let rows = LinerRows::new(inp, preload.liner)?;
-    let (liner, crankcase, sources) = reduce_parts(inp, &rows, &preload.crankcase, progress)?;
+    let data = PartData::new(inp)?;
+    let rows = &data.rows;
+    let (liner, crankcase, sources) = reduce_parts(inp, &data, progress)?;
     progress("assembling the engine");
     let (crankcase_map, liner_maps, n_g) = layout(&liner, &crankcase, &inp.cylinders);
     let mut placements = vec![Placement {
@@ -874,7 +873,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     let u0 = static_solve(&sys, &f)?;
     let assembled = Assembled {
         inp,
-        rows: &rows,
+        rows,
         crankcase: &crankcase,
         crankcase_map: &crankcase_map,
         sys: &sys,
@@ -941,44 +940,79 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     })
 }
 
-/// The Craig-Bampton reductions of the liner (once, in its own frame) and of the crankcase,
-/// each with its interface fields, loads and output rows ([`reduce`]), through the component
-/// cache when the inputs name one; the two run at once (the eigen-solves take turns: ARPACK
-/// is not re-entrant, and each part's block solves and products use both cores).
+/// The engine's components, in the order of their task indices (1-based in `rom --component`).
+pub const COMPONENTS: [&str; 2] = ["liner", "crankcase"];
+
+/// What the parts' reductions read besides the inputs: interface fields, loads, outputs.
+struct PartData {
+    liner_blocks: Vec<InterfaceBlock>,
+    cc_blocks: Vec<InterfaceBlock>,
+    rows: LinerRows,
+    cc_loads: Vec<Load>,
+    cc_outputs: Vec<Output>,
+}
+
+impl PartData {
+    fn new(inp: &RomInputs<'_>) -> Result<Self, RomError> {
+        check_fit(inp)?;
+        let preload = preload_loads(inp)?;
+        let rows = LinerRows::new(inp, preload.liner)?;
+        let (liner_blocks, cc_blocks) = interface_blocks(inp)?;
+        Ok(Self {
+            liner_blocks,
+            cc_blocks,
+            rows,
+            cc_loads: preload.crankcase,
+            cc_outputs: crankcase_outputs(inp)?,
+        })
+    }
+
+    /// The liner (once, in its own frame) and the crankcase as parts to reduce.
+    fn parts<'a>(&'a self, inp: &'a RomInputs<'a>) -> [Part<'a>; 2] {
+        [
+            Part {
+                name: COMPONENTS[0],
+                mesh: inp.liner,
+                material: &inp.liner_material,
+                surface: &inp.liner_surface_mass,
+                fix: &[],
+                interfaces: &self.liner_blocks,
+                loads: &self.rows.loads,
+                outputs: &self.rows.outputs,
+            },
+            Part {
+                name: COMPONENTS[1],
+                mesh: inp.crankcase,
+                material: &inp.crankcase_material,
+                surface: &[],
+                fix: &inp.crankcase_fix,
+                interfaces: &self.cc_blocks,
+                loads: &self.cc_loads,
+                outputs: &self.cc_outputs,
+            },
+        ]
+    }
+}
+
+fn cb_settings(inp: &RomInputs<'_>) -> CbSettings {
+    CbSettings {
+        cutoff_hz: inp.cutoff_hz,
+        keep_basis: inp.keep_bases,
+    }
+}
+
+/// The Craig-Bampton reductions of the liner and the crankcase ([`reduce_cached`]), through the
+/// component cache when the inputs name one; the two run at once (the eigen-solves take turns:
+/// ARPACK is not re-entrant; each part's block solves and products use both cores).
 fn reduce_parts(
     inp: &RomInputs<'_>,
-    rows: &LinerRows,
-    crankcase_loads: &[Load],
+    data: &PartData,
     progress: &dyn Fn(&str),
 ) -> Result<(PartReduction, PartReduction, [Source; 2]), RomError> {
     progress("reducing the liner and the crankcase");
-    let (liner_blocks, cc_blocks) = interface_blocks(inp)?;
-    let settings = CbSettings {
-        cutoff_hz: inp.cutoff_hz,
-        keep_basis: inp.keep_bases,
-    };
-    let cc_outputs = crankcase_outputs(inp)?;
+    let settings = cb_settings(inp);
+    let [liner, crankcase] = data.parts(inp);
     let dir = inp.part_cache.as_deref();
-    let liner = Part {
-        name: "liner",
-        mesh: inp.liner,
-        material: &inp.liner_material,
-        surface: &inp.liner_surface_mass,
-        fix: &[],
-        interfaces: &liner_blocks,
-        loads: &rows.loads,
-        outputs: &rows.outputs,
-    };
-    let crankcase = Part {
-        name: "crankcase",
-        mesh: inp.crankcase,
-        material: &inp.crankcase_material,
-        surface: &[],
-        fix: &inp.crankcase_fix,
-        interfaces: &cc_blocks,
-        loads: crankcase_loads,
-        outputs: &cc_outputs,
-    };
     let (l, c) = std::thread::scope(|s| {
         let l = s.spawn(|| reduce_cached(&liner, &settings, dir));
         let c = reduce_cached(&crankcase, &settings, dir);
@@ -987,6 +1021,21 @@ fn reduce_parts(
     let (l, ls) = l.unwrap_or_else(|p| std::panic::resume_unwind(p))?;
     let (c, cs) = c?;
     Ok((l, c, [ls, cs]))
+}
+
+/// One component's reduction into the component cache (`inp.part_cache`), for a scheduler's
+/// task: `index` 0 the liner, 1 the crankcase ([`COMPONENTS`]). A later build finds it there.
+pub fn reduce_component(
+    inp: &RomInputs<'_>,
+    index: usize,
+) -> Result<(PartReduction, Source), RomError> {
+    let data = PartData::new(inp)?;
+    let part = &data.parts(inp)[index];
+    Ok(reduce_cached(
+        part,
+        &cb_settings(inp),
+        inp.part_cache.as_deref(),
+    )?)
 }
 
 /// The liner's output rows (contact DOFs, then points) scattered onto each modelled

@@ -283,8 +283,12 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
     })?;
     // a mesh from a file is sized only once read: the engine model it makes is checked now
     if imported {
-        let dofs = 3 * (cm.nodes.len() + scene.rom.cylinders.len() * lm.nodes.len());
-        let est = budget::fe_model(dofs, "the ROM build");
+        let cylinders = axis_x.len();
+        let est = budget::rom_parts(
+            3.0 * cm.nodes.len() as f64,
+            3.0 * lm.nodes.len() as f64,
+            (cylinders * budget::interface_columns(scene.rom.harmonics)) as f64,
+        );
         Limits::of(scene).check(scene, &est)?;
     }
     for name in &cc.fix {
@@ -508,6 +512,63 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions, progress: &dyn Fn(&str)) -> R
         cache_file: (!opts.no_cache).then_some(path),
         build: None,
         replaced,
+    })
+}
+
+/// One component's reduction done for a scheduler's task.
+#[derive(Debug, serde::Serialize)]
+pub struct ComponentDone {
+    /// "liner" or "crankcase".
+    pub component: &'static str,
+    /// Its index among the engine's components (1-based) and their number.
+    pub index: usize,
+    pub count: usize,
+    /// Reduced now, or found in the component cache.
+    pub source: super::part_cache::Source,
+    pub full_dofs: usize,
+    pub reduced_dofs: usize,
+    pub seconds: f64,
+}
+
+/// Reduces component `index` (1-based, of [`super::rom::COMPONENTS`]) of the scene's engine into
+/// the component cache of `opts` (its directory or the scene's `rom.cache_dir`), where a later
+/// `rom` finds it: one task of a component job array. Refused with `--no-cache` (nothing
+/// would keep the result).
+pub fn reduce_component(scene: &Scene, opts: &CacheOptions, index: usize) -> Result<ComponentDone> {
+    let t = Instant::now();
+    let names = super::rom::COMPONENTS;
+    if opts.no_cache || index == 0 || index > names.len() {
+        return Err(SceneRomError::Scene(SceneError::Field {
+            path: scene.path.clone(),
+            key: "--component".into(),
+            msg: format!(
+                "must be I/{} with I in 1..={} (the engine's components: {}) and a cache to keep it in (not --no-cache)",
+                names.len(),
+                names.len(),
+                names.join(", ")
+            ),
+        }));
+    }
+    let dir = opts
+        .dir
+        .clone()
+        .unwrap_or_else(|| scene.rom.cache_dir.clone());
+    crate::files::check_writable(&dir)?;
+    if let Some(est) = budget::rom_build(scene) {
+        Limits::of(scene).check(scene, &est)?;
+    }
+    let em = load_meshes(scene)?;
+    let mut inputs = rom_inputs(scene, &em, false);
+    inputs.part_cache = Some(dir);
+    let (r, source) = super::rom::reduce_component(&inputs, index - 1)?;
+    Ok(ComponentDone {
+        component: names[index - 1],
+        index,
+        count: names.len(),
+        source,
+        full_dofs: r.stats.full_dofs,
+        reduced_dofs: r.size(),
+        seconds: t.elapsed().as_secs_f64(),
     })
 }
 

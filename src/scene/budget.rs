@@ -187,13 +187,94 @@ pub fn fe_model(dofs: usize, what: &'static str) -> Estimate {
     }
 }
 
-/// The ROM build of a scene with generated meshes, from its estimated DOFs ([`fe_model`]).
+/// Factor entries of the default crankcase's interior (75,810 DOFs, hex20, METIS order):
+/// 50.9M; at 992k DOFs 1,664M, i.e. growth as n^1.355 (measured with the refined settings of
+/// issue 37).
+const REF_PART_DOFS: f64 = 75_810.0;
+const REF_FACTOR_ENTRIES: f64 = 50.9e6;
+const FACTOR_EXPONENT: f64 = 1.355;
+/// Bytes per DOF of a part's two assembled models (full and interior: pattern, K and M, about
+/// 142 stored entries per row for hex20, 24 bytes each, twice).
+const MODEL_BYTES_PER_DOF: f64 = 2.0 * 142.0 * 24.0;
+/// Wall time of the default engine's ROM build from an empty cache on the 2-core machine [s]
+/// (session 38: both parts at once, 72 s) and its two parts' DOFs.
+const REF_ROM_SECONDS: f64 = 72.0;
+const REF_ROM_DOFS: f64 = 75_810.0 + 48_672.0;
+
+/// Peak memory of one part's Craig-Bampton reduction [bytes]: its factor (8 bytes an entry,
+/// grown from the default crankcase's as n^1.355), its two assembled models, and the basis
+/// block of n x `columns` (constraint modes, modes, attachment candidates).
+pub fn part_reduction_bytes(dofs: f64, columns: f64) -> f64 {
+    8.0 * REF_FACTOR_ENTRIES * (dofs / REF_PART_DOFS).powf(FACTOR_EXPONENT)
+        + MODEL_BYTES_PER_DOF * dofs
+        + 8.0 * dofs * columns
+}
+
+/// The ROM build from its parts' DOFs: the liner and the crankcase are reduced at once, so
+/// their peaks add; the crankcase's basis holds twice its interface columns (constraint modes
+/// and their inertia loads) plus modes and loads. Time grows as (n_c + n_l)^1.5 from the
+/// default engine's build.
+pub fn rom_parts(crankcase_dofs: f64, liner_dofs: f64, interface_cols: f64) -> Estimate {
+    let cc = part_reduction_bytes(crankcase_dofs, 2.0 * interface_cols + 100.0);
+    let liner = part_reduction_bytes(liner_dofs, 400.0);
+    let n = crankcase_dofs + liner_dofs;
+    Estimate {
+        what: "the ROM build",
+        memory: cc + liner,
+        seconds: REF_ROM_SECONDS * (n / REF_ROM_DOFS).powf(1.5),
+        keys: "liner.mesh.* / crankcase.mesh.* (element counts and sizes), engine.cylinders or rom.interface_harmonics",
+        detail: format!(
+            "crankcase {} DOFs, liner {} DOFs, {} interface columns",
+            num(crankcase_dofs.round()),
+            num(liner_dofs.round()),
+            num(interface_cols)
+        ),
+    }
+}
+
+/// The ROM build of a scene with generated meshes, from its parts' estimated DOFs
+/// ([`rom_parts`]).
 pub fn rom_build(scene: &Scene) -> Option<Estimate> {
-    let n = engine_dofs(scene)?;
-    Some(Estimate {
-        keys: "liner.mesh.* / crankcase.mesh.* (element counts and sizes), engine.cylinders or rom.cylinders",
-        ..fe_model(n.round() as usize, "the ROM build")
-    })
+    let (cc, liner) = part_dofs(scene)?;
+    let cylinders = scene.crankcase.as_ref().map_or(0, |c| match &c.source {
+        CrankcaseSource::Parametric { geometry, .. } => geometry.cylinders,
+        CrankcaseSource::File(_) => 0,
+    });
+    Some(rom_parts(
+        cc,
+        liner,
+        (cylinders * interface_columns(scene.rom.harmonics)) as f64,
+    ))
+}
+
+/// Interface columns of one cylinder: (2N + 1) harmonics x 2 profiles x 6 directions (seat
+/// radial, tangential, axial; guide the same).
+pub fn interface_columns(harmonics: usize) -> usize {
+    (2 * harmonics + 1) * 2 * 6
+}
+
+/// Estimated DOFs of the generated crankcase and of one generated liner (`None` when a mesh
+/// comes from a file).
+fn part_dofs(scene: &Scene) -> Option<(f64, f64)> {
+    let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
+        return None;
+    };
+    let liner = 3.0 * liner_elements(geometry, meshing) * nodes_per_cell(meshing.kind);
+    let cc = match scene.crankcase.as_ref().map(|c| &c.source) {
+        Some(CrankcaseSource::Parametric {
+            geometry: cg,
+            meshing: cm,
+        }) => {
+            3.0 * crankcase_elements(
+                cg.cylinders,
+                cg.skirt_depth + cg.seat_z,
+                geometry.analysis_depths.len(),
+                cm,
+            ) * nodes_per_cell(cm.kind)
+        }
+        _ => return None,
+    };
+    Some((cc, liner))
 }
 
 /// The transient of `simulate`: steps N = cycles 720 / step (plus the step-error windows),
