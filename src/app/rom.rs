@@ -234,7 +234,7 @@ pub fn reduce_component(
             }
         })?
     } else {
-        Shard::parse(arg)?
+        Shard::parse("--component", arg)?
     };
     if task.count != count {
         return Err(crate::scene::SceneError::Field {

@@ -67,7 +67,7 @@ pub struct SweepRequest {
 pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     let design = Design::from_args(&req.vary, req.sample.as_deref(), &req.ranges, req.seed)?;
     let shard = match &req.shard {
-        Some(s) => Some(Shard::parse(s)?),
+        Some(s) => Some(Shard::parse("--shard", s)?),
         None => Shard::from_env(&|k| std::env::var(k).ok(), req.shards)?,
     };
     if shard.is_some() && req.out.is_none() {

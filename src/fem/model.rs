@@ -2,7 +2,7 @@
 //! order and the symbolic factorisation, ready for static and eigen solves.
 
 use super::assembly::{Assembler, AssemblyError};
-use super::dofs::{DofMap, UnknownSet};
+use super::dofs::{DofMap, UnknownSet, FIXED};
 use super::material::Elastic;
 use super::surface::{self, SurfaceMass};
 use crate::linalg::factor::{Analysis, FactorError};
@@ -45,6 +45,9 @@ pub struct FeModel {
     pub km: StiffnessMass,
     pub analysis: Analysis,
     pub timings: Timings,
+    /// The fill-reducing node order of the analysis (nodes with free DOFs, METIS nested
+    /// dissection), kept so that a restricted model ([`FeModel::restrict`]) reuses it.
+    node_order: Vec<usize>,
 }
 
 impl FeModel {
@@ -92,6 +95,51 @@ impl FeModel {
             km,
             analysis,
             timings,
+            node_order: node_perm,
+        })
+    }
+
+    /// The model with the nodes of `sets` fixed as well (`sets` names every fixed set, this
+    /// model's included): K and M restricted to the remaining free DOFs (rows and columns
+    /// dropped, no assembly), analysed with this model's node order restricted to the nodes
+    /// still free (a nested-dissection order stays one on a subgraph: its separators still
+    /// separate). The Craig-Bampton interior model K_ii, M_ii.
+    pub fn restrict(&self, sets: &[String]) -> Result<Self, ModelError> {
+        let t = Instant::now();
+        let dofs = DofMap::with_fixed_sets(&self.mesh, sets)?;
+        if dofs.n_free == 0 {
+            return Err(ModelError::NoDofs);
+        }
+        // old free index -> new free index (FIXED when newly fixed); both numberings run in
+        // node order, so kept indices keep their order
+        let mut map = vec![FIXED; self.dofs.n_free];
+        for (slot, &old) in self.dofs.dof.iter().enumerate() {
+            let new = dofs.dof[slot];
+            if new != FIXED {
+                assert!(old != FIXED, "restrict: `sets` must include the model's fixed sets");
+                map[old] = new;
+            }
+        }
+        let km = self.km.restrict(&map, dofs.n_free);
+        let node_dofs = dofs.node_dofs();
+        let node_perm: Vec<usize> = self
+            .node_order
+            .iter()
+            .copied()
+            .filter(|&n| !node_dofs[n].is_empty())
+            .collect();
+        let (fwd, inv) = ordering::expand_to_dofs(&node_perm, &node_dofs, dofs.n_free);
+        let analysis = Analysis::new(&km.pattern, &fwd, &inv)?;
+        Ok(Self {
+            mesh: self.mesh.clone(),
+            dofs,
+            km,
+            analysis,
+            timings: Timings {
+                ordering: t.elapsed().as_secs_f64(),
+                ..Timings::default()
+            },
+            node_order: node_perm,
         })
     }
 

@@ -126,6 +126,38 @@ pub struct StiffnessMass {
 }
 
 impl StiffnessMass {
+    /// The principal submatrices on the indices `map` keeps: `map[old]` the new index (in the
+    /// same order as the old ones) or `usize::MAX` for a dropped row and column.
+    pub fn restrict(&self, map: &[usize], n: usize) -> Self {
+        let p = &self.pattern;
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0);
+        let (mut row_idx, mut k, mut m) = (Vec::new(), Vec::new(), Vec::new());
+        for c in 0..p.n {
+            if map[c] == usize::MAX {
+                continue;
+            }
+            for q in p.col_ptr[c]..p.col_ptr[c + 1] {
+                let r = map[p.row_idx[q]];
+                if r != usize::MAX {
+                    row_idx.push(r);
+                    k.push(self.k[q]);
+                    m.push(self.m[q]);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        Self {
+            pattern: Pattern {
+                n,
+                col_ptr,
+                row_idx,
+            },
+            k,
+            m,
+        }
+    }
+
     /// Values of K - sigma M on the shared pattern.
     pub fn shifted(&self, sigma: f64) -> Vec<f64> {
         self.k

@@ -162,8 +162,7 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
     let full =
         FeModel::build_with(p.mesh.clone(), p.material, p.fix, p.surface).map_err(err_model)?;
     let sets = interior_sets(p)?;
-    let inner =
-        FeModel::build_with(p.mesh.clone(), p.material, &sets, p.surface).map_err(err_model)?;
+    let inner = full.restrict(&sets).map_err(err_model)?;
     let (na, nb) = (full.n_free(), inner.n_free());
     tick(&format!("assembled: {na} DOFs, {nb} interior"));
     let llt = inner

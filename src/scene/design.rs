@@ -354,9 +354,9 @@ pub struct Shard {
 }
 
 impl Shard {
-    /// Parses `I/N` with 1 <= I <= N.
-    pub fn parse(arg: &str) -> Result<Self, DesignError> {
-        let bad = |p: &str| argument("--shard", arg, p, "I/N with 1 <= I <= N");
+    /// Parses `I/N` with 1 <= I <= N, given as `flag` (for the messages).
+    pub fn parse(flag: &'static str, arg: &str) -> Result<Self, DesignError> {
+        let bad = |p: &str| argument(flag, arg, p, "I/N with 1 <= I <= N");
         let (i, n) = arg.split_once('/').ok_or_else(|| bad("no '/'"))?;
         let num = |s: &str| {
             s.trim()
