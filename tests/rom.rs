@@ -646,7 +646,10 @@ fn contract_rom_component_tasks() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     let (code, out, err) = run(&["--component", "1/2"], &[]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("component 1/2 (liner)") && out.contains("reduced into"), "{out}");
+    assert!(
+        out.contains("component 1/2 (liner)") && out.contains("reduced into"),
+        "{out}"
+    );
     let slurm = [
         ("SLURM_ARRAY_TASK_ID", "1"),
         ("SLURM_ARRAY_TASK_MIN", "0"),

@@ -116,7 +116,10 @@ impl FeModel {
         for (slot, &old) in self.dofs.dof.iter().enumerate() {
             let new = dofs.dof[slot];
             if new != FIXED {
-                assert!(old != FIXED, "restrict: `sets` must include the model's fixed sets");
+                assert!(
+                    old != FIXED,
+                    "restrict: `sets` must include the model's fixed sets"
+                );
                 map[old] = new;
             }
         }
