@@ -154,22 +154,13 @@ pub struct Llt<'a> {
 }
 
 impl Llt<'_> {
-    /// Solves A X = B in place for the columns of `rhs` (n x k, column-major).
+    /// Solves A X = B in place for the columns of `rhs` (n x k, column-major), on the calling
+    /// thread: faer's parallel supernodal solve sums in an order that depends on the number of
+    /// threads (a ROM built on 1 core differed from one built on 2 in the last bits, and a
+    /// slap transient amplifies that), and it was no faster here (single vectors are bound by
+    /// reading the factor). Callers with many right-hand sides solve column blocks in parallel
+    /// themselves, which keeps every column's arithmetic the same on any machine.
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        let k = rhs.ncols();
-        let sym = &self.analysis.symbolic;
-        let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<f64>(k, par()));
-        LltRef::new(sym, &self.l).solve_in_place_with_conj(
-            Conj::No,
-            rhs,
-            par(),
-            MemStack::new(&mut mem),
-        );
-    }
-
-    /// Solves A X = B in place on the calling thread (callers that solve several blocks in
-    /// parallel themselves).
-    pub fn solve_block_serial(&self, rhs: MatMut<'_, f64>) {
         let k = rhs.ncols();
         let sym = &self.analysis.symbolic;
         let mut mem = MemBuffer::new(sym.solve_in_place_scratch::<f64>(k, Par::Seq));

@@ -273,9 +273,10 @@ fn interior_sets(p: &Part<'_>) -> Result<Vec<String>, ReduceError> {
 
 /// The fixed-interface normal modes below the cut-off: K_ii phi = lambda M_ii phi, their
 /// number from a Sturm count (negative pivots of K_ii - omega_c^2 M_ii), solved by
-/// shift-invert Lanczos on the factor of K_ii; refused when the Lanczos vectors would not fit
-/// in memory or the cut-off takes in more than a quarter of the spectrum. Returns the
-/// eigenvalues and the modes (interior DOFs x modes).
+/// shift-invert Lanczos on the factor of K_ii and certified by that count (all of them must
+/// come out below the cut-off; a skipped mode is solved for again, up to [`RESOLVES`] times);
+/// refused when the Lanczos vectors would not fit in memory or the cut-off takes in more than
+/// a quarter of the spectrum. Returns the eigenvalues and the modes (interior DOFs x modes).
 fn fixed_interface_modes(
     p: &Part<'_>,
     inner: &FeModel,
@@ -317,20 +318,48 @@ fn fixed_interface_modes(
     }
     let pattern = &inner.km.pattern;
     let m = &inner.km.m;
-    let modes = solve_modes(
-        nb,
-        &EigenSettings::new(count.min(nb - 1), 0.0),
-        |x, y| pattern.matvec(m, x, y),
-        |x| llt.solve_vec(x),
-    )
-    .map_err(|source| ReduceError::Eigen {
+    // certified by the count: the `count` lowest computed must all lie below the cut-off (a
+    // mode the iteration skipped shows as one above it); else solved again with a margin and
+    // another start vector
+    let mut missed = 0;
+    for attempt in 0..=RESOLVES {
+        let mut settings = EigenSettings::new((count + missed).min(nb - 1), 0.0);
+        settings.seed = attempt as u64;
+        let modes = solve_modes(
+            nb,
+            &settings,
+            |x, y| pattern.matvec(m, x, y),
+            |x| llt.solve_vec(x),
+        )
+        .map_err(|source| ReduceError::Eigen {
+            part: part.to_string(),
+            source,
+        })?;
+        let below = modes
+            .eigenvalues
+            .iter()
+            .filter(|&&l| l <= omega_c2 * (1.0 + 1e-9))
+            .count();
+        if below >= count {
+            let mat = Mat::from_fn(nb, count, |i, j| modes.vectors[j * nb + i]);
+            return Ok((modes.eigenvalues[..count].to_vec(), mat));
+        }
+        log::warn!(
+            "[{part}] the Sturm count finds {count} fixed-interface modes below the cut-off, the Lanczos solve {below}: solving again"
+        );
+        missed = (count - below).max(missed) + 4;
+    }
+    Err(ReduceError::Other {
         part: part.to_string(),
-        source,
-    })?;
-    let k = modes.count();
-    let mat = Mat::from_fn(nb, k, |i, j| modes.vectors[j * nb + i]);
-    Ok((modes.eigenvalues.clone(), mat))
+        msg: format!(
+            "the fixed-interface modes below the cut-off could not all be found: the Sturm count gives {count}, {} solves found fewer",
+            RESOLVES + 1
+        ),
+    })
 }
+
+/// Solves again after a fixed-interface mode was missed: at most this many times.
+const RESOLVES: usize = 2;
 
 /// For each interior DOF (the interior model's numbering) its DOF in the full model.
 fn interior_to_full(full: &FeModel, inner: &FeModel) -> Vec<usize> {
@@ -387,7 +416,7 @@ fn constraint_modes(
         for v in rhs.col_iter_mut().flat_map(|c| c.iter_mut()) {
             *v = -*v;
         }
-        interior.llt.solve_block_serial(rhs.as_mut());
+        interior.llt.solve_in_place(rhs.as_mut());
         interior.scatter(rhs.as_ref(), panel.as_mut());
     });
     interface_cols
@@ -473,7 +502,7 @@ fn attachment_candidates(
             let f_b = interior.gather(f.as_ref());
             drop(f);
             let mut x = f_b.clone();
-            interior.llt.solve_block_serial(x.as_mut());
+            interior.llt.solve_in_place(x.as_mut());
             if !lambdas.is_empty() {
                 // u -= Phi_n Lambda^-1 Phi_n^T f
                 let mut pf = modes_b.transpose() * &f_b;

@@ -842,6 +842,7 @@ fn left_out(inp: &RomInputs<'_>, n_g: usize, b: &Basis) -> Vec<String> {
 /// needs.
 pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, RomError> {
     let t0 = Instant::now();
+    crate::linalg::thread_count_invariant();
     let data = PartData::new(inp)?;
     let rows = &data.rows;
     let (liner, crankcase, sources) = reduce_parts(inp, &data, progress)?;
@@ -1029,6 +1030,7 @@ pub fn reduce_component(
     inp: &RomInputs<'_>,
     index: usize,
 ) -> Result<(PartReduction, Source), RomError> {
+    crate::linalg::thread_count_invariant();
     let data = PartData::new(inp)?;
     let part = &data.parts(inp)[index];
     Ok(reduce_cached(

@@ -95,7 +95,13 @@ impl<'a> FullLiner<'a> {
                 x[(k, j)] += v;
             }
         }
-        llt.solve_in_place(x.as_mut());
+        {
+            use rayon::prelude::*;
+            // column blocks on both cores (each block's arithmetic independent of the split)
+            x.as_mut()
+                .par_col_chunks_mut(64)
+                .for_each(|block| llt.solve_in_place(block));
+        }
         let mut g = vec![0.0; nc * nc];
         for (i, row) in contact.iter().enumerate() {
             for j in 0..nc {
