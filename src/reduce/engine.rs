@@ -157,6 +157,22 @@ pub fn system_modes(
     })
 }
 
+/// A B on both cores: faer's parallel product splits the output into blocks, each summed in
+/// the same order on any number of threads (unlike its dense factorisations, which stay serial
+/// during a ROM build: [`crate::linalg::thread_count_invariant`]).
+fn mul(a: faer::MatRef<'_, f64>, b: faer::MatRef<'_, f64>) -> Mat<f64> {
+    let mut c = Mat::<f64>::zeros(a.nrows(), b.ncols());
+    faer::linalg::matmul::matmul(
+        c.as_mut(),
+        faer::Accum::Replace,
+        a,
+        b,
+        1.0,
+        faer::Par::rayon(0),
+    );
+    c
+}
+
 /// Three passes of subspace iteration with K'^-1 M' from the block `ys` (Rayleigh-Ritz each
 /// pass, K' = `kchol` factorised once): W = K'^-1 M' Y, (W^T K' W) x = lambda (W^T M' W) x,
 /// Y = W X. Returns the Ritz values (ascending, upper bounds of the exact eigenvalues,
@@ -170,9 +186,9 @@ fn subspace_refine(
     let p = ys.ncols();
     let mut ritz = vec![0.0; p];
     for _ in 0..3 {
-        let w = kchol.solve(ms * &ys);
-        let mut kp = w.transpose() * (ks * &w);
-        let mut mp = w.transpose() * (ms * &w);
+        let w = kchol.solve(mul(ms.as_ref(), ys.as_ref()));
+        let mut kp = mul(w.transpose(), mul(ks.as_ref(), w.as_ref()).as_ref());
+        let mut mp = mul(w.transpose(), mul(ms.as_ref(), w.as_ref()).as_ref());
         symmetrise(&mut kp);
         symmetrise(&mut mp);
         let cp = mp
@@ -188,7 +204,7 @@ fn subspace_refine(
             q.as_mut(),
             faer::Par::rayon(0),
         );
-        ys = &w * &q;
+        ys = mul(w.as_ref(), q.as_ref());
         let sv = e.S().column_vector();
         for (i, r) in ritz.iter_mut().enumerate() {
             *r = sv[i];
