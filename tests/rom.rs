@@ -682,3 +682,24 @@ fn contract_rom_component_tasks() {
         assert!((a - b).abs() <= 1e-6 * b, "{a} vs {b}");
     }
 }
+
+/// Regression (issue 37): the ROM is the same to the last bit on 1 and on 2 threads. faer's
+/// parallel sparse solve and dense decompositions summed in a thread-count dependent order; a
+/// ROM built by a 1-CPU scheduler task then differed in the last bits from a workstation's,
+/// and the slap transient turned that into peaks 0.1 % apart (a sharded Slurm sweep no longer
+/// equalled the unsharded one). Exact equality of the printed frequencies (JSON keeps every
+/// bit of an f64) is the test: nothing but the thread count differs between the two builds.
+#[test]
+fn regression_rom_does_not_depend_on_the_thread_count() {
+    let build = |threads: &str| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_linercav"))
+            .args(["rom", SMALL, "--no-cache", "--json"])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        v["first_frequencies_hz"].clone()
+    };
+    assert_eq!(build("1"), build("2"));
+}
