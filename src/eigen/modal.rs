@@ -67,7 +67,8 @@ const RECOVERY_ATTEMPTS: usize = 2;
 /// are recovered by the solver itself: solved again with every counted eigenvalue plus the
 /// guard asked for and another start vector (up to [`RECOVERY_ATTEMPTS`] times), each result
 /// certified anew; `recovered` tells how many modes the first solve had missed. A count below
-/// the computed number (spurious eigenvalues) is reported, not retried.
+/// the computed number (spurious eigenvalues) is reported, not retried; a re-solve that fails
+/// (not converged) leaves the previous result with its failed certificate.
 pub fn certified_modes(
     km: &StiffnessMass,
     analysis: &Analysis,
@@ -94,28 +95,41 @@ fn certify_with_recovery(
     let mut nev = (count + guard).min(n.saturating_sub(1)).max(count);
     let mut attempt = 0;
     let mut recovered = 0;
+    let mut previous: Option<(Modes, Option<SturmCheck>)> = None;
     let (all, sturm) = loop {
-        let (all, t) = solve(nev, attempt)?;
+        let (all, t) = match (solve(nev, attempt), previous.take()) {
+            (Ok(r), _) => r,
+            // a re-solve that fails leaves the first result with its failed certificate
+            (Err(e), Some(prev)) => {
+                log::warn!("solving again for the missed modes failed: {e}");
+                break prev;
+            }
+            (Err(e), None) => return Err(e),
+        };
         timings.factorisation += t.0;
         timings.eigen += t.1;
         let t = Instant::now();
         let sturm = sturm_check(km, analysis, &all.eigenvalues, count)?;
         timings.certification += t.elapsed().as_secs_f64();
-        match &sturm {
+        let retry = match &sturm {
             Some(st) if st.found > st.expected && attempt < RECOVERY_ATTEMPTS => {
-                let missed = st.found - st.expected;
-                log::warn!(
-                    "the Sturm count at {:.1} Hz found {} eigenvalues below, {} were computed: solving again for the {missed} missed",
-                    st.shift_hz, st.found, st.expected
-                );
-                if attempt == 0 {
-                    recovered = missed;
-                }
-                nev = (st.found + guard.max(missed)).min(n.saturating_sub(1));
-                attempt += 1;
+                Some((st.found, st.expected, st.shift_hz))
             }
-            _ => break (all, sturm),
+            _ => None,
+        };
+        let Some((found, expected, shift_hz)) = retry else {
+            break (all, sturm);
+        };
+        let missed = found - expected;
+        log::warn!(
+            "the Sturm count at {shift_hz:.1} Hz found {found} eigenvalues below, {expected} were computed: solving again for the {missed} missed"
+        );
+        if attempt == 0 {
+            recovered = missed;
         }
+        nev = (found + guard.max(missed)).min(n.saturating_sub(1));
+        attempt += 1;
+        previous = Some((all, sturm));
     };
     if sturm.as_ref().is_some_and(|s| !s.ok) {
         recovered = 0;
@@ -252,5 +266,22 @@ mod tests {
         .unwrap();
         assert!(!sol.sturm.unwrap().ok);
         assert_eq!(sol.recovered, 0);
+        // a re-solve that fails (ARPACK not converged) leaves the first result and its failed
+        // certificate, the exit 1 of `modes` (not the re-solve's error)
+        let (sol, _) = certify_with_recovery(km, an, 8, sigma, 2, |nev, attempt| {
+            if attempt > 0 {
+                return Err(EigenError::NotConverged {
+                    converged: 0,
+                    wanted: nev,
+                    restarts: 500,
+                    msg: "test",
+                }
+                .into());
+            }
+            let (m, t) = lanczos(km, an, nev, sigma, 0)?;
+            Ok((drop_mode(m, 3), t))
+        })
+        .unwrap();
+        assert!(!sol.sturm.unwrap().ok);
     }
 }
