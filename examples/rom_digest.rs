@@ -1,3 +1,7 @@
+//! Digests (BLAKE3 of the bits) of the small engine's ROM: both parts' reduced matrices, the
+//! system modes and the cylinders' rows. Two runs, or runs with RAYON_NUM_THREADS=1 and 2,
+//! must print the same lines (the ROM does not depend on the thread count or the run).
+//! `RAYON_NUM_THREADS=1 cargo run --release --example rom_digest`
 use std::path::Path;
 fn h(m: &faer::Mat<f64>) -> String {
     let mut v = Vec::new();

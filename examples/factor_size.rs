@@ -1,3 +1,7 @@
+//! The default engine's crankcase model with scene overrides: its DOFs, stored entries of K and
+//! the entries of its Cholesky factor (symbolic analysis only), the machine-independent
+//! figures of benches/RESULTS.md ("ROM build against crankcase size").
+//! `cargo run --release --example factor_size -- crankcase.mesh.per_sector=8`
 use linercav::fem::model::FeModel;
 use std::time::Instant;
 fn main() {
