@@ -82,18 +82,7 @@ pub fn system_modes(
     keep_lambda: f64,
 ) -> Result<SystemModes, SystemError> {
     let n = k.nrows();
-    let d: Vec<f64> = (0..n)
-        .map(|i| {
-            let v = m[(i, i)];
-            if v > 0.0 {
-                1.0 / v.sqrt()
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let ks = Mat::from_fn(n, n, |i, j| d[i] * k[(i, j)] * d[j]);
-    let ms = Mat::from_fn(n, n, |i, j| d[i] * m[(i, j)] * d[j]);
+    let (d, ks, ms) = unit_mass_scaling(&k, m);
     let chol = ms
         .llt(Side::Lower)
         .map_err(|_| SystemError::MassNotPositive)?;
@@ -155,6 +144,24 @@ pub fn system_modes(
         vectors: y,
         k,
     })
+}
+
+/// The scaling to unit modal mass of [`system_modes`]: D = diag(M)^-1/2 (1 where M_ii <= 0),
+/// K' = D K D, M' = D M D. Returns (D, K', M').
+fn unit_mass_scaling(k: &Mat<f64>, m: &Mat<f64>) -> (Vec<f64>, Mat<f64>, Mat<f64>) {
+    let n = k.nrows();
+    let d: Vec<f64> = (0..n)
+        .map(|i| {
+            if m[(i, i)] > 0.0 {
+                1.0 / m[(i, i)].sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let ks = Mat::from_fn(n, n, |i, j| d[i] * k[(i, j)] * d[j]);
+    let ms = Mat::from_fn(n, n, |i, j| d[i] * m[(i, j)] * d[j]);
+    (d, ks, ms)
 }
 
 /// A B on both cores: faer's parallel product splits the output into blocks, each summed in
@@ -223,17 +230,7 @@ pub fn refined_eigenvalues(
     start: faer::MatRef<'_, f64>,
 ) -> Result<Vec<f64>, SystemError> {
     let n = k.nrows();
-    let d: Vec<f64> = (0..n)
-        .map(|i| {
-            if m[(i, i)] > 0.0 {
-                1.0 / m[(i, i)].sqrt()
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let ks = Mat::from_fn(n, n, |i, j| d[i] * k[(i, j)] * d[j]);
-    let ms = Mat::from_fn(n, n, |i, j| d[i] * m[(i, j)] * d[j]);
+    let (d, ks, ms) = unit_mass_scaling(k, m);
     let kchol = ks
         .llt(Side::Lower)
         .map_err(|_| SystemError::StiffnessSingular)?;
