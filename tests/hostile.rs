@@ -779,3 +779,30 @@ fn contract_doubtful_values_are_warned_about() {
     );
     assert!(warnings(&["transient.cycles=1", "transient.averaged_cycles=1"]).is_empty());
 }
+
+/// Regression (issue 40, found in session 38): under an address-space limit as a batch
+/// scheduler sets one (RLIMIT_AS 2 GB), the default engine's ROM build (estimated 3.8 GB) aborted
+/// in an allocation; it is refused up front, exit 2, naming the estimate.
+#[test]
+fn regression_an_address_space_limit_is_respected() {
+    use std::os::unix::process::CommandExt;
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_linercav"));
+    c.args(["rom", "models/engine.toml", "--no-cache"]);
+    // SAFETY: setrlimit is async-signal-safe; the struct lives for the call
+    unsafe {
+        c.pre_exec(|| {
+            let r = libc::rlimit {
+                rlim_cur: 2_000_000_000,
+                rlim_max: 2_000_000_000,
+            };
+            if libc::setrlimit(libc::RLIMIT_AS, &r) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let o = c.output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("needs about") && err.contains("GB"), "{err}");
+}
