@@ -8,7 +8,7 @@ use super::criteria::{self, Risk, Thresholds};
 use super::Setup;
 use crate::analysis::correlation::{pearson, spearman};
 use crate::analysis::spectrum::{amplitude_spectrum, rms_average, Spectrum};
-use crate::linalg::dense::row;
+use crate::linalg::dense::{row, Dense};
 use crate::reduce::rom::EngineRom;
 use crate::transient::cycle::{CycleResult, Series};
 
@@ -67,9 +67,9 @@ pub struct Evaluation {
     /// Cylinders ordered from the highest to the lowest peak negative acceleration.
     pub ranking: Vec<usize>,
     /// Engine-wide dominant response frequency [Hz]: the peak of the RMS average of all the
-    /// points' spectra (see [`crate::analysis::spectrum::rms_average`]). The single spectra
-    /// of one cycle scatter bin to bin (the slap is not periodic), so their largest single peak
-    /// jumps between neighbouring peaks of similar height from one realisation to the next.
+    /// points' spectra, each itself averaged over the averaged cycles ([`spectra`]). The
+    /// spectrum of one cycle scatters bin to bin (the slap is not periodic), so its largest
+    /// peak jumps between neighbouring peaks of similar height from one realisation to the next.
     pub dominant_hz: f64,
     /// The system modes nearest to it (closest first).
     pub nearest_modes: Vec<ModeLink>,
@@ -77,8 +77,13 @@ pub struct Evaluation {
     pub most_active_point: usize,
 }
 
-/// Per cylinder and point, the spectrum of the last cycle with the cylinder's firing TDC at
-/// the window centre (the series is periodic, so it is rotated, not cut).
+/// Per cylinder and point, the spectrum averaged over the averaged cycles: each cycle's
+/// record with the cylinder's firing TDC at the window centre (rotated, not cut: the cycle's
+/// ends meet where the Hann window is zero), its amplitude spectrum A_j, and their RMS average
+/// A = sqrt(sum_j A_j^2 / n) (Welch's estimate over n cycles of a non-periodic slap; one
+/// cycle's spectrum is one draw, whose largest peak jumps between neighbouring modes). A
+/// series without the averaged cycles' records (`cycle_acceleration` empty) gives the last
+/// cycle's spectrum.
 pub fn spectra(series: &Series, firing_order: &[usize]) -> Vec<Vec<Spectrum>> {
     let n = series.time_s.len();
     if n < 4 {
@@ -105,15 +110,34 @@ pub fn spectra(series: &Series, firing_order: &[usize]) -> Vec<Vec<Spectrum>> {
                     d(a).total_cmp(&d(b))
                 })
                 .unwrap_or(0);
+            let records: Vec<&Dense> = if c.cycle_acceleration.is_empty() {
+                vec![&c.acceleration]
+            } else {
+                c.cycle_acceleration.iter().collect()
+            };
             (0..c.acceleration.nrows())
                 .map(|p| {
-                    let a = row(&c.acceleration, p);
-                    let rot: Vec<f64> = (0..n).map(|i| a[(start + i) % n]).collect();
-                    amplitude_spectrum(&rot, dt)
+                    let each: Vec<Spectrum> = records
+                        .iter()
+                        .filter(|r| r.nrows() == c.acceleration.nrows() && r.ncols() == n)
+                        .map(|r| {
+                            amplitude_spectrum(&rotated(row(r, p), start), dt)
+                        })
+                        .collect();
+                    let refs: Vec<&Spectrum> = each.iter().collect();
+                    rms_average(&refs).unwrap_or_else(|| {
+                        amplitude_spectrum(&rotated(row(&c.acceleration, p), start), dt)
+                    })
                 })
                 .collect()
         })
         .collect()
+}
+
+/// `a` rotated to start at sample `start`.
+fn rotated(a: &[f64], start: usize) -> Vec<f64> {
+    let n = a.len();
+    (0..n).map(|i| a[(start + i) % n]).collect()
 }
 
 /// Peak |v| of a periodic acceleration record: v = cumulative trapezoid integral, mean

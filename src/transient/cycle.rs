@@ -11,7 +11,8 @@
 //! next slap starts from, so consecutive cycles differ (the default engine's by 20-40 %) and
 //! one cycle's peak is one draw. Each reported peak is therefore the mean over the last
 //! `averaged_cycles` cycles of the per-cycle peak P_k, with the sample standard deviation
-//! s = sqrt(sum (P_k - mean)^2 / (n - 1)) and the largest P_k; the series are the last cycle's.
+//! s = sqrt(sum (P_k - mean)^2 / (n - 1)) and the largest P_k; the series are the last cycle's
+//! (with the averaged cycles' point accelerations, for averaged spectra).
 //! The change between the last two cycles is reported as well.
 //!
 //! Energy balance of the structure (mass-normalised modes): E = 1/2 sum (eta'^2 + omega^2 eta^2);
@@ -164,6 +165,11 @@ pub struct CylinderSeries {
     pub cylinder: usize,
     /// Liner point accelerations [m/s^2] (points x steps), + toward the coolant.
     pub acceleration: Dense,
+    /// The same for every averaged cycle, oldest first (the last equals `acceleration`): the
+    /// spectra are averaged over them (one cycle's spectrum is one draw of a non-periodic
+    /// slap). Not serialised (the averaged cycles' records, 6 x 4 x 2880 x 20 values).
+    #[serde(skip)]
+    pub cycle_acceleration: Vec<Dense>,
     /// Crankcase jacket-wall accelerations at the facing points [m/s^2] (points x steps; the
     /// last cycle's only, 0 steps in the others).
     pub crankcase_acceleration: Dense,
@@ -952,7 +958,8 @@ impl<'a> EngineRun<'a> {
         let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
         let mut prev_peaks: Option<CyclePeaks> = None;
         let mut kept: Vec<CyclePeaks> = Vec::with_capacity(averaged);
-        let mut last_series = None;
+        let mut kept_acceleration: Vec<Vec<Dense>> = vec![Vec::new(); self.cyls.len()];
+        let mut last_series: Option<Series> = None;
         let mut building: Option<Series> = None;
         let mut pending: Option<(usize, Series)> = None;
         let (starts, window_steps) = self.step_error_plan(cycles, spc, margin);
@@ -996,6 +1003,9 @@ impl<'a> EngineRun<'a> {
             }
             if k + averaged >= cycles {
                 kept.push(peaks.clone());
+                for (acc, cs) in kept_acceleration.iter_mut().zip(&series.cylinders) {
+                    acc.push(cs.acceleration.clone());
+                }
             }
             prev_peaks = Some(peaks);
             last_series = Some(series);
@@ -1004,7 +1014,10 @@ impl<'a> EngineRun<'a> {
         self.stats.energy_error = if scale > 0.0 { err / scale } else { 0.0 };
         self.stats.cycles_run = cycles;
         self.stats.cycles_averaged = kept.len();
-        let series = last_series.expect("at least one cycle");
+        let mut series = last_series.expect("at least one cycle");
+        for (cs, acc) in series.cylinders.iter_mut().zip(kept_acceleration) {
+            cs.cycle_acceleration = acc;
+        }
         let mut peaks = average_peaks(&kept);
         self.stats.autocorrelation_cycles = standard_errors(&kept, &mut peaks);
         let CyclePeaks {
