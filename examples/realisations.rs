@@ -30,7 +30,13 @@ fn main() {
         let modes: Vec<String> = ev
             .nearest_modes
             .iter()
-            .map(|m| format!("{:.1} Hz r {:.2}", m.frequency_hz, m.pearson.unwrap_or(f64::NAN)))
+            .map(|m| {
+                format!(
+                    "{:.1} Hz r {:.2}",
+                    m.frequency_hz,
+                    m.pearson.unwrap_or(f64::NAN)
+                )
+            })
             .collect();
         println!(
             "zeta {zeta}: dominant {:.1} Hz; nearest {}; ranking {:?}",

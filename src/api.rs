@@ -95,7 +95,7 @@ pub struct LoadedPart {
     pub fix: Vec<String>,
     pub checks: CheckReport,
     pub label: String,
-    /// Shift frequency of the modal solve [Hz].
+    /// Shift frequency of the modal solve \[Hz\].
     pub shift_hz: f64,
     pub guard_modes: usize,
 }
@@ -147,6 +147,15 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
                 flag: format!("{}: part '{part}'", scene.display()),
                 msg: format!("unknown; the scene has: {}", PARTS.join(", ")),
             })?;
+            // a generated mesh is sized before it is made (`liner.mesh.radial = 100000` ran
+            // for minutes at 6-12 GB, and aborted under an address-space cap)
+            if let MeshSource::Liner { geometry, meshing } = &p.source {
+                let dofs = crate::scene::budget::liner_dofs(geometry, meshing);
+                let mut est =
+                    crate::scene::budget::fe_model(dofs.min(1e18) as usize, "the modal solve");
+                est.keys = "liner.mesh (radial, radial_flange, circumferential, axial_size_mm)";
+                crate::scene::budget::Limits::of(&sc).check(&sc, &est)?;
+            }
             let (mut mesh, file, material, src) = read_mesh(
                 &p.source,
                 p.mesh_unit,
@@ -284,12 +293,16 @@ impl Variants {
 
     /// Runs every variant's engine cycles in parallel (`labels[k]` names variant k in a
     /// failure); `done()` is called after each run. Returns the results with each run's wall
-    /// time [s], in the variants' order.
+    /// time \[s\], in the variants' order.
     pub fn run(
         &self,
         labels: &[String],
         done: impl Fn() + Sync,
     ) -> Result<Vec<(CycleResult, f64)>> {
+        // every variant's mode cut-off checked before any run starts
+        for (sc, &ri) in self.scenes.iter().zip(&self.rom_of) {
+            crate::transient::engine::check_mode_cutoff(sc, simulation(sc)?, &self.roms[ri].rom)?;
+        }
         self.scenes
             .par_iter()
             .zip(self.rom_of.par_iter())
@@ -330,11 +343,11 @@ pub struct ReportRuns {
     /// The scene's own run, on `rom`.
     pub base: CycleResult,
     /// The whole-run step check: the scene's run repeated at half its step
-    /// ([`crate::transient::engine::run_half_step`]), and its wall time [s].
+    /// ([`crate::transient::engine::run_half_step`]), and its wall time \[s\].
     pub half_step: CycleResult,
     pub half_step_seconds: f64,
     pub rom: LoadedRom,
-    /// The clearance [um] and pin-offset [mm] sweeps, the scene's run included, ascending.
+    /// The clearance \[um\] and pin-offset \[mm\] sweeps, the scene's run included, ascending.
     pub clearance: Vec<SweepPoint>,
     pub pin_offset: Vec<SweepPoint>,
     /// Speed against error of the fast path on the reference window.
@@ -362,7 +375,7 @@ impl Swept {
 }
 
 /// The whole-run step check of `base`, a run of `scene` on `rom`: its cycles repeated at half
-/// the step it was made at ([`run_half_step`]), with the wall time [s]; `on_step(k, n)` hears
+/// the step it was made at ([`run_half_step`]), with the wall time \[s\]; `on_step(k, n)` hears
 /// the steps.
 pub fn half_step_check(
     scene: &Scene,

@@ -25,7 +25,7 @@ pub struct Coolant {
     pub temp_c: f64,
     /// Ethylene glycol mass fraction in [0, 1).
     pub glycol: f64,
-    /// Static pressure at the liner [Pa].
+    /// Static pressure at the liner \[Pa\].
     pub static_pa: f64,
     pub vapour_pressure_pa: f64,
     pub density_kg_m3: f64,
@@ -46,7 +46,7 @@ pub enum CoolantError {
 }
 
 impl Coolant {
-    /// Properties at `temp_c` [C], glycol mass fraction `glycol`, static pressure `static_pa`.
+    /// Properties at `temp_c` \[C\], glycol mass fraction `glycol`, static pressure `static_pa`.
     pub fn new(temp_c: f64, glycol: f64, static_pa: f64) -> Result<Self, CoolantError> {
         if !(0.0..=150.0).contains(&temp_c) {
             return Err(CoolantError::Temperature(temp_c));
@@ -80,7 +80,7 @@ impl Coolant {
         (self.static_pa - self.vapour_pressure_pa) / (self.density_kg_m3 * self.speed_of_sound_m_s)
     }
 
-    /// Static acceleration threshold of a layer of thickness `gap` [m] with a rigid far wall
+    /// Static acceleration threshold of a layer of thickness `gap` \[m\] with a rigid far wall
     /// (no pressure swing at the crankcase wall, k_p = 0): Ca = 1 at
     /// |a| = (p_s - p_v) / (rho h) [m/s^2].
     pub fn static_threshold(&self, gap: f64) -> f64 {
@@ -88,7 +88,7 @@ impl Coolant {
     }
 }
 
-/// Saturation pressure of water [Pa] at `temp_c`, IAPWS-IF97 region 4 (eq. 30):
+/// Saturation pressure of water \[Pa\] at `temp_c`, IAPWS-IF97 region 4 (eq. 30):
 /// theta = T + n9 / (T - n10), A = theta^2 + n1 theta + n2, B = n3 theta^2 + n4 theta + n5,
 /// C = n6 theta^2 + n7 theta + n8, p_s = [2C / (-B + sqrt(B^2 - 4AC))]^4 MPa.
 /// Valid 273.15-647.096 K.
@@ -153,7 +153,7 @@ pub fn water_mole_fraction(glycol: f64) -> f64 {
     nw / (nw + ng)
 }
 
-/// Vapour pressure of the mixture [Pa], Raoult's law: p_v = x_w p_sat,water(T).
+/// Vapour pressure of the mixture \[Pa\], Raoult's law: p_v = x_w p_sat,water(T).
 pub fn mixture_vapour_pressure(temp_c: f64, glycol: f64) -> f64 {
     water_mole_fraction(glycol) * water_vapour_pressure(temp_c)
 }

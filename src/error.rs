@@ -54,6 +54,8 @@ pub enum Error {
     },
     #[error("cavitation thresholds: {0}")]
     Thresholds(#[from] crate::cavitation::criteria::ThresholdError),
+    #[error(transparent)]
+    Certification(#[from] crate::eigen::certify::CertificationError),
 }
 
 impl Error {
@@ -78,7 +80,10 @@ impl Error {
             Error::Rom(e) => e.exit_code(),
             Error::SceneRom(e) => e.exit_code(),
             Error::Verify(e) => e.exit_code(),
-            Error::Model(_) | Error::Failure(_) | Error::Transient { .. } => 1,
+            Error::Model(_)
+            | Error::Failure(_)
+            | Error::Transient { .. }
+            | Error::Certification(_) => 1,
         }
     }
 }

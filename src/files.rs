@@ -15,6 +15,9 @@ use std::sync::Mutex;
 static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 /// Held while staged outputs are moved into place (the signal handler waits for it).
 static COMMITTING: Mutex<()> = Mutex::new(());
+/// Output directories this process created and has not yet written into, deepest last:
+/// removed on a stopping signal when still empty ([`NewDirs`]).
+static NEW_DIRS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 /// Makes a temporary file or directory at `p` through `make` and registers it, both under the
 /// registry's lock: the signal handler, which takes that lock and keeps it until the process
@@ -31,6 +34,17 @@ fn make_registered<T>(
 
 fn unregister(p: &Path) {
     lock(&TEMPORARIES).retain(|q| q != p);
+}
+
+/// Registers a file this process made and must not outlive it (a cache build's lock file):
+/// a stopping signal removes it like a temporary. [`forget_temporary`] undoes it.
+pub fn register_temporary(p: &Path) {
+    lock(&TEMPORARIES).push(p.to_path_buf());
+}
+
+/// Takes a file registered by [`register_temporary`] off the list (it was removed or kept).
+pub fn forget_temporary(p: &Path) {
+    unregister(p);
 }
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -52,6 +66,9 @@ pub fn install_signal_cleanup() {
             } else {
                 let _ = std::fs::remove_file(&p);
             }
+        }
+        for d in lock(&NEW_DIRS).drain(..).rev() {
+            let _ = std::fs::remove_dir(&d);
         }
         eprintln!("\nstopped by a signal; temporary files removed, outputs left as they were");
         std::process::exit(130);
@@ -202,6 +219,80 @@ pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
     removed.map_err(fail)
 }
 
+/// The first entry of directory `dir` that is not a regular file (a directory, a device, a
+/// link to one) and whose name matches one of `outputs` (a name, or `prefix*suffix`).
+fn taken_output(dir: &Path, outputs: &[&str]) -> Option<PathBuf> {
+    let matches = |name: &str| {
+        outputs.iter().any(|o| match o.split_once('*') {
+            Some((pre, suf)) => {
+                name.len() >= pre.len() + suf.len() && name.starts_with(pre) && name.ends_with(suf)
+            }
+            None => name == *o,
+        })
+    };
+    std::fs::read_dir(dir).ok()?.flatten().find_map(|e| {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let file = std::fs::metadata(e.path()).is_ok_and(|m| m.is_file());
+        (matches(&name) && !file).then(|| e.path())
+    })
+}
+
+/// Output directories made for a command (the missing ones of a path): removed again, when
+/// still empty, if the command fails (dropped without [`NewDirs::keep`]) or is stopped by a
+/// signal, so a failed run leaves no empty directory behind. Only empty directories are ever
+/// removed: a part directory that other shards wrote into stays.
+pub struct NewDirs {
+    made: Vec<PathBuf>,
+}
+
+impl NewDirs {
+    /// Creates `dir` and its missing parents.
+    pub fn create(dir: &Path) -> Result<Self, WriteError> {
+        let missing: Vec<PathBuf> = dir
+            .ancestors()
+            .filter(|a| !a.as_os_str().is_empty())
+            .take_while(|a| std::fs::symlink_metadata(a).is_err())
+            .map(Path::to_path_buf)
+            .collect();
+        let mut made = Vec::new();
+        let mut registry = lock(&NEW_DIRS);
+        for d in missing.iter().rev() {
+            match std::fs::create_dir(d) {
+                Ok(()) => {
+                    registry.push(d.clone());
+                    made.push(d.clone());
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && d.is_dir() => {}
+                Err(source) => {
+                    drop(registry);
+                    drop(Self { made });
+                    return Err(WriteError {
+                        path: d.clone(),
+                        source,
+                    });
+                }
+            }
+        }
+        Ok(Self { made })
+    }
+
+    /// The outputs are written: the directories stay.
+    pub fn keep(mut self) {
+        let made = std::mem::take(&mut self.made);
+        lock(&NEW_DIRS).retain(|d| !made.contains(d));
+    }
+}
+
+impl Drop for NewDirs {
+    fn drop(&mut self) {
+        let mut registry = lock(&NEW_DIRS);
+        for d in self.made.iter().rev() {
+            let _ = std::fs::remove_dir(d);
+            registry.retain(|x| x != d);
+        }
+    }
+}
+
 /// A set of output files written all-or-nothing: the command writes into [`OutputDir::path`]
 /// (a temporary directory), and [`OutputDir::commit`] moves the files into the target
 /// directory only when all are written. When the target does not exist the staging directory
@@ -218,8 +309,10 @@ pub struct OutputDir {
 
 impl OutputDir {
     /// Creates the staging directory for `target` (and the target's parent directories), so an
-    /// unwritable output is found before any work starts.
-    pub fn create(target: &Path) -> Result<Self, WriteError> {
+    /// unwritable output is found before any work starts; so is a name the command writes
+    /// (`outputs`: file names, or patterns with one `*` such as `sweep_*.png`) that the target
+    /// holds as a directory or another non-file.
+    pub fn create(target: &Path, outputs: &[&str]) -> Result<Self, WriteError> {
         let fail = |source| WriteError {
             path: target.to_path_buf(),
             source,
@@ -229,6 +322,15 @@ impl OutputDir {
                 std::io::ErrorKind::AlreadyExists,
                 "exists and is not a directory",
             )));
+        }
+        if let Some(taken) = taken_output(target, outputs) {
+            return Err(WriteError {
+                path: taken,
+                source: std::io::Error::new(
+                    std::io::ErrorKind::AlreadyExists,
+                    "exists and is not a file, and the command writes an output of that name: remove or rename it",
+                ),
+            });
         }
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),

@@ -1,12 +1,55 @@
-//! What the machine can hold: memory available to a new job (Linux `/proc/meminfo`, and the
-//! address-space limit a batch scheduler or `prlimit --as` sets).
+//! What the machine can hold: memory available to a new job (Linux `/proc/meminfo`, the
+//! address-space limit a batch scheduler or `prlimit --as` sets, and the memory cgroup's
+//! limit a container or a scheduler sets).
 
-/// Memory available for new work [bytes]: the smaller of the system's (`MemAvailable`: what can
+/// Memory available for new work \[bytes\]: the smaller of the system's (`MemAvailable`: what can
 /// be allocated without swapping, else `MemTotal`, else 8 GiB when the kernel does not say)
 /// and the process's address-space limit (RLIMIT_AS; under a 2 GB cap the default ROM build
 /// aborted in an allocation instead of being refused up front).
 pub fn available_memory() -> u64 {
-    system_memory().min(address_space_limit())
+    system_memory()
+        .min(address_space_limit())
+        .min(cgroup_available(&|p| std::fs::read_to_string(p).ok()))
+}
+
+/// What the process's memory cgroup still allows \[bytes\]: limit - usage of its cgroup (v2
+/// `memory.max` - `memory.current`; v1 `memory.limit_in_bytes` - `memory.usage_in_bytes`), as a
+/// container runtime or a batch scheduler sets it; u64::MAX when unlimited or not found.
+/// `read` reads a file (a parameter so that the parsing can be tested).
+pub fn cgroup_available(read: &dyn Fn(&str) -> Option<String>) -> u64 {
+    let Some(groups) = read("/proc/self/cgroup") else {
+        return u64::MAX;
+    };
+    let num = |p: &str| read(p).and_then(|t| t.trim().parse::<u64>().ok());
+    let mut best = u64::MAX;
+    for line in groups.lines() {
+        let mut f = line.splitn(3, ':');
+        let (_, controllers, path) = (f.next(), f.next().unwrap_or(""), f.next().unwrap_or(""));
+        let path = path.trim_end_matches('/');
+        let (root, max, current) = if controllers.is_empty() {
+            ("/sys/fs/cgroup", "memory.max", "memory.current")
+        } else if controllers.split(',').any(|c| c == "memory") {
+            (
+                "/sys/fs/cgroup/memory",
+                "memory.limit_in_bytes",
+                "memory.usage_in_bytes",
+            )
+        } else {
+            continue;
+        };
+        // the group's own directory, else the namespace's root (a container sees its group there)
+        for dir in [format!("{root}{path}"), root.to_string()] {
+            if let Some(limit) = num(&format!("{dir}/{max}")) {
+                // v1 says "no limit" with a number near 2^63
+                if limit < 1 << 60 {
+                    let used = num(&format!("{dir}/{current}")).unwrap_or(0);
+                    best = best.min(limit.saturating_sub(used));
+                }
+                break;
+            }
+        }
+    }
+    best
 }
 
 /// RLIMIT_AS of the process [bytes] (u64::MAX when unlimited or unknown).
@@ -37,4 +80,48 @@ fn system_memory() -> u64 {
     field("MemAvailable:")
         .or_else(|| field("MemTotal:"))
         .unwrap_or(8 << 30)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cgroup_available;
+    use std::collections::HashMap;
+
+    fn reader(files: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
+        let m: HashMap<String, String> = files
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        move |p: &str| m.get(p).cloned()
+    }
+
+    /// Verification: a v2 group with a limit gives limit - usage; "max" is unlimited; a v1
+    /// memory group's limit is read from its directory, or from the namespace's root, and the
+    /// v1 "unlimited" number is ignored.
+    #[test]
+    fn verification_cgroup_limits_are_read() {
+        let v2 = reader(&[
+            ("/proc/self/cgroup", "0::/job/42\n"),
+            ("/sys/fs/cgroup/job/42/memory.max", "8589934592\n"),
+            ("/sys/fs/cgroup/job/42/memory.current", "1073741824\n"),
+        ]);
+        assert_eq!(cgroup_available(&v2), 7 << 30);
+        let v2_max = reader(&[
+            ("/proc/self/cgroup", "0::/\n"),
+            ("/sys/fs/cgroup/memory.max", "max\n"),
+        ]);
+        assert_eq!(cgroup_available(&v2_max), u64::MAX);
+        let v1 = reader(&[
+            ("/proc/self/cgroup", "5:devices:/\n4:memory:/slurm/uid_0/job_7\n0::/\n"),
+            ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "4294967296"),
+            ("/sys/fs/cgroup/memory/memory.usage_in_bytes", "294967296"),
+        ]);
+        assert_eq!(cgroup_available(&v1), 4_000_000_000);
+        let v1_unlimited = reader(&[
+            ("/proc/self/cgroup", "4:memory:/x\n"),
+            ("/sys/fs/cgroup/memory/x/memory.limit_in_bytes", "9223372036854771712"),
+        ]);
+        assert_eq!(cgroup_available(&v1_unlimited), u64::MAX);
+        assert_eq!(cgroup_available(&reader(&[])), u64::MAX);
+    }
 }

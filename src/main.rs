@@ -609,11 +609,7 @@ fn modes_command(
             started,
         )?;
         print_report(json, &report, || report.to_text());
-        if report.sturm_count_ok == Some(false) {
-            return Err(Error::Failure(
-                        "certification failed: the Sturm count found more eigenvalues below the check's shift than were computed (a mode was missed)".into(),
-                    ));
-        }
+        linercav::eigen::certify::system_verdict(report.sturm_count_ok)?;
         return Ok(());
     }
     let req = modes::ModesRequest {
@@ -629,22 +625,11 @@ fn modes_command(
     };
     let report = modes::run(&req, started)?;
     print_report(json, &report, || report.to_text());
-    if let Some(st) = report.sturm.as_ref().filter(|st| !st.ok) {
-        return Err(Error::Failure(format!(
-                    "certification failed: the Sturm count at {:.1} Hz found {} eigenvalues below, {} were computed (a mode was missed; raise --count or lower --shift-hz)",
-                    st.shift_hz, st.found, st.expected
-                )));
-    }
-    // ARPACK converges the Ritz pairs to machine precision (relative residuals 1e-15..1e-9
-    // measured on the test meshes); a residual or M-orthonormality error above 1e-6 means the
-    // pairs are not eigenpairs to the accuracy a user reads
-    const BOUND: f64 = 1e-6;
-    if !(report.max_residual <= BOUND && report.m_orthogonality_error <= BOUND) {
-        return Err(Error::Failure(format!(
-            "certification failed: largest relative residual {:.1e}, M-orthonormality error {:.1e} (bound {BOUND:.0e})",
-            report.max_residual, report.m_orthogonality_error
-        )));
-    }
+    linercav::eigen::certify::verdict(
+        report.sturm.as_ref(),
+        report.max_residual,
+        report.m_orthogonality_error,
+    )?;
     Ok(())
 }
 

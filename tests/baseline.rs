@@ -2,7 +2,7 @@
 //! side and slap forces pinned against `tests/baseline/default_engine.json`.
 //!
 //! Tolerances. The quasi-static side force is kinematics and pressure only: 1e-4 relative.
-//! The slap peaks are means over 5 cycles of a non-periodic slap (cycles differ by 20-40 %),
+//! The slap peaks are means over the 20 averaged cycles of a non-periodic slap (cycles differ by 20-40 %),
 //! and they are sensitive to any perturbation, roundoff included: two builds of the same ROM
 //! that differed in roundoff only (a threaded against a single-threaded BLAS under ARPACK; 2624
 //! against 2629 reduced DOFs, frequencies equal to 1e-5) moved single-cycle peaks by up to 20 %,

@@ -124,7 +124,12 @@ fn render(structs: &BTreeMap<String, Vec<Field>>, defaults: &BTreeMap<String, St
                     .map(|b| format!("`{b}`"))
                     .unwrap_or_else(|| format!("`{d}()`")),
             };
-            let doc = f.doc.replace('|', "\\|");
+            // rustdoc's escapes of unit brackets (\[mm\]) read as plain brackets here
+            let doc = f
+                .doc
+                .replace("\\[", "[")
+                .replace("\\]", "]")
+                .replace('|', "\\|");
             rows.push_str(&format!("| `{key}` | `{}` | {default} | {doc} |\n", f.ty));
         }
         if !rows.is_empty() {
@@ -272,10 +277,10 @@ fn verification_every_referenced_file_and_test_exists() {
     );
 }
 
-/// Every test in `tests/` is named for what it is (docs/verification.md): a test without one
-/// of the prefixes fails here with its file and name.
-#[test]
-fn contract_every_test_is_named_for_what_it_is() {
+/// Test functions in `text` not named with one of `KINDS`: every `fn` after `#[test]` (other
+/// attributes and comments between), and every `fn` inside a `proptest! { ... }` block (its
+/// cases are tests, whatever their name).
+fn unnamed_tests(text: &str) -> Vec<String> {
     const KINDS: [&str; 5] = [
         "verification_",
         "regression_",
@@ -283,31 +288,50 @@ fn contract_every_test_is_named_for_what_it_is() {
         "contract_",
         "fuzz_",
     ];
+    let mut unnamed = Vec::new();
+    let (mut marked, mut in_proptest) = (false, false);
+    for raw in text.lines() {
+        if raw.starts_with("proptest!") {
+            in_proptest = true;
+        } else if raw == "}" {
+            in_proptest = false;
+        }
+        let line = raw.trim();
+        if line == "#[test]" {
+            marked = true;
+            continue;
+        }
+        if (marked || in_proptest) && line.starts_with("fn ") {
+            let name: String = line[3..]
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            if !KINDS.iter().any(|k| name.starts_with(k)) {
+                unnamed.push(name);
+            }
+            marked = false;
+        } else if marked && !line.starts_with("#[") && !line.starts_with("//") {
+            marked = false;
+        }
+    }
+    unnamed
+}
+
+/// Every test in `tests/` is named for what it is (docs/verification.md): a test without one
+/// of the prefixes fails here with its file and name. The scanner itself is checked first on a
+/// text with one badly named test of each kind (it once could not see proptest cases that were
+/// not named `fuzz_*`).
+#[test]
+fn contract_every_test_is_named_for_what_it_is() {
+    let sample = "#[test]\n#[ignore]\nfn plain_name() {}\n#[test]\nfn regression_ok() {}\nproptest! {\n    #[test]\n    fn case_without_kind(x in 0..1) {}\n    fn fuzz_ok(x in 0..1) {}\n}\nfn helper() {}\n";
+    assert_eq!(unnamed_tests(sample), vec!["plain_name", "case_without_kind"]);
     let mut files = Vec::new();
     files_under(Path::new("tests"), &["rs"], &mut files);
     let mut unnamed = Vec::new();
     for f in files {
         let text = std::fs::read_to_string(&f).unwrap();
-        let mut marked = false;
-        for line in text.lines().map(str::trim) {
-            if line == "#[test]" {
-                marked = true;
-                continue;
-            }
-            // a proptest's cases are functions inside `proptest! { ... }`, named like tests
-            let in_proptest = line.starts_with("fn fuzz_");
-            if (marked || in_proptest) && line.starts_with("fn ") {
-                let name: String = line[3..]
-                    .chars()
-                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-                    .collect();
-                if !KINDS.iter().any(|k| name.starts_with(k)) {
-                    unnamed.push(format!("{}: {name}", f.display()));
-                }
-                marked = false;
-            } else if marked && !line.starts_with("#[") && !line.starts_with("//") {
-                marked = false;
-            }
+        for name in unnamed_tests(&text) {
+            unnamed.push(format!("{}: {name}", f.display()));
         }
     }
     assert!(

@@ -87,12 +87,22 @@ fn verification_sturm_count_detects_a_missed_mode() {
     );
 }
 
-/// Bad requests are refused with typed errors, not panics.
+/// Bad requests are refused with typed errors, not panics: 24 modes of a one-element hex8
+/// (24 DOFs, all free) is `EigenError::TooMany` naming both numbers.
 #[test]
 fn contract_too_many_modes_is_an_error() {
     let mesh = box_mesh(ElementKind::Hex8, [1, 1, 1], [0.1, 0.1, 0.1], 0.0);
     let mut model = FeModel::build(mesh, &STEEL, &[]).unwrap();
-    assert!(model.modes(24, SIGMA, 0).is_err());
+    let e = model.modes(24, SIGMA, 0).err().expect("refused");
+    assert!(
+        matches!(
+            e,
+            linercav::eigen::modal::ModalError::Eigen(
+                linercav::eigen::shift_invert::EigenError::TooMany { count: 24, n: 24 }
+            )
+        ),
+        "{e:?}"
+    );
 }
 
 /// `copies` identical clamped blocks side by side, not joined: every eigenvalue has that

@@ -643,7 +643,9 @@ proptest! {
         prop_assert!(t.elapsed() < CASE_LIMIT);
     }
 
-    /// Fuzz (400 cases): mutated pressure curves and rig data CSVs never panic.
+    /// Fuzz (400 cases): mutated pressure curves and rig data CSVs never panic; each is read
+/// (a pressure curve finite and positive over the cycle) or refused naming its file, within
+/// the case limit.
     #[test]
     fn fuzz_mutated_csvs_never_panic(muts in prop::collection::vec(mutation(), 1..4)) {
         let pressure: String = std::iter::once("crank_angle_deg,pressure_bar".to_string())
@@ -651,14 +653,25 @@ proptest! {
             .collect::<Vec<_>>()
             .join("\n");
         let comma = |s: String| s.replace(' ', ",");
-        let _ = linercav::piston::pressure::PressureCurve::parse(Path::new("p.csv"), &comma(apply(&pressure.replace(',', " "), &muts)));
+        let t = Instant::now();
+        match linercav::piston::pressure::PressureCurve::parse(Path::new("p.csv"), &comma(apply(&pressure.replace(',', " "), &muts))) {
+            // a table read is a usable curve: finite and positive everywhere
+            Ok(c) => {
+                let usable = (0..72).map(|k| c.at(10.0 * k as f64 + 5.0)).all(|p| p.is_finite() && p > 0.0);
+                prop_assert!(usable, "a curve read that is not finite and positive");
+            }
+            // a refusal names the file
+            Err(e) => prop_assert!(e.to_string().contains("p.csv"), "{}", e),
+        }
         let rig: String = std::iter::once("time_s,acceleration_m_s2,pressure_kpa".to_string())
             .chain((0..200).map(|k| format!("{},{},{}", k as f64 * 1e-4, (k as f64).sin() * 500.0, 150.0 + (k as f64).cos())))
             .collect::<Vec<_>>()
             .join("\n");
-        if let Ok(d) = linercav::cavitation::calibration::RigData::parse("r.csv", &comma(apply(&rig.replace(',', " "), &muts))) {
-            let _ = d;
+        match linercav::cavitation::calibration::RigData::parse("r.csv", &comma(apply(&rig.replace(',', " "), &muts))) {
+            Ok(_) => {}
+            Err(e) => prop_assert!(e.to_string().contains("r.csv"), "{}", e),
         }
+        prop_assert!(t.elapsed() < CASE_LIMIT);
     }
 }
 

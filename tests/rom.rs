@@ -6,7 +6,6 @@ mod common;
 use common::linercav_output as linercav;
 use linercav::analysis::correlation::compare_rom_with_full;
 use linercav::reduce::craig_bampton::{reduce, CbSettings, InterfaceBlock, Part};
-use linercav::reduce::interface::{self, Direction, InterfaceShape};
 use linercav::reduce::scene_rom::{
     build_rom, full_modes, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
 };
@@ -82,38 +81,9 @@ fn verification_reused_liner_reduction_equals_reducing_a_placed_copy() {
         cutoff_hz: inp.cutoff_hz,
         keep_basis: false,
     };
+    // the production code's blocks, about the liner's own axis and about another bore's
     let blocks = |mesh: &linercav::mesh::Mesh, cx: f64| -> Vec<InterfaceBlock> {
-        let seat = InterfaceShape::Seat {
-            r_in: inp.liner_outer_radius,
-            r_out: inp.flange_radius,
-        };
-        let guide = InterfaceShape::Guide {
-            z0: inp.guide_bottom,
-            z1: inp.guide_bottom + inp.guide_height,
-        };
-        let mk = |set: &str, shape, dirs: &[Direction]| InterfaceBlock {
-            set: set.into(),
-            psi: interface::shapes(
-                &mesh.coords_of(mesh.node_set(set).unwrap()),
-                cx,
-                shape,
-                inp.harmonics,
-                dirs,
-            ),
-        };
-        vec![
-            mk(
-                "flange_seat",
-                seat,
-                &[Direction::Radial, Direction::Tangential, Direction::Axial],
-            ),
-            mk("lower_guide", guide, &[Direction::Radial]),
-            mk(
-                "lower_guide",
-                guide,
-                &[Direction::Tangential, Direction::Axial],
-            ),
-        ]
+        linercav::reduce::rom::liner_blocks(&inp, mesh, cx).unwrap()
     };
     fn part<'a>(
         mesh: &'a linercav::mesh::Mesh,

@@ -130,12 +130,21 @@ fn contract_parts_of_different_studies_are_refused() {
     let part = a.join("part-00001-of-00002.json");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&part).unwrap()).unwrap();
-    for (forge, needle) in [("shard", "shard 5/2"), ("runs", "does not hold its runs")] {
+    // (regression, issue 40: an edited result was merged as if the shard had computed it)
+    for (forge, needle) in [
+        ("shard", "shard 5/2"),
+        ("runs", "does not hold its runs"),
+        ("result", "edited or damaged"),
+    ] {
         let mut f = v.clone();
         if forge == "shard" {
             f["shard"]["index"] = 5.into();
-        } else {
+        } else if forge == "runs" {
             f["runs"].as_array_mut().unwrap().pop();
+        } else {
+            // one peak of the run's record lowered by 10 %, as a hand edit would
+            let v = &mut f["runs"][0]["line"]["cylinders"][0]["peak_negative_m_s2"][0];
+            *v = (v.as_f64().unwrap() * 0.9).into();
         }
         let forged = dir.path().join(format!("forged-{forge}.json"));
         std::fs::write(&forged, serde_json::to_string(&f).unwrap()).unwrap();

@@ -62,7 +62,7 @@ pub struct ModeComparison {
     pub modes: usize,
     pub worst_frequency_error: f64,
     pub worst_mac: f64,
-    /// Per compared mode: reference and model frequency [Hz], relative error, best MAC.
+    /// Per compared mode: reference and model frequency \[Hz\], relative error, best MAC.
     pub rows: Vec<(f64, f64, f64, f64)>,
 }
 

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Format tag of a shard's part file.
-pub const PART_FORMAT: &str = "linercav-sweep-part 1";
+pub const PART_FORMAT: &str = "linercav-sweep-part 2";
 
 /// A shard's part file.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -29,10 +29,20 @@ pub struct Part {
     pub shard: Shard,
     /// The ROMs the shard used.
     pub roms: Vec<String>,
-    /// Wall time of the shard [s].
+    /// Wall time of the shard \[s\].
     pub seconds: f64,
     /// The shard's runs: design runs k with k mod N = I - 1, in order.
     pub runs: Vec<PartRun>,
+    /// BLAKE3 of the runs' JSON ([`runs_digest`]): a part whose results were edited, or
+    /// damaged, after the shard wrote them is refused.
+    pub runs_blake3: String,
+}
+
+/// The BLAKE3 hex digest of `runs` as compact JSON (floats in their shortest round-trip form,
+/// so the digest of parsed runs equals the writer's).
+pub fn runs_digest(runs: &[PartRun]) -> String {
+    let text = serde_json::to_string(runs).expect("serialisable");
+    blake3::hash(text.as_bytes()).to_hex().to_string()
 }
 
 /// One run of a part: its CSV and picture record, and its full results.
@@ -76,6 +86,11 @@ pub fn parse_part(path: &Path, text: &str) -> Result<Part, PartError> {
     {
         return Err(runs_problem(format!("it holds {} runs", part.runs.len())));
     }
+    if runs_digest(&part.runs) != part.runs_blake3 {
+        return Err(not_a_part(
+            "its runs differ from what the shard wrote (their BLAKE3 is not runs_blake3): edited or damaged after the run; run the shard again".into(),
+        ));
+    }
     Ok(part)
 }
 
@@ -102,15 +117,15 @@ pub fn same_study(path: &Path, p: &Part, first_path: &Path, first: &Part) -> Res
     if p.sets != first.sets {
         return Err(differ(
             "--set overrides",
-            format!("{:?}", p.sets),
-            format!("{:?}", first.sets),
+            format!("'{}'", p.sets.join(" ")),
+            format!("'{}'", first.sets.join(" ")),
         ));
     }
     if p.design != first.design {
         return Err(differ(
             "design",
-            format!("{:?}", p.design),
-            format!("{:?}", first.design),
+            format!("'{}'", p.design.describe()),
+            format!("'{}'", first.design.describe()),
         ));
     }
     if p.shard.count != first.shard.count {

@@ -85,7 +85,7 @@ pub struct ProbabilityRow {
 pub struct Sensitivities {
     pub keys: Vec<String>,
     pub cylinders: Vec<usize>,
-    /// rho[key][cylinder] (None: constant), then the engine's largest peak as the last column.
+    /// rho\[key\]\[cylinder\] (None: constant), then the engine's largest peak as the last column.
     pub spearman: Vec<Vec<Option<f64>>>,
 }
 

@@ -20,15 +20,6 @@ pub struct ExportReport {
     pub files: Vec<PathBuf>,
 }
 
-fn ensure_dir(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| {
-        Error::Write(crate::files::WriteError {
-            path: dir.to_path_buf(),
-            source: e,
-        })
-    })
-}
-
 /// Writes `DIR/K.mtx` and `DIR/M.mtx` (both or neither).
 pub fn export_matrices(
     input: &ModelInput,
@@ -37,7 +28,7 @@ pub fn export_matrices(
 ) -> Result<ExportReport> {
     let part = load_part(input, extra_fix)?;
     let model = FeModel::build(part.mesh, &part.material, &part.fix)?;
-    ensure_dir(out)?;
+    let dirs = crate::files::NewDirs::create(out)?;
     let (kp, mp) = (out.join("K.mtx"), out.join("M.mtx"));
     let km = &model.km;
     let comment = format!(
@@ -70,6 +61,7 @@ pub fn export_matrices(
             }),
         ),
     ])?;
+    dirs.keep();
     Ok(ExportReport {
         dofs: model.n_free(),
         nnz_lower: km.pattern.lower_entries(&km.k).count(),

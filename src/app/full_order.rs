@@ -7,8 +7,8 @@ use crate::transient::signal::low_pass;
 pub use crate::transient::verify::{compare, FullOrderReport, PointComparison};
 
 /// Writes both runs of the window, one row per step: crank angle, then for the full model and
-/// the ROM the piston's lateral displacement [um] and tilt [mrad], the net contact force toward
-/// thrust [N], and each analysis point's acceleration raw and low-passed to the band [m/s^2].
+/// the ROM the piston's lateral displacement \[um\] and tilt \[mrad\], the net contact force toward
+/// thrust \[N\], and each analysis point's acceleration raw and low-passed to the band [m/s^2].
 pub fn write_window_series(path: &std::path::Path, report: &FullOrderReport) -> Result<()> {
     let runs = [("full", &report.full_series), ("rom", &report.rom_series)];
     let filtered: Vec<Vec<Vec<f64>>> = runs

@@ -16,7 +16,7 @@ pub struct ModesRequest {
     pub count: usize,
     pub extra_fix: Vec<String>,
     pub vtu: Option<PathBuf>,
-    /// Overrides the scene's shift frequency [Hz].
+    /// Overrides the scene's shift frequency \[Hz\].
     pub shift_hz: Option<f64>,
 }
 

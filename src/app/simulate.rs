@@ -39,6 +39,9 @@ pub fn run_cycle(
     })
 }
 
+/// The files `simulate --out` writes.
+pub const OUTPUTS: &[&str] = &["simulate.json", "time_series.csv", "full_order_window.csv"];
+
 /// Request of `simulate`.
 pub struct SimulateRequest {
     pub scene: PathBuf,
@@ -64,10 +67,15 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         }
         crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
     }
-    let stage = req.out.as_deref().map(OutputDir::create).transpose()?;
+    let stage = req
+        .out
+        .as_deref()
+        .map(|o| OutputDir::create(o, OUTPUTS))
+        .transpose()?;
     let progress = Progress::new();
     progress.phase("engine ROM");
     let loaded = get_rom(&scene, &req.cache)?;
+    crate::transient::engine::check_mode_cutoff(&scene, sim, &loaded.rom)?;
     progress.phase("transient");
     let t = Instant::now();
     let settings = settings_of(sim, scene.rom.band_hz);

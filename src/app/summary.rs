@@ -21,6 +21,9 @@ pub use crate::report::summary::Report;
 use std::path::Path;
 use std::time::Instant;
 
+/// The files `report --out` writes (the figures all PNG).
+pub const OUTPUTS: &[&str] = &["summary.md", "summary.json", "*.png"];
+
 /// Writes the report of `scene` into `out`.
 pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions) -> Result<Report> {
     let started = Instant::now();
@@ -34,7 +37,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         est.seconds *= (1 + CLEARANCES_UM.len() + PIN_OFFSETS_MM.len()) as f64 / 2.0 + 2.0;
         crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
     }
-    let stage = crate::files::OutputDir::create(out)?;
+    let stage = crate::files::OutputDir::create(out, OUTPUTS)?;
     let progress = super::progress::Progress::new();
     let runs = report_runs(scene_path, sets, &scene, cache, &|m| progress.phase(m))?;
     let mut simulate = SimulateReport::new(&scene, &piston, &runs.base, runs.rom.cache, 0.0);

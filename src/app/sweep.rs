@@ -11,7 +11,9 @@
 //! sweep writes, from the same code: the CSV rows are identical.
 
 use super::rom::CacheOptions;
-use crate::analysis::shards::{assemble, parse_part, Merged, Part, PartRun, PART_FORMAT};
+use crate::analysis::shards::{
+    assemble, parse_part, runs_digest, Merged, Part, PartRun, PART_FORMAT,
+};
 use crate::analysis::study::{statistics, worst_peak, ProbabilityRow, RunLine, Sensitivities};
 use crate::api::Variants;
 use crate::error::{Error, Result};
@@ -63,9 +65,18 @@ pub struct SweepRequest {
     pub cache: CacheOptions,
 }
 
+/// The files `sweep --out` and `sweep-merge` write.
+pub const OUTPUTS: &[&str] = &[
+    "sweep.csv",
+    "sweep.json",
+    "sweep_*.png",
+    "probabilities.csv",
+];
+
 /// Runs the sweep, or its shard.
 pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     let design = Design::from_args(&req.vary, req.sample.as_deref(), &req.ranges, req.seed)?;
+    design.check_fixed(&req.sets)?;
     let shard = match &req.shard {
         Some(s) => Some(Shard::parse("--shard", s)?),
         None => Shard::from_env(&|k| std::env::var(k).ok(), req.shards)?,
@@ -92,13 +103,15 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         })?;
     // the part directory is shared by the shards (one file each, checked writable before
     // any run); a whole sweep's output directory is staged and renamed into place
-    let stage = match (&req.out, shard) {
-        (Some(o), None) => Some(OutputDir::create(o)?),
+    let (stage, part_dir) = match (&req.out, shard) {
+        (Some(o), None) => (Some(OutputDir::create(o, OUTPUTS)?), None),
         (Some(o), Some(_)) => {
+            // made now, removed again (when still empty) if this shard fails or is stopped
+            let made = crate::files::NewDirs::create(o)?;
             crate::files::check_writable(o)?;
-            None
+            (None, Some(made))
         }
-        _ => None,
+        _ => (None, None),
     };
     let all = design.runs();
     let (lines, runs, roms) = execute(req, &design, &all, &indices)?;
@@ -134,9 +147,17 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
                 .zip(report.runs.iter().cloned())
                 .map(|(line, run)| PartRun { line, run })
                 .collect(),
+            runs_blake3: String::new(),
+        };
+        let part = Part {
+            runs_blake3: runs_digest(&part.runs),
+            ..part
         };
         let text = serde_json::to_string(&part).expect("serialisable");
         write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        if let Some(made) = part_dir {
+            made.keep();
+        }
         report.files = vec![path.display().to_string()];
     } else {
         add_statistics(&mut report);
@@ -333,7 +354,7 @@ fn part_files(inputs: &[PathBuf]) -> std::result::Result<Vec<PathBuf>, PartError
 /// outputs of the unsharded sweep into `out`.
 pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepReport> {
     let files = part_files(inputs)?;
-    let stage = OutputDir::create(out)?;
+    let stage = OutputDir::create(out, OUTPUTS)?;
     let mut parts: Vec<(PathBuf, Part)> = Vec::new();
     for f in files {
         let text = std::fs::read_to_string(&f).map_err(|e| PartError::Read {

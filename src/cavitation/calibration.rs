@@ -25,7 +25,7 @@
 use crate::coolant::Coolant;
 use std::path::Path;
 
-/// Rig data: time [s], acceleration [m/s^2], pressure [Pa].
+/// Rig data: time \[s\], acceleration [m/s^2], pressure \[Pa\].
 #[derive(Clone, Debug, Default)]
 pub struct RigData {
     pub time: Vec<f64>,
@@ -174,9 +174,9 @@ pub struct Event {
 #[derive(Clone, Copy, Debug)]
 pub struct Settings {
     pub coolant: Coolant,
-    /// Coolant gap [m].
+    /// Coolant gap \[m\].
     pub gap: f64,
-    /// Quiet time that separates events [s].
+    /// Quiet time that separates events \[s\].
     pub quiet: f64,
 }
 

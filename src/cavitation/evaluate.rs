@@ -7,12 +7,12 @@
 use super::criteria::{self, Risk, Thresholds};
 use super::Setup;
 use crate::analysis::correlation::{pearson, spearman};
-use crate::analysis::spectrum::{amplitude_spectrum, rms_average, Spectrum};
-use crate::linalg::dense::{row, Dense};
+use crate::analysis::spectrum::{centred_spectrum, rms_average, Spectrum};
+use crate::linalg::dense::row;
 use crate::reduce::rom::EngineRom;
 use crate::transient::cycle::{CycleResult, Series};
 
-/// Lowest frequency searched for the dominant response [Hz] (below it: the quasi-static
+/// Lowest frequency searched for the dominant response \[Hz\] (below it: the quasi-static
 /// piston motion, not the ring).
 pub const SPECTRUM_FLOOR_HZ: f64 = 500.0;
 
@@ -29,7 +29,7 @@ pub struct PointRisk {
     pub peak_velocity_m_s: f64,
     pub csf: f64,
     pub classic_number: f64,
-    /// Dominant frequency of the point's spectrum above the floor [Hz] and its amplitude.
+    /// Dominant frequency of the point's spectrum above the floor \[Hz\] and its amplitude.
     pub dominant_hz: f64,
     pub dominant_amplitude_m_s2: f64,
 }
@@ -66,7 +66,7 @@ pub struct Evaluation {
     pub cylinders: Vec<CylinderRisk>,
     /// Cylinders ordered from the highest to the lowest peak negative acceleration.
     pub ranking: Vec<usize>,
-    /// Engine-wide dominant response frequency [Hz]: the peak of the RMS average of all the
+    /// Engine-wide dominant response frequency \[Hz\]: the peak of the RMS average of all the
     /// points' spectra, each itself averaged over the averaged cycles ([`spectra`]). The
     /// spectrum of one cycle scatters bin to bin (the slap is not periodic), so its largest
     /// peak jumps between neighbouring peaks of similar height from one realisation to the next.
@@ -77,13 +77,11 @@ pub struct Evaluation {
     pub most_active_point: usize,
 }
 
-/// Per cylinder and point, the spectrum averaged over the averaged cycles: each cycle's
-/// record with the cylinder's firing TDC at the window centre (rotated, not cut: the cycle's
-/// ends meet where the Hann window is zero), its amplitude spectrum A_j, and their RMS average
-/// A = sqrt(sum_j A_j^2 / n) (Welch's estimate over n cycles of a non-periodic slap; one
-/// cycle's spectrum is one draw, whose largest peak jumps between neighbouring modes). A
-/// series without the averaged cycles' records (`cycle_acceleration` empty) gives the last
-/// cycle's spectrum.
+/// Per cylinder and point, the spectrum averaged over the averaged cycles, as the run made it
+/// (`CylinderSeries::spectra`: each cycle's record centred on the cylinder's firing TDC, RMS
+/// average over the cycles; one cycle's spectrum of a non-periodic slap is one draw, whose
+/// largest peak jumps between neighbouring modes). A series without them gives the last
+/// cycle's spectrum, centred the same way.
 pub fn spectra(series: &Series, firing_order: &[usize]) -> Vec<Vec<Spectrum>> {
     let n = series.time_s.len();
     if n < 4 {
@@ -95,49 +93,19 @@ pub fn spectra(series: &Series, firing_order: &[usize]) -> Vec<Vec<Spectrum>> {
         .cylinders
         .iter()
         .map(|c| {
+            if c.spectra.len() == c.acceleration.nrows() {
+                return c.spectra.clone();
+            }
             let k = firing_order
                 .iter()
                 .position(|&x| x == c.cylinder)
                 .unwrap_or(0);
             let phase = 720.0 * k as f64 / cyls as f64;
-            // sample whose own crank angle is 0 (firing TDC 360 then sits at the centre)
-            let start = (0..n)
-                .min_by(|&a, &b| {
-                    let d = |i: usize| {
-                        let x = (series.crank_angle_deg[i] - phase).rem_euclid(720.0);
-                        x.min(720.0 - x)
-                    };
-                    d(a).total_cmp(&d(b))
-                })
-                .unwrap_or(0);
-            let records: Vec<&Dense> = if c.cycle_acceleration.is_empty() {
-                vec![&c.acceleration]
-            } else {
-                c.cycle_acceleration.iter().collect()
-            };
             (0..c.acceleration.nrows())
-                .map(|p| {
-                    let each: Vec<Spectrum> = records
-                        .iter()
-                        .filter(|r| r.nrows() == c.acceleration.nrows() && r.ncols() == n)
-                        .map(|r| {
-                            amplitude_spectrum(&rotated(row(r, p), start), dt)
-                        })
-                        .collect();
-                    let refs: Vec<&Spectrum> = each.iter().collect();
-                    rms_average(&refs).unwrap_or_else(|| {
-                        amplitude_spectrum(&rotated(row(&c.acceleration, p), start), dt)
-                    })
-                })
+                .map(|p| centred_spectrum(row(&c.acceleration, p), &series.crank_angle_deg, phase, dt))
                 .collect()
         })
         .collect()
-}
-
-/// `a` rotated to start at sample `start`.
-fn rotated(a: &[f64], start: usize) -> Vec<f64> {
-    let n = a.len();
-    (0..n).map(|i| a[(start + i) % n]).collect()
 }
 
 /// Peak |v| of a periodic acceleration record: v = cumulative trapezoid integral, mean

@@ -9,7 +9,7 @@ use crate::coolant::Coolant;
 use crate::scene::CavitationSpec;
 use criteria::Thresholds;
 
-/// What the criteria need, resolved from the scene: the coolant's properties, the gap [m] and
+/// What the criteria need, resolved from the scene: the coolant's properties, the gap \[m\] and
 /// the risk thresholds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Setup {

@@ -79,11 +79,96 @@ pub fn sturm_shift(eigenvalues: &[f64], count: usize, rel_gap: f64) -> Option<(f
 /// Outcome of the Sturm check, as reported.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct SturmCheck {
-    /// Shift of the check [Hz] (sqrt(sigma_c) / 2 pi).
+    /// Shift of the check \[Hz\] (sqrt(sigma_c) / 2 pi).
     pub shift_hz: f64,
     /// Computed eigenvalues below the shift.
     pub expected: usize,
     /// Negative pivots of K - sigma_c M.
     pub found: usize,
     pub ok: bool,
+}
+
+/// Largest relative residual and M-orthonormality error a certified set of modes may have:
+/// ARPACK converges the Ritz pairs to machine precision (relative residuals 1e-15..1e-9
+/// measured on the test meshes); above 1e-6 the pairs are not eigenpairs to the accuracy a
+/// user reads.
+pub const RESIDUAL_BOUND: f64 = 1e-6;
+
+/// Why a set of computed modes is not certified (exit 1: the computation failed, not the input).
+#[derive(Debug, thiserror::Error)]
+pub enum CertificationError {
+    #[error("certification failed: the Sturm count at {shift_hz:.1} Hz found {found} eigenvalues below, {expected} were computed (a mode was missed; raise --count or lower --shift-hz)")]
+    Missed {
+        shift_hz: f64,
+        found: usize,
+        expected: usize,
+    },
+    #[error("certification failed: the Sturm count found more eigenvalues below the check's shift than were computed (a mode was missed)")]
+    MissedSystemModes,
+    #[error("certification failed: largest relative residual {residual:.1e}, M-orthonormality error {orthogonality:.1e} (bound {RESIDUAL_BOUND:.0e})")]
+    Residual { residual: f64, orthogonality: f64 },
+}
+
+/// The verdict on a part's modes: the Sturm check passed (when one was made), and the largest
+/// relative residual ||K x - lambda M x|| / ||K x|| and the M-orthonormality error max
+/// |X^T M X - I| are within [`RESIDUAL_BOUND`] (a NaN fails).
+pub fn verdict(
+    sturm: Option<&SturmCheck>,
+    max_residual: f64,
+    m_orthogonality_error: f64,
+) -> Result<(), CertificationError> {
+    if let Some(st) = sturm.filter(|st| !st.ok) {
+        return Err(CertificationError::Missed {
+            shift_hz: st.shift_hz,
+            found: st.found,
+            expected: st.expected,
+        });
+    }
+    if !(max_residual <= RESIDUAL_BOUND && m_orthogonality_error <= RESIDUAL_BOUND) {
+        return Err(CertificationError::Residual {
+            residual: max_residual,
+            orthogonality: m_orthogonality_error,
+        });
+    }
+    Ok(())
+}
+
+/// The verdict on the coupled engine's modes: `sturm_count_ok` false (more eigenvalues below
+/// the check's shift than computed) fails; None (no check made) passes.
+pub fn system_verdict(sturm_count_ok: Option<bool>) -> Result<(), CertificationError> {
+    match sturm_count_ok {
+        Some(false) => Err(CertificationError::MissedSystemModes),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod verdict_tests {
+    use super::*;
+
+    /// Verification: each failure is named, a NaN residual fails, a clean set passes.
+    #[test]
+    fn verification_the_verdict_names_each_failure() {
+        let ok = SturmCheck {
+            shift_hz: 10.0,
+            expected: 20,
+            found: 20,
+            ok: true,
+        };
+        assert!(verdict(Some(&ok), 1e-12, 1e-13).is_ok());
+        let missed = SturmCheck {
+            found: 22,
+            ok: false,
+            ..ok.clone()
+        };
+        let e = verdict(Some(&missed), 1e-12, 1e-13).unwrap_err().to_string();
+        assert!(e.contains("found 22") && e.contains("20 were computed"), "{e}");
+        assert!(matches!(
+            verdict(None, f64::NAN, 0.0),
+            Err(CertificationError::Residual { .. })
+        ));
+        assert!(verdict(None, 1e-12, 2e-6).is_err());
+        assert!(system_verdict(Some(false)).is_err());
+        assert!(system_verdict(None).is_ok() && system_verdict(Some(true)).is_ok());
+    }
 }

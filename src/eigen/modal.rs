@@ -65,7 +65,7 @@ const RECOVERY_ATTEMPTS: usize = 2;
 ///
 /// When the count finds more eigenvalues below its shift than were computed, the missed modes
 /// are recovered by the solver itself: solved again with every counted eigenvalue plus the
-/// guard asked for and another start vector (up to [`RECOVERY_ATTEMPTS`] times), each result
+/// guard asked for and another start vector (up to `RECOVERY_ATTEMPTS` times), each result
 /// certified anew; `recovered` tells how many modes the first solve had missed. A count below
 /// the computed number (spurious eigenvalues) is reported, not retried; a re-solve that fails
 /// (not converged) leaves the previous result with its failed certificate.

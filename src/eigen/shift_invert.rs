@@ -71,7 +71,7 @@ impl Modes {
     pub fn vector(&self, j: usize) -> &[f64] {
         &self.vectors[j * self.n..(j + 1) * self.n]
     }
-    /// Natural frequency f = sqrt(max(lambda, 0)) / (2 pi) [Hz].
+    /// Natural frequency f = sqrt(max(lambda, 0)) / (2 pi) \[Hz\].
     pub fn frequency_hz(&self, j: usize) -> f64 {
         self.eigenvalues[j].max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
     }

@@ -277,7 +277,8 @@ pub fn check_mesh(
     crate::mesh::checks::check_and_compact(mesh, min_jacobian_ratio)
 }
 
-/// Smallest det J over the stiffness points and the nodes, relative to the mean (a shape check).
+/// Smallest det J over the stiffness points and the nodes, relative to the magnitude of the
+/// mean (a shape check: <= 0 for an inverted or degenerate element).
 pub fn min_jacobian_ratio(kind: ElementKind, coords: &[[f64; 3]]) -> f64 {
     let nn = kind.num_nodes();
     let (mut n, mut dn) = (vec![0.0; nn], vec![[0.0; 3]; nn]);
@@ -291,5 +292,7 @@ pub fn min_jacobian_ratio(kind: ElementKind, coords: &[[f64; 3]]) -> f64 {
     for (q, _) in kr.points.iter().enumerate() {
         min = min.min(jacobian(coords, &kr.dn[q]).determinant());
     }
-    min / mean
+    // the mean's size: an inverted element with a constant Jacobian (tet4) has min and
+    // mean of one sign, and min / mean would read 1
+    min / mean.abs()
 }

@@ -44,7 +44,7 @@ fn par() -> Par {
 }
 
 impl Analysis {
-    /// Analyses `pattern` with the fill-reducing order `fwd` (fwd[new] = old) and its inverse.
+    /// Analyses `pattern` with the fill-reducing order `fwd` (fwd\[new\] = old) and its inverse.
     pub fn new(pattern: &Pattern, fwd: &[usize], inv: &[usize]) -> Result<Self, FactorError> {
         let perm = PermRef::new_checked(fwd, inv, pattern.n);
         let params = CholeskySymbolicParams {

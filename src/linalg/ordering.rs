@@ -58,7 +58,7 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>,
 }
 
 /// Expands a node order to a DOF order: the free DOFs of each node in the node order.
-/// `node_dofs[node]` lists that node's free DOF indices. Returns (fwd, inv) with fwd[new] = old.
+/// `node_dofs[node]` lists that node's free DOF indices. Returns (fwd, inv) with fwd\[new\] = old.
 pub fn expand_to_dofs(
     node_perm: &[usize],
     node_dofs: &[Vec<usize>],

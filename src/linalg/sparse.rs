@@ -29,7 +29,7 @@ impl Pattern {
         SparseColMatRef::new(self.symbolic(), values)
     }
     /// y = A x for a symmetric matrix stored with both triangles. By symmetry column c holds
-    /// row c, so y_c = sum_p A[row_p, c] x[row_p]: a gather per column, parallel over columns.
+    /// row c, so y_c = sum_p A[row_p, c] x\[row_p\]: a gather per column, parallel over columns.
     pub fn matvec(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
         use rayon::prelude::*;
         y.par_chunks_mut(4096).enumerate().for_each(|(chunk, ys)| {

@@ -8,13 +8,13 @@ use super::Mesh;
 /// A mesh defect that makes the model unusable.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    #[error("element {element} ({kind}) is inverted or degenerate: smallest Jacobian {ratio:.3e} of the mean (must be > 0)")]
+    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements) is inverted or degenerate: smallest Jacobian {ratio:.3e} of its mean size (must be > 0; negative: the corner nodes are ordered the wrong way round)")]
     Inverted {
         element: usize,
         kind: String,
         ratio: f64,
     },
-    #[error("element {element} ({kind}): mid-edge node {node} lies {offset:.2} edge lengths from the midpoint of its edge (wrong node order or badly curved edge)")]
+    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements): mid-edge node {node} lies {offset:.2} edge lengths from the midpoint of its edge (wrong node order or badly curved edge)")]
     MidNode {
         element: usize,
         kind: String,
@@ -69,7 +69,7 @@ pub fn check_and_compact(
                 .sqrt();
             if off > 0.25 * len {
                 return Err(MeshError::MidNode {
-                    element: e,
+                    element: e + 1,
                     kind: format!("{kind:?}"),
                     node: nodes[nc + m],
                     offset: off / len,
@@ -79,7 +79,7 @@ pub fn check_and_compact(
         let ratio = min_jacobian_ratio(kind, &x);
         if ratio.partial_cmp(&1e-6) != Some(std::cmp::Ordering::Greater) {
             return Err(MeshError::Inverted {
-                element: e,
+                element: e + 1,
                 kind: format!("{kind:?}"),
                 ratio,
             });

@@ -82,13 +82,6 @@ impl ElementKind {
             _ => &[],
         }
     }
-    /// All edges between corners (for mesh checks and orderings).
-    pub fn corner_edges(self) -> &'static [(usize, usize)] {
-        match self {
-            Self::Tet4 | Self::Tet10 => &TET10_EDGES,
-            Self::Hex8 | Self::Hex20 => &HEX20_EDGES,
-        }
-    }
     /// Faces as corner-node lists with outward orientation.
     pub fn faces(self) -> &'static [&'static [usize]] {
         match self {

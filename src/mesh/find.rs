@@ -42,7 +42,7 @@ fn fail(part: &str, msg: String) -> FindError {
     }
 }
 
-/// The liner's shape in its own frame [m].
+/// The liner's shape in its own frame \[m\].
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LinerShape {
     pub inner_radius: f64,
@@ -74,16 +74,16 @@ pub struct FoundInterfaces {
     /// Rigid motion applied to the liner mesh: the axis found (deck frame) and the centre.
     pub liner_axis: Option<[f64; 3]>,
     pub liner_centre: Option<[f64; 3]>,
-    /// z shift applied to the crankcase to seat cylinder 1's liner [m].
+    /// z shift applied to the crankcase to seat cylinder 1's liner \[m\].
     pub crankcase_shift_z: f64,
-    /// Guide band [z0, z1] in the liner frame [m].
+    /// Guide band [z0, z1] in the liner frame \[m\].
     pub guide_band: Option<[f64; 2]>,
     pub sets: Vec<FoundSet>,
     /// Which material each part used: "liner: scene" or "crankcase: deck (MAT1 1, MAT1 2)".
     pub materials: Vec<String>,
 }
 
-/// Median of the first corner edge of every element: the part's typical mesh size h [m].
+/// Median of the first corner edge of every element: the part's typical mesh size h \[m\].
 pub fn mesh_size(mesh: &Mesh) -> f64 {
     let mut h: Vec<f64> = mesh
         .elements()
@@ -298,9 +298,9 @@ fn measure_liner(mesh: &Mesh, tol: f64) -> Result<LinerShape, FindError> {
 
 /// The analysis-point and band inputs of the liner's sets.
 pub struct LinerTargets<'a> {
-    /// Guide band [z0, z1] in the liner frame [m].
+    /// Guide band [z0, z1] in the liner frame \[m\].
     pub guide: [f64; 2],
-    /// Depths of the analysis points below the liner top [m].
+    /// Depths of the analysis points below the liner top \[m\].
     pub depths: &'a [f64],
 }
 
@@ -519,7 +519,7 @@ fn counterbore_z(cm: &Mesh, xc: f64, s: &LinerShape, tol: f64) -> Option<f64> {
 }
 
 /// Moves the crankcase along z so that cylinder 1's counterbore floor meets the liner's flange
-/// underside; returns the shift [m].
+/// underside; returns the shift \[m\].
 pub fn seat_crankcase(cm: &mut Mesh, axis_x: &[f64], s: &LinerShape) -> Result<f64, FindError> {
     let tol = 0.02 * mesh_size(cm);
     let x1 = axis_x.first().copied().unwrap_or(0.0);
@@ -581,7 +581,7 @@ pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<[f64; 2]> {
 /// The crankcase's interface and point inputs.
 pub struct CrankcaseTargets<'a> {
     pub axis_x: &'a [f64],
-    /// Heights of the analysis points in the liner frame [m].
+    /// Heights of the analysis points in the liner frame \[m\].
     pub analysis_z: &'a [f64],
 }
 
@@ -638,7 +638,7 @@ pub fn crankcase_sets(
     Ok(out)
 }
 
-/// A scene's box set: the nodes inside [x0, x1] x [y0, y1] x [z0, z1] [m].
+/// A scene's box set: the nodes inside [x0, x1] x [y0, y1] x [z0, z1] \[m\].
 pub fn box_set(mesh: &mut Mesh, part: &str, name: &str, b: &[f64; 6]) -> FoundSet {
     let inside = |p: &[f64; 3]| (0..3).all(|a| p[a] >= b[a] && p[a] <= b[a + 3]);
     let nodes: Vec<usize> = (0..mesh.nodes.len())

@@ -34,7 +34,7 @@ pub enum ImportError {
     },
 }
 
-/// Largest extent of any part linercav models, [m] (a marine engine's block is ~20 m long).
+/// Largest extent of any part linercav models, \[m\] (a marine engine's block is ~20 m long).
 pub const MAX_EXTENT_M: f64 = 30.0;
 /// Smallest extent: below this a part is no engine component (a metre deck read as mm).
 pub const MIN_EXTENT_M: f64 = 5e-3;
@@ -125,9 +125,9 @@ pub fn resolve_material(
 /// The liner's place and the crankcase's targets, from the scene.
 pub struct EngineFrame<'a> {
     pub axis_x: &'a [f64],
-    /// Depths of the analysis points below the liner top [m].
+    /// Depths of the analysis points below the liner top \[m\].
     pub depths: &'a [f64],
-    /// The scene's bore [m] (the found bore must match it).
+    /// The scene's bore \[m\] (the found bore must match it).
     pub bore: f64,
     /// Key naming the liner mesh's unit (for messages).
     pub liner_unit_key: &'a str,

@@ -30,7 +30,7 @@
 //!   resolved after all cards are read, whatever their order; undefined references, cycles,
 //!   degenerate points and ids <= 0 are refused; blank coordinates are 0.0 but the
 //!   continuation with C1-C3 must be there. Rectangular (x, y, z), cylindrical
-//!   (r, theta [deg], z) and spherical (r, theta [deg] from the z axis, phi [deg] in the x-y
+//!   (r, theta \[deg\], z) and spherical (r, theta \[deg\] from the z axis, phi \[deg\] in the x-y
 //!   plane) coordinates. CORD1R/C/S (systems through grid points) are refused.
 //! - CTETRA with 4 or 10 nodes, CHEXA with 8 or 20 nodes (CPENTA, CPYRA refused).
 //! - SET1 (node ids, `THRU` ranges): node sets named by a HyperMesh comment

@@ -19,11 +19,11 @@
 /// Crank radius, rod length, lateral offset and speed, SI.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CrankSlider {
-    /// Crank radius r = stroke / 2 [m].
+    /// Crank radius r = stroke / 2 \[m\].
     pub radius: f64,
-    /// Connecting-rod length l [m].
+    /// Connecting-rod length l \[m\].
     pub rod: f64,
-    /// Lateral pin offset relative to the crank axis e [m], + toward the thrust side.
+    /// Lateral pin offset relative to the crank axis e \[m\], + toward the thrust side.
     pub offset: f64,
     /// Crank speed omega [rad/s].
     pub omega: f64,
@@ -32,7 +32,7 @@ pub struct CrankSlider {
 /// Piston pin motion at one crank angle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PinMotion {
-    /// Height above the crank axis [m], its velocity and acceleration.
+    /// Height above the crank axis \[m\], its velocity and acceleration.
     pub z: f64,
     pub dz: f64,
     pub ddz: f64,
@@ -41,7 +41,7 @@ pub struct PinMotion {
 }
 
 impl CrankSlider {
-    /// Pin motion at crank angle `theta` [rad] (0 = top dead centre).
+    /// Pin motion at crank angle `theta` \[rad\] (0 = top dead centre).
     pub fn at(&self, theta: f64) -> PinMotion {
         let (r, l, w) = (self.radius, self.rod, self.omega);
         let (st, ct) = theta.sin_cos();

@@ -34,7 +34,7 @@ use skirt::Skirt;
 pub struct Piston {
     pub kinematics: CrankSlider,
     pub pressure: PressureCurve,
-    /// Crankcase (back-side) pressure [Pa].
+    /// Crankcase (back-side) pressure \[Pa\].
     pub crankcase_pa: f64,
     /// Bore area A [m^2].
     pub area: f64,
@@ -42,12 +42,12 @@ pub struct Piston {
     pub pin_mass: f64,
     /// Tilt inertia about the pin axis [kg m^2].
     pub tilt_inertia: f64,
-    /// Centre of gravity above the pin [m] and beside it toward thrust [m].
+    /// Centre of gravity above the pin \[m\] and beside it toward thrust \[m\].
     pub cg_above_pin: f64,
     pub cg_lateral: f64,
-    /// Pin offset from the piston axis toward thrust [m].
+    /// Pin offset from the piston axis toward thrust \[m\].
     pub pin_offset: f64,
-    /// Pin height below the liner top at top dead centre [m].
+    /// Pin height below the liner top at top dead centre \[m\].
     pub pin_depth_at_tdc: f64,
     pub skirt: Skirt,
     /// Contact damping per slice [N s/m].
@@ -61,14 +61,14 @@ pub struct Piston {
 pub struct PistonLoads {
     /// Generalised force on (y, phi) without contact [N, N m].
     pub force: [f64; 2],
-    /// Quasi-static side force C_z tan(beta) [N] (+: presses the thrust side).
+    /// Quasi-static side force C_z tan(beta) \[N\] (+: presses the thrust side).
     pub side_force: f64,
-    /// Pin height below the liner top [m].
+    /// Pin height below the liner top \[m\].
     pub pin_depth: f64,
     /// tan(beta) and the sign of the piston's axial velocity.
     pub tan_beta: f64,
     pub axial_sign: f64,
-    /// Gas pressure [Pa].
+    /// Gas pressure \[Pa\].
     pub pressure: f64,
 }
 

@@ -2,7 +2,7 @@
 //! built-in single-zone Wiebe curve.
 //!
 //! Crank angles are the cylinder's own, firing top dead centre at 360 deg, gas-exchange TDC at
-//! 0/720. Pressures are absolute [Pa]; the table is periodic over 720 deg and interpolated
+//! 0/720. Pressures are absolute \[Pa\]; the table is periodic over 720 deg and interpolated
 //! linearly.
 //!
 //! Built-in curve (closed cycle from bottom dead centre, 180 deg, to exhaust valve opening):
@@ -121,6 +121,12 @@ impl PressureCurve {
                     format!("pressure {p} bar must be positive (absolute)"),
                 ));
             }
+            if p > MAX_BAR {
+                return Err(line_err(
+                    i + 1,
+                    format!("pressure {} bar is beyond any engine's ({MAX_BAR} bar at most; is the column in Pa or kPa?)", crate::text::num(p)),
+                ));
+            }
             angles_deg.push(a);
             pa.push(p * 1e5);
         }
@@ -129,6 +135,12 @@ impl PressureCurve {
                 path: path.into(),
                 msg: "needs at least two rows spanning less than 720 deg (the curve is periodic)"
                     .into(),
+            });
+        }
+        if let Some(msg) = coverage_gap(&angles_deg) {
+            return Err(PressureError::Table {
+                path: path.into(),
+                msg,
             });
         }
         Ok(Self { angles_deg, pa })
@@ -188,7 +200,7 @@ impl PressureCurve {
         Self { angles_deg, pa }
     }
 
-    /// Pressure [Pa] at crank angle `deg` (any value; periodic in 720 deg).
+    /// Pressure \[Pa\] at crank angle `deg` (any value; periodic in 720 deg).
     pub fn at(&self, deg: f64) -> f64 {
         let a0 = self.angles_deg[0];
         let x = a0 + (deg - a0).rem_euclid(720.0);
@@ -210,7 +222,7 @@ impl PressureCurve {
         pa_a + (pb - pa_a) * (x - a) / (b - a)
     }
 
-    /// Peak pressure [Pa] and its crank angle [deg].
+    /// Peak pressure \[Pa\] and its crank angle \[deg\].
     pub fn peak(&self) -> (f64, f64) {
         let (i, p) = self
             .pa
@@ -220,10 +232,43 @@ impl PressureCurve {
         (p, self.angles_deg[i])
     }
 
-    /// The samples (angle [deg], pressure [Pa]) as stored.
+    /// The samples (angle \[deg\], pressure \[Pa\]) as stored.
     pub fn samples(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         self.angles_deg.iter().copied().zip(self.pa.iter().copied())
     }
+}
+
+/// Largest cylinder pressure a table may hold \[bar\]: peak firing pressures of heavy-duty
+/// diesels are 200-300 bar; a larger value is a unit mistake (Pa or kPa), and 1e308 bar would
+/// overflow to infinity in Pa.
+pub const MAX_BAR: f64 = 1000.0;
+
+/// Largest gap allowed between consecutive table angles, the wrap from the last to the first
+/// through 720/0 deg included \[deg\]: a four-stroke table must cover the whole cycle (a trace of
+/// one revolution, or of the firing part only, would otherwise be read as a periodic 720 deg
+/// curve and interpolated across the missing strokes without a word).
+pub const MAX_GAP_DEG: f64 = 45.0;
+
+/// Why the table's angles do not cover the cycle, or None: the largest gap
+/// max(theta_{i+1} - theta_i, theta_0 + 720 - theta_last) must not exceed [`MAX_GAP_DEG`].
+fn coverage_gap(angles: &[f64]) -> Option<String> {
+    let n = angles.len();
+    let wrap = angles[0] + 720.0 - angles[n - 1];
+    let (gap, from, to) = angles.windows(2).map(|w| (w[1] - w[0], w[0], w[1])).fold(
+        (wrap, angles[n - 1], angles[0]),
+        |m, x| if x.0 > m.0 { x } else { m },
+    );
+    (gap > MAX_GAP_DEG).then(|| {
+        format!(
+            "covers {}-{} deg with a gap of {} deg from {} to {} deg (through 720/0 when the second is smaller); a four-stroke pressure table needs samples over the whole 0-720 deg cycle, at most {} deg apart (firing TDC at 360 deg)",
+            crate::text::num(angles[0]),
+            crate::text::num(angles[n - 1]),
+            crate::text::num(gap),
+            crate::text::num(from),
+            crate::text::num(to),
+            MAX_GAP_DEG
+        )
+    })
 }
 
 #[cfg(test)]
@@ -276,11 +321,27 @@ mod tests {
     #[test]
     fn csv_table_interpolates_periodically_and_names_bad_lines() {
         let p = Path::new("p.csv");
-        let c =
-            PressureCurve::parse(p, "crank_angle_deg,pressure_bar\n0,1\n360,101\n540,3\n").unwrap();
-        assert!((c.at(180.0) - 51e5).abs() < 1e-6);
-        assert!((c.at(630.0) - 2e5).abs() < 1e-6); // 540 -> 720(=0): 3 -> 1 bar
+        // every 30 deg of p = 1 + 100 max(0, 1 - |theta - 360| / 180) bar, linear between
+        // samples (its kinks at 180, 360 and 540 are samples), so the interpolation is exact
+        let f = |t: f64| 1.0 + 100.0 * (1.0 - (t - 360.0).abs() / 180.0).max(0.0);
+        let table: String = (0..24)
+            .map(|k| format!("{},{}\n", 30 * k, f(30.0 * k as f64)))
+            .collect();
+        let c = PressureCurve::parse(p, &format!("crank_angle_deg,pressure_bar\n{table}")).unwrap();
+        for t in [100.0, 275.0, 372.5, 705.0] {
+            assert!((c.at(t) - f(t) * 1e5).abs() < 1e-6, "{t}");
+        }
         assert!((c.at(1080.0) - 101e5).abs() < 1e-6);
+        // a partial trace (firing part only) and one revolution of a four-stroke cycle
+        for rows in [
+            "0,1\n50,2\n99,80\n",
+            "0,1\n120,2\n240,20\n300,60\n360,150\n",
+        ] {
+            let e = PressureCurve::parse(p, &format!("crank_angle_deg,pressure_bar\n{rows}"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("p.csv") && e.contains("whole 0-720 deg"), "{e}");
+        }
         let e = PressureCurve::parse(p, "crank_angle_deg,pressure_bar\n0,1\n10,NaN\n")
             .unwrap_err()
             .to_string();

@@ -34,7 +34,7 @@ pub fn simulation(scene: &Scene) -> Result<&Simulation, PistonSetupError> {
 }
 
 /// The warning for a hot skirt larger than the bore (`hot` <= 0, the hot diametral clearance;
-/// `cold` the scene's cold clearance) [m].
+/// `cold` the scene's cold clearance) \[m\].
 pub fn interference_warning(hot: f64, cold: f64) -> Option<String> {
     (hot <= 0.0).then(|| {
         format!(

@@ -42,7 +42,7 @@ pub struct Piece {
 }
 
 impl SliceLaw {
-    /// Law of a slice with hot radial gap `gap` [m], ovality `ovality` [m], stiffness `k` [N/m].
+    /// Law of a slice with hot radial gap `gap` \[m\], ovality `ovality` \[m\], stiffness `k` [N/m].
     pub fn new(k: f64, gap: f64, ovality: f64) -> Self {
         let rad = std::f64::consts::PI / 180.0;
         let c = PSI_DEG.map(|d| (d * rad).cos());
@@ -101,7 +101,7 @@ impl SliceLaw {
         out
     }
 
-    /// Elastic force F(p) [N].
+    /// Elastic force F(p) \[N\].
     pub fn force(&self, p: f64) -> f64 {
         let pc = self.piece(p);
         pc.a + pc.kt * p
@@ -111,9 +111,9 @@ impl SliceLaw {
 /// Slices of the skirt with their hot gaps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Skirt {
-    /// Height of each slice centre above the pin [m], top to bottom.
+    /// Height of each slice centre above the pin \[m\], top to bottom.
     pub heights: Vec<f64>,
-    /// Hot radial gap of a centred piston at each slice [m] (negative: interference).
+    /// Hot radial gap of a centred piston at each slice \[m\] (negative: interference).
     pub gaps: Vec<f64>,
     pub laws: Vec<SliceLaw>,
 }
@@ -152,7 +152,7 @@ impl Skirt {
         }
     }
 
-    /// Smallest hot diametral clearance (2 min g_i) [m].
+    /// Smallest hot diametral clearance (2 min g_i) \[m\].
     pub fn hot_clearance(&self) -> f64 {
         2.0 * self.gaps.iter().copied().fold(f64::INFINITY, f64::min)
     }

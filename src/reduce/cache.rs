@@ -133,8 +133,9 @@ use bincode::Options;
 /// beside it. Processes that miss the same entry at once (the shards of an array job on a
 /// shared cache directory) queue on it: one builds and stores, the others then find the entry.
 /// The holder removes the lock file before it lets go (a build leaves nothing behind, also
-/// when it fails), so a process that locked a file no longer at the path locks again; a
-/// process that dies lets go by itself (its file stays, empty, and is reused).
+/// when it fails, and when a stopping signal ends the process: the file is registered with
+/// the temporaries), so a process that locked a file no longer at the path locks again; a
+/// process that is killed lets go by itself (its file stays, empty, and is reused).
 pub struct BuildLock {
     /// Held for the lock: closing it lets go.
     _file: std::fs::File,
@@ -173,11 +174,13 @@ impl BuildLock {
             let ours = file.metadata().map_err(fail)?;
             match std::fs::metadata(&lock) {
                 Ok(now) if now.ino() == ours.ino() && now.dev() == ours.dev() => {
+                    // a stopping signal (which skips Drop) removes it as well
+                    crate::files::register_temporary(&lock);
                     return Ok(Self {
                         _file: file,
                         path: lock,
                         waited,
-                    })
+                    });
                 }
                 _ => continue,
             }
@@ -189,6 +192,7 @@ impl Drop for BuildLock {
     /// Removes the lock file, then lets go of the lock (closing the file).
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
+        crate::files::forget_temporary(&self.path);
     }
 }
 

@@ -725,7 +725,12 @@ mod tests {
             };
         }
         let n = gram_cut(&s);
-        assert!((s[n - 1] / s[n] - 1.3).abs() < 1e-9, "{} {}", s[n - 1], s[n]);
+        assert!(
+            (s[n - 1] / s[n] - 1.3).abs() < 1e-9,
+            "{} {}",
+            s[n - 1],
+            s[n]
+        );
         for sign in [-1.0, 1.0] {
             let p: Vec<f64> = s.iter().map(|v| v * (1.0 + sign * 1e-6)).collect();
             assert_eq!(gram_cut(&p), n);

@@ -221,7 +221,7 @@ fn subspace_refine(
 }
 
 /// The lowest eigenvalues of K y = lambda M y refined from a start block (columns: vectors in
-/// the coordinates of K and M, e.g. the modes of a nearby system) by [`subspace_refine`] after
+/// the coordinates of K and M, e.g. the modes of a nearby system) by `subspace_refine` after
 /// the unit-modal-mass scaling of [`system_modes`]: as many Ritz values as start vectors,
 /// without the dense solve of the whole spectrum.
 pub fn refined_eigenvalues(
@@ -260,7 +260,7 @@ fn standard_form(c: faer::MatRef<'_, f64>, k: Mat<f64>) -> Mat<f64> {
     at
 }
 
-/// Frequency [Hz] of an eigenvalue lambda = omega^2.
+/// Frequency \[Hz\] of an eigenvalue lambda = omega^2.
 pub fn hz(lambda: f64) -> f64 {
     lambda.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
 }

@@ -36,7 +36,7 @@ pub struct CylinderRom {
     pub point_modes: Dense,
     /// Crankcase jacket-wall points facing them (+y).
     pub crankcase_point_modes: Dense,
-    /// Head-bolt preload displacement at the bore-line nodes and points [m].
+    /// Head-bolt preload displacement at the bore-line nodes and points \[m\].
     pub preload_thrust: Vec<f64>,
     pub preload_antithrust: Vec<f64>,
     pub preload_points: Vec<f64>,
@@ -86,7 +86,7 @@ pub struct RomInfo {
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct EngineRom {
     /// System modes kept (below the cut-off), ascending, then the residual vectors' pseudo-modes
-    /// (above the cut-off, ascending) [Hz].
+    /// (above the cut-off, ascending) \[Hz\].
     pub frequencies_hz: Vec<f64>,
     pub cylinders: Vec<CylinderRom>,
     /// Residual flexibility of the dropped modes at all contact DOFs [m/N].
@@ -188,12 +188,12 @@ pub struct RomInputs<'a> {
     pub crankcase: &'a Mesh,
     pub crankcase_material: Elastic,
     pub crankcase_fix: Vec<String>,
-    /// Liner radii and heights that define the interfaces [m].
+    /// Liner radii and heights that define the interfaces \[m\].
     pub liner_outer_radius: f64,
     pub flange_radius: f64,
     pub seat_z: f64,
     pub guide_height: f64,
-    /// Height of the guide band's lower edge above the liner bottom [m].
+    /// Height of the guide band's lower edge above the liner bottom \[m\].
     pub guide_bottom: f64,
     pub analysis_points: usize,
     /// Bore axis x of every cylinder (all cylinders of the crankcase).
@@ -389,28 +389,7 @@ pub fn interface_blocks(
         z0: inp.guide_bottom,
         z1: inp.guide_bottom + inp.guide_height,
     };
-    let lm = inp.liner;
-    let liner = vec![
-        block(
-            lm,
-            "liner",
-            "flange_seat",
-            0.0,
-            seat,
-            nh,
-            &[Radial, Tangential, Axial],
-        )?,
-        block(lm, "liner", "lower_guide", 0.0, guide, nh, &[Radial])?,
-        block(
-            lm,
-            "liner",
-            "lower_guide",
-            0.0,
-            guide,
-            nh,
-            &[Tangential, Axial],
-        )?,
-    ];
+    let liner = liner_blocks(inp, inp.liner, 0.0)?;
     let cm = inp.crankcase;
     let mut cc = Vec::new();
     for (c, &xc) in inp.axis_x.iter().enumerate() {
@@ -444,6 +423,46 @@ pub fn interface_blocks(
         )?);
     }
     Ok((liner, cc))
+}
+
+/// The liner's interface blocks on `mesh` about a bore axis at x = `cx` (0: its own frame):
+/// seat (radial, tangential, axial), guide radial, guide tangential/axial.
+pub fn liner_blocks(
+    inp: &RomInputs<'_>,
+    mesh: &Mesh,
+    cx: f64,
+) -> Result<Vec<InterfaceBlock>, RomError> {
+    use Direction::*;
+    let nh = inp.harmonics;
+    let seat = InterfaceShape::Seat {
+        r_in: inp.liner_outer_radius,
+        r_out: inp.flange_radius,
+    };
+    let guide = InterfaceShape::Guide {
+        z0: inp.guide_bottom,
+        z1: inp.guide_bottom + inp.guide_height,
+    };
+    Ok(vec![
+        block(
+            mesh,
+            "liner",
+            "flange_seat",
+            cx,
+            seat,
+            nh,
+            &[Radial, Tangential, Axial],
+        )?,
+        block(mesh, "liner", "lower_guide", cx, guide, nh, &[Radial])?,
+        block(
+            mesh,
+            "liner",
+            "lower_guide",
+            cx,
+            guide,
+            nh,
+            &[Tangential, Axial],
+        )?,
+    ])
 }
 
 /// The head-bolt preload as loads: the clamp force pressing each liner's flange top down

@@ -141,7 +141,7 @@ pub struct EngineMeshes {
     pub crankcase_material: Elastic,
     /// The liner's radii and heights (measured on a file's mesh, else the scene's).
     pub shape: LinerShape,
-    /// Guide band [z0, z1] in the liner frame [m].
+    /// Guide band [z0, z1] in the liner frame \[m\].
     pub guide: [f64; 2],
     /// What was found on imported meshes (None when both are generated).
     pub found: Option<FoundInterfaces>,
@@ -579,7 +579,7 @@ pub struct SceneFullModes {
     pub system: super::full::FullSystem,
     pub liner_mesh: Mesh,
     pub crankcase_mesh: Mesh,
-    /// Bore axis x of every cylinder [m].
+    /// Bore axis x of every cylinder \[m\].
     pub axis_x: Vec<f64>,
 }
 

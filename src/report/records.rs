@@ -17,7 +17,7 @@ use std::path::Path;
 pub struct PointPeaks {
     pub point: usize,
     /// Largest negative acceleration (toward the crankcase... away from the coolant), as a
-    /// positive magnitude [m/s^2], and the cylinder's crank angle of it [deg].
+    /// positive magnitude [m/s^2], and the cylinder's crank angle of it \[deg\].
     pub peak_negative_m_s2: f64,
     pub crank_angle_deg: f64,
     pub peak_positive_m_s2: f64,
@@ -80,7 +80,7 @@ impl PointPeaks {
 /// ([`crate::transient::engine::run_half_step`]); per point in [`PointPeaks`].
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct StepCheck {
-    /// Step of the repeated run [deg], its averaged cycles and wall time [s].
+    /// Step of the repeated run \[deg\], its averaged cycles and wall time \[s\].
     pub step_deg: f64,
     pub cycles_averaged: usize,
     pub seconds: f64,
@@ -98,7 +98,7 @@ pub struct CylinderReport {
     pub points: Vec<PointPeaks>,
     pub peak_slap_force_n: f64,
     pub slap_crank_angle_deg: f64,
-    /// Sample standard deviation of the per-cycle slap-force peak [N].
+    /// Sample standard deviation of the per-cycle slap-force peak \[N\].
     pub slap_force_std_n: f64,
     pub peak_side_force_n: f64,
     pub side_force_crank_angle_deg: f64,
@@ -120,7 +120,7 @@ pub struct SimulateReport {
     pub speed_rpm: f64,
     pub cylinders: Vec<CylinderReport>,
     pub seconds: f64,
-    /// Wall time of the transient alone [s].
+    /// Wall time of the transient alone \[s\].
     pub transient_seconds: f64,
     pub stats: Stats,
     pub cache: &'static str,

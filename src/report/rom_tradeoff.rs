@@ -12,7 +12,7 @@ pub struct TradeoffRow {
     pub cutoff_hz: f64,
     pub reduced_dofs: usize,
     pub system_modes: usize,
-    /// Build from scratch (parts, assembly, system modes, residual vectors) [s].
+    /// Build from scratch (parts, assembly, system modes, residual vectors) \[s\].
     pub build_seconds: f64,
     pub worst_frequency_error: f64,
     pub worst_mac: f64,
@@ -24,7 +24,7 @@ pub struct RomTradeoff {
     pub scene: String,
     pub band_hz: f64,
     pub full_dofs: usize,
-    /// Full coupled eigen-solve of the compared modes [s].
+    /// Full coupled eigen-solve of the compared modes \[s\].
     pub full_seconds: f64,
     /// Modes compared: the full model's below the band.
     pub modes_compared: usize,

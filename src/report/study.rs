@@ -20,7 +20,7 @@ pub struct SweepRun {
     pub values: Vec<String>,
     pub cylinders: Vec<CylinderReport>,
     pub risk: Vec<CylinderRisk>,
-    /// Largest |tilt| per cylinder over the cycle [rad].
+    /// Largest |tilt| per cylinder over the cycle \[rad\].
     pub peak_tilt_rad: Vec<f64>,
     pub seconds: f64,
 }

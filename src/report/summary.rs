@@ -35,7 +35,7 @@ pub struct Report {
 
 impl Report {
     /// Neighbours of `ranking` separated or tied beyond their combined uncertainty
-    /// ([`separations`] of [`ranked_uncertainty`]).
+    /// ([`separations`] of `ranked_uncertainty`).
     pub fn ranking_resolution_of(simulate: &SimulateReport, ranking: &[usize]) -> Vec<RankStep> {
         separations(&ranked_uncertainty(simulate, ranking, true))
     }

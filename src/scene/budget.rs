@@ -29,9 +29,9 @@ const STEP_SECONDS_PER_CYLINDER: f64 = 15e-6;
 pub struct Estimate {
     /// What is estimated ("the ROM build", "the transient", ...).
     pub what: &'static str,
-    /// Peak memory [bytes].
+    /// Peak memory \[bytes\].
     pub memory: f64,
-    /// Wall time on this machine [s].
+    /// Wall time on this machine \[s\].
     pub seconds: f64,
     /// The keys to change to make it smaller, and the sizes behind the estimate.
     pub keys: &'static str,
@@ -41,9 +41,9 @@ pub struct Estimate {
 /// The limits a run must stay within.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Limits {
-    /// [bytes]
+    /// \[bytes\]
     pub memory: f64,
-    /// [s]
+    /// \[s\]
     pub seconds: f64,
     /// Whether the memory limit was given in the scene (else it is the machine's).
     pub memory_from_scene: bool,
@@ -136,6 +136,11 @@ pub fn liner_elements(g: &LinerGeometry, m: &LinerMeshing) -> f64 {
     m.circumferential as f64 * (m.radial as f64 * tube + m.radial_flange as f64 * flange)
 }
 
+/// Estimated full DOFs of one generated liner: 3 per node, nodes from [`liner_elements`].
+pub fn liner_dofs(g: &LinerGeometry, m: &LinerMeshing) -> f64 {
+    3.0 * liner_elements(g, m) * nodes_per_cell(m.kind)
+}
+
 /// Estimated lattice cells of the generated crankcase: per cylinder (1 + wall layers) rings of
 /// 4 s elements around the bore over N_z axial levels (bay, jacket and deck).
 pub fn crankcase_elements(
@@ -154,7 +159,7 @@ pub fn engine_dofs(scene: &Scene) -> Option<f64> {
     let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
         return None;
     };
-    let liner = liner_elements(geometry, meshing) * nodes_per_cell(meshing.kind);
+    let liner = liner_dofs(geometry, meshing) / 3.0;
     let cc = match scene.crankcase.as_ref().map(|c| &c.source) {
         Some(CrankcaseSource::Parametric {
             geometry: cg,
@@ -201,7 +206,7 @@ const MODEL_BYTES_PER_DOF: f64 = 2.0 * 142.0 * 24.0;
 const REF_ROM_SECONDS: f64 = 80.0;
 const REF_ROM_DOFS: f64 = 75_810.0 + 48_672.0;
 
-/// Peak memory of one part's Craig-Bampton reduction [bytes]: its factor (8 bytes an entry,
+/// Peak memory of one part's Craig-Bampton reduction \[bytes\]: its factor (8 bytes an entry,
 /// grown from the default crankcase's as n^1.355), its two assembled models, and the basis
 /// block of n x `columns` (constraint modes, modes, attachment candidates).
 pub fn part_reduction_bytes(dofs: f64, columns: f64) -> f64 {
@@ -279,8 +284,8 @@ fn part_dofs(scene: &Scene) -> Option<(f64, f64)> {
 
 /// The transient of `simulate`: steps N = cycles 720 / step (plus the step-error windows),
 /// t = N n_cyl t_1 max(1, slices / 12); memory per cylinder and step of a cycle, 8 bytes each:
-/// the points' two rolling series (up to twice their length while they grow) and three cycles
-/// of the eight piston series.
+/// the points' two rolling series (up to twice their length while they grow), their spectra's
+/// power sums and frequencies, and three cycles of the eight piston series.
 pub fn transient(scene: &Scene) -> Option<Estimate> {
     let sim = scene.simulation.as_ref()?;
     let t = &sim.transient;
@@ -291,7 +296,7 @@ pub fn transient(scene: &Scene) -> Option<Estimate> {
     let points = scene.liner_geometry.analysis_depths.len() as f64;
     Some(Estimate {
         what: "the transient",
-        memory: per_cycle * ncyl * (4.0 * points + 24.0) * 8.0 + ncyl * slices * 2.0 * 1e4,
+        memory: per_cycle * ncyl * (5.0 * points + 24.0) * 8.0 + ncyl * slices * 2.0 * 1e4,
         seconds: steps * ncyl * STEP_SECONDS_PER_CYLINDER * (slices / 12.0).max(1.0),
         keys: "transient.step_deg, transient.cycles, piston.slices",
         detail: format!(

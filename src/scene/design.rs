@@ -251,6 +251,52 @@ impl Design {
         Ok(design)
     }
 
+    /// Refuses a `--set KEY=VALUE` whose key the design varies: the varied value would
+    /// silently replace the fixed one in every run.
+    pub fn check_fixed(&self, sets: &[String]) -> Result<(), DesignError> {
+        let keys = self.keys();
+        for s in sets {
+            let key = s.split_once('=').map_or(s.as_str(), |(k, _)| k).trim();
+            if keys.iter().any(|k| k == key) {
+                return Err(DesignError::Argument {
+                    arg: "--set",
+                    value: s.clone(),
+                    problem: format!("the design varies '{key}' too"),
+                    expected: "a key fixed by --set or varied by --vary/--range, not both",
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The design as the command line gives it: `--vary KEY=V1,V2 ...` or `--sample lhs:N
+    /// --range KEY=LO:HI ... --seed S`.
+    pub fn describe(&self) -> String {
+        match self {
+            Design::Grid { vary } => vary
+                .iter()
+                .map(|v| format!("--vary {}={}", v.key, v.values.join(",")))
+                .collect::<Vec<_>>()
+                .join(" "),
+            Design::Sample {
+                method,
+                runs,
+                ranges,
+                seed,
+            } => {
+                let m = match method {
+                    Method::Lhs => "lhs",
+                    Method::Mc => "mc",
+                };
+                let r: Vec<String> = ranges
+                    .iter()
+                    .map(|r| format!("--range {}={}:{}", r.key, r.lo, r.hi))
+                    .collect();
+                format!("--sample {m}:{runs} {} --seed {seed}", r.join(" "))
+            }
+        }
+    }
+
     /// The varied keys, in order.
     pub fn keys(&self) -> Vec<String> {
         match self {
@@ -310,12 +356,24 @@ impl Design {
                         ranges
                             .iter()
                             .enumerate()
-                            .map(|(d, r)| format!("{}", r.lo + u[d][k] * (r.hi - r.lo)))
+                            .map(|(d, r)| toml_float(r.lo + u[d][k] * (r.hi - r.lo)))
                             .collect()
                     })
                     .collect()
             }
         }
+    }
+}
+
+/// `x` as a TOML literal: the shortest decimal that reads back as `x`, in exponent form when
+/// the plain form would be long (1.3e308 prints 309 digits plainly, which TOML reads as an
+/// integer out of range).
+fn toml_float(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() > 24 {
+        format!("{x:e}")
+    } else {
+        plain
     }
 }
 

@@ -74,7 +74,7 @@ pub struct Part {
     pub fix: Vec<String>,
     /// Unit of a mesh file's lengths (and constants).
     pub mesh_unit: spec::MeshUnit,
-    /// Node sets defined by boxes, [m] in the part's frame.
+    /// Node sets defined by boxes, \[m\] in the part's frame.
     pub box_sets: Vec<(String, [f64; 6])>,
 }
 
@@ -110,10 +110,10 @@ pub struct Crankcase {
     pub material: Option<Elastic>,
     /// Unit of a mesh file's lengths (and constants).
     pub mesh_unit: spec::MeshUnit,
-    /// Node sets defined by boxes, [m] in the engine frame.
+    /// Node sets defined by boxes, \[m\] in the engine frame.
     pub box_sets: Vec<(String, [f64; 6])>,
     pub fix: Vec<String>,
-    /// Clamp force on each liner flange [N].
+    /// Clamp force on each liner flange \[N\].
     pub clamp_force: f64,
 }
 
@@ -121,7 +121,7 @@ pub struct Crankcase {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Rom {
     pub band_hz: f64,
-    /// Cut-off of part and system modes [Hz] (band x cutoff factor).
+    /// Cut-off of part and system modes \[Hz\] (band x cutoff factor).
     pub cutoff_hz: f64,
     pub harmonics: usize,
     /// Residual-vector pattern spacing in bore-line nodes (0: none).
@@ -177,7 +177,7 @@ pub struct TransientSpec {
     pub mode_cutoff_hz: Option<f64>,
     /// Largest acceptable estimated relative step error of the mean peak.
     pub tolerance: f64,
-    /// Sub-steps per base step around slap onsets, and for how long after one [deg].
+    /// Sub-steps per base step around slap onsets, and for how long after one \[deg\].
     pub slap_substeps: usize,
     pub slap_span_deg: f64,
 }

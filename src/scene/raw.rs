@@ -1,5 +1,5 @@
 //! Raw scene structures, exactly as written in the TOML file. Units are SI unless the key names
-//! another (`bore_mm`); unknown keys are rejected. [`super::validate`] turns these into the
+//! another (`bore_mm`); unknown keys are rejected. `scene::validate` turns these into the
 //! validated model.
 
 use serde::Deserialize;
@@ -47,11 +47,11 @@ pub struct RawScene {
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawLimits {
-    /// Memory a run may use [GB]; default: 80 % of the memory the machine has available when
+    /// Memory a run may use \[GB\]; default: 80 % of the memory the machine has available when
     /// the run starts. Raise it only when the estimate is known to be pessimistic.
     #[serde(default)]
     pub max_memory_gb: Option<f64>,
-    /// Wall time a run (a sweep: all its runs) may take on this machine [h]; default 24.
+    /// Wall time a run (a sweep: all its runs) may take on this machine \[h\]; default 24.
     #[serde(default)]
     pub max_hours: Option<f64>,
 }
@@ -63,7 +63,7 @@ pub struct RawLimits {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawCavitation {
-    /// Coolant temperature [C], 0-150.
+    /// Coolant temperature \[C\], 0-150.
     #[serde(default = "default_coolant_temp")]
     pub coolant_temp_c: f64,
     /// Static coolant pressure at the liner [kPa absolute], above the vapour pressure.
@@ -72,7 +72,7 @@ pub struct RawCavitation {
     /// Ethylene glycol mass fraction, 0-0.8.
     #[serde(default)]
     pub glycol: f64,
-    /// Coolant gap between liner and crankcase wall [mm].
+    /// Coolant gap between liner and crankcase wall \[mm\].
     #[serde(default = "default_gap_mm")]
     pub gap_mm: f64,
     /// Wall-pressure transfer p_r = p_s + k_p a [Pa per m/s^2]; default derived (see above).
@@ -146,21 +146,21 @@ pub struct RawCrankcase {
     /// engine frame, in mm whatever the mesh's unit), e.g. the fixed set named in `fix`.
     #[serde(default)]
     pub sets: BTreeMap<String, RawBoxSet>,
-    /// Deck plate thickness below the liner flange seat [mm].
+    /// Deck plate thickness below the liner flange seat \[mm\].
     pub deck_thickness_mm: f64,
     /// Water-jacket outer wall thickness at the thrust/anti-thrust side, at the cylinder centre
-    /// line [mm] (the wall thickens towards the cylinder junctions).
+    /// line \[mm\] (the wall thickens towards the cylinder junctions).
     pub jacket_wall_mm: f64,
-    /// Depth of the crank bay (skirt) below the liner bottom [mm].
+    /// Depth of the crank bay (skirt) below the liner bottom \[mm\].
     pub skirt_depth_mm: f64,
-    /// Front (gear-end) wall thickness [mm].
+    /// Front (gear-end) wall thickness \[mm\].
     pub front_wall_mm: f64,
-    /// Rear (flywheel-end) wall thickness [mm].
+    /// Rear (flywheel-end) wall thickness \[mm\].
     pub rear_wall_mm: f64,
-    /// Oil-pan rail: outward flange width [mm] and height [mm] at the skirt bottom.
+    /// Oil-pan rail: outward flange width \[mm\] and height \[mm\] at the skirt bottom.
     pub rail_width_mm: f64,
     pub rail_height_mm: f64,
-    /// Head-bolt clamp force carried by each liner flange [kN] (bolt preload from torque:
+    /// Head-bolt clamp force carried by each liner flange \[kN\] (bolt preload from torque:
     /// F = T / (k d)); pushes the flange down and pulls the deck up (the bolt reaction).
     pub flange_clamp_kn: f64,
     /// Node sets held fixed (engine mounting); the parametric mesh offers `pan_rail`.
@@ -178,7 +178,7 @@ pub struct RawCrankcase {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawBoxSet {
-    /// The box's corners [x0, y0, z0, x1, y1, z1] [mm], x0 <= x1, y0 <= y1, z0 <= z1.
+    /// The box's corners [x0, y0, z0, x1, y1, z1] \[mm\], x0 <= x1, y0 <= y1, z0 <= z1.
     pub box_mm: [f64; 6],
 }
 
@@ -193,7 +193,7 @@ pub struct RawCrankcaseMesh {
     pub per_sector: usize,
     /// Element rings through the jacket wall, >= 1.
     pub wall_layers: usize,
-    /// Target axial element size [mm].
+    /// Target axial element size \[mm\].
     pub axial_size_mm: f64,
 }
 
@@ -201,7 +201,7 @@ pub struct RawCrankcaseMesh {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawRom {
-    /// Highest frequency of interest [Hz] (spectra, responses), > 0.
+    /// Highest frequency of interest \[Hz\] (spectra, responses), > 0.
     #[serde(default = "default_band")]
     pub band_hz: f64,
     /// Cut-off of part and system modes as a multiple of `band_hz`, >= 1 (default 2.5).
@@ -261,15 +261,15 @@ pub struct RawEngine {
     pub cylinders: usize,
     /// Firing order, a permutation of 1..=cylinders.
     pub firing_order: Vec<usize>,
-    /// Cylinder bore [mm]; must equal the liner's inner diameter.
+    /// Cylinder bore \[mm\]; must equal the liner's inner diameter.
     pub bore_mm: f64,
-    /// Piston stroke [mm].
+    /// Piston stroke \[mm\].
     pub stroke_mm: f64,
-    /// Connecting-rod length, centre to centre [mm]; longer than half the stroke.
+    /// Connecting-rod length, centre to centre \[mm\]; longer than half the stroke.
     pub rod_length_mm: f64,
-    /// Distance between neighbouring bore axes [mm]; larger than the liner flange diameter.
+    /// Distance between neighbouring bore axes \[mm\]; larger than the liner flange diameter.
     pub cylinder_pitch_mm: f64,
-    /// Engine speed [rpm], > 0.
+    /// Engine speed \[rpm\], > 0.
     pub speed_rpm: f64,
 }
 
@@ -277,7 +277,7 @@ pub struct RawEngine {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawMaterial {
-    /// Young's modulus [Pa], > 0.
+    /// Young's modulus \[Pa\], > 0.
     pub youngs_pa: f64,
     /// Poisson's ratio, in (-1, 0.5).
     pub poisson: f64,
@@ -301,28 +301,28 @@ pub struct RawLiner {
     /// x1, y1, z1]` in the liner's own frame (axis z, z = 0 at the liner bottom), mm.
     #[serde(default)]
     pub sets: BTreeMap<String, RawBoxSet>,
-    /// Outer (coolant-side) diameter [mm].
+    /// Outer (coolant-side) diameter \[mm\].
     pub outer_diameter_mm: f64,
-    /// Inner (bore) diameter [mm].
+    /// Inner (bore) diameter \[mm\].
     pub inner_diameter_mm: f64,
-    /// Overall length [mm].
+    /// Overall length \[mm\].
     pub length_mm: f64,
-    /// Diameter of the top flange [mm]; equal to the outer diameter for no flange.
+    /// Diameter of the top flange \[mm\]; equal to the outer diameter for no flange.
     pub flange_outer_diameter_mm: f64,
-    /// Height of the top flange [mm].
+    /// Height of the top flange \[mm\].
     pub flange_height_mm: f64,
     /// Height (axial length) of the lower guide band, the liner's radial support in the
-    /// crankcase [mm].
+    /// crankcase \[mm\].
     pub guide_height_mm: f64,
-    /// Depth of the guide band's top edge below the liner top [mm]. Omitted: the band ends the
+    /// Depth of the guide band's top edge below the liner top \[mm\]. Omitted: the band ends the
     /// liner (depth = length - guide height). Smaller: a short-jacket liner, supported part-way
     /// down, its lower end hanging free in the crank bay; the coolant zone (flange to guide)
     /// shortens, which stiffens the liner's ovalling.
     #[serde(default)]
     pub guide_depth_mm: Option<f64>,
-    /// Depth of the first analysis point below the liner top [mm].
+    /// Depth of the first analysis point below the liner top \[mm\].
     pub analysis_first_depth_mm: f64,
-    /// Spacing of the analysis points, top to bottom [mm] (paper: 25).
+    /// Spacing of the analysis points, top to bottom \[mm\] (paper: 25).
     pub analysis_spacing_mm: f64,
     /// Number of analysis points (paper: 4).
     pub analysis_points: usize,
@@ -351,7 +351,7 @@ pub struct RawLinerMesh {
     /// Elements across the flange overhang, >= 1.
     #[serde(default = "one")]
     pub radial_flange: usize,
-    /// Target axial element size [mm].
+    /// Target axial element size \[mm\].
     pub axial_size_mm: f64,
 }
 
@@ -366,7 +366,7 @@ fn one() -> usize {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawSolver {
-    /// Frequency f_s of the negative shift sigma = -(2 pi f_s)^2 [Hz], > 0; well below the
+    /// Frequency f_s of the negative shift sigma = -(2 pi f_s)^2 \[Hz\], > 0; well below the
     /// first elastic mode, so rigid-body modes stay regular.
     #[serde(default = "default_shift_hz")]
     pub shift_hz: f64,
@@ -394,42 +394,42 @@ fn default_guard() -> usize {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawPiston {
-    /// Piston with rings, without the pin [kg], > 0.
+    /// Piston with rings, without the pin \[kg\], > 0.
     pub mass_kg: f64,
-    /// Pin plus the rod small-end share [kg], >= 0.
+    /// Pin plus the rod small-end share \[kg\], >= 0.
     pub pin_mass_kg: f64,
     /// Tilt inertia of the piston about the pin axis [kg m^2], > mass x cg_above_pin^2.
     pub tilt_inertia_kg_m2: f64,
-    /// Centre of gravity above the pin axis [mm] (negative: below).
+    /// Centre of gravity above the pin axis \[mm\] (negative: below).
     #[serde(default)]
     pub cg_above_pin_mm: f64,
-    /// Centre of gravity beside the pin toward thrust [mm]; less than the bore's radius.
+    /// Centre of gravity beside the pin toward thrust \[mm\]; less than the bore's radius.
     #[serde(default)]
     pub cg_offset_mm: f64,
-    /// Pin offset from the piston axis toward the thrust side [mm] (paper sweeps -1..+1); less
+    /// Pin offset from the piston axis toward the thrust side \[mm\] (paper sweeps -1..+1); less
     /// than the bore's radius, warned beyond 5 % of the bore (engines use 0-2 %).
     #[serde(default)]
     pub pin_offset_mm: f64,
-    /// Crankshaft axis offset from the bore axis toward thrust [mm].
+    /// Crankshaft axis offset from the bore axis toward thrust \[mm\].
     #[serde(default)]
     pub crank_offset_mm: f64,
-    /// Pin axis to crown top [mm].
+    /// Pin axis to crown top \[mm\].
     pub compression_height_mm: f64,
-    /// Crown below the liner top at top dead centre [mm], >= 0.
+    /// Crown below the liner top at top dead centre \[mm\], >= 0.
     pub crown_depth_at_tdc_mm: f64,
-    /// Skirt length [mm] and skirt top above the pin axis [mm].
+    /// Skirt length \[mm\] and skirt top above the pin axis \[mm\].
     pub skirt_length_mm: f64,
     pub pin_below_skirt_top_mm: f64,
-    /// Cold diametral clearance at the widest skirt height [um], >= 0; at most 2 % of the bore
+    /// Cold diametral clearance at the widest skirt height \[um\], >= 0; at most 2 % of the bore
     /// (warned above 0.5 %: running clearances are 0.05-0.2 %).
     pub clearance_um: f64,
-    /// Radial barrel drop at the farther skirt end [um], >= 0, and the widest height below the
-    /// pin [mm].
+    /// Radial barrel drop at the farther skirt end \[um\], >= 0, and the widest height below the
+    /// pin \[mm\].
     #[serde(default)]
     pub barrel_um: f64,
     #[serde(default)]
     pub barrel_max_below_pin_mm: f64,
-    /// Ovality: thrust-axis minus pin-axis skirt diameter [um], >= 0.
+    /// Ovality: thrust-axis minus pin-axis skirt diameter \[um\], >= 0.
     #[serde(default)]
     pub ovality_um: f64,
     /// Skirt slices per side, >= 10.
@@ -471,7 +471,10 @@ pub struct RawOperating {
     /// Load as a fraction of rated, in [0, 1] (scales heat release and boost of the built-in curve).
     pub load: f64,
     /// Measured cylinder pressure, CSV `crank_angle_deg,pressure_bar` (absolute; path relative
-    /// to the scene); replaces the built-in curve.
+    /// to the scene; the cylinder's own angle, firing TDC at 360); replaces the built-in curve.
+    /// The table covers the whole 0-720 deg cycle, samples at most 45 deg apart (the wrap
+    /// through 720/0 included), pressures in (0, 1000] bar, and is interpolated linearly and
+    /// periodically.
     #[serde(default)]
     pub pressure_file: Option<String>,
     /// Crankcase pressure under the piston [bar absolute].
@@ -491,19 +494,19 @@ pub struct RawCombustion {
     pub compression_ratio: f64,
     /// Intake (boost) pressure at full load [bar absolute], >= 1.
     pub intake_bar: f64,
-    /// Exhaust back-pressure above intake [bar].
+    /// Exhaust back-pressure above intake \[bar\].
     pub exhaust_over_intake_bar: f64,
-    /// Start of combustion [deg crank angle; firing TDC = 360] and duration [deg].
+    /// Start of combustion [deg crank angle; firing TDC = 360] and duration \[deg\].
     pub start_deg: f64,
     pub duration_deg: f64,
     /// Wiebe parameters a (> 0) and m (>= 0).
     pub wiebe_a: f64,
     pub wiebe_m: f64,
-    /// Net heat released per cycle at full load [J].
+    /// Net heat released per cycle at full load \[J\].
     pub heat_release_j: f64,
     /// Polytropic exponent of the closed cycle, in (1, 1.67).
     pub polytropic: f64,
-    /// Exhaust valve opening [deg], between 450 and 700.
+    /// Exhaust valve opening \[deg\], between 450 and 700.
     pub evo_deg: f64,
 }
 
@@ -517,7 +520,7 @@ pub struct RawTransient {
     /// HHT alpha in [-1/3, 0] (scheme = "hht").
     #[serde(default = "default_alpha")]
     pub hht_alpha: f64,
-    /// Crank-angle step [deg]; 720 must be a whole multiple of it.
+    /// Crank-angle step \[deg\]; 720 must be a whole multiple of it.
     pub step_deg: f64,
     /// Engine cycles run from rest, >= 1.
     pub cycles: usize,
@@ -534,9 +537,9 @@ pub struct RawTransient {
     pub adaptive: bool,
     /// Modal damping ratio of the engine's system modes, in [0, 1).
     pub damping_ratio: f64,
-    /// Largest acceptable skirt penetration [um]; deeper stops the run.
+    /// Largest acceptable skirt penetration \[um\]; deeper stops the run.
     pub max_penetration_um: f64,
-    /// Integrate system modes up to this frequency [Hz] only; the static part of the modes
+    /// Integrate system modes up to this frequency \[Hz\] only; the static part of the modes
     /// above joins the residual flexibility. Default: every mode of the ROM (up to the
     /// ROM cut-off).
     #[serde(default)]

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 /// Isotropic elastic solid, SI units.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Elastic {
-    /// Young's modulus E [Pa], > 0.
+    /// Young's modulus E \[Pa\], > 0.
     pub young: f64,
     /// Poisson's ratio nu [-], in (-1, 0.5).
     pub poisson: f64,
@@ -41,11 +41,11 @@ impl Elastic {
         }
         Ok(())
     }
-    /// First Lame constant lambda [Pa].
+    /// First Lame constant lambda \[Pa\].
     pub fn lambda(&self) -> f64 {
         self.young * self.poisson / ((1.0 + self.poisson) * (1.0 - 2.0 * self.poisson))
     }
-    /// Shear modulus mu [Pa].
+    /// Shear modulus mu \[Pa\].
     pub fn mu(&self) -> f64 {
         self.young / (2.0 * (1.0 + self.poisson))
     }
@@ -87,7 +87,7 @@ pub struct LinerMeshing {
     pub radial: usize,
     /// Elements across the flange overhang.
     pub radial_flange: usize,
-    /// Target axial element size [m].
+    /// Target axial element size \[m\].
     pub axial_size: f64,
 }
 
@@ -126,7 +126,7 @@ pub struct CrankcaseMeshing {
     pub per_sector: usize,
     /// Element rings through the jacket wall.
     pub wall_layers: usize,
-    /// Target axial element size [m].
+    /// Target axial element size \[m\].
     pub axial_size: f64,
 }
 
@@ -135,15 +135,15 @@ pub struct CrankcaseMeshing {
 pub struct SkirtSpec {
     pub bore: f64,
     pub length: f64,
-    /// Skirt top above the pin [m].
+    /// Skirt top above the pin \[m\].
     pub top_above_pin: f64,
     pub slices: usize,
-    /// Cold diametral clearance at the widest height [m].
+    /// Cold diametral clearance at the widest height \[m\].
     pub clearance: f64,
-    /// Radial barrel drop at the farther skirt end [m] and the widest height below the pin [m].
+    /// Radial barrel drop at the farther skirt end \[m\] and the widest height below the pin \[m\].
     pub barrel: f64,
     pub barrel_max_below_pin: f64,
-    /// Ovality (thrust-axis minus pin-axis diameter) [m].
+    /// Ovality (thrust-axis minus pin-axis diameter) \[m\].
     pub ovality: f64,
     /// Thermal expansion of piston and liner [1/K], temperatures [deg C].
     pub piston_expansion: f64,
@@ -161,21 +161,21 @@ pub struct SkirtSpec {
 pub struct Wiebe {
     /// Geometric compression ratio eps.
     pub compression_ratio: f64,
-    /// Intake (boost) pressure at full load, absolute [Pa]; falls linearly to 1 bar at no load.
+    /// Intake (boost) pressure at full load, absolute \[Pa\]; falls linearly to 1 bar at no load.
     pub intake_pa: f64,
-    /// Exhaust back-pressure above the intake pressure [Pa].
+    /// Exhaust back-pressure above the intake pressure \[Pa\].
     pub exhaust_over_intake_pa: f64,
-    /// Start of combustion [deg] and its duration [deg].
+    /// Start of combustion \[deg\] and its duration \[deg\].
     pub start_deg: f64,
     pub duration_deg: f64,
     /// Wiebe efficiency and shape parameters a, m.
     pub a: f64,
     pub m: f64,
-    /// Heat released per cycle at full load [J] (net of wall losses).
+    /// Heat released per cycle at full load \[J\] (net of wall losses).
     pub heat_j: f64,
     /// Polytropic exponent n of the closed cycle.
     pub polytropic: f64,
-    /// Exhaust valve opening [deg].
+    /// Exhaust valve opening \[deg\].
     pub evo_deg: f64,
     /// Load fraction in [0, 1].
     pub load: f64,

@@ -110,7 +110,7 @@ pub struct StepResult {
     pub penetrations: Vec<f64>,
     /// Penetration rate p' at the new time of every penetrating slice (0 elsewhere) [m/s].
     pub rates: Vec<f64>,
-    /// Damper part c_d p' of every slice force (0 where the damper did not act) [N].
+    /// Damper part c_d p' of every slice force (0 where the damper did not act) \[N\].
     pub damper: Vec<f64>,
     /// Slices whose damped force was clamped at zero (it would have pulled).
     pub clamped: Vec<bool>,
@@ -135,8 +135,8 @@ impl StepResult {
 /// One slice at one end of a step, as [`onset_impulses`] needs it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SliceState {
-    /// Penetration [m] (negative: apart), its rate [m/s], and the damper part of the slice's
-    /// nodal force [N].
+    /// Penetration \[m\] (negative: apart), its rate [m/s], and the damper part of the slice's
+    /// nodal force \[N\].
     pub penetration: f64,
     pub rate: f64,
     pub damper: f64,
@@ -233,8 +233,8 @@ pub enum StepFailure {
 /// Solves one step of size `dt` with the structure's `scheme` (Newmark beta, gamma; HHT alpha).
 ///
 /// A piecewise-linear Newton on the slices' law pieces: each iteration solves the step's
-/// linear problem for the active set ([`Step::solve_active`]), then moves every slice to the
-/// piece its new penetration lies on ([`Step::next_pieces`]); it has converged when no slice
+/// linear problem for the active set (`Step::solve_active`), then moves every slice to the
+/// piece its new penetration lies on (`Step::next_pieces`); it has converged when no slice
 /// changes. After a third of `max_iterations` only the most violated slice changes per
 /// iteration (guards against cycling).
 pub fn step(

@@ -28,6 +28,7 @@ use super::error::TransientError;
 use super::modal::ModalStructure;
 use super::scheme::{ModalIntegrator, Scheme};
 use super::signal::{fir_half_length, low_pass, sampled_peak, second_difference4};
+use super::spectrum::{centred_spectrum, PowerSum, Spectrum};
 use crate::linalg::dense::{from_row_vecs, row, values_mut, Dense};
 use crate::piston::Piston;
 use crate::reduce::rom::{CylinderRom, EngineRom};
@@ -49,10 +50,10 @@ pub struct CycleSettings {
     pub max_halvings: usize,
     /// Modal damping ratio of every system mode.
     pub damping_ratio: f64,
-    /// Largest allowed penetration [m].
+    /// Largest allowed penetration \[m\].
     pub max_penetration: f64,
     pub max_newton: usize,
-    /// Use system modes up to this frequency only [Hz] (None: all of the ROM).
+    /// Use system modes up to this frequency only \[Hz\] (None: all of the ROM).
     pub modes_below_hz: Option<f64>,
     /// Static correction (residual flexibility) at the contact.
     pub static_correction: bool,
@@ -80,7 +81,7 @@ pub struct CycleSettings {
     /// Estimate the step error of each cylinder's firing slap ([`StepError`]; the window run
     /// at h and h/2 costs about 0.46 cycles of work per cylinder).
     pub step_error: bool,
-    /// Accelerations at the analysis points are reported in the band of the ROM [Hz]: the sum
+    /// Accelerations at the analysis points are reported in the band of the ROM \[Hz\]: the sum
     /// over every integrated mode plus the quasi-static (residual) response to the contact
     /// forces, low-passed by a zero-phase FIR over the cycle
     /// ([`super::signal::low_pass`]; the ROM is accurate up to about half its cut-off, and
@@ -110,7 +111,7 @@ pub struct EngineSetup<'a> {
     pub firing_order: &'a [usize],
     /// Crank speed [rad/s].
     pub omega: f64,
-    /// Height of the liner top in the liner frame [m].
+    /// Height of the liner top in the liner frame \[m\].
     pub liner_top: f64,
 }
 
@@ -124,9 +125,9 @@ pub struct Stats {
     pub modes: usize,
     /// Accumulated energy-balance error relative to the energy scale (E - W_contact + W_damping).
     pub energy_error: f64,
-    /// Largest penetration [m].
+    /// Largest penetration \[m\].
     pub max_penetration_m: f64,
-    /// Smallest force of any slice at any committed step [N] (the law never pulls: >= 0).
+    /// Smallest force of any slice at any committed step \[N\] (the law never pulls: >= 0).
     pub min_slice_force_n: f64,
     /// Base steps taken as sub-steps around slap onsets ([`CycleSettings::slap_substeps`]).
     pub substepped_steps: usize,
@@ -141,18 +142,18 @@ pub struct Stats {
     pub step_error_estimate: f64,
     pub step_refinements: usize,
     /// Integrated autocorrelation time of the per-cycle peaks (1: independent cycles), pooled
-    /// over every peak series of the run ([`standard_errors`]).
+    /// over every peak series of the run (`standard_errors`).
     pub autocorrelation_cycles: f64,
     pub dt_s: f64,
     /// Per-cylinder coupling: largest difference between the liner displacement a contact
-    /// slice used and the one of the completed step [m].
+    /// slice used and the one of the completed step \[m\].
     pub coupling_lag_m: f64,
 }
 
 /// Time series of the last cycle, one row per base step.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct Series {
-    /// Global crank angle [deg] (cylinder `firing_order[0]`'s own angle) and time [s].
+    /// Global crank angle \[deg\] (cylinder `firing_order[0]`'s own angle) and time \[s\].
     pub crank_angle_deg: Vec<f64>,
     pub time_s: Vec<f64>,
     /// Per modelled cylinder.
@@ -165,20 +166,21 @@ pub struct CylinderSeries {
     pub cylinder: usize,
     /// Liner point accelerations [m/s^2] (points x steps), + toward the coolant.
     pub acceleration: Dense,
-    /// The same for every averaged cycle, oldest first (the last equals `acceleration`): the
-    /// spectra are averaged over them (one cycle's spectrum is one draw of a non-periodic
-    /// slap). Not serialised (the averaged cycles' records, 6 x 4 x 2880 x 20 values).
+    /// Per point, the amplitude spectrum of `acceleration` averaged over the averaged cycles:
+    /// each cycle's record centred on the cylinder's firing TDC
+    /// ([`super::spectrum::centred_spectrum`]), RMS-averaged ([`super::spectrum::PowerSum`];
+    /// one cycle's spectrum of a non-periodic slap is one draw). Not serialised.
     #[serde(skip)]
-    pub cycle_acceleration: Vec<Dense>,
+    pub spectra: Vec<Spectrum>,
     /// Crankcase jacket-wall accelerations at the facing points [m/s^2] (points x steps; the
     /// last cycle's only, 0 steps in the others).
     pub crankcase_acceleration: Dense,
     pub lateral_m: Vec<f64>,
     pub tilt_rad: Vec<f64>,
-    /// Summed contact force on the thrust and anti-thrust side [N].
+    /// Summed contact force on the thrust and anti-thrust side \[N\].
     pub thrust_force_n: Vec<f64>,
     pub antithrust_force_n: Vec<f64>,
-    /// Quasi-static side force [N] and cylinder pressure [Pa].
+    /// Quasi-static side force \[N\] and cylinder pressure \[Pa\].
     pub side_force_n: Vec<f64>,
     pub pressure_pa: Vec<f64>,
 }
@@ -193,7 +195,7 @@ pub struct Peak {
     /// Sample standard deviation of the per-cycle peaks (0 for one cycle).
     pub std: f64,
     /// Standard error of the mean, corrected for the correlation of consecutive cycles
-    /// ([`standard_errors`]; 0 for one cycle).
+    /// (`standard_errors`; 0 for one cycle).
     pub se: f64,
     /// Largest per-cycle peak.
     pub max: f64,
@@ -267,9 +269,9 @@ impl Peak {
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct CylinderPeaks {
     pub cylinder: usize,
-    /// Largest |net contact force - quasi-static side force| (the dynamic slap) [N].
+    /// Largest |net contact force - quasi-static side force| (the dynamic slap) \[N\].
     pub slap_force: Peak,
-    /// Largest quasi-static side force toward thrust [N].
+    /// Largest quasi-static side force toward thrust \[N\].
     pub side_force: Peak,
 }
 
@@ -320,7 +322,7 @@ impl StepError {
     }
 }
 
-/// The firing-slap window of the step-error estimate, in the cylinder's own crank angle [deg].
+/// The firing-slap window of the step-error estimate, in the cylinder's own crank angle \[deg\].
 pub const STEP_ERROR_WINDOW_DEG: (f64, f64) = (320.0, 430.0);
 /// How much of each end of the window the output filter may take before the window is
 /// widened (the compared part keeps covering 355-395 deg, the firing slap) [deg].
@@ -503,12 +505,12 @@ impl<'a> EngineRun<'a> {
         }
     }
 
-    /// Global crank angle [deg] at time `t`.
+    /// Global crank angle \[deg\] at time `t`.
     pub fn angle_at(&self, t: f64) -> f64 {
         t * self.setup.omega.to_degrees()
     }
 
-    /// Base step [s].
+    /// Base step \[s\].
     pub fn base_dt(&self) -> f64 {
         self.settings.step_deg.to_radians() / self.setup.omega
     }
@@ -958,7 +960,7 @@ impl<'a> EngineRun<'a> {
         let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
         let mut prev_peaks: Option<CyclePeaks> = None;
         let mut kept: Vec<CyclePeaks> = Vec::with_capacity(averaged);
-        let mut kept_acceleration: Vec<Vec<Dense>> = vec![Vec::new(); self.cyls.len()];
+        let mut power: Vec<Vec<PowerSum>> = vec![Vec::new(); self.cyls.len()];
         let mut last_series: Option<Series> = None;
         let mut building: Option<Series> = None;
         let mut pending: Option<(usize, Series)> = None;
@@ -1003,9 +1005,7 @@ impl<'a> EngineRun<'a> {
             }
             if k + averaged >= cycles {
                 kept.push(peaks.clone());
-                for (acc, cs) in kept_acceleration.iter_mut().zip(&series.cylinders) {
-                    acc.push(cs.acceleration.clone());
-                }
+                self.add_spectra(&series, dt, &mut power);
             }
             prev_peaks = Some(peaks);
             last_series = Some(series);
@@ -1015,8 +1015,8 @@ impl<'a> EngineRun<'a> {
         self.stats.cycles_run = cycles;
         self.stats.cycles_averaged = kept.len();
         let mut series = last_series.expect("at least one cycle");
-        for (cs, acc) in series.cylinders.iter_mut().zip(kept_acceleration) {
-            cs.cycle_acceleration = acc;
+        for (cs, sums) in series.cylinders.iter_mut().zip(&power) {
+            cs.spectra = sums.iter().filter_map(PowerSum::average).collect();
         }
         let mut peaks = average_peaks(&kept);
         self.stats.autocorrelation_cycles = standard_errors(&kept, &mut peaks);
@@ -1195,6 +1195,19 @@ impl<'a> EngineRun<'a> {
                     .map_or(0.0, |(p, _)| p.max(0.0))
             })
             .collect())
+    }
+
+    /// Adds each cylinder's point spectra of the cycle in `series` to the power sums `power`
+    /// (per cylinder, per point).
+    fn add_spectra(&self, series: &Series, dt: f64, power: &mut [Vec<PowerSum>]) {
+        for ((cs, cyl), sums) in series.cylinders.iter().zip(&self.cyls).zip(power) {
+            let np = cs.acceleration.nrows();
+            sums.resize(np, PowerSum::default());
+            for (p, sum) in sums.iter_mut().enumerate() {
+                let a = row(&cs.acceleration, p);
+                sum.add(&centred_spectrum(a, &series.crank_angle_deg, cyl.phase, dt));
+            }
+        }
     }
 
     /// A cycle's series with room for `spc` steps (accelerations are set when it completes).

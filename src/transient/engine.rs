@@ -4,7 +4,7 @@ use super::cycle::{run_with_tolerance, Coupling, CycleResult, CycleSettings, Eng
 use super::error::TransientError;
 use crate::piston::Piston;
 use crate::reduce::rom::EngineRom;
-use crate::scene::{Scene, Simulation};
+use crate::scene::{Scene, SceneError, Simulation};
 
 /// How often the tolerance control may halve the step ([`run_with_tolerance`]).
 pub const MAX_REFINEMENTS: usize = 2;
@@ -55,7 +55,34 @@ pub fn run_cycle(
     )
 }
 
-/// The whole-run step check of a run made at `step_deg` [deg]: the same cycles at `step_deg` / 2
+/// Refuses a `transient.mode_cutoff_hz` below the ROM's lowest system mode: the run would
+/// integrate no mode at all (the structure reduced to its static flexibility) and report
+/// quasi-static accelerations as if they were the ringing liner's.
+pub fn check_mode_cutoff(
+    scene: &Scene,
+    sim: &Simulation,
+    rom: &EngineRom,
+) -> Result<(), SceneError> {
+    let (Some(cut), Some(&lowest)) = (sim.transient.mode_cutoff_hz, rom.frequencies_hz.first())
+    else {
+        return Ok(());
+    };
+    if cut < lowest {
+        return Err(SceneError::Field {
+            path: scene.path.clone(),
+            key: "transient.mode_cutoff_hz".into(),
+            msg: format!(
+                "{} Hz keeps no system mode (the ROM's lowest is {} Hz): the transient would integrate no mode; remove the key (all modes) or set it above the band ({} Hz)",
+                crate::text::num(cut),
+                crate::text::num(lowest),
+                crate::text::num(scene.rom.band_hz)
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The whole-run step check of a run made at `step_deg` \[deg\]: the same cycles at `step_deg` / 2
 /// (no accuracy control, no firing-slap windows). Its mean peaks P_{h/2} differ from the run's
 /// P_h by the whole step error, the slaps' own and the shift of the cycles' statistics that the
 /// coarser step makes between the slaps (which the firing-slap windows of [`StepError`] do not

@@ -10,7 +10,7 @@ pub enum TransientError {
         iterations: usize,
         halvings: usize,
     },
-    #[error("deep penetration: cylinder {cylinder}, {side} side, slice {slice} (height {height_mm:.1} mm on the liner): {penetration_um:.1} um > {limit_um:.1} um at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s); the contact stiffness is too low for the load, or the step too large")]
+    #[error("deep penetration: cylinder {cylinder}, {side} side, slice {slice} (height {height_mm:.1} mm on the liner): {} um > {} um at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s); the contact stiffness is too low for the load, or the step too large", crate::text::num(*.penetration_um), crate::text::num(*.limit_um))]
     DeepPenetration {
         cylinder: usize,
         side: &'static str,

@@ -10,5 +10,6 @@ pub mod full_order;
 pub mod modal;
 pub mod scheme;
 pub mod signal;
+pub mod spectrum;
 pub mod verify;
 pub mod window;

@@ -200,7 +200,7 @@ impl ModalStructure {
         self.rows.nrows()
     }
 
-    /// u += f R_e[range] (row `e` of the residual flexibility, which is symmetric: the column
+    /// u += f R_e\[range\] (row `e` of the residual flexibility, which is symmetric: the column
     /// too); nothing without the static correction.
     pub fn rflex_axpy(&self, u: &mut [f64], f: f64, e: usize, range: std::ops::Range<usize>) {
         if self.static_correction {

@@ -78,11 +78,11 @@ impl Scheme {
 /// Energy quantities of one committed step ([`ModalIntegrator::commit_with_energy`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StepEnergy {
-    /// Work of the modal forces over the step [J].
+    /// Work of the modal forces over the step \[J\].
     pub work: f64,
-    /// Damping power at the step's mean velocity [W].
+    /// Damping power at the step's mean velocity \[W\].
     pub damping_power: f64,
-    /// Modal energy after the step [J].
+    /// Modal energy after the step \[J\].
     pub energy: f64,
 }
 
@@ -189,7 +189,7 @@ impl ModalIntegrator {
         self.pred_strain_norm = strain.sqrt();
     }
 
-    /// Size of the current step [s].
+    /// Size of the current step \[s\].
     pub fn dt(&self) -> f64 {
         self.dt
     }

@@ -64,7 +64,7 @@ impl VerifyError {
 
 type Result<T> = std::result::Result<T, VerifyError>;
 
-/// Window around firing TDC (360 deg) in the cylinder's own crank angle [deg]: from before the
+/// Window around firing TDC (360 deg) in the cylinder's own crank angle \[deg\]: from before the
 /// piston crosses over at TDC to past the side-force peak.
 pub const WINDOW_DEG: (f64, f64) = (330.0, 420.0);
 
@@ -89,11 +89,11 @@ pub struct FullOrderReport {
     pub steps: usize,
     /// The scheme both models ran on the window (the scene's).
     pub scheme: Scheme,
-    /// Upper edge of the band both series are low-passed to [Hz].
+    /// Upper edge of the band both series are low-passed to \[Hz\].
     pub filter_band_hz: f64,
     pub full_dofs: usize,
     pub rom_modes: usize,
-    /// Rayleigh coefficients a [1/s] and b [s].
+    /// Rayleigh coefficients a [1/s] and b \[s\].
     pub rayleigh_a: f64,
     pub rayleigh_b: f64,
     pub points: Vec<PointComparison>,
@@ -115,7 +115,7 @@ pub struct FullOrderReport {
     pub full_series: WindowResult,
     #[serde(skip)]
     pub rom_series: WindowResult,
-    /// The window's step [s].
+    /// The window's step \[s\].
     #[serde(skip)]
     pub dt: f64,
 }
@@ -495,7 +495,7 @@ pub struct TradeoffPoint {
     /// the scene's, all modes): over the window's points for a mode cut-off, over the
     /// cylinders' worst points (the reference's) for a step.
     pub error: f64,
-    /// Wall time of the stepping: the window, or all cylinders' windows [s].
+    /// Wall time of the stepping: the window, or all cylinders' windows \[s\].
     pub seconds: f64,
 }
 

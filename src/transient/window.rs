@@ -44,7 +44,7 @@ pub trait Liner: Structure {
 /// The crank-angle window and the piston's bore.
 #[derive(Clone, Debug)]
 pub struct Window {
-    /// The cylinder's own crank angles [deg] (firing TDC at 360).
+    /// The cylinder's own crank angles \[deg\] (firing TDC at 360).
     pub start_deg: f64,
     pub end_deg: f64,
     pub step_deg: f64,
@@ -72,10 +72,10 @@ pub struct WindowResult {
     pub acceleration: Dense,
     pub lateral_m: Vec<f64>,
     pub tilt_rad: Vec<f64>,
-    /// Net contact force toward thrust (thrust minus anti-thrust side) [N].
+    /// Net contact force toward thrust (thrust minus anti-thrust side) \[N\].
     pub contact_force_n: Vec<f64>,
     pub newton_iterations: usize,
-    /// Wall time of the stepping [s].
+    /// Wall time of the stepping \[s\].
     pub seconds: f64,
 }
 

@@ -1,0 +1,335 @@
+//! Regression tests of the hostile-input findings of issue 40 (tried as a new user would):
+//! silent successes now refused, leftovers now removed, late refusals now made before any
+//! work, unclear messages now naming the file, key or flag and what was expected. Each exits
+//! 2 (bad input) or 1 (numerical failure) with one message and nothing on stdout.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
+
+mod common;
+use common::linercav;
+
+const SMALL: &str = "tests/fixtures/engine_small.toml";
+
+/// Asserts a refusal: the exit code, one `error:` message naming `needle`, no panic, nothing
+/// on stdout.
+fn refused(args: &[&str], code: i32, needle: &str) -> String {
+    let (c, out, err) = linercav(args);
+    assert_eq!(c, code, "{args:?}: exit {c}, stderr: {err}");
+    assert!(err.contains("error: "), "{args:?}: no error message: {err}");
+    assert!(!err.contains("panicked"), "{args:?}: panic: {err}");
+    assert!(out.is_empty(), "{args:?}: stdout not empty: {out}");
+    assert!(
+        err.contains(needle),
+        "{args:?}: should name '{needle}': {err}"
+    );
+    err
+}
+
+/// A cache directory holding the small engine's ROM.
+fn small_rom_cache() -> (tempfile::TempDir, String) {
+    let cache = tempfile::tempdir().unwrap();
+    let dir = cache.path().to_str().unwrap().to_string();
+    let (c, _, err) = linercav(&["rom", SMALL, "--cache-dir", &dir]);
+    assert_eq!(c, 0, "{err}");
+    (cache, dir)
+}
+
+/// Regression: `--set K` was dropped without a word when `--vary K` named the same key.
+#[test]
+fn regression_a_fixed_key_that_the_design_varies_is_refused() {
+    refused(
+        &[
+            "sweep",
+            SMALL,
+            "--vary",
+            "piston.clearance_um=60,100",
+            "--set",
+            "piston.clearance_um=80",
+        ],
+        2,
+        "--set 'piston.clearance_um=80'",
+    );
+}
+
+/// Regression: a pressure table covering 0-99 deg, or one revolution (0-360 deg) of the
+/// four-stroke cycle, was read as a periodic 720 deg curve (motored peaks, exit 0).
+#[test]
+fn regression_a_pressure_table_that_does_not_cover_the_cycle_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, last) in [("partial.csv", 99), ("one_revolution.csv", 360)] {
+        let rows: String = (0..=last)
+            .step_by(3)
+            .map(|a| {
+                format!(
+                    "{a},{}\n",
+                    1.0 + 150.0 * (-(f64::from(a) - 360.0).powi(2) / 800.0).exp()
+                )
+            })
+            .collect();
+        let p = dir.path().join(name);
+        std::fs::write(&p, format!("crank_angle_deg,pressure_bar\n{rows}")).unwrap();
+        let set = format!("operating.pressure_file={}", toml_string(&p));
+        let err = refused(&["simulate", SMALL, "--set", &set], 2, name);
+        assert!(err.contains("whole 0-720 deg"), "{err}");
+    }
+}
+
+/// A path as a TOML string literal.
+fn toml_string(p: &Path) -> String {
+    format!("\"{}\"", p.display())
+}
+
+/// Regression: `transient.mode_cutoff_hz = 1` integrated no mode and said nothing.
+#[test]
+fn regression_a_mode_cutoff_below_every_mode_is_refused() {
+    let (_cache, dir) = small_rom_cache();
+    for cmd in [
+        vec!["simulate", SMALL],
+        vec!["sweep", SMALL, "--vary", "piston.clearance_um=60,100"],
+    ] {
+        let mut args = cmd.clone();
+        args.extend_from_slice(&["--cache-dir", &dir, "--set", "transient.mode_cutoff_hz=1"]);
+        refused(&args, 2, "transient.mode_cutoff_hz");
+    }
+}
+
+/// Regression: `--range operating.load=1e308:1.7e308` gave "invalid type: string" (the sampled
+/// value was printed as a 309-digit integer); the key's own check now speaks.
+#[test]
+fn regression_a_huge_sampled_value_reaches_the_key_check() {
+    let err = refused(
+        &[
+            "sweep",
+            SMALL,
+            "--sample",
+            "mc:2",
+            "--range",
+            "operating.load=1e308:1.7e308",
+        ],
+        2,
+        "operating.load",
+    );
+    assert!(!err.contains("invalid type"), "{err}");
+}
+
+/// Regression: `max_penetration_um = 1e-9` failed with "0.0 um > 0.0 um".
+#[test]
+fn regression_a_tiny_penetration_limit_is_printed_with_its_digits() {
+    let (_cache, dir) = small_rom_cache();
+    let err = refused(
+        &[
+            "simulate",
+            SMALL,
+            "--cache-dir",
+            &dir,
+            "--set",
+            "transient.max_penetration_um=1e-9",
+        ],
+        1,
+        "deep penetration",
+    );
+    assert!(err.contains("> 1e-9 um"), "{err}");
+}
+
+/// Regression: a report into a directory holding `summary.md/` (a directory) ran to the end
+/// (minutes) and only then exited 2. Now refused before any work: the empty cache stays empty.
+#[test]
+fn regression_an_output_name_taken_by_a_directory_is_found_before_any_work() {
+    let cache = tempfile::tempdir().unwrap();
+    let out = tempfile::tempdir().unwrap();
+    std::fs::create_dir(out.path().join("summary.md")).unwrap();
+    for cmd in ["report", "simulate", "sweep"] {
+        let mut args = vec![cmd, SMALL];
+        if cmd == "sweep" {
+            std::fs::create_dir_all(out.path().join("sweep_piston_clearance_um.png")).unwrap();
+            args.extend_from_slice(&["--vary", "piston.clearance_um=60,100"]);
+        }
+        if cmd == "simulate" {
+            std::fs::create_dir_all(out.path().join("time_series.csv")).unwrap();
+        }
+        args.extend_from_slice(&[
+            "--cache-dir",
+            cache.path().to_str().unwrap(),
+            "--out",
+            out.path().to_str().unwrap(),
+        ]);
+        refused(&args, 2, "is not a file");
+        assert_eq!(
+            std::fs::read_dir(cache.path()).unwrap().count(),
+            0,
+            "{cmd}: work started before the refusal"
+        );
+    }
+}
+
+/// Regression: a shard run that failed, or was stopped by SIGTERM, left its (new) part
+/// directory behind, empty.
+#[test]
+fn regression_a_failed_or_stopped_shard_leaves_no_empty_part_directory() {
+    let (_cache, dir) = small_rom_cache();
+    let root = tempfile::tempdir().unwrap();
+    let parts = root.path().join("new").join("parts");
+    let args = |extra: &[&str]| {
+        let mut a: Vec<String> = [
+            "sweep",
+            SMALL,
+            "--vary",
+            "piston.clearance_um=60,65,70,75,80,85,90,95,100,105,110,115",
+            "--shard",
+            "1/2",
+            "--cache-dir",
+            &dir,
+            "--out",
+            parts.to_str().unwrap(),
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    // a numerical failure in the run (exit 1)
+    let a = args(&["--set", "transient.max_penetration_um=1e-9"]);
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    refused(&a, 1, "deep penetration");
+    assert!(!root.path().join("new").exists(), "a directory left");
+    // stopped by SIGTERM while it runs (six runs of the small engine, a second or more)
+    let mut child = Command::new(env!("CARGO_BIN_EXE_linercav"))
+        .args(args(&[]))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    // SAFETY: kill(2) on our own child's pid
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGTERM);
+    }
+    let status = child.wait().unwrap();
+    assert_eq!(
+        status.code(),
+        Some(130),
+        "the shard finished before the signal"
+    );
+    assert!(!root.path().join("new").exists(), "a directory left");
+}
+
+/// Regression: SIGINT during a ROM build left `rom-<key>.lock` in the cache directory, though
+/// the message said the temporary files were removed.
+#[test]
+fn regression_a_stopped_rom_build_leaves_no_lock_file() {
+    let cache = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_linercav"))
+        .args(["rom", SMALL, "--cache-dir"])
+        .arg(cache.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // the small engine's build takes several seconds; its lock is taken at once
+    std::thread::sleep(Duration::from_millis(1500));
+    // SAFETY: kill(2) on our own child's pid
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let status = child.wait().unwrap();
+    assert_eq!(
+        status.code(),
+        Some(130),
+        "the build finished before the signal"
+    );
+    let left: Vec<String> = std::fs::read_dir(cache.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    // complete entries (a part reduced before the signal, stored atomically) may stay
+    assert!(
+        left.iter()
+            .all(|n| n.ends_with(".bin") && !n.starts_with('.') && !n.contains(".tmp")),
+        "left in the cache: {left:?}"
+    );
+}
+
+/// Regression: an inverted tet4 passed the mesh check (its constant Jacobian has the sign of
+/// its mean) and failed in the assembly with exit 1, without the file and with a 0-based
+/// element index.
+#[test]
+fn regression_an_inverted_tet4_is_refused_naming_the_file_and_element() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("inverted.bdf");
+    // element 2 has its nodes 2 and 3 swapped
+    std::fs::write(
+        &p,
+        "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\nGRID,5,,1.,1.,1.\n\
+         CTETRA,1,1,1,2,3,4\nCTETRA,2,1,2,3,5,4\nPSOLID,1,1\nMAT1,1,2.1e11,,0.3,7850.\nENDDATA\n",
+    )
+    .unwrap();
+    let err = refused(
+        &["modes", "--mesh", p.to_str().unwrap(), "--count", "2"],
+        2,
+        "inverted.bdf",
+    );
+    assert!(err.contains("#2") && err.contains("inverted"), "{err}");
+}
+
+/// Regression: parts of two samples with different seeds were refused with a Rust debug dump
+/// of the designs; now the designs are printed as their command-line options.
+#[test]
+fn regression_parts_of_different_seeds_name_the_seed() {
+    let (_cache, dir) = small_rom_cache();
+    let root = tempfile::tempdir().unwrap();
+    for (seed, shard) in [("1", "1/2"), ("2", "2/2")] {
+        let out = root.path().join(format!("seed{seed}"));
+        let (c, _, err) = linercav(&[
+            "sweep",
+            SMALL,
+            "--sample",
+            "mc:2",
+            "--range",
+            "piston.clearance_um=60:100",
+            "--seed",
+            seed,
+            "--shard",
+            shard,
+            "--cache-dir",
+            &dir,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(c, 0, "{err}");
+    }
+    let err = refused(
+        &[
+            "sweep-merge",
+            root.path().join("seed1").to_str().unwrap(),
+            root.path().join("seed2").to_str().unwrap(),
+            "--out",
+            root.path().join("merged").to_str().unwrap(),
+        ],
+        2,
+        "--seed 2",
+    );
+    assert!(!err.contains("Sample {"), "{err}");
+}
+
+/// Regression: `modes SCENE --part liner` made any mesh it was given (`liner.mesh.radial =
+/// 100000` ran past 60 s at 6-12 GB, and aborted under an address-space cap); the generated
+/// mesh is now sized first and refused naming its keys, before anything is allocated.
+#[test]
+fn regression_a_generated_liner_mesh_is_sized_before_it_is_made() {
+    for set in [
+        "liner.mesh.radial=100000",
+        "liner.mesh.circumferential=9223372036854775804",
+        "liner.mesh.axial_size_mm=1e-6",
+        "liner.mesh.radial_flange=1000000",
+    ] {
+        let err = refused(
+            &["modes", SMALL, "--part", "liner", "--count", "5", "--set", set],
+            2,
+            "liner.mesh",
+        );
+        assert!(err.contains("needs about") || err.contains("would take"), "{set}: {err}");
+    }
+}
