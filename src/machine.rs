@@ -112,14 +112,20 @@ mod tests {
         ]);
         assert_eq!(cgroup_available(&v2_max), u64::MAX);
         let v1 = reader(&[
-            ("/proc/self/cgroup", "5:devices:/\n4:memory:/slurm/uid_0/job_7\n0::/\n"),
+            (
+                "/proc/self/cgroup",
+                "5:devices:/\n4:memory:/slurm/uid_0/job_7\n0::/\n",
+            ),
             ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "4294967296"),
             ("/sys/fs/cgroup/memory/memory.usage_in_bytes", "294967296"),
         ]);
         assert_eq!(cgroup_available(&v1), 4_000_000_000);
         let v1_unlimited = reader(&[
             ("/proc/self/cgroup", "4:memory:/x\n"),
-            ("/sys/fs/cgroup/memory/x/memory.limit_in_bytes", "9223372036854771712"),
+            (
+                "/sys/fs/cgroup/memory/x/memory.limit_in_bytes",
+                "9223372036854771712",
+            ),
         ]);
         assert_eq!(cgroup_available(&v1_unlimited), u64::MAX);
         assert_eq!(cgroup_available(&reader(&[])), u64::MAX);

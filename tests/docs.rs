@@ -324,7 +324,10 @@ fn unnamed_tests(text: &str) -> Vec<String> {
 #[test]
 fn contract_every_test_is_named_for_what_it_is() {
     let sample = "#[test]\n#[ignore]\nfn plain_name() {}\n#[test]\nfn regression_ok() {}\nproptest! {\n    #[test]\n    fn case_without_kind(x in 0..1) {}\n    fn fuzz_ok(x in 0..1) {}\n}\nfn helper() {}\n";
-    assert_eq!(unnamed_tests(sample), vec!["plain_name", "case_without_kind"]);
+    assert_eq!(
+        unnamed_tests(sample),
+        vec!["plain_name", "case_without_kind"]
+    );
     let mut files = Vec::new();
     files_under(Path::new("tests"), &["rs"], &mut files);
     let mut unnamed = Vec::new();

@@ -326,10 +326,15 @@ fn regression_a_generated_liner_mesh_is_sized_before_it_is_made() {
         "liner.mesh.radial_flange=1000000",
     ] {
         let err = refused(
-            &["modes", SMALL, "--part", "liner", "--count", "5", "--set", set],
+            &[
+                "modes", SMALL, "--part", "liner", "--count", "5", "--set", set,
+            ],
             2,
             "liner.mesh",
         );
-        assert!(err.contains("needs about") || err.contains("would take"), "{set}: {err}");
+        assert!(
+            err.contains("needs about") || err.contains("would take"),
+            "{set}: {err}"
+        );
     }
 }

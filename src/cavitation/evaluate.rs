@@ -102,7 +102,9 @@ pub fn spectra(series: &Series, firing_order: &[usize]) -> Vec<Vec<Spectrum>> {
                 .unwrap_or(0);
             let phase = 720.0 * k as f64 / cyls as f64;
             (0..c.acceleration.nrows())
-                .map(|p| centred_spectrum(row(&c.acceleration, p), &series.crank_angle_deg, phase, dt))
+                .map(|p| {
+                    centred_spectrum(row(&c.acceleration, p), &series.crank_angle_deg, phase, dt)
+                })
                 .collect()
         })
         .collect()

@@ -161,8 +161,13 @@ mod verdict_tests {
             ok: false,
             ..ok.clone()
         };
-        let e = verdict(Some(&missed), 1e-12, 1e-13).unwrap_err().to_string();
-        assert!(e.contains("found 22") && e.contains("20 were computed"), "{e}");
+        let e = verdict(Some(&missed), 1e-12, 1e-13)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("found 22") && e.contains("20 were computed"),
+            "{e}"
+        );
         assert!(matches!(
             verdict(None, f64::NAN, 0.0),
             Err(CertificationError::Residual { .. })

@@ -164,7 +164,9 @@ mod tests {
     fn verification_fft_correlation_equals_the_direct_sum() {
         let mut seed = 7u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
         let h: Vec<f64> = (0..2001).map(|_| rnd()).collect();
