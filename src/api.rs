@@ -439,10 +439,17 @@ pub fn report_runs(
     let base = results.next().expect("the scene's run");
     let mut clearance = vec![SweepPoint::of(cur_c, &base)];
     let mut pin_offset = vec![SweepPoint::of(cur_o, &base)];
+    // each what-if with its change against the scene's own run
+    let own = SweepPoint::of(cur_c, &base);
+    let changed = |v: f64, r: &CycleResult| {
+        let mut p = SweepPoint::of(v, r);
+        p.set_change(&own);
+        p
+    };
     for (job, r) in jobs.iter().skip(1).zip(results) {
         match *job {
-            Swept::Clearance(v) => clearance.push(SweepPoint::of(v, &r)),
-            Swept::PinOffset(v) => pin_offset.push(SweepPoint::of(v, &r)),
+            Swept::Clearance(v) => clearance.push(changed(v, &r)),
+            Swept::PinOffset(v) => pin_offset.push(changed(v, &r)),
             Swept::Scene => {}
         }
     }

@@ -271,3 +271,80 @@ fn contract_simulate_time_series_agrees_with_its_json() {
         );
     }
 }
+
+/// Each run's change against the base design (the scene as given): a run whose values are the
+/// scene's own is the same deterministic run, so its change is exactly 0 at every point; with
+/// several cycles every row carries the change's standard error sqrt(se_run^2 + se_base^2) >=
+/// the run's own SE, and its verdict follows the 2-SE rule; with one cycle the standard error
+/// is unknown and said so.
+#[test]
+fn verification_sweep_changes_against_the_base_design() {
+    // the small engine averages one cycle; then again with three of four averaged
+    for one_cycle in [true, false] {
+        changes_against_the_base(one_cycle);
+    }
+}
+
+fn changes_against_the_base(one_cycle: bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sw");
+    let mut args = vec![
+        "sweep",
+        SCENE,
+        "--vary",
+        "piston.clearance_um=40,80",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    if !one_cycle {
+        args.extend_from_slice(&[
+            "--set",
+            "transient.cycles=4",
+            "--set",
+            "transient.averaged_cycles=3",
+        ]);
+    }
+    // 80 um is the small engine's own clearance
+    let (code, _, err) = linercav(&args);
+    assert_eq!(code, 0, "{err}");
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("column {name} in {header:?}"))
+    };
+    let (se, change, change_se, verdict) = (
+        col("peak_negative_se_m_s2"),
+        col("change_m_s2"),
+        col("change_se_m_s2"),
+        col("change"),
+    );
+    col("peak_negative_numerical_uncertainty_m_s2");
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2 * 2 * 4);
+    for r in &rows {
+        let d: f64 = r[change].parse().unwrap();
+        if r[0] == "80" {
+            assert_eq!(d, 0.0, "the scene's own run against itself: {r:?}");
+        }
+        if one_cycle {
+            // a single cycle's standard error is unknown, not zero
+            assert_eq!((r[change_se], r[verdict]), ("", "unknown (one cycle)"));
+            continue;
+        }
+        let s: f64 = r[change_se].parse().unwrap();
+        let own: f64 = r[se].parse().unwrap();
+        assert!(s >= own - 1e-3, "{r:?}");
+        let expected = if d < -2.0 * s {
+            "lower"
+        } else if d > 2.0 * s {
+            "higher"
+        } else {
+            "not distinguishable"
+        };
+        assert_eq!(r[verdict], expected, "{r:?}");
+    }
+}

@@ -89,7 +89,8 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     }
     // the size is checked before any list of the runs is made
     let total = design.len();
-    check_size(req, shard.map_or(total, |s| s.len(total)))?;
+    // the design's runs and the base design's
+    check_size(req, shard.map_or(total, |s| s.len(total)) + 1)?;
     let indices: Vec<usize> = match shard {
         Some(s) => s.runs(total),
         None => (0..total).collect(),
@@ -201,12 +202,16 @@ fn execute(
                 .collect()
         })
         .collect();
+    // the base design (the scene without the design's values) runs too, last: every run's
+    // change is measured against it (each shard runs it: the runs are deterministic)
+    let mut extra = extra;
+    extra.push(Vec::new());
     let rom_progress = super::rom::RomProgress::default();
     let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache, &|m| {
         rom_progress.phase(m)
     })?;
     let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(indices.len() as u64);
+        let b = indicatif::ProgressBar::new(indices.len() as u64 + 1);
         b.set_style(
             indicatif::ProgressStyle::with_template(
                 "{bar:30} {pos}/{len} runs, {elapsed} (eta {eta})",
@@ -215,8 +220,9 @@ fn execute(
         );
         b
     });
-    let labels: Vec<String> = indices.iter().map(|&k| label(&keys, &all[k])).collect();
-    let results = variants.run(&labels, || {
+    let mut labels: Vec<String> = indices.iter().map(|&k| label(&keys, &all[k])).collect();
+    labels.push("the base design".into());
+    let mut results = variants.run(&labels, || {
         if let Some(b) = &bar {
             b.inc(1);
         }
@@ -224,11 +230,22 @@ fn execute(
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let mut lines = Vec::with_capacity(indices.len());
-    let mut runs = Vec::with_capacity(indices.len());
+    let (base_res, base_seconds) = results.pop().expect("the base design's run");
+    let nb = indices.len();
+    let base_values = vec!["(scene)".to_string(); keys.len()];
+    let base = sweep_run(
+        &variants.scenes[nb],
+        &variants.roms[variants.rom_of[nb]].rom,
+        &base_values,
+        &base_res,
+        base_seconds,
+    )?;
+    let mut lines = Vec::with_capacity(nb);
+    let mut runs = Vec::with_capacity(nb);
     for (k, (sc, (res, seconds))) in indices.iter().zip(variants.scenes.iter().zip(results)) {
         let ri = variants.rom_of[lines.len()];
-        let run = sweep_run(sc, &variants.roms[ri].rom, &all[*k], &res, seconds)?;
+        let mut run = sweep_run(sc, &variants.roms[ri].rom, &all[*k], &res, seconds)?;
+        run.set_changes(&base);
         lines.push(line_of(*k, &run));
         runs.push(serde_json::to_value(&run).expect("serialisable"));
     }

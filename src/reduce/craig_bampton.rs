@@ -577,32 +577,23 @@ fn orthonormalise_attachments(
     Ok(nk)
 }
 
-/// Nominal cut of the attachments' Gram eigenvalues, relative to the largest: directions
-/// below carry less than 1e-5 of the largest candidate's M-norm (dependent load shapes).
+/// Cut of the attachments' Gram eigenvalues, relative to the largest: directions below carry
+/// less than 1e-5 of the largest candidate's M-norm (dependent load shapes).
 pub const GRAM_CUT: f64 = 1e-10;
 
-/// The number of Gram eigenvalues kept (`s` sorted from the largest down): the cut is placed
-/// in the widest relative gap s_i / s_{i+1} whose geometric mean lies within a factor 2 of
-/// [`GRAM_CUT`] max s, so that roundoff (a relative change of ~1e-16 max s / s_i, 1e-6 here)
-/// cannot move an eigenvalue across it: the eigenvalues are a continuum there (no natural
-/// gap), and a fixed threshold falls next to one of them sooner or later, so that the
-/// column count, and every chaotic transient after it, would hang on the last bits. Without
-/// eigenvalues near the nominal cut it is the plain threshold s_i > GRAM_CUT max s.
+/// The number of Gram eigenvalues kept (`s` sorted from the largest down): s_i > GRAM_CUT
+/// max s. The eigenvalues form a continuum near the cut (no natural gap), so which side of it
+/// the nearest one falls on can hang on roundoff; the builds are deterministic, so a given
+/// machine always draws the same. Placing the cut in the widest gap near the nominal was tried
+/// (2026-11-26) and dropped: two gaps of nearly equal width (0.6 % apart on the small test
+/// crankcase) made that choice as fragile, and a CI run drew the other one. A selection that
+/// does not depend on the candidates' scales (point loads against inertia loads) is the fix
+/// (open, issue 37).
 pub fn gram_cut(s: &[f64]) -> usize {
     let Some(&smax) = s.first() else {
         return 0;
     };
-    let nominal = GRAM_CUT * smax;
-    let plain = s.iter().take_while(|&&x| x > nominal).count();
-    let within = |a: f64, b: f64| {
-        let g = (a * b.max(0.0)).sqrt();
-        g >= 0.5 * nominal && g <= 2.0 * nominal
-    };
-    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::INFINITY };
-    (1..s.len())
-        .filter(|&i| within(s[i - 1], s[i]))
-        .max_by(|&i, &j| ratio(s[i - 1], s[i]).total_cmp(&ratio(s[j - 1], s[j])))
-        .unwrap_or(plain)
+    s.iter().take_while(|&&x| x > GRAM_CUT * smax).count()
 }
 
 /// X^T A X for a symmetric sparse A and a dense block X, in blocks of [`PANEL`] columns on both
@@ -708,44 +699,10 @@ pub fn symmetrise(a: &mut Mat<f64>) {
 mod tests {
     use super::gram_cut;
 
-    /// Verification: on a continuum of eigenvalues (geometric, ratio 1.02) with one wider gap
-    /// (ratio 1.3) inside the factor-2 window around the nominal cut, the cut falls in that
-    /// gap; perturbing every eigenvalue by a relative 1e-6 (far above roundoff) does not move
-    /// it, while a plain threshold placed 1e-7 relative above one eigenvalue does flip.
+    /// The threshold relative to the largest; an empty or one-value spectrum keeps everything
+    /// it has; negative (roundoff) eigenvalues are dropped.
     #[test]
-    fn verification_gram_cut_sits_in_the_widest_gap_near_the_nominal() {
-        let mut s = vec![1.0];
-        let mut x = 1.3e-10;
-        while x > 1e-12 {
-            s.push(x);
-            x /= if (x - 1.3e-10 / 1.02f64.powi(10)).abs() < 1e-14 {
-                1.3
-            } else {
-                1.02
-            };
-        }
-        let n = gram_cut(&s);
-        assert!(
-            (s[n - 1] / s[n] - 1.3).abs() < 1e-9,
-            "{} {}",
-            s[n - 1],
-            s[n]
-        );
-        for sign in [-1.0, 1.0] {
-            let p: Vec<f64> = s.iter().map(|v| v * (1.0 + sign * 1e-6)).collect();
-            assert_eq!(gram_cut(&p), n);
-        }
-        // a plain threshold just next to an eigenvalue is decided by the last bits
-        let thr = s[5] * (1.0 + 1e-7);
-        let count = |v: &[f64]| v.iter().filter(|&&x| x > thr).count();
-        let up: Vec<f64> = s.iter().map(|v| v * (1.0 + 1e-6)).collect();
-        assert_ne!(count(&s), count(&up));
-    }
-
-    /// Without eigenvalues near the nominal cut, the plain threshold; an empty or one-value
-    /// spectrum keeps everything it has.
-    #[test]
-    fn verification_gram_cut_without_eigenvalues_near_the_cut() {
+    fn verification_gram_cut_is_relative_to_the_largest() {
         assert_eq!(gram_cut(&[1.0, 0.5, 1e-3, 1e-14, 1e-15]), 3);
         assert_eq!(gram_cut(&[2.0]), 1);
         assert_eq!(gram_cut(&[]), 0);

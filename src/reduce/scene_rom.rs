@@ -394,6 +394,8 @@ pub fn build_rom(
     part_cache: Option<&Path>,
     progress: &dyn Fn(&str),
 ) -> Result<(RomBuild, Mesh, Mesh)> {
+    // before any faer product of the build (the interface fields' checks included)
+    crate::linalg::thread_count_invariant();
     let em = load_meshes(scene)?;
     let mut inputs = rom_inputs(scene, &em, keep_bases);
     inputs.part_cache = part_cache.map(Path::to_path_buf);

@@ -8,6 +8,7 @@
 
 use super::png::{bars, write_png, BarData, Chart, Mark, Rule, Series};
 use super::records::SimulateReport;
+use super::study::Change;
 use crate::analysis::spectrum::{rms_average, Spectrum};
 use crate::cavitation::criteria::Thresholds;
 use crate::cavitation::evaluate::{spectra, Evaluation};
@@ -34,6 +35,15 @@ pub struct SweepPoint {
     /// Per cylinder (rows) and point (columns).
     #[serde(serialize_with = "crate::linalg::dense::serialize_rows")]
     pub points_m_s2: Dense,
+    /// The engine's largest mean peak negative acceleration and the standard error of the point
+    /// that holds it.
+    pub largest_m_s2: f64,
+    pub largest_se_m_s2: f64,
+    /// Cycles the peaks are means over.
+    pub cycles_averaged: usize,
+    /// Its change against the scene's own design ([`Change::of`]); None for the scene's run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub change: Option<Change>,
 }
 
 impl SweepPoint {
@@ -42,6 +52,13 @@ impl SweepPoint {
     /// side-force angle and the last cycle's largest |tilt|; per cylinder and point the peaks.
     pub fn of(value: f64, r: &CycleResult) -> Self {
         let points = r.peak_negative.map(|p| p.value);
+        let largest =
+            r.peak_negative
+                .iter()
+                .fold(None::<&crate::transient::cycle::Peak>, |m, p| match m {
+                    Some(q) if q.value >= p.value => Some(q),
+                    _ => Some(p),
+                });
         SweepPoint {
             value,
             peak_negative_m_s2: points
@@ -63,7 +80,20 @@ impl SweepPoint {
                 .map(|c| c.tilt_rad.iter().fold(0.0f64, |m, v| m.max(v.abs())))
                 .collect(),
             points_m_s2: points,
+            largest_m_s2: largest.map_or(0.0, |p| p.value),
+            largest_se_m_s2: largest.map_or(0.0, |p| p.se),
+            cycles_averaged: r.stats.cycles_averaged,
+            change: None,
         }
+    }
+
+    /// Sets the change of the largest peak against `base` (the scene's own run).
+    pub fn set_change(&mut self, base: &SweepPoint) {
+        self.change = Some(Change::of(
+            (self.largest_m_s2, self.largest_se_m_s2),
+            (base.largest_m_s2, base.largest_se_m_s2),
+            self.cycles_averaged > 1 && base.cycles_averaged > 1,
+        ));
     }
 }
 
@@ -275,7 +305,7 @@ impl Figures<'_> {
         Ok(files)
     }
 
-    /// `spectra.png`: the spectrum of each cylinder's worst point.
+    /// `spectra.png`: the spectrum of each cylinder's worst point, averaged over the cycles.
     fn spectra(&self) -> Result<Vec<PathBuf>, WriteError> {
         let Self {
             out,
@@ -327,7 +357,8 @@ impl Figures<'_> {
             }
             let rules = mode_rules(ev);
             let title = format!(
-                "Amplitude spectra (Hann, window centred on firing); dominant {:.0} Hz (peak of the RMS average)",
+                "Amplitude spectra (Hann, window centred on firing, RMS over {} cycles); dominant {:.0} Hz (peak of the RMS average)",
+                base.stats.cycles_averaged,
                 ev.dominant_hz
             );
             Chart {

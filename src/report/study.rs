@@ -23,6 +23,85 @@ pub struct SweepRun {
     /// Largest |tilt| per cylinder over the cycle \[rad\].
     pub peak_tilt_rad: Vec<f64>,
     pub seconds: f64,
+    /// Cycles the peaks are means over.
+    pub cycles_averaged: usize,
+    /// Per cylinder and point, the change of the mean peak negative acceleration against the
+    /// base design (the scene without the design's values; [`Change::of`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub changes: Vec<Vec<Change>>,
+}
+
+/// Multiple of the standard error beyond which a change is called lower or higher (two-sided
+/// 95 % for a normal difference).
+pub const CHANGE_Z: f64 = 2.0;
+
+/// The change of one point's mean peak negative acceleration P against the base design's:
+/// delta = P - P_base with the standard error se = sqrt(se_P^2 + se_base^2) of the difference
+/// of two means over their cycles (each se respects its cycles' correlation). Both runs start
+/// from the same state at rest (paired), but the slap is chaotic and the two cycle sequences
+/// decorrelate within a few cycles, so they are combined as independent (conservative if they
+/// stay positively correlated). The verdict: `lower` / `higher` when |delta| > [`CHANGE_Z`] se,
+/// else `not distinguishable`. The numerical (step) uncertainty of each value is reported
+/// beside it and not folded in: both runs have the same step and scheme, so their step errors
+/// are alike and largely cancel in the difference.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Change {
+    pub delta_m_s2: f64,
+    pub se_m_s2: f64,
+    pub verdict: &'static str,
+}
+
+impl Change {
+    /// The change of (mean, se) against the base's (mean, se); `statistics` false when either
+    /// mean is of a single cycle (its standard error is unknown, not zero): the verdict is then
+    /// `unknown (one cycle)` and the standard error NaN.
+    pub fn of(value: (f64, f64), base: (f64, f64), statistics: bool) -> Self {
+        let delta = value.0 - base.0;
+        if !statistics {
+            return Change {
+                delta_m_s2: delta,
+                se_m_s2: f64::NAN,
+                verdict: "unknown (one cycle)",
+            };
+        }
+        let se = value.1.hypot(base.1);
+        let verdict = if delta < -CHANGE_Z * se {
+            "lower"
+        } else if delta > CHANGE_Z * se {
+            "higher"
+        } else {
+            "not distinguishable"
+        };
+        Change {
+            delta_m_s2: delta,
+            se_m_s2: se,
+            verdict,
+        }
+    }
+}
+
+impl SweepRun {
+    /// Sets the changes of every cylinder and point against `base` (a run of the same engine).
+    pub fn set_changes(&mut self, base: &SweepRun) {
+        self.changes = self
+            .cylinders
+            .iter()
+            .zip(&base.cylinders)
+            .map(|(c, b)| {
+                c.points
+                    .iter()
+                    .zip(&b.points)
+                    .map(|(p, q)| {
+                        Change::of(
+                            (p.peak_negative_m_s2, p.peak_negative_se_m_s2),
+                            (q.peak_negative_m_s2, q.peak_negative_se_m_s2),
+                            self.cycles_averaged > 1 && base.cycles_averaged > 1,
+                        )
+                    })
+                    .collect()
+            })
+            .collect();
+    }
 }
 
 /// One run of the sweep, evaluated: values, per-cylinder peaks and risks, largest tilt.
@@ -51,6 +130,8 @@ pub fn sweep_run(
             .map(|c| c.tilt_rad.iter().fold(0.0f64, |m, v| m.max(v.abs())))
             .collect(),
         seconds,
+        cycles_averaged: res.stats.cycles_averaged,
+        changes: Vec::new(),
     })
 }
 
@@ -66,7 +147,7 @@ pub fn label(keys: &[String], values: &[String]) -> String {
 /// The header of `sweep.csv` for `keys`.
 pub fn csv_header(keys: &[String]) -> String {
     let mut s: String = keys.iter().map(|k| format!("{k},")).collect();
-    s.push_str("cylinder,point,peak_negative_m_s2,peak_slap_force_n,peak_positive_m_s2,crank_angle_deg,peak_side_force_n,side_force_crank_angle_deg,peak_tilt_mrad,ca,risk,peak_negative_std_m_s2,peak_negative_max_m_s2\n");
+    s.push_str("cylinder,point,peak_negative_m_s2,peak_slap_force_n,peak_positive_m_s2,crank_angle_deg,peak_side_force_n,side_force_crank_angle_deg,peak_tilt_mrad,ca,risk,peak_negative_std_m_s2,peak_negative_max_m_s2,peak_negative_se_m_s2,peak_negative_numerical_uncertainty_m_s2,change_m_s2,change_se_m_s2,change\n");
     s
 }
 
@@ -80,9 +161,10 @@ pub fn line_of(index: usize, r: &SweepRun) -> RunLine {
                 let _ = write!(s, "{v},");
             }
             let risk = r.risk.get(ci).and_then(|x| x.points.get(pi));
+            let change = r.changes.get(ci).and_then(|x| x.get(pi));
             let _ = writeln!(
                 s,
-                "{},{},{:.3},{:.2},{:.3},{:.3},{:.2},{:.3},{:.5},{:.4},{},{:.3},{:.3}",
+                "{},{},{:.3},{:.2},{:.3},{:.3},{:.2},{:.3},{:.5},{:.4},{},{:.3},{:.3},{:.3},{:.3},{},{},{}",
                 c.cylinder,
                 p.point,
                 p.peak_negative_m_s2,
@@ -96,6 +178,13 @@ pub fn line_of(index: usize, r: &SweepRun) -> RunLine {
                 risk.map(|x| x.risk.label()).unwrap_or("-"),
                 p.peak_negative_std_m_s2,
                 p.peak_negative_max_m_s2,
+                p.peak_negative_se_m_s2,
+                p.peak_negative_numerical_uncertainty_m_s2,
+                change.map_or(String::new(), |x| format!("{:.3}", x.delta_m_s2)),
+                change
+                    .filter(|x| x.se_m_s2.is_finite())
+                    .map_or(String::new(), |x| format!("{:.3}", x.se_m_s2)),
+                change.map_or("", |x| x.verdict),
             );
         }
     }

@@ -175,23 +175,27 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
             m.spearman.map(|v| format!("{v:.2}")).unwrap_or("-".into())
         );
     }
-    let _ = writeln!(s, "\n## What-if\n\n| clearance [um] | largest peak negative [m/s^2] | largest slap force [kN] |\n|---|---|---|");
+    let _ = writeln!(s, "\n## What-if\n\nEach row's change of the engine's largest mean peak against the scene's own run, with the standard error of the difference (the two runs' cycle statistics combined); lower / higher when the change exceeds twice it, else not distinguishable.\n\n| clearance [um] | largest peak negative [m/s^2] | change against the scene [m/s^2] | largest slap force [kN] |\n|---|---|---|---|");
     for p in &r.clearance_sweep {
         let _ = writeln!(
             s,
-            "| {:.0} | {:.0} | {:.2} |",
+            "| {:.0} | {:.0} ± {:.0} | {} | {:.2} |",
             p.value,
-            p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)),
+            p.largest_m_s2,
+            p.largest_se_m_s2,
+            change_text(p),
             p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3
         );
     }
-    let _ = writeln!(s, "\n| pin offset [mm] | largest peak negative [m/s^2] | largest slap force [kN] | side-force peak [kN] at [deg] |\n|---|---|---|---|");
+    let _ = writeln!(s, "\n| pin offset [mm] | largest peak negative [m/s^2] | change against the scene [m/s^2] | largest slap force [kN] | side-force peak [kN] at [deg] |\n|---|---|---|---|---|");
     for p in &r.pin_offset_sweep {
         let _ = writeln!(
             s,
-            "| {:+.1} | {:.0} | {:.2} | {:.1} at {:.1} |",
+            "| {:+.1} | {:.0} ± {:.0} | {} | {:.2} | {:.1} at {:.1} |",
             p.value,
-            p.peak_negative_m_s2.iter().fold(0.0f64, |m, v| m.max(*v)),
+            p.largest_m_s2,
+            p.largest_se_m_s2,
+            change_text(p),
             p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3,
             p.peak_side_force_n.first().copied().unwrap_or(0.0) / 1e3,
             p.side_force_crank_angle_deg.first().copied().unwrap_or(0.0)
@@ -229,5 +233,16 @@ impl Report {
             self.seconds
         );
         s
+    }
+}
+
+/// A what-if row's change against the scene's run: "+123 ± 20 (higher)", or "the scene's".
+fn change_text(p: &crate::report::figures::SweepPoint) -> String {
+    match &p.change {
+        Some(c) if c.se_m_s2.is_finite() => {
+            format!("{:+.0} ± {:.0} ({})", c.delta_m_s2, c.se_m_s2, c.verdict)
+        }
+        Some(c) => format!("{:+.0} ({})", c.delta_m_s2, c.verdict),
+        None => "the scene's".into(),
     }
 }
