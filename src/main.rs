@@ -264,6 +264,14 @@ enum Command {
         /// Number of shards of a Kubernetes Indexed Job (its completions).
         #[arg(long, value_name = "N")]
         shards: Option<usize>,
+        /// One key refined adaptively over [LO, HI] (with --runs): the runs placed where the
+        /// largest slap force and peak acceleration can lie and where the response changes
+        /// faster than its uncertainty; sweep.json gets each one's located maximum.
+        #[arg(long, value_name = "KEY=LO:HI", allow_hyphen_values = true)]
+        refine: Option<String>,
+        /// Number of runs of --refine (3-1000).
+        #[arg(long, value_name = "N")]
+        runs: Option<usize>,
         /// Fixed overrides for every run (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
@@ -441,6 +449,8 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             seed,
             shard,
             shards,
+            refine,
+            runs,
             sets,
             out,
             json,
@@ -457,6 +467,8 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 shards,
                 out,
                 cache: cache.options(),
+                refine,
+                runs,
             };
             let r = sweep::run(&req, started)?;
             print_report(json, &r, || r.to_text());

@@ -348,3 +348,119 @@ fn changes_against_the_base(one_cycle: bool) {
         assert_eq!(r[verdict], expected, "{r:?}");
     }
 }
+
+/// `sweep --refine KEY=LO:HI --runs N` (issue 38): N distinct runs within [LO, HI], written as a
+/// one-key grid; sweep.json's `maximum` names, for the largest slap force and the largest peak
+/// acceleration, the run that holds it (checked against the runs' own records) with a location
+/// uncertainty of half the larger spacing to its neighbours. Misused, it is refused by flag.
+#[test]
+fn contract_sweep_refine_places_its_runs_and_locates_the_maxima() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("refine");
+    let (code, _, err) = linercav(&[
+        "sweep",
+        SCENE,
+        "--refine",
+        "piston.pin_offset_mm=-1:1",
+        "--runs",
+        "7",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    let xs: Vec<f64> = v["design"]["vary"][0]["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_str().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(xs.len(), 7);
+    assert!(xs.windows(2).all(|w| w[0] < w[1]), "{xs:?}");
+    assert!(xs.iter().all(|x| (-1.0..=1.0).contains(x)), "{xs:?}");
+    let runs = v["runs"].as_array().unwrap();
+    // the largest of each quantity over the runs, from their own records
+    let slap = |r: &serde_json::Value| {
+        r["cylinders"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["peak_slap_force_n"].as_f64().unwrap())
+            .fold(f64::MIN, f64::max)
+    };
+    let acc = |r: &serde_json::Value| {
+        r["cylinders"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|c| c["points"].as_array().unwrap().iter())
+            .map(|p| p["peak_negative_m_s2"].as_f64().unwrap())
+            .fold(f64::MIN, f64::max)
+    };
+    for (name, f) in [
+        (
+            "peak_slap_force_n",
+            &slap as &dyn Fn(&serde_json::Value) -> f64,
+        ),
+        ("peak_negative_m_s2", &acc),
+    ] {
+        let m = &v["maximum"][name];
+        let k = (0..runs.len())
+            .max_by(|&a, &b| f(&runs[a]).total_cmp(&f(&runs[b])))
+            .unwrap();
+        assert_eq!(m["at"].as_f64().unwrap(), xs[k], "{name}");
+        assert_eq!(m["value"].as_f64().unwrap(), f(&runs[k]), "{name}");
+        let spacing = [
+            k.checked_sub(1).map(|j| xs[k] - xs[j]),
+            xs.get(k + 1).map(|x| x - xs[k]),
+        ]
+        .into_iter()
+        .flatten()
+        .fold(0.0f64, f64::max);
+        assert_eq!(m["uncertainty"].as_f64().unwrap(), 0.5 * spacing, "{name}");
+    }
+    for (extra, flag) in [
+        (vec!["--refine", "piston.pin_offset_mm=-1:1"], "--runs"),
+        (
+            vec!["--refine", "piston.pin_offset_mm=-1:1", "--runs", "2"],
+            "--runs",
+        ),
+        (
+            vec!["--refine", "piston.pin_offset_mm=1:-1", "--runs", "5"],
+            "--refine",
+        ),
+        (
+            vec![
+                "--refine",
+                "piston.pin_offset_mm=-1:1",
+                "--runs",
+                "5",
+                "--vary",
+                "piston.clearance_um=60,80",
+            ],
+            "--refine",
+        ),
+        (
+            vec![
+                "--refine",
+                "piston.pin_offset_mm=-1:1",
+                "--runs",
+                "5",
+                "--shard",
+                "1/2",
+            ],
+            "--refine",
+        ),
+        (
+            vec!["--vary", "piston.clearance_um=60,80", "--runs", "5"],
+            "--runs",
+        ),
+    ] {
+        let mut args = vec!["sweep", SCENE];
+        args.extend_from_slice(&extra);
+        let (code, out, err) = linercav(&args);
+        assert_eq!(code, 2, "{extra:?}: {err}");
+        assert!(out.is_empty() && err.contains(flag), "{extra:?}: {err}");
+    }
+}

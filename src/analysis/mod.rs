@@ -4,6 +4,7 @@
 pub mod correlation;
 pub mod frf;
 pub mod ranking;
+pub mod refine;
 pub mod shards;
 pub mod spectrum;
 pub mod study;

@@ -45,6 +45,10 @@ pub struct SweepReport {
     pub probabilities: Option<Vec<ProbabilityRow>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sensitivities: Option<Sensitivities>,
+    /// With `--refine`: where each quantity's largest value lies ([`Maximum`]), by quantity
+    /// (`peak_slap_force_n`, `peak_negative_m_s2`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub maximum: Option<std::collections::BTreeMap<&'static str, Maximum>>,
     pub seconds: f64,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub files: Vec<String>,
@@ -63,6 +67,9 @@ pub struct SweepRequest {
     pub shards: Option<usize>,
     pub out: Option<PathBuf>,
     pub cache: CacheOptions,
+    /// `KEY=LO:HI`: place `runs` runs of one key adaptively ([`crate::analysis::refine`]).
+    pub refine: Option<String>,
+    pub runs: Option<usize>,
 }
 
 /// The files `sweep --out` and `sweep-merge` write.
@@ -75,6 +82,15 @@ pub const OUTPUTS: &[&str] = &[
 
 /// Runs the sweep, or its shard.
 pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
+    if let Some(spec) = &req.refine {
+        return refine(req, spec, started);
+    }
+    if req.runs.is_some() {
+        return Err(Error::Argument {
+            flag: "--runs".into(),
+            msg: "belongs to --refine KEY=LO:HI".into(),
+        });
+    }
     let design = Design::from_args(&req.vary, req.sample.as_deref(), &req.ranges, req.seed)?;
     design.check_fixed(&req.sets)?;
     let shard = match &req.shard {
@@ -126,6 +142,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         shard,
         probabilities: None,
         sensitivities: None,
+        maximum: None,
         seconds: 0.0,
         files: vec![],
     };
@@ -393,6 +410,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepRe
         shard: None,
         probabilities: None,
         sensitivities: None,
+        maximum: None,
         seconds: 0.0,
         files: vec![],
     };
@@ -420,6 +438,17 @@ impl SweepReport {
                 ))
                 .unwrap_or_default()
         );
+        for (name, m) in self.maximum.iter().flatten() {
+            let _ = writeln!(
+                s,
+                "  largest {name}: {} +- {} at {} = {} +- {}",
+                crate::text::num(m.value),
+                crate::text::num(m.value_se),
+                self.keys.first().map_or("", String::as_str),
+                crate::text::num(m.at),
+                crate::text::num(m.uncertainty)
+            );
+        }
         let many = self.lines.len() > 40;
         for r in self.lines.iter().take(if many { 20 } else { usize::MAX }) {
             let _ = write!(s, "  {:<40}", label(&self.keys, &r.values));
@@ -466,4 +495,178 @@ impl SweepReport {
         }
         s
     }
+}
+
+/// The located maximum of one quantity over a refined key: the run with the largest value,
+/// its mean and standard error, and where the maximum lies: `at` +- `uncertainty` (half the
+/// larger spacing to the neighbouring runs: the response's maximum lies between them).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Maximum {
+    pub at: f64,
+    pub uncertainty: f64,
+    pub value: f64,
+    pub value_se: f64,
+}
+
+/// The refined quantities of a run: the engine's largest mean slap force and largest mean peak
+/// negative acceleration, each with the standard error of the cylinder or point holding it.
+fn quantities(run: &SweepRun) -> Vec<(f64, f64)> {
+    let slap = run
+        .cylinders
+        .iter()
+        .map(|c| (c.peak_slap_force_n, c.slap_force_se_n))
+        .fold((f64::MIN, 0.0), |m, x| if x.0 > m.0 { x } else { m });
+    let acc = run
+        .cylinders
+        .iter()
+        .flat_map(|c| c.points.iter())
+        .map(|p| (p.peak_negative_m_s2, p.peak_negative_se_m_s2))
+        .fold((f64::MIN, 0.0), |m, x| if x.0 > m.0 { x } else { m });
+    vec![slap, acc]
+}
+
+/// Names of [`quantities`] in `sweep.json`'s `maximum`.
+const REFINED: [&str; 2] = ["peak_slap_force_n", "peak_negative_m_s2"];
+
+/// `sweep --refine KEY=LO:HI --runs N`: N runs of one key placed adaptively (two at a time, one
+/// per core), then the outputs of a one-key grid over the values run, with each quantity's
+/// located maximum. Not shardable (each round depends on the last).
+fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepReport> {
+    use crate::analysis::refine::{initial, maximum, next, Sample};
+    if !req.vary.is_empty() || req.sample.is_some() || !req.ranges.is_empty() || req.seed.is_some()
+    {
+        return Err(Error::Argument {
+            flag: "--refine".into(),
+            msg: "refines one key on its own: no --vary, --sample, --range or --seed with it"
+                .into(),
+        });
+    }
+    if req.shard.is_some() || req.shards.is_some() {
+        return Err(Error::Argument {
+            flag: "--refine".into(),
+            msg: "each round depends on the last: it cannot be sharded".into(),
+        });
+    }
+    let range = crate::scene::design::parse_range(spec).map_err(|e| Error::Argument {
+        flag: "--refine".into(),
+        msg: e.to_string().replacen("--range", "", 1).trim().to_string(),
+    })?;
+    let runs = match req.runs {
+        Some(n) if (3..=1000).contains(&n) => n,
+        other => {
+            return Err(Error::Argument {
+                flag: "--runs".into(),
+                msg: format!(
+                    "{}: --refine needs --runs N with 3 <= N <= 1000",
+                    other.map_or("missing".to_string(), |n| n.to_string())
+                ),
+            })
+        }
+    };
+    let grid = |values: Vec<String>| Design::Grid {
+        vary: vec![crate::scene::design::Vary {
+            key: range.key.clone(),
+            values,
+        }],
+    };
+    grid(vec![]).check_fixed(&req.sets)?;
+    check_size(req, runs)?;
+    let stage = req
+        .out
+        .as_ref()
+        .map(|o| OutputDir::create(o, OUTPUTS))
+        .transpose()?;
+    let (lo, hi) = (range.lo, range.hi);
+    let mut done: Vec<(f64, SweepRun, String)> = Vec::new();
+    let mut samples: Vec<Sample> = Vec::new();
+    let mut batch = initial(lo, hi, runs);
+    let mut round = 0;
+    while !batch.is_empty() {
+        let values: Vec<String> = batch.iter().map(|x| format!("{x}")).collect();
+        let extra: Vec<Vec<String>> = values
+            .iter()
+            .map(|v| vec![format!("{}={v}", range.key)])
+            .collect();
+        let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache, &|_| {})?;
+        let labels: Vec<String> = extra.iter().map(|e| e[0].clone()).collect();
+        let results = variants.run(&labels, || {})?;
+        for (i, ((res, seconds), x)) in results.into_iter().zip(&batch).enumerate() {
+            let ri = variants.rom_of[i];
+            let run = sweep_run(
+                &variants.scenes[i],
+                &variants.roms[ri].rom,
+                &values[i..=i],
+                &res,
+                seconds,
+            )?;
+            samples.push(Sample {
+                x: *x,
+                y: quantities(&run),
+            });
+            done.push((*x, run, variants.roms[ri].cache.to_string()));
+        }
+        batch.clear();
+        while done.len() + batch.len() < runs && batch.len() < 2 {
+            let Some(x) = next(&samples, round, lo, hi) else {
+                break;
+            };
+            round += 1;
+            if !batch
+                .iter()
+                .chain(samples.iter().map(|s| &s.x))
+                .any(|b| (b - x).abs() < 1e-12)
+            {
+                batch.push(x);
+            } else if round > 4 * runs {
+                break;
+            }
+        }
+    }
+    done.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut lines = Vec::with_capacity(done.len());
+    let mut out_runs = Vec::with_capacity(done.len());
+    let mut roms: Vec<String> = Vec::new();
+    for (k, (_, run, rom)) in done.iter().enumerate() {
+        lines.push(line_of(k, run));
+        out_runs.push(serde_json::to_value(run).expect("serialisable"));
+        if roms.last() != Some(rom) {
+            roms.push(rom.clone());
+        }
+    }
+    let maxima = REFINED
+        .iter()
+        .enumerate()
+        .filter_map(|(q, name)| {
+            maximum(&samples, q).map(|(at, value, value_se, uncertainty)| {
+                (
+                    *name,
+                    Maximum {
+                        at,
+                        uncertainty,
+                        value,
+                        value_se,
+                    },
+                )
+            })
+        })
+        .collect();
+    let mut report = SweepReport {
+        scene: req.scene.display().to_string(),
+        keys: vec![range.key.clone()],
+        design: grid(done.iter().map(|d| format!("{}", d.0)).collect()),
+        runs: out_runs,
+        lines,
+        roms,
+        shard: None,
+        probabilities: None,
+        sensitivities: None,
+        maximum: Some(maxima),
+        seconds: 0.0,
+        files: vec![],
+    };
+    if let Some(stage) = stage {
+        finish(&mut report, stage)?;
+    }
+    report.seconds = started.elapsed().as_secs_f64();
+    Ok(report)
 }

@@ -100,6 +100,8 @@ pub struct CylinderReport {
     pub slap_crank_angle_deg: f64,
     /// Sample standard deviation of the per-cycle slap-force peak \[N\].
     pub slap_force_std_n: f64,
+    /// Standard error of the mean slap force (cycles' correlation respected; 0 for one cycle).
+    pub slap_force_se_n: f64,
     pub peak_side_force_n: f64,
     pub side_force_crank_angle_deg: f64,
 }
@@ -258,6 +260,7 @@ impl SimulateReport {
                 peak_slap_force_n: c.slap_force.value,
                 slap_crank_angle_deg: c.slap_force.crank_angle_deg,
                 slap_force_std_n: c.slap_force.std,
+                slap_force_se_n: c.slap_force.se,
                 peak_side_force_n: c.side_force.value,
                 side_force_crank_angle_deg: c.side_force.crank_angle_deg,
             })
