@@ -4,7 +4,7 @@
 //! never leaves a half-written file behind; a command's set of files is staged in a temporary
 //! directory and moved into place only when complete ([`OutputDir`]). Temporary files and
 //! directories are registered and removed when the process is stopped by SIGINT, SIGTERM or
-//! SIGHUP ([`install_signal_cleanup`]); the handler waits for a move in progress to finish, so
+//! SIGHUP ([`stop_cleanly`]); the handler waits for a move in progress to finish, so
 //! an output directory is left either as it was or complete.
 
 use std::io::{BufWriter, Write};
@@ -51,28 +51,27 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Removes this process's temporary files and directories and exits with 130 when SIGINT,
-/// SIGTERM or SIGHUP arrives. A move of staged outputs in progress is finished first; both
-/// locks are then held until the process ends, so the working thread can neither make a new
-/// temporary nor move an output while (or after) they are removed. Called once by the
-/// command-line front end.
-pub fn install_signal_cleanup() {
-    let _ = ctrlc::set_handler(|| {
-        let _moving = lock(&COMMITTING);
-        let mut temporaries = lock(&TEMPORARIES);
-        for p in temporaries.drain(..) {
-            if p.is_dir() {
-                let _ = std::fs::remove_dir_all(&p);
-            } else {
-                let _ = std::fs::remove_file(&p);
-            }
+/// What a stopping signal (SIGINT, SIGTERM, SIGHUP) does: removes this process's temporary
+/// files and directories (and its new, still empty output directories) and exits with 130. A
+/// move of staged outputs in progress is finished first; both locks are then held until the
+/// process ends, so the working thread can neither make a new temporary nor move an output
+/// while (or after) they are removed. The command-line front end installs it as the signal
+/// handler.
+pub fn stop_cleanly() {
+    let _moving = lock(&COMMITTING);
+    let mut temporaries = lock(&TEMPORARIES);
+    for p in temporaries.drain(..) {
+        if p.is_dir() {
+            let _ = std::fs::remove_dir_all(&p);
+        } else {
+            let _ = std::fs::remove_file(&p);
         }
-        for d in lock(&NEW_DIRS).drain(..).rev() {
-            let _ = std::fs::remove_dir(&d);
-        }
-        eprintln!("\nstopped by a signal; temporary files removed, outputs left as they were");
-        std::process::exit(130);
-    });
+    }
+    for d in lock(&NEW_DIRS).drain(..).rev() {
+        let _ = std::fs::remove_dir(&d);
+    }
+    eprintln!("\nstopped by a signal; temporary files removed, outputs left as they were");
+    std::process::exit(130);
 }
 
 /// An output file that could not be written.

@@ -2,12 +2,12 @@
 //!
 //! The pipeline (docs/physics.md): scene -> mesh -> FE matrices -> modal bases
 //! -> reduced engine model -> slap transient -> analysis -> cavitation risk -> reports.
-//! This crate is the library ([`api`] is its front door); `src/app` and `src/main.rs` are the
-//! thin command-line layer.
+//! This crate is the library ([`api`] is its front door, the commands included); the binary
+//! (`src/main.rs`, `src/cli/`) parses arguments, prints and shows progress (the `cli`
+//! feature's crates, which the library does not use).
 
 pub mod analysis;
 pub mod api;
-pub mod app;
 pub mod cavitation;
 pub mod coolant;
 pub mod eigen;

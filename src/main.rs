@@ -1,8 +1,10 @@
 //! linercav command-line front end: parses arguments, calls the library, prints the result and
 //! maps errors to exit codes (0 ok, 2 bad input, 1 failure), printing the whole cause chain.
 
+mod cli;
+
 use clap::{Args, Parser, Subcommand};
-use linercav::app::{cavitation, export, modes, rom, simulate, sweep, ModelInput};
+use linercav::api::{cavitation, export, modes, rom, simulate, sweep, ModelInput};
 use linercav::error::Error;
 use linercav::fem::material::Elastic;
 use std::path::PathBuf;
@@ -394,7 +396,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             out,
             cache,
         } => {
-            let r = linercav::app::summary::run(&scene, &sets, &out, &cache.options())?;
+            let r = linercav::api::summary::run(&scene, &sets, &out, &cache.options())?;
             print!("{}", r.to_text());
             println!("report written to {}", out.display());
         }
@@ -412,7 +414,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             out,
             json,
         } => {
-            let r = linercav::app::rom_tradeoff::run(&scene, &sets, &factors, out.as_deref())?;
+            let r = linercav::api::rom_tradeoff::run(&scene, &sets, &factors, out.as_deref())?;
             print_report(json, &r, || r.to_text());
         }
         Command::Shapes {
@@ -706,7 +708,7 @@ impl log::Log for StderrLog {
 
 fn main() {
     single_threaded_blas();
-    linercav::files::install_signal_cleanup();
+    cli::install();
     static LOG: std::sync::OnceLock<StderrLog> = std::sync::OnceLock::new();
     let logger = LOG.get_or_init(|| StderrLog {
         said: Default::default(),

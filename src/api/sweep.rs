@@ -23,7 +23,6 @@ use crate::report::study::{
     csv, draw_key, draw_statistics, label, line_of, numeric, probabilities_csv, sweep_run,
 };
 use crate::scene::design::{Design, PartError, Shard};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -227,26 +226,11 @@ fn execute(
     let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache, &|m| {
         rom_progress.phase(m)
     })?;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(indices.len() as u64 + 1);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:30} {pos}/{len} runs, {elapsed} (eta {eta})",
-            )
-            .expect("valid template"),
-        );
-        b
-    });
+    let bar = super::progress::Progress::counter(indices.len() as u64 + 1);
     let mut labels: Vec<String> = indices.iter().map(|&k| label(&keys, &all[k])).collect();
     labels.push("the base design".into());
-    let mut results = variants.run(&labels, || {
-        if let Some(b) = &bar {
-            b.inc(1);
-        }
-    })?;
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    let mut results = variants.run(&labels, || bar.inc())?;
+    drop(bar);
     let (base_res, base_seconds) = results.pop().expect("the base design's run");
     let nb = indices.len();
     let base_values = vec!["(scene)".to_string(); keys.len()];

@@ -2,7 +2,9 @@
 //! evaluate the cavitation risk; for the single-part commands, a part's checked mesh and
 //! material ([`load_part`]); variants of a scene run in parallel on shared ROMs ([`Variants`],
 //! the sweeps' and the report's runs), and the transients behind a design-review report
-//! ([`report_runs`]). The command layer (`src/app`, `src/main.rs`) and the
+//! ([`report_runs`]); and the commands of the command-line tool as functions that take a
+//! request and return a serialisable report, writing their files atomically ([`simulate`],
+//! [`sweep`], [`modes`], [`rom`], ...). The command line (`src/main.rs`, `src/cli/`) and the
 //! tests go through here; each re-exported item belongs to its pipeline stage
 //! (docs/physics.md), the items defined here join the scene to the stages:
 //!
@@ -17,6 +19,18 @@
 //! let risk = evaluate_scene(&scene, &rom, &result)?;
 //! # Ok::<(), linercav::api::Error>(())
 //! ```
+
+pub mod cavitation;
+pub mod export;
+pub mod full_modes;
+pub mod full_order;
+pub mod modes;
+pub mod progress;
+pub mod rom;
+pub mod rom_tradeoff;
+pub mod simulate;
+pub mod summary;
+pub mod sweep;
 
 pub use crate::cavitation::evaluate::{evaluate, Evaluation};
 pub use crate::error::{Error, Result};
