@@ -28,8 +28,21 @@ pub enum Error {
     Model(#[from] ModelError),
     #[error(transparent)]
     Write(#[from] WriteError),
-    #[error("{0}")]
-    Failure(String),
+    /// One run of several (a sweep's, the report's) failed: which, and why.
+    #[error("run {name}: {source}")]
+    Run {
+        name: String,
+        #[source]
+        source: Box<Error>,
+    },
+    /// A ROM built for shapes or a trade-off did not keep the bases it was asked to keep (a
+    /// defect of the code, not of the input).
+    #[error("the ROM build did not keep its bases")]
+    NoBases,
+    /// The full coupled reference's own Sturm check failed (a mode may be missing from the
+    /// reference a comparison needs).
+    #[error("{}: the full model's Sturm check failed (a mode may be missing)", path.display())]
+    ReferenceUncertified { path: std::path::PathBuf },
     #[error(transparent)]
     Rom(#[from] crate::reduce::rom::RomError),
     #[error(transparent)]
@@ -80,8 +93,10 @@ impl Error {
             Error::Rom(e) => e.exit_code(),
             Error::SceneRom(e) => e.exit_code(),
             Error::Verify(e) => e.exit_code(),
+            Error::Run { source, .. } => source.exit_code(),
             Error::Model(_)
-            | Error::Failure(_)
+            | Error::NoBases
+            | Error::ReferenceUncertified { .. }
             | Error::Transient { .. }
             | Error::Certification(_) => 1,
         }

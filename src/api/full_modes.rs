@@ -42,13 +42,8 @@ pub fn write_vtu(
     b: &RomBuild,
     count: usize,
 ) -> Result<()> {
-    let axis_x: Vec<f64> = (0..scene.engine.cylinders)
-        .map(|c| {
-            (c as f64 - (scene.engine.cylinders as f64 - 1.0) / 2.0) * scene.engine.cylinder_pitch
-        })
-        .collect();
-    let shapes = recover_shapes(b, count)
-        .ok_or_else(|| Error::Failure("the ROM build did not keep its bases".into()))?;
+    let axis_x = crate::reduce::scene_rom::axis_x(scene);
+    let shapes = recover_shapes(b, count).ok_or(Error::NoBases)?;
     let dofs: Vec<&DofMap> = b
         .liner_maps
         .iter()

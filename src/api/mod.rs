@@ -333,13 +333,12 @@ impl Variants {
                     settings_of(sim, sc.rom.band_hz),
                     |_, _| {},
                 )
-                .map_err(|source| {
-                    // the run's name before the scene's own transient error
-                    let e = Error::Transient {
+                .map_err(|source| Error::Run {
+                    name: name.clone(),
+                    source: Box::new(Error::Transient {
                         path: sc.path.clone(),
                         source,
-                    };
-                    Error::Failure(format!("run {name}: {e}"))
+                    }),
                 })?;
                 done();
                 Ok((res, t.elapsed().as_secs_f64()))

@@ -60,17 +60,15 @@ pub fn run(
             let t1 = Instant::now();
             let r = full::run(sc, n, None)?;
             if !r.sturm_ok {
-                return Err(Error::Failure(format!(
-                    "{}: the full model's Sturm check failed (a mode may be missing)",
-                    scene_path.display()
-                )));
+                return Err(Error::ReferenceUncertified {
+                    path: scene_path.to_path_buf(),
+                });
             }
             let below = r.frequencies_hz.iter().filter(|&&x| x < band).count();
             reference = Some((r, t1.elapsed().as_secs_f64(), below));
         }
         let (r, _, below) = reference.as_ref().expect("set above");
-        let c = compare(&b, r, *below)
-            .ok_or_else(|| Error::Failure("the ROM build did not keep its bases".into()))?;
+        let c = compare(&b, r, *below).ok_or(Error::NoBases)?;
         rows.push(TradeoffRow {
             cutoff_factor: *f,
             cutoff_hz: f * band,

@@ -54,7 +54,7 @@ enum Zone {
 impl CrankcaseGeometry {
     /// Axis x of cylinder `c` (0-based).
     pub fn axis_x(&self, c: usize) -> f64 {
-        (c as f64 - (self.cylinders as f64 - 1.0) / 2.0) * self.pitch
+        crate::scene::bore_axis_x(self.cylinders, self.pitch, c)
     }
     /// Half-width b of the block (y extent of a cell).
     pub fn half_width(&self) -> f64 {

@@ -324,7 +324,7 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
 pub fn axis_x(scene: &Scene) -> Vec<f64> {
     let e = &scene.engine;
     (0..e.cylinders)
-        .map(|c| (c as f64 - (e.cylinders as f64 - 1.0) / 2.0) * e.cylinder_pitch)
+        .map(|c| crate::scene::bore_axis_x(e.cylinders, e.cylinder_pitch, c))
         .collect()
 }
 

@@ -54,6 +54,12 @@ pub struct Engine {
     pub speed_rpm: f64,
 }
 
+/// Bore axis x of cylinder `c` (0-based) of `cylinders` at pitch `pitch`, the block centred on
+/// x = 0: x_c = (c - (N - 1) / 2) p.
+pub fn bore_axis_x(cylinders: usize, pitch: f64, c: usize) -> f64 {
+    (c as f64 - (cylinders as f64 - 1.0) / 2.0) * pitch
+}
+
 /// Where a part's mesh comes from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MeshSource {

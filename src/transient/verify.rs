@@ -39,13 +39,27 @@ pub enum VerifyError {
     SceneRom(#[from] SceneRomError),
     #[error(transparent)]
     Rom(#[from] RomError),
-    /// A run or a solve of the window failed, or the ROM does not fit the mesh.
+    /// The ROM does not fit the liner mesh it is compared with (a stale cache?).
     #[error("{0}")]
-    Failure(String),
+    RomDoesNotFit(String),
+    /// A factorisation of the full-order window failed (`what`: which matrix).
+    #[error("{what}: {source}")]
+    Factor {
+        what: &'static str,
+        source: crate::linalg::factor::FactorError,
+    },
     /// An engine transient of the comparison failed (`what`: which one).
     #[error("{what}: {source}")]
     Transient {
         what: &'static str,
+        source: TransientError,
+    },
+    /// A window run of the comparison failed: which window of which scene and cylinder.
+    #[error("{}: {what} window, cylinder {cylinder}: {source}", scene.display())]
+    Window {
+        scene: std::path::PathBuf,
+        what: String,
+        cylinder: usize,
         source: TransientError,
     },
 }
@@ -57,7 +71,10 @@ impl VerifyError {
             VerifyError::Scene(_) => 2,
             VerifyError::SceneRom(e) => e.exit_code(),
             VerifyError::Rom(e) => e.exit_code(),
-            VerifyError::Failure(_) | VerifyError::Transient { .. } => 1,
+            VerifyError::RomDoesNotFit(_)
+            | VerifyError::Factor { .. }
+            | VerifyError::Transient { .. }
+            | VerifyError::Window { .. } => 1,
         }
     }
 }
@@ -133,7 +150,7 @@ fn liner_rows(
     let set = |name: &str| -> Result<Vec<usize>> {
         lm.node_set(name).map(|s| s.to_vec()).ok_or_else(|| {
             // the ROM was built from this mesh with these sets: a stale cache or a bug
-            VerifyError::Failure(format!(
+            VerifyError::RomDoesNotFit(format!(
                 "liner mesh: node set '{name}' is missing, though the ROM was built with it"
             ))
         })
@@ -148,7 +165,7 @@ fn liner_rows(
         }
     }
     if contact.len() != nc {
-        return Err(VerifyError::Failure(format!(
+        return Err(VerifyError::RomDoesNotFit(format!(
             "full-order window: {} bore-line DOFs in the mesh, {nc} in the ROM (stale cache?)",
             contact.len()
         )));
@@ -176,7 +193,10 @@ fn full_preload(sys: &FullSystem, inp: &RomInputs<'_>, contact: &[Row]) -> Resul
     let llt = sys
         .analysis
         .llt(&sys.km.pattern, &sys.km.k)
-        .map_err(|e| VerifyError::Failure(format!("full-order preload: {e}")))?;
+        .map_err(|source| VerifyError::Factor {
+            what: "full-order preload",
+            source,
+        })?;
     llt.solve_vec(&mut f);
     Ok(contact
         .iter()
@@ -214,11 +234,11 @@ pub fn compare(
     let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
     let nc = nt + na;
     let scheme = win.scheme;
-    let fail = |e: TransientError, what: &str| {
-        VerifyError::Failure(format!(
-            "{}: {what} window, cylinder {cylinder}: {e}",
-            scene.path.display()
-        ))
+    let fail = |source: TransientError, what: &str| VerifyError::Window {
+        scene: scene.path.clone(),
+        what: what.to_string(),
+        cylinder,
+        source,
     };
     // --- full-order window
     let t_full = Instant::now();
@@ -242,8 +262,13 @@ pub fn compare(
         .fold(0.0, f64::max)
         / pre_scale.max(1e-30);
     progress("full-order window: factorising the Newmark matrix");
-    let mut full = FullLiner::new(&sys, contact, points, preload, scheme, dt, (ra, rb))
-        .map_err(|e| VerifyError::Failure(format!("full-order Newmark matrix: {e}")))?;
+    let mut full =
+        FullLiner::new(&sys, contact, points, preload, scheme, dt, (ra, rb)).map_err(|source| {
+            VerifyError::Factor {
+                what: "full-order Newmark matrix",
+                source,
+            }
+        })?;
     progress("full-order window: stepping");
     let full_res = window::run(&win, piston, &mut full).map_err(|e| fail(e, "full-order"))?;
     let full_seconds = t_full.elapsed().as_secs_f64();
@@ -386,11 +411,11 @@ pub fn rom_window(
         max_penetration: settings.max_penetration,
         onset_correction: settings.onset_correction,
     };
-    let fail = |e: TransientError, what: &str| {
-        VerifyError::Failure(format!(
-            "{}: {what} window, cylinder {cylinder}: {e}",
-            scene.path.display()
-        ))
+    let fail = |source: TransientError, what: &str| VerifyError::Window {
+        scene: scene.path.clone(),
+        what: what.to_string(),
+        cylinder,
+        source,
     };
     // --- ROM window
     let all = rom.frequencies_hz.len();
