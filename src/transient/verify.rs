@@ -60,7 +60,7 @@ pub enum VerifyError {
         scene: std::path::PathBuf,
         what: String,
         cylinder: usize,
-        source: TransientError,
+        source: Box<TransientError>,
     },
 }
 
@@ -238,7 +238,7 @@ pub fn compare(
         scene: scene.path.clone(),
         what: what.to_string(),
         cylinder,
-        source,
+        source: Box::new(source),
     };
     // --- full-order window
     let t_full = Instant::now();
@@ -415,7 +415,7 @@ pub fn rom_window(
         scene: scene.path.clone(),
         what: what.to_string(),
         cylinder,
-        source,
+        source: Box::new(source),
     };
     // --- ROM window
     let all = rom.frequencies_hz.len();
