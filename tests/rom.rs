@@ -489,10 +489,12 @@ fn contract_bad_guide_depth_is_refused_with_the_key() {
 
 /// The component cache (issue 37): a change of the liner's own inputs re-reduces the liner
 /// only, one of the crankcase's the crankcase only, and the ROM assembled from a cached part
-/// equals the one built without any cache. Both builds run the same code on the same inputs;
-/// rebuilds differ by the summation order of threaded products (seen up to 4e-9 relative, see
-/// above), so the tolerance is that test's 1e-6, while a stale part would be off by the change
-/// itself (asserted > 1e-4 below). A corrupt part file is reported and replaced.
+/// equals the one built without any cache. Both builds run the same code on the same inputs
+/// and, reductions being one at a time per process (`craig_bampton::reduce`), agree to the
+/// last bit; the tolerance 1e-6 keeps the margin of the earlier rebuild roundoff (4e-9), while a
+/// stale part would be off by the change itself (asserted > 1e-4 below). Before the lock this
+/// test saw 1.1e-6 when other tests reduced parts at the same time. A corrupt part file is
+/// reported and replaced.
 #[test]
 fn contract_component_cache_reuses_unchanged_parts() {
     use linercav::reduce::part_cache::Source::{Cached, Reduced};

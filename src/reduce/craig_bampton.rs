@@ -147,11 +147,22 @@ pub struct Part<'a> {
     pub outputs: &'a [Output],
 }
 
+/// Held by a running reduction: reductions in one process run one after the other. Two at
+/// once (tests side by side, or a library user's threads) gave a part that differed from the
+/// same part reduced alone (system frequencies up to 1.1e-6 relative apart, in 1 of 2 local
+/// runs of tests/rom.rs and in a CI run; the state the two shared is not found), while one
+/// reduction at a time is the same to the last bit from run to run, in one process or several,
+/// and on 1 or 2 threads (3 of 3 runs after this lock). Each reduction keeps both cores through
+/// its own column-block parallelism; the command line reduces one part at a time anyway.
+static REDUCING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Reduces one part: the basis Phi = [Phi_c | Phi_n | Phi_a] of the module doc, built on the
 /// full model (the part's own fixed sets) and the interior model (interfaces fixed too), and
 /// K_r = Phi^T K Phi, M_r = Phi^T M Phi with the basis's rows at the outputs and Phi^T f of
 /// the loads.
 pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, ReduceError> {
+    // one reduction at a time per process (see [`REDUCING`])
+    let _one = REDUCING.lock().unwrap_or_else(|e| e.into_inner());
     let part = p.name;
     let t0 = Instant::now();
     let tick = |what: &str| log::info!("[{part}] {:7.2} s  {what}", t0.elapsed().as_secs_f64());
