@@ -595,11 +595,10 @@ pub const GRAM_CUT: f64 = 1e-10;
 /// The number of Gram eigenvalues kept (`s` sorted from the largest down): s_i > GRAM_CUT
 /// max s. The eigenvalues form a continuum near the cut (no natural gap), so which side of it
 /// the nearest one falls on can hang on roundoff; the builds are deterministic, so a given
-/// machine always draws the same. Placing the cut in the widest gap near the nominal was tried
-/// (2026-11-26) and dropped: two gaps of nearly equal width (0.6 % apart on the small test
-/// crankcase) made that choice as fragile, and a CI run drew the other one. A selection that
-/// does not depend on the candidates' scales (point loads against inertia loads) is the fix
-/// (open, issue 37).
+/// machine always draws the same. A cut in the widest gap near the nominal was tried
+/// (2026-11-26) and reverted without a fair evaluation (the CI failure blamed on it came from
+/// concurrent reductions). A selection that does not depend on the candidates' scales (point
+/// loads against inertia loads) is the fix (open, issue 37).
 pub fn gram_cut(s: &[f64]) -> usize {
     let Some(&smax) = s.first() else {
         return 0;
