@@ -1,0 +1,125 @@
+//! Loading a scene: the TOML file, its `--set` overrides, the raw structs, validation and the
+//! sanity review; the checker that names a key in every refusal.
+
+#[allow(unused_imports)]
+use super::*;
+
+pub(super) fn check_guard_modes(c: &Checker<'_>, g: usize) -> Result<usize, SceneError> {
+    if g > MAX_GUARD_MODES {
+        return Err(c.err(
+            "solver.guard_modes",
+            format!("must be at most {MAX_GUARD_MODES} (a few find the spectral gap), got {g}"),
+        ));
+    }
+    Ok(g)
+}
+
+impl Scene {
+    /// Reads, overrides and validates a scene file.
+    pub fn load(path: &Path, sets: &[String]) -> Result<Self, SceneError> {
+        let text = crate::files::read_text(path, crate::files::LIMIT_TEXT).map_err(|source| {
+            SceneError::Io {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+        Self::from_str_with(path, &text, sets)
+    }
+
+    /// Parses scene text; `path` locates relative mesh files and names the file in errors.
+    pub fn from_str_with(path: &Path, text: &str, sets: &[String]) -> Result<Self, SceneError> {
+        let mut table: toml::Table =
+            text.parse()
+                .map_err(|e: toml::de::Error| SceneError::Syntax {
+                    path: path.to_path_buf(),
+                    msg: e.to_string(),
+                })?;
+        for s in sets {
+            overrides::apply(&mut table, s)?;
+        }
+        let de = toml::Value::Table(table);
+        let raw: RawScene =
+            serde_path_to_error::deserialize(de).map_err(|e| SceneError::Field {
+                path: path.to_path_buf(),
+                key: e.path().to_string(),
+                msg: e.inner().to_string(),
+            })?;
+        let mut scene = validate(path, raw)?;
+        scene.warnings = sanity::review(&scene)?;
+        for w in &scene.warnings {
+            log::warn!("{}: {w}", path.display());
+        }
+        Ok(scene)
+    }
+
+    /// The part called `name`.
+    pub fn part(&self, name: &str) -> Option<&Part> {
+        match name {
+            "liner" => Some(&self.liner),
+            _ => None,
+        }
+    }
+}
+
+pub(super) struct Checker<'a> {
+    pub(super) path: &'a Path,
+}
+
+impl Checker<'_> {
+    pub(super) fn err(&self, key: &str, msg: impl Into<String>) -> SceneError {
+        SceneError::Field {
+            path: self.path.to_path_buf(),
+            key: key.to_string(),
+            msg: msg.into(),
+        }
+    }
+    /// A finite value > 0 (mm converted to m when `mm`).
+    pub(super) fn positive(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("must be a positive number, got {}", num(v))))
+        }
+    }
+    /// A finite value >= 0.
+    pub(super) fn nonneg(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("must be a number >= 0, got {}", num(v))))
+        }
+    }
+    /// A finite value.
+    pub(super) fn finite(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("must be a finite number, got {}", num(v))))
+        }
+    }
+    pub(super) fn mm(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        Ok(self.positive(key, v)? * 1e-3)
+    }
+}
+
+/// The analysis points must fit on the liner: first + (n - 1) spacing < length, checked before
+/// their depths are listed (a count of 9e18 was allocated).
+pub(super) fn check_analysis_points(c: &Checker<'_>, l: &raw::RawLiner) -> Result<(), SceneError> {
+    let spacing = c.positive("liner.analysis_spacing_mm", l.analysis_spacing_mm)?;
+    let first = c.positive("liner.analysis_first_depth_mm", l.analysis_first_depth_mm)?;
+    let fit = ((l.length_mm - first) / spacing).floor() + 1.0;
+    if l.analysis_points as f64 > fit.max(0.0) {
+        return Err(c.err(
+            "liner.analysis_points",
+            format!(
+                "{} points {} mm apart from {} mm below the top do not fit on a {} mm liner (at most {})",
+                l.analysis_points,
+                num(spacing),
+                num(first),
+                num(l.length_mm),
+                num(fit.max(0.0))
+            ),
+        ));
+    }
+    Ok(())
+}

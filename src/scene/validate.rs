@@ -1,0 +1,904 @@
+//! The validators: each `[section]` of the raw scene checked and turned into its SI model,
+//! every refusal naming its key and what was expected.
+
+#[allow(unused_imports)]
+use super::*;
+
+pub(super) fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> {
+    let c = Checker { path };
+    let engine = validate_engine(&c, &raw.engine)?;
+    for (name, m) in &raw.materials {
+        let el = Elastic {
+            young: m.youngs_pa,
+            poisson: m.poisson,
+            density: m.density_kg_m3,
+        };
+        el.validate()
+            .map_err(|msg| c.err(&format!("materials.{name}"), msg))?;
+    }
+    let material = |key: &str, name: &str| -> Result<Elastic, SceneError> {
+        let m = raw.materials.get(name).ok_or_else(|| {
+            c.err(
+                key,
+                format!(
+                    "unknown material '{name}'; [materials] defines: {}",
+                    raw.materials.keys().cloned().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })?;
+        Ok(Elastic {
+            young: m.youngs_pa,
+            poisson: m.poisson,
+            density: m.density_kg_m3,
+        })
+    };
+    let l = &raw.liner;
+    let geometry = validate_liner_geometry(&c, l, &engine)?;
+    let meshing = validate_liner_meshing(&c, l)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let liner_geometry = geometry.clone();
+    let source = match &l.mesh_file {
+        Some(f) => MeshSource::File(base.join(mesh_file(&c, "liner.mesh_file", f)?)),
+        None => MeshSource::Liner { geometry, meshing },
+    };
+    let liner = Part {
+        name: "liner".into(),
+        material: part_material(&c, "liner", &l.material, &source, &material)?,
+        mesh_unit: mesh_unit(&c, "liner.mesh_unit", &l.mesh_unit, l.mesh_file.is_some())?,
+        box_sets: box_sets(&c, "liner.sets", &l.sets)?,
+        source,
+        fix: l.fix.clone(),
+    };
+    let solver = Solver {
+        shift_hz: c.positive("solver.shift_hz", raw.solver.shift_hz)?,
+        guard_modes: check_guard_modes(&c, raw.solver.guard_modes)?,
+    };
+    let crankcase = match &raw.crankcase {
+        None => None,
+        Some(cc) => Some(validate_crankcase(
+            &c,
+            base,
+            cc,
+            &engine,
+            &liner_geometry,
+            &material,
+        )?),
+    };
+    let rom = validate_rom(&c, &raw.rom, base, &engine, &liner)?;
+    let simulation = validate_simulation(&c, base, &raw, &engine, &liner_geometry)?;
+    let cavitation = validate_cavitation(&c, base, &raw.cavitation)?;
+    Ok(Scene {
+        path: path.to_path_buf(),
+        title: raw.title,
+        engine,
+        liner,
+        liner_geometry,
+        crankcase,
+        solver,
+        rom,
+        simulation,
+        cavitation,
+        limits: validate_limits(&c, &raw.limits)?,
+        warnings: Vec::new(),
+    })
+}
+
+/// `[engine]`: cylinders, firing order (a permutation), crank train.
+pub(super) fn validate_engine(c: &Checker<'_>, e: &raw::RawEngine) -> Result<Engine, SceneError> {
+    if e.cylinders == 0 {
+        return Err(c.err("engine.cylinders", "must be at least 1"));
+    }
+    // the count is compared first: 1..=cylinders is never listed for a huge count
+    let mut fo = e.firing_order.clone();
+    fo.sort_unstable();
+    if fo.len() != e.cylinders || fo.iter().enumerate().any(|(i, &k)| k != i + 1) {
+        return Err(c.err(
+            "engine.firing_order",
+            format!(
+                "must be a permutation of 1..={}, got {:?}",
+                e.cylinders, e.firing_order
+            ),
+        ));
+    }
+    let engine = Engine {
+        cylinders: e.cylinders,
+        firing_order: e.firing_order.clone(),
+        bore: c.mm("engine.bore_mm", e.bore_mm)?,
+        stroke: c.mm("engine.stroke_mm", e.stroke_mm)?,
+        rod_length: c.mm("engine.rod_length_mm", e.rod_length_mm)?,
+        cylinder_pitch: c.mm("engine.cylinder_pitch_mm", e.cylinder_pitch_mm)?,
+        speed_rpm: c.positive("engine.speed_rpm", e.speed_rpm)?,
+    };
+    // reciprocating engines run below ~10,000 rpm; far above, the step check would blame the
+    // step for what is a mistyped speed
+    if engine.speed_rpm > 1e5 {
+        return Err(c.err(
+            "engine.speed_rpm",
+            format!(
+                "{} rpm is no engine speed (at most 1e5)",
+                num(engine.speed_rpm)
+            ),
+        ));
+    }
+    if engine.rod_length <= engine.stroke / 2.0 {
+        return Err(c.err(
+            "engine.rod_length_mm",
+            "must exceed half the stroke (crank radius), or the crank cannot turn",
+        ));
+    }
+    Ok(engine)
+}
+
+/// `[liner]` geometry: diameters, flange, guide band, analysis points in the coolant zone.
+pub(super) fn validate_liner_geometry(
+    c: &Checker<'_>,
+    l: &raw::RawLiner,
+    engine: &Engine,
+) -> Result<LinerGeometry, SceneError> {
+    check_analysis_points(c, l)?;
+    let mut geometry = LinerGeometry {
+        outer_diameter: c.mm("liner.outer_diameter_mm", l.outer_diameter_mm)?,
+        inner_diameter: c.mm("liner.inner_diameter_mm", l.inner_diameter_mm)?,
+        length: c.mm("liner.length_mm", l.length_mm)?,
+        flange_outer_diameter: c
+            .mm("liner.flange_outer_diameter_mm", l.flange_outer_diameter_mm)?,
+        flange_height: c.mm("liner.flange_height_mm", l.flange_height_mm)?,
+        guide_height: c.mm("liner.guide_height_mm", l.guide_height_mm)?,
+        guide_bottom: 0.0,
+        analysis_depths: (0..l.analysis_points)
+            .map(|i| (l.analysis_first_depth_mm + i as f64 * l.analysis_spacing_mm) * 1e-3)
+            .collect(),
+    };
+    if geometry.inner_diameter >= geometry.outer_diameter {
+        return Err(c.err(
+            "liner.inner_diameter_mm",
+            "must be smaller than outer_diameter_mm",
+        ));
+    }
+    if (geometry.inner_diameter - engine.bore).abs() > 1e-9 {
+        return Err(c.err(
+            "liner.inner_diameter_mm",
+            format!("must equal engine.bore_mm ({} mm)", num(engine.bore * 1e3)),
+        ));
+    }
+    if geometry.flange_outer_diameter < geometry.outer_diameter {
+        return Err(c.err(
+            "liner.flange_outer_diameter_mm",
+            "must be at least outer_diameter_mm",
+        ));
+    }
+    if engine.cylinder_pitch <= geometry.flange_outer_diameter {
+        return Err(c.err(
+            "engine.cylinder_pitch_mm",
+            "must exceed the liner flange diameter (liners would overlap)",
+        ));
+    }
+    if geometry.flange_height + geometry.guide_height >= geometry.length {
+        return Err(c.err(
+            "liner.guide_height_mm",
+            "flange and guide band together must be shorter than the liner",
+        ));
+    }
+    if let Some(depth_mm) = l.guide_depth_mm {
+        let depth = c.mm("liner.guide_depth_mm", depth_mm)?;
+        let bottom = geometry.length - depth - geometry.guide_height;
+        if depth <= geometry.flange_height || bottom < -1e-9 {
+            return Err(c.err(
+                "liner.guide_depth_mm",
+                format!(
+                    "the guide band must lie below the flange and within the liner: depth in ({}, {}] mm",
+                    l.flange_height_mm,
+                    l.length_mm - l.guide_height_mm
+                ),
+            ));
+        }
+        geometry.guide_bottom = bottom.max(0.0);
+    }
+    c.positive("liner.analysis_spacing_mm", l.analysis_spacing_mm)?;
+    c.positive("liner.analysis_first_depth_mm", l.analysis_first_depth_mm)?;
+    if l.analysis_points == 0 {
+        return Err(c.err("liner.analysis_points", "must be at least 1"));
+    }
+    let deepest = geometry.analysis_depths.last().copied().unwrap_or(0.0);
+    if geometry.analysis_depths[0] <= geometry.flange_height
+        || deepest >= geometry.length - geometry.guide_bottom - geometry.guide_height
+    {
+        return Err(c.err(
+            "liner.analysis_first_depth_mm",
+            "analysis points must lie in the coolant zone, between the flange and the lower guide band",
+        ));
+    }
+    Ok(geometry)
+}
+
+/// `[liner.mesh]`: element kind and divisions of the generated liner.
+pub(super) fn validate_liner_meshing(
+    c: &Checker<'_>,
+    l: &raw::RawLiner,
+) -> Result<LinerMeshing, SceneError> {
+    let mesh = &l.mesh;
+    let kind = match mesh.element.as_str() {
+        "hex20" => ElementKind::Hex20,
+        "tet10" => ElementKind::Tet10,
+        "hex8" => ElementKind::Hex8,
+        "tet4" => ElementKind::Tet4,
+        other => {
+            return Err(c.err(
+                "liner.mesh.element",
+                format!("expected \"hex20\", \"tet10\", \"hex8\" or \"tet4\", got \"{other}\""),
+            ))
+        }
+    };
+    if mesh.circumferential < 8 || mesh.circumferential % 4 != 0 {
+        return Err(c.err(
+            "liner.mesh.circumferential",
+            "must be a multiple of 4 and at least 8 (thrust and anti-thrust lines fall on nodes)",
+        ));
+    }
+    if mesh.radial == 0 || mesh.radial_flange == 0 {
+        return Err(c.err("liner.mesh.radial", "must be at least 1"));
+    }
+    let meshing = LinerMeshing {
+        kind,
+        circumferential: mesh.circumferential,
+        radial: mesh.radial,
+        radial_flange: mesh.radial_flange,
+        axial_size: c.mm("liner.mesh.axial_size_mm", mesh.axial_size_mm)?,
+    };
+    Ok(meshing)
+}
+
+/// `[rom]`: band, cut-off, interface harmonics (resolved by the liner ring), cylinders, cache.
+pub(super) fn validate_rom(
+    c: &Checker<'_>,
+    r: &raw::RawRom,
+    base: &Path,
+    engine: &Engine,
+    liner: &Part,
+) -> Result<Rom, SceneError> {
+    let band_hz = c.positive("rom.band_hz", r.band_hz)?;
+    if !(r.cutoff_factor.is_finite() && r.cutoff_factor >= 1.0) {
+        return Err(c.err(
+            "rom.cutoff_factor",
+            format!("must be at least 1, got {}", num(r.cutoff_factor)),
+        ));
+    }
+    if r.interface_harmonics == 0 {
+        return Err(c.err(
+            "rom.interface_harmonics",
+            "must be at least 1 (rigid liner motion needs n = 1)",
+        ));
+    }
+    // a ring of n_c elements carries harmonics up to about n_c before they alias; the
+    // ovalling shapes that couple liner and crankcase are n <= 6
+    let ring = match &liner.source {
+        MeshSource::Liner { meshing, .. } => meshing.circumferential,
+        MeshSource::File(_) => MAX_HARMONICS,
+    };
+    if r.interface_harmonics > ring.min(MAX_HARMONICS) {
+        return Err(c.err(
+            "rom.interface_harmonics",
+            format!(
+                "must be at most {} (the liner ring has {ring} elements; harmonics beyond it alias), got {}",
+                ring.min(MAX_HARMONICS),
+                r.interface_harmonics
+            ),
+        ));
+    }
+    let mut cylinders = if r.cylinders.is_empty() {
+        (1..=engine.cylinders).collect()
+    } else {
+        r.cylinders.clone()
+    };
+    cylinders.sort_unstable();
+    cylinders.dedup();
+    if let Some(&bad) = cylinders.iter().find(|&&k| k == 0 || k > engine.cylinders) {
+        return Err(c.err(
+            "rom.cylinders",
+            format!("cylinder {bad} does not exist (1..={})", engine.cylinders),
+        ));
+    }
+    let rom = Rom {
+        band_hz,
+        cutoff_hz: band_hz * r.cutoff_factor,
+        harmonics: r.interface_harmonics,
+        residual_vector_spacing: r.residual_vector_spacing,
+        cylinders,
+        cache_dir: base.join(&r.cache_dir),
+    };
+    Ok(rom)
+}
+
+pub(super) fn validate_limits(c: &Checker<'_>, l: &raw::RawLimits) -> Result<Limits, SceneError> {
+    if let Some(gb) = l.max_memory_gb {
+        c.positive("limits.max_memory_gb", gb)?;
+    }
+    if let Some(h) = l.max_hours {
+        c.positive("limits.max_hours", h)?;
+    }
+    Ok(Limits {
+        max_memory_gb: l.max_memory_gb,
+        max_hours: l.max_hours,
+    })
+}
+
+/// Thresholds written by `linercav calibrate --json`.
+#[derive(serde::Deserialize)]
+pub(super) struct CalibrationThresholds {
+    onset_m_s2: f64,
+    high_risk_m_s2: f64,
+    k_p_pa_per_m_s2: f64,
+}
+
+pub(super) fn validate_cavitation(
+    c: &Checker<'_>,
+    base: &Path,
+    r: &raw::RawCavitation,
+) -> Result<CavitationSpec, SceneError> {
+    use crate::coolant::Coolant;
+    let coolant = Coolant::new(r.coolant_temp_c, r.glycol, r.static_pressure_kpa * 1e3)
+        .map_err(|e| c.err("cavitation", e.to_string()))?;
+    let gap = c.mm("cavitation.gap_mm", r.gap_mm)?;
+    let thresholds = if let Some(f) = &r.calibration_file {
+        if r.k_p_pa_per_m_s2.is_some() || r.onset_m_s2.is_some() || r.high_risk_m_s2.is_some() {
+            return Err(c.err(
+                "cavitation.calibration_file",
+                "give either a calibration file or k_p_pa_per_m_s2/onset_m_s2/high_risk_m_s2, not both",
+            ));
+        }
+        calibration_thresholds(c, &base.join(f))?
+    } else {
+        if let Some(k) = r.k_p_pa_per_m_s2 {
+            if !(k.is_finite() && k >= 0.0) {
+                return Err(c.err(
+                    "cavitation.k_p_pa_per_m_s2",
+                    format!("must be a finite number >= 0, got {}", num(k)),
+                ));
+            }
+        }
+        let high = r
+            .high_risk_m_s2
+            .map(|v| c.positive("cavitation.high_risk_m_s2", v))
+            .transpose()?;
+        let onset = r
+            .onset_m_s2
+            .map(|v| c.positive("cavitation.onset_m_s2", v))
+            .transpose()?;
+        ThresholdSpec::Scene {
+            onset_m_s2: onset,
+            high_risk_m_s2: high,
+            k_p_pa_per_m_s2: r.k_p_pa_per_m_s2,
+        }
+    };
+    let layer_mass_per_area = match r.coolant_mass.as_str() {
+        "none" => None,
+        "layer" => Some(coolant.density_kg_m3 * gap),
+        other => {
+            return Err(c.err(
+                "cavitation.coolant_mass",
+                format!("expected \"none\" or \"layer\", got \"{other}\""),
+            ))
+        }
+    };
+    // their order is checked where the cavitation stage resolves them (`cavitation::Setup`,
+    // called by `api::load_scene` right after loading)
+    Ok(CavitationSpec {
+        coolant,
+        gap,
+        thresholds,
+        layer_mass_per_area,
+    })
+}
+
+/// The thresholds of a calibration file written by `linercav calibrate --json`.
+pub(super) fn calibration_thresholds(
+    c: &Checker<'_>,
+    path: &Path,
+) -> Result<ThresholdSpec, SceneError> {
+    let key = "cavitation.calibration_file";
+    let text = crate::files::read_text(path, crate::files::LIMIT_TEXT)
+        .map_err(|e| c.err(key, format!("cannot read {}: {e}", path.display())))?;
+    let t: CalibrationThresholds = serde_json::from_str(&text).map_err(|e| {
+        c.err(
+            key,
+            format!(
+                "{}: not a calibration JSON (need onset_m_s2, high_risk_m_s2, k_p_pa_per_m_s2): {e}",
+                path.display()
+            ),
+        )
+    })?;
+    for (name, v) in [
+        ("onset_m_s2", t.onset_m_s2),
+        ("high_risk_m_s2", t.high_risk_m_s2),
+        ("k_p_pa_per_m_s2", t.k_p_pa_per_m_s2),
+    ] {
+        if !v.is_finite() || v < 0.0 {
+            return Err(c.err(
+                key,
+                format!(
+                    "{}: {name} must be a finite number >= 0, got {}",
+                    path.display(),
+                    num(v)
+                ),
+            ));
+        }
+    }
+    Ok(ThresholdSpec::Calibrated {
+        onset_m_s2: t.onset_m_s2,
+        high_risk_m_s2: t.high_risk_m_s2,
+        k_p_pa_per_m_s2: t.k_p_pa_per_m_s2,
+    })
+}
+
+pub(super) fn validate_simulation(
+    c: &Checker<'_>,
+    base: &Path,
+    raw: &RawScene,
+    engine: &Engine,
+    liner: &LinerGeometry,
+) -> Result<Option<Simulation>, SceneError> {
+    let (p, o, t) = match (&raw.piston, &raw.operating, &raw.transient) {
+        (None, None, None) => return Ok(None),
+        (Some(p), Some(o), Some(t)) => (p, o, t),
+        _ => {
+            return Err(c.err(
+                "piston",
+                "[piston], [operating] and [transient] go together: give all three or none",
+            ))
+        }
+    };
+    Ok(Some(Simulation {
+        piston: validate_piston(c, p, engine, liner)?,
+        operating: validate_operating(c, base, o)?,
+        transient: validate_transient(c, t)?,
+    }))
+}
+
+/// `[piston]`: masses, geometry (the pin inside the liner at TDC, the offset within the rod's
+/// reach), skirt profile, slices and thermal state.
+pub(super) fn validate_piston(
+    c: &Checker<'_>,
+    p: &raw::RawPiston,
+    engine: &Engine,
+    liner: &LinerGeometry,
+) -> Result<PistonSpec, SceneError> {
+    let mass = c.positive("piston.mass_kg", p.mass_kg)?;
+    let cg_above_pin = c.finite("piston.cg_above_pin_mm", p.cg_above_pin_mm)? * 1e-3;
+    let tilt_inertia = c.positive("piston.tilt_inertia_kg_m2", p.tilt_inertia_kg_m2)?;
+    if tilt_inertia <= mass * cg_above_pin * cg_above_pin {
+        return Err(c.err(
+            "piston.tilt_inertia_kg_m2",
+            format!(
+                "must exceed mass x cg_above_pin^2 = {:.3e} kg m^2 (it is the inertia about the pin, including the parallel-axis part)",
+                mass * cg_above_pin * cg_above_pin
+            ),
+        ));
+    }
+    let compression_height = c.mm("piston.compression_height_mm", p.compression_height_mm)?;
+    let skirt_length = c.mm("piston.skirt_length_mm", p.skirt_length_mm)?;
+    let top_above_pin = c.finite("piston.pin_below_skirt_top_mm", p.pin_below_skirt_top_mm)? * 1e-3;
+    if top_above_pin >= compression_height || top_above_pin <= 0.0 || top_above_pin >= skirt_length
+    {
+        return Err(c.err(
+            "piston.pin_below_skirt_top_mm",
+            "the pin must lie within the skirt, and the skirt top below the crown",
+        ));
+    }
+    let crown_depth = c.nonneg("piston.crown_depth_at_tdc_mm", p.crown_depth_at_tdc_mm)? * 1e-3;
+    if crown_depth + compression_height >= liner.length {
+        return Err(c.err(
+            "piston.compression_height_mm",
+            "the pin at top dead centre would lie below the liner",
+        ));
+    }
+    // 10 slices resolve the skirt's barrel and contact patch; beyond a few hundred the
+    // contact cost grows with no change in the answer
+    if !(10..=MAX_SLICES).contains(&p.slices) {
+        return Err(c.err(
+            "piston.slices",
+            format!("must lie in [10, {MAX_SLICES}], got {}", p.slices),
+        ));
+    }
+    let th = &p.thermal;
+    let temp = |key: &str, v: f64| -> Result<f64, SceneError> {
+        if v.is_finite() && (-50.0..=400.0).contains(&v) {
+            Ok(v)
+        } else {
+            Err(c.err(
+                key,
+                format!("must be a temperature in [-50, 400] deg C, got {}", num(v)),
+            ))
+        }
+    };
+    let expansion = |key: &str, v: f64| -> Result<f64, SceneError> {
+        if v.is_finite() && (0.0..1e-4).contains(&v) {
+            Ok(v)
+        } else {
+            Err(c.err(key, format!("must be in [0, 1e-4] 1/K, got {}", num(v))))
+        }
+    };
+    let skirt = spec::SkirtSpec {
+        bore: engine.bore,
+        length: skirt_length,
+        top_above_pin,
+        slices: p.slices,
+        clearance: c.nonneg("piston.clearance_um", p.clearance_um)? * 1e-6,
+        barrel: c.nonneg("piston.barrel_um", p.barrel_um)? * 1e-6,
+        barrel_max_below_pin: c
+            .finite("piston.barrel_max_below_pin_mm", p.barrel_max_below_pin_mm)?
+            * 1e-3,
+        ovality: c.nonneg("piston.ovality_um", p.ovality_um)? * 1e-6,
+        piston_expansion: expansion(
+            "piston.thermal.piston_expansion_per_k",
+            th.piston_expansion_per_k,
+        )?,
+        skirt_top_temp_c: temp("piston.thermal.skirt_top_temp_c", th.skirt_top_temp_c)?,
+        skirt_bottom_temp_c: temp("piston.thermal.skirt_bottom_temp_c", th.skirt_bottom_temp_c)?,
+        liner_expansion: expansion(
+            "piston.thermal.liner_expansion_per_k",
+            th.liner_expansion_per_k,
+        )?,
+        liner_temp_c: temp("piston.thermal.liner_temp_c", th.liner_temp_c)?,
+        reference_temp_c: temp("piston.thermal.reference_temp_c", th.reference_temp_c)?,
+        stiffness: c.positive(
+            "piston.contact_stiffness_n_per_m",
+            p.contact_stiffness_n_per_m,
+        )?,
+    };
+    let piston = PistonSpec {
+        mass,
+        pin_mass: c.nonneg("piston.pin_mass_kg", p.pin_mass_kg)?,
+        tilt_inertia,
+        cg_above_pin,
+        cg_lateral: c.finite("piston.cg_offset_mm", p.cg_offset_mm)? * 1e-3,
+        pin_offset: c.finite("piston.pin_offset_mm", p.pin_offset_mm)? * 1e-3,
+        crank_offset: c.finite("piston.crank_offset_mm", p.crank_offset_mm)? * 1e-3,
+        compression_height,
+        crown_depth_at_tdc: crown_depth,
+        skirt,
+        contact_damping: c.nonneg(
+            "piston.contact_damping_n_s_per_m",
+            p.contact_damping_n_s_per_m,
+        )?,
+        friction: c.nonneg("piston.friction", p.friction)?,
+    };
+    let offset = (piston.pin_offset - piston.crank_offset).abs();
+    if offset + engine.stroke / 2.0 >= engine.rod_length {
+        return Err(c.err(
+            "piston.pin_offset_mm",
+            "the offset is too large for the rod",
+        ));
+    }
+    Ok(piston)
+}
+
+/// `[operating]`: load, combustion model (Wiebe) or measured pressure curve.
+pub(super) fn validate_operating(
+    c: &Checker<'_>,
+    base: &Path,
+    o: &raw::RawOperating,
+) -> Result<Operating, SceneError> {
+    if !(o.load.is_finite() && (0.0..=1.0).contains(&o.load)) {
+        return Err(c.err(
+            "operating.load",
+            format!("must be in [0, 1], got {}", num(o.load)),
+        ));
+    }
+    let cb = &o.combustion;
+    if !(cb.compression_ratio.is_finite() && cb.compression_ratio > 1.0) {
+        return Err(c.err("operating.combustion.compression_ratio", "must exceed 1"));
+    }
+    if !(cb.intake_bar.is_finite() && cb.intake_bar >= 1.0) {
+        return Err(c.err(
+            "operating.combustion.intake_bar",
+            "must be at least 1 bar (absolute)",
+        ));
+    }
+    if !(cb.polytropic > 1.0 && cb.polytropic < 1.67) {
+        return Err(c.err("operating.combustion.polytropic", "must lie in (1, 1.67)"));
+    }
+    if !(cb.evo_deg > 450.0 && cb.evo_deg < 700.0) {
+        return Err(c.err("operating.combustion.evo_deg", "must lie in (450, 700) deg"));
+    }
+    if !(cb.start_deg > 180.0 && cb.start_deg < cb.evo_deg) {
+        return Err(c.err(
+            "operating.combustion.start_deg",
+            "must lie between 180 deg and evo_deg",
+        ));
+    }
+    let wiebe = spec::Wiebe {
+        compression_ratio: cb.compression_ratio,
+        intake_pa: cb.intake_bar * 1e5,
+        exhaust_over_intake_pa: c.nonneg(
+            "operating.combustion.exhaust_over_intake_bar",
+            cb.exhaust_over_intake_bar,
+        )? * 1e5,
+        start_deg: cb.start_deg,
+        duration_deg: c.positive("operating.combustion.duration_deg", cb.duration_deg)?,
+        a: c.positive("operating.combustion.wiebe_a", cb.wiebe_a)?,
+        m: c.nonneg("operating.combustion.wiebe_m", cb.wiebe_m)?,
+        heat_j: c.nonneg("operating.combustion.heat_release_j", cb.heat_release_j)?,
+        polytropic: cb.polytropic,
+        evo_deg: cb.evo_deg,
+        load: o.load,
+    };
+    let operating = Operating {
+        load: o.load,
+        pressure: match &o.pressure_file {
+            Some(f) => PressureSource::File(base.join(f)),
+            None => PressureSource::Wiebe(wiebe),
+        },
+        crankcase_pa: c.positive("operating.crankcase_pressure_bar", o.crankcase_pressure_bar)?
+            * 1e5,
+    };
+    Ok(operating)
+}
+
+/// `[transient]`: scheme, step (a whole number of steps per cycle), cycles, damping,
+/// tolerance.
+pub(super) fn validate_transient(
+    c: &Checker<'_>,
+    t: &raw::RawTransient,
+) -> Result<TransientSpec, SceneError> {
+    let scheme = match t.scheme.as_str() {
+        "newmark" => spec::SchemeChoice::AverageAcceleration,
+        "hht" => {
+            if !(t.hht_alpha.is_finite() && (-1.0 / 3.0..=0.0).contains(&t.hht_alpha)) {
+                return Err(c.err(
+                    "transient.hht_alpha",
+                    format!("must lie in [-1/3, 0], got {}", num(t.hht_alpha)),
+                ));
+            }
+            spec::SchemeChoice::Hht { alpha: t.hht_alpha }
+        }
+        other => {
+            return Err(c.err(
+                "transient.scheme",
+                format!("expected \"newmark\" or \"hht\", got \"{other}\""),
+            ))
+        }
+    };
+    let step = c.positive("transient.step_deg", t.step_deg)?;
+    let n = 720.0 / step;
+    if !n.is_finite() || (n - n.round()).abs() > 1e-9 * n || n.round() < 36.0 {
+        return Err(c.err(
+            "transient.step_deg",
+            format!(
+                "720 must be a whole multiple of the step, with at least 36 steps, got {}",
+                num(step)
+            ),
+        ));
+    }
+    if t.cycles == 0 {
+        return Err(c.err("transient.cycles", "must be at least 1"));
+    }
+    if t.averaged_cycles == 0 {
+        return Err(c.err("transient.averaged_cycles", "must be at least 1"));
+    }
+    if !(1..=64).contains(&t.slap_substeps) {
+        return Err(c.err(
+            "transient.slap_substeps",
+            format!("must lie in 1..=64, got {}", t.slap_substeps),
+        ));
+    }
+    if !(t.slap_span_deg.is_finite() && (0.0..=720.0).contains(&t.slap_span_deg)) {
+        return Err(c.err(
+            "transient.slap_span_deg",
+            format!("must lie in [0, 720], got {}", num(t.slap_span_deg)),
+        ));
+    }
+    if !(t.damping_ratio.is_finite() && (0.0..1.0).contains(&t.damping_ratio)) {
+        return Err(c.err(
+            "transient.damping_ratio",
+            format!("must lie in [0, 1), got {}", num(t.damping_ratio)),
+        ));
+    }
+    let transient = TransientSpec {
+        scheme,
+        step_deg: step,
+        cycles: t.cycles,
+        // more than were run: all of them (`--set transient.cycles=1` keeps working)
+        averaged_cycles: t.averaged_cycles.min(t.cycles),
+        adaptive: t.adaptive,
+        damping_ratio: t.damping_ratio,
+        max_penetration: c.positive("transient.max_penetration_um", t.max_penetration_um)? * 1e-6,
+        mode_cutoff_hz: match t.mode_cutoff_hz {
+            Some(f) => Some(c.positive("transient.mode_cutoff_hz", f)?),
+            None => None,
+        },
+        slap_substeps: t.slap_substeps,
+        slap_span_deg: t.slap_span_deg,
+        tolerance: if t.tolerance.is_finite() && t.tolerance > 0.0 && t.tolerance < 1.0 {
+            t.tolerance
+        } else {
+            return Err(c.err(
+                "transient.tolerance",
+                format!(
+                    "must lie in (0, 1) (a relative error), got {}",
+                    num(t.tolerance)
+                ),
+            ));
+        },
+    };
+    Ok(transient)
+}
+
+pub(super) fn validate_crankcase(
+    c: &Checker<'_>,
+    base: &Path,
+    cc: &raw::RawCrankcase,
+    engine: &Engine,
+    liner: &LinerGeometry,
+    material: &dyn Fn(&str, &str) -> Result<Elastic, SceneError>,
+) -> Result<Crankcase, SceneError> {
+    let geometry = CrankcaseGeometry {
+        cylinders: engine.cylinders,
+        pitch: engine.cylinder_pitch,
+        liner_outer_radius: liner.outer_diameter / 2.0,
+        flange_radius: liner.flange_outer_diameter / 2.0,
+        seat_z: liner.length - liner.flange_height,
+        guide_height: liner.guide_height,
+        guide_bottom: liner.guide_bottom,
+        deck_thickness: c.mm("crankcase.deck_thickness_mm", cc.deck_thickness_mm)?,
+        jacket_wall: c.mm("crankcase.jacket_wall_mm", cc.jacket_wall_mm)?,
+        skirt_depth: c.mm("crankcase.skirt_depth_mm", cc.skirt_depth_mm)?,
+        front_wall: c.mm("crankcase.front_wall_mm", cc.front_wall_mm)?,
+        rear_wall: c.mm("crankcase.rear_wall_mm", cc.rear_wall_mm)?,
+        rail_width: c.mm("crankcase.rail_width_mm", cc.rail_width_mm)?,
+        rail_height: c.mm("crankcase.rail_height_mm", cc.rail_height_mm)?,
+        analysis_z: liner
+            .analysis_depths
+            .iter()
+            .map(|d| liner.length - d)
+            .collect(),
+    };
+    if liner.flange_outer_diameter <= liner.outer_diameter {
+        return Err(c.err(
+            "liner.flange_outer_diameter_mm",
+            "the crankcase needs a liner flange to seat on (flange diameter > outer diameter)",
+        ));
+    }
+    if geometry.seat_z - geometry.deck_thickness
+        <= geometry.guide_bottom + geometry.guide_height + 1e-9
+    {
+        return Err(c.err(
+            "crankcase.deck_thickness_mm",
+            "the deck reaches down into the lower guide band: no water jacket left",
+        ));
+    }
+    if let Some(&z) = geometry.analysis_z.first() {
+        if z >= geometry.seat_z - geometry.deck_thickness {
+            return Err(c.err(
+                "crankcase.deck_thickness_mm",
+                "the first analysis point lies inside the deck, not in the coolant zone",
+            ));
+        }
+    }
+    if geometry.rail_height >= geometry.skirt_depth {
+        return Err(c.err(
+            "crankcase.rail_height_mm",
+            "must be smaller than skirt_depth_mm",
+        ));
+    }
+    let m = &cc.mesh;
+    let kind = match m.element.as_str() {
+        "hex20" => ElementKind::Hex20,
+        "tet10" => ElementKind::Tet10,
+        other => {
+            return Err(c.err(
+                "crankcase.mesh.element",
+                format!("expected \"hex20\" or \"tet10\", got \"{other}\""),
+            ))
+        }
+    };
+    if m.per_sector < 2 || m.per_sector % 2 != 0 {
+        return Err(c.err(
+            "crankcase.mesh.per_sector",
+            "must be even and at least 2 (the thrust line falls on nodes)",
+        ));
+    }
+    if m.wall_layers == 0 {
+        return Err(c.err("crankcase.mesh.wall_layers", "must be at least 1"));
+    }
+    let meshing = CrankcaseMeshing {
+        kind,
+        per_sector: m.per_sector,
+        wall_layers: m.wall_layers,
+        axial_size: c.mm("crankcase.mesh.axial_size_mm", m.axial_size_mm)?,
+    };
+    let source = match &cc.mesh_file {
+        Some(f) => CrankcaseSource::File(base.join(mesh_file(c, "crankcase.mesh_file", f)?)),
+        None => CrankcaseSource::Parametric { geometry, meshing },
+    };
+    let clamp_force = c.positive("crankcase.flange_clamp_kn", cc.flange_clamp_kn)? * 1e3;
+    let file = matches!(source, CrankcaseSource::File(_));
+    Ok(Crankcase {
+        material: match &cc.material {
+            Some(name) => Some(material("crankcase.material", name)?),
+            None if file => None,
+            None => return Err(c.err(
+                "crankcase.material",
+                "missing: the parametric crankcase needs a material (name an entry of [materials])",
+            )),
+        },
+        mesh_unit: mesh_unit(c, "crankcase.mesh_unit", &cc.mesh_unit, file)?,
+        box_sets: box_sets(c, "crankcase.sets", &cc.sets)?,
+        source,
+        fix: cc.fix.clone(),
+        clamp_force,
+    })
+}
+
+/// A part's material: the named entry of `[materials]`, required unless the mesh is a file
+/// (whose own materials are then used).
+pub(super) fn part_material(
+    c: &Checker<'_>,
+    part: &str,
+    name: &Option<String>,
+    source: &MeshSource,
+    material: &dyn Fn(&str, &str) -> Result<Elastic, SceneError>,
+) -> Result<Option<Elastic>, SceneError> {
+    let key = format!("{part}.material");
+    match (name, source) {
+        (Some(n), _) => Ok(Some(material(&key, n)?)),
+        (None, MeshSource::File(_)) => Ok(None),
+        (None, _) => Err(c.err(
+            &key,
+            "missing: the parametric mesh needs a material (name an entry of [materials])",
+        )),
+    }
+}
+
+/// A mesh file's unit: "m" (default) or "mm"; only meaningful with a mesh file.
+pub(super) fn mesh_unit(
+    c: &Checker<'_>,
+    key: &str,
+    raw: &Option<String>,
+    file: bool,
+) -> Result<spec::MeshUnit, SceneError> {
+    let Some(u) = raw else {
+        return Ok(spec::MeshUnit::M);
+    };
+    let unit = spec::MeshUnit::parse(u)
+        .ok_or_else(|| c.err(key, format!("expected \"m\" or \"mm\", got \"{u}\"")))?;
+    if !file {
+        return Err(c.err(
+            key,
+            "applies to a mesh_file only (the parametric mesh is built in SI)",
+        ));
+    }
+    Ok(unit)
+}
+
+/// Box sets of a part, converted from mm to m; each box must have finite, ordered corners.
+pub(super) fn box_sets(
+    c: &Checker<'_>,
+    key: &str,
+    raw: &std::collections::BTreeMap<String, raw::RawBoxSet>,
+) -> Result<Vec<(String, [f64; 6])>, SceneError> {
+    let mut out = Vec::new();
+    for (name, b) in raw {
+        let v = b.box_mm;
+        let ordered = (0..3).all(|a| v[a] <= v[a + 3]);
+        if !v.iter().all(|x| x.is_finite() && x.abs() < 1e6) || !ordered {
+            return Err(c.err(
+                &format!("{key}.{name}.box_mm"),
+                format!("expected [x0, y0, z0, x1, y1, z1] in mm with finite values below 1e6 and x0 <= x1, y0 <= y1, z0 <= z1, got {v:?}"),
+            ));
+        }
+        out.push((name.clone(), v.map(|x| x * 1e-3)));
+    }
+    Ok(out)
+}
+
+/// A mesh file name: not blank (an empty one joined the scene's directory: "cannot read mesh
+/// file small/").
+pub(super) fn mesh_file<'f>(c: &Checker<'_>, key: &str, f: &'f str) -> Result<&'f str, SceneError> {
+    if f.trim().is_empty() {
+        return Err(c.err(
+            key,
+            "is empty: give the mesh file's path (relative to the scene file), or leave the key out for the parametric mesh",
+        ));
+    }
+    Ok(f)
+}
