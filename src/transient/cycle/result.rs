@@ -58,7 +58,7 @@ pub struct CylinderSeries {
     pub acceleration: Dense,
     /// Per point, the amplitude spectrum of `acceleration` averaged over the averaged cycles:
     /// each cycle's record centred on the cylinder's firing TDC
-    /// ([`super::spectrum::centred_spectrum`]), RMS-averaged ([`super::spectrum::PowerSum`];
+    /// ([`crate::transient::spectrum::centred_spectrum`]), RMS-averaged ([`crate::transient::spectrum::PowerSum`];
     /// one cycle's spectrum of a non-periodic slap is one draw). Not serialised.
     #[serde(skip)]
     pub spectra: Vec<Spectrum>,

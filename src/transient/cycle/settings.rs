@@ -28,7 +28,7 @@ pub struct CycleSettings {
     /// How the cylinders' contacts are coupled within a step.
     pub coupling: Coupling,
     /// Skip the predictor's products over the modes at slices that an energy bound proves
-    /// apart ([`super::modal`]); the results are the same bit for bit (false: every slice's
+    /// apart ([`crate::transient::modal`]); the results are the same bit for bit (false: every slice's
     /// prediction is formed, for verification).
     pub bound_predictions: bool,
     /// Restore the damper impulse the steps miss at contact onsets
@@ -52,7 +52,7 @@ pub struct CycleSettings {
     /// Accelerations at the analysis points are reported in the band of the ROM \[Hz\]: the sum
     /// over every integrated mode plus the quasi-static (residual) response to the contact
     /// forces, low-passed by a zero-phase FIR over the cycle
-    /// ([`super::signal::low_pass`]; the ROM is accurate up to about half its cut-off, and
+    /// ([`crate::transient::signal::low_pass`]; the ROM is accurate up to about half its cut-off, and
     /// the modes above the band are kept for the contact response, not as outputs). None: the
     /// unfiltered sum.
     pub output_band_hz: Option<f64>,
