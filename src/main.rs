@@ -540,7 +540,7 @@ fn rom_command(
         print_report(json, &done, || rom::component_text(&done));
         return Ok(());
     }
-    let loaded = rom::get_rom(&sc, &cache.options())?;
+    let loaded = rom::get_rom_with_progress(&sc, &cache.options())?;
     let mut report = rom::RomReport::new(&loaded);
     report.seconds = started.elapsed().as_secs_f64();
     print_report(json, &report, || report.to_text());
@@ -555,7 +555,7 @@ fn shapes_command(
     cache: &CacheArgs,
 ) -> Result<(), Error> {
     let sc = linercav::api::load_scene(scene, sets)?;
-    let loaded = rom::get_rom(&sc, &cache.options())?;
+    let loaded = rom::get_rom_with_progress(&sc, &cache.options())?;
     let report = rom::ShapesReport {
         modes: loaded.rom.shapes(),
         cylinders: loaded.rom.cylinders.iter().map(|c| c.cylinder).collect(),

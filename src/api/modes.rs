@@ -285,12 +285,12 @@ pub fn run_assembly(
     }
     let (rom, cache_state) = if let Some(path) = vtu_path {
         // mode shapes on the meshes need the full bases: build in this run
-        let (b, lm, cm) = super::rom::build_rom(scene, true)?;
+        let (b, lm, cm) = super::rom::build_rom_with_progress(scene, true)?;
         let n = count.min(b.rom.frequencies_hz.len());
         super::full_modes::write_vtu(path, scene, &lm, &cm, &b, n)?;
         (b.rom, "bypassed")
     } else {
-        let l = super::rom::get_rom(scene, cache)?;
+        let l = super::rom::get_rom_with_progress(scene, cache)?;
         (l.rom, l.cache)
     };
     if rom.frequencies_hz.len() < count {

@@ -21,7 +21,7 @@ impl RomProgress {
 
 /// Gets the ROM of a scene ([`crate::reduce::scene_rom::get_rom`]), showing the build's
 /// phases on a terminal.
-pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
+pub fn get_rom_with_progress(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
     let bar = RomProgress::default();
     Ok(crate::reduce::scene_rom::get_rom(scene, opts, &|m| {
         bar.phase(m)
@@ -30,7 +30,7 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions) -> Result<LoadedRom> {
 
 /// Builds the ROM of a scene without the cache ([`crate::reduce::scene_rom::build_rom`]),
 /// showing its phases on a terminal.
-pub fn build_rom(scene: &Scene, keep_bases: bool) -> Result<(RomBuild, Mesh, Mesh)> {
+pub fn build_rom_with_progress(scene: &Scene, keep_bases: bool) -> Result<(RomBuild, Mesh, Mesh)> {
     let bar = RomProgress::default();
     Ok(crate::reduce::scene_rom::build_rom(
         scene,

@@ -10,7 +10,7 @@
 //! only raise frequencies, so a ROM mode below its full counterpart flags a bug.
 
 use super::full_modes as full;
-use super::rom::build_rom;
+use super::rom::build_rom_with_progress;
 use crate::error::{Error, Result};
 use crate::files::write_all_atomic;
 use crate::reduce::full::FullModes;
@@ -50,7 +50,7 @@ pub fn run(
     let mut reference: Option<(FullModes, f64, usize)> = None;
     for (f, sc) in factors.iter().zip(&scenes) {
         let t0 = Instant::now();
-        let (b, _, _) = build_rom(sc, true)?;
+        let (b, _, _) = build_rom_with_progress(sc, true)?;
         let build_seconds = t0.elapsed().as_secs_f64();
         if reference.is_none() {
             // one full solve, sized by the first ROM: its modes below the band (no rigid-body

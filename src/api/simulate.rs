@@ -3,7 +3,7 @@
 
 use super::full_order::compare;
 use super::progress::Progress;
-use super::rom::{get_rom, CacheOptions};
+use super::rom::{get_rom_with_progress, CacheOptions};
 use crate::error::{Error, Result};
 use crate::files::{write_atomic, OutputDir};
 use crate::piston::Piston;
@@ -19,7 +19,7 @@ use crate::transient::engine::settings_of;
 
 /// Runs the engine cycle of `scene` on `rom` ([`crate::transient::engine::run_cycle`]) with a
 /// progress bar on a terminal.
-pub fn run_cycle(
+pub fn run_cycle_with_progress(
     scene: &Scene,
     rom: &EngineRom,
     piston: &Piston,
@@ -74,12 +74,12 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         .transpose()?;
     let progress = Progress::new();
     progress.phase("engine ROM");
-    let loaded = get_rom(&scene, &req.cache)?;
+    let loaded = get_rom_with_progress(&scene, &req.cache)?;
     crate::transient::engine::check_mode_cutoff(&scene, sim, &loaded.rom)?;
     progress.phase("transient");
     let t = Instant::now();
     let settings = settings_of(sim, scene.rom.band_hz);
-    let res = run_cycle(
+    let res = run_cycle_with_progress(
         &scene,
         &loaded.rom,
         &piston,
