@@ -9,24 +9,11 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 mod common;
-use common::linercav;
+use common::{linercav, refused};
 
 const SMALL: &str = "tests/fixtures/engine_small.toml";
 const MESH: &str = "tests/fixtures/block_tet10.msh";
 const STEEL: [&str; 6] = ["--youngs", "210e9", "--poisson", "0.3", "--density", "7850"];
-
-/// Asserts a refusal: the exit code, one `error:` message, no panic, nothing on stdout.
-fn refused(args: &[&str], code: i32, needle: &str) {
-    let (c, out, err) = linercav(args);
-    assert_eq!(c, code, "{args:?}: exit {c}, stderr: {err}");
-    assert!(err.contains("error: "), "{args:?}: no error message: {err}");
-    assert!(!err.contains("panicked"), "{args:?}: panic: {err}");
-    assert!(out.is_empty(), "{args:?}: stdout not empty: {out}");
-    assert!(
-        err.contains(needle),
-        "{args:?}: message should name '{needle}': {err}"
-    );
-}
 
 /// The fixture mesh with line `line` (1-based) replaced.
 fn mesh_with(dir: &Path, name: &str, line: usize, text: &str) -> PathBuf {

@@ -8,24 +8,9 @@ use std::process::Command;
 use std::time::Duration;
 
 mod common;
-use common::linercav;
+use common::{linercav, refused};
 
 const SMALL: &str = "tests/fixtures/engine_small.toml";
-
-/// Asserts a refusal: the exit code, one `error:` message naming `needle`, no panic, nothing
-/// on stdout.
-fn refused(args: &[&str], code: i32, needle: &str) -> String {
-    let (c, out, err) = linercav(args);
-    assert_eq!(c, code, "{args:?}: exit {c}, stderr: {err}");
-    assert!(err.contains("error: "), "{args:?}: no error message: {err}");
-    assert!(!err.contains("panicked"), "{args:?}: panic: {err}");
-    assert!(out.is_empty(), "{args:?}: stdout not empty: {out}");
-    assert!(
-        err.contains(needle),
-        "{args:?}: should name '{needle}': {err}"
-    );
-    err
-}
 
 /// A cache directory holding the small engine's ROM.
 fn small_rom_cache() -> (tempfile::TempDir, String) {

@@ -381,14 +381,7 @@ pub fn interface_blocks(
 ) -> Result<(Vec<InterfaceBlock>, Vec<InterfaceBlock>), RomError> {
     use Direction::*;
     let nh = inp.harmonics;
-    let seat = InterfaceShape::Seat {
-        r_in: inp.liner_outer_radius,
-        r_out: inp.flange_radius,
-    };
-    let guide = InterfaceShape::Guide {
-        z0: inp.guide_bottom,
-        z1: inp.guide_bottom + inp.guide_height,
-    };
+    let (seat, guide) = seat_and_guide(inp);
     let liner = liner_blocks(inp, inp.liner, 0.0)?;
     let cm = inp.crankcase;
     let mut cc = Vec::new();
@@ -425,6 +418,21 @@ pub fn interface_blocks(
     Ok((liner, cc))
 }
 
+/// The two interface fields' shapes: the seat (the flange annulus between the liner's outer
+/// radius and the flange's) and the guide (the lower guide band).
+fn seat_and_guide(inp: &RomInputs<'_>) -> (InterfaceShape, InterfaceShape) {
+    (
+        InterfaceShape::Seat {
+            r_in: inp.liner_outer_radius,
+            r_out: inp.flange_radius,
+        },
+        InterfaceShape::Guide {
+            z0: inp.guide_bottom,
+            z1: inp.guide_bottom + inp.guide_height,
+        },
+    )
+}
+
 /// The liner's interface blocks on `mesh` about a bore axis at x = `cx` (0: its own frame):
 /// seat (radial, tangential, axial), guide radial, guide tangential/axial.
 pub fn liner_blocks(
@@ -434,14 +442,7 @@ pub fn liner_blocks(
 ) -> Result<Vec<InterfaceBlock>, RomError> {
     use Direction::*;
     let nh = inp.harmonics;
-    let seat = InterfaceShape::Seat {
-        r_in: inp.liner_outer_radius,
-        r_out: inp.flange_radius,
-    };
-    let guide = InterfaceShape::Guide {
-        z0: inp.guide_bottom,
-        z1: inp.guide_bottom + inp.guide_height,
-    };
+    let (seat, guide) = seat_and_guide(inp);
     Ok(vec![
         block(
             mesh,

@@ -95,3 +95,18 @@ pub const KINDS: [ElementKind; 4] = [
     ElementKind::Hex8,
     ElementKind::Hex20,
 ];
+
+/// Asserts a refusal of the binary run with `args`: the exit code, one `error:` message naming
+/// `needle`, no panic, nothing on stdout. Returns the message.
+pub fn refused(args: &[&str], code: i32, needle: &str) -> String {
+    let (c, out, err) = linercav(args);
+    assert_eq!(c, code, "{args:?}: exit {c}, stderr: {err}");
+    assert!(err.contains("error: "), "{args:?}: no error message: {err}");
+    assert!(!err.contains("panicked"), "{args:?}: panic: {err}");
+    assert!(out.is_empty(), "{args:?}: stdout not empty: {out}");
+    assert!(
+        err.contains(needle),
+        "{args:?}: should name '{needle}': {err}"
+    );
+    err
+}
