@@ -8,6 +8,7 @@
 //!   count). Used only to certify eigen results, with sigma placed in a spectral gap.
 
 use super::sparse::Pattern;
+use super::tree_solve::TreePlan;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltParams, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltParams, LltRegularization};
@@ -34,6 +35,8 @@ pub enum FactorError {
 /// Symbolic analysis (ordering + supernodal structure) of one pattern.
 pub struct Analysis {
     symbolic: SymbolicCholesky<usize>,
+    /// The elimination tree's split for single-vector solves on both cores.
+    plan: TreePlan,
     n: usize,
 }
 
@@ -58,8 +61,13 @@ impl Analysis {
             params,
         )
         .map_err(|e| FactorError::Symbolic(format!("{e:?}")))?;
+        let SymbolicCholeskyRaw::Supernodal(sym) = symbolic.raw() else {
+            unreachable!("supernodal factorisation is forced above")
+        };
+        let plan = TreePlan::new(sym);
         Ok(Self {
             symbolic,
+            plan,
             n: pattern.n,
         })
     }
@@ -172,9 +180,18 @@ impl Llt<'_> {
         );
     }
 
-    /// Solves A x = b in place for one vector.
+    /// Solves A x = b in place for one vector, on both cores along the elimination tree
+    /// ([`super::tree_solve`]; the same bits on any number of threads): x = P^T L^-T L^-1 P b.
     pub fn solve_vec(&self, x: &mut [f64]) {
-        let n = x.len();
-        self.solve_in_place(MatMut::from_column_major_slice_mut(x, n, 1));
+        let sym = &self.analysis.symbolic;
+        let SymbolicCholeskyRaw::Supernodal(sup) = sym.raw() else {
+            unreachable!("supernodal factorisation is forced in the analysis")
+        };
+        let (fwd, inv) = sym.perm().expect("a fill-reducing order is given").arrays();
+        let mut y: Vec<f64> = fwd.iter().map(|&f| x[f]).collect();
+        self.analysis.plan.solve(sup, &self.l, &mut y);
+        for (xi, &i) in x.iter_mut().zip(inv) {
+            *xi = y[i];
+        }
     }
 }
