@@ -350,7 +350,9 @@ mod tests {
         let (pattern, values, fwd, inv) = grid(18);
         let analysis = Analysis::new(&pattern, &fwd, &inv).unwrap();
         let llt = analysis.llt(&pattern, &values).unwrap();
-        let b: Vec<f64> = (0..pattern.n).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
+        let b: Vec<f64> = (0..pattern.n)
+            .map(|i| ((i * 7919) % 101) as f64 - 50.0)
+            .collect();
         let mut serial = b.clone();
         let n = serial.len();
         llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut serial, n, 1));
@@ -362,7 +364,10 @@ mod tests {
             .zip(&tree)
             .fold(0.0f64, |a, (s, t)| a.max((s - t).abs()));
         assert!(diff <= 1e-12 * scale, "difference {diff} of {scale}");
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         let mut single = b.clone();
         one.install(|| llt.solve_vec(&mut single));
         assert_eq!(single, tree);

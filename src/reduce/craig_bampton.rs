@@ -586,7 +586,9 @@ fn orthonormalise_attachments(
         sorted.get(keep.len()).copied().unwrap_or(0.0) / sorted[0]
     );
     let v = evd.U();
-    let tr = Mat::from_fn(nu, keep.len(), |r, c| d[r] * v[(r, keep[c])] / s[keep[c]].sqrt());
+    let tr = Mat::from_fn(nu, keep.len(), |r, c| {
+        d[r] * v[(r, keep[c])] / s[keep[c]].sqrt()
+    });
     let nk = keep.len();
     let rows = phi.nrows();
     let mut u = phi.as_mut().subcols_mut(a0, nu);
