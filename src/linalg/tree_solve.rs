@@ -9,7 +9,7 @@
 //!
 //! [`TreePlan`] splits the supernodal elimination tree into *tasks* (whole subtrees) and the
 //! *top* (the separators above them), by taking the heaviest subtree apart at its root until
-//! each task holds at most 1/[`TASKS`] of the factor's entries. The forward solve L y = b runs
+//! each task holds at most 1/16 (`TASKS`) of the factor's entries. The forward solve L y = b runs
 //! the tasks in parallel, each on a local copy of its rows, gathering its updates of the top
 //! rows, -sum L_ts y_s, in a buffer of its own; the rows and buffers are written back in task
 //! order, then the top supernodes run in order. The backward solve L^T x = y runs the top in reverse order, then the tasks in

@@ -212,8 +212,7 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
     drop(llt);
     let na_cols = orthonormalise_attachments(part, &full, &mut phi, nc + nm)?;
     let nr = nc + nm + na_cols;
-    let k = lower_gram(&full.km.pattern, &full.km.k, phi.as_ref());
-    let m = lower_gram(&full.km.pattern, &full.km.m, phi.as_ref());
+    let (k, m) = project(&full, &b_to_a, &lambdas, phi.as_ref(), nc);
     tick(&format!("projected onto {nr} coordinates"));
     log_conditioning(part, &k, &m);
     let loads_r = phi.transpose() * &f_a;
@@ -624,6 +623,106 @@ pub fn gram_cut(s: &[f64]) -> usize {
         return 0;
     };
     s.iter().take_while(|&&x| x > GRAM_CUT * smax).count()
+}
+
+/// K_r = Phi^T K Phi and M_r = Phi^T M Phi of the basis [Phi_c | Phi_n | Phi_a] (`nc`
+/// constraint modes, the modes with eigenvalues `lambdas`, then the attachments) from its
+/// structure, computing only the blocks that are not known:
+///
+/// K_r = diag(K_cc, Lambda, K_aa),   M_r = [[M_cc, M_cn, M_ca], [M_nc, I, 0], [M_ac, 0, I]].
+///
+/// K Phi_c vanishes on the interior (static equilibrium), so K_cn = K_ca = 0 and K_cc needs
+/// only the boundary rows: K_cc = (K Phi_c)_B^T (Phi_c)_B. Phi_n and Phi_a vanish on the
+/// boundary; K_ii phi = lambda M_ii phi with phi^T M_ii phi = 1 gives K_nn = Lambda, M_nn = I;
+/// the attachments are M-orthogonal to the modes (Phi_n^T M_ii K_ii^-1 f = Lambda^-1 Phi_n^T f)
+/// and K_ii-orthogonal to them likewise, so K_na = M_na = 0, and M-orthonormal: M_aa = I.
+/// Each known block holds to the solves' and the eigen-solve's residuals (checked against
+/// the brute-force products in tests/rom.rs).
+fn project(
+    full: &FeModel,
+    b_to_a: &[usize],
+    lambdas: &[f64],
+    phi: MatRef<'_, f64>,
+    nc: usize,
+) -> (Mat<f64>, Mat<f64>) {
+    let (na, nm, nr) = (full.n_free(), lambdas.len(), phi.ncols());
+    let (pattern, kv, mv) = (&full.km.pattern, &full.km.k, &full.km.m);
+    let na_cols = nr - nc - nm;
+    let (phi_c, phi_a) = (phi.subcols(0, nc), phi.subcols(nc + nm, na_cols));
+    let mut interior = vec![false; na];
+    for &a in b_to_a {
+        interior[a] = true;
+    }
+    let boundary: Vec<usize> = (0..na).filter(|&a| !interior[a]).collect();
+    let mut k = Mat::<f64>::zeros(nr, nr);
+    let mut m = Mat::<f64>::zeros(nr, nr);
+    // K_cc from the boundary rows of K Phi_c (column d of K is its row d: both triangles stored)
+    let mut k_phi_b = Mat::<f64>::zeros(boundary.len(), nc);
+    k_phi_b
+        .as_mut()
+        .par_col_chunks_mut(PANEL)
+        .enumerate()
+        .for_each(|(p, mut col)| {
+            for j in 0..col.ncols() {
+                for (r, &d) in boundary.iter().enumerate() {
+                    col[(r, j)] = (pattern.col_ptr[d]..pattern.col_ptr[d + 1])
+                        .map(|q| kv[q] * phi_c[(pattern.row_idx[q], p * PANEL + j)])
+                        .sum::<f64>();
+                }
+            }
+        });
+    let phi_b = Mat::from_fn(boundary.len(), nc, |r, j| phi_c[(boundary[r], j)]);
+    let mut k_cc = k_phi_b.transpose() * &phi_b;
+    symmetrise(&mut k_cc);
+    k.as_mut().submatrix_mut(0, 0, nc, nc).copy_from(&k_cc);
+    for (j, &lam) in lambdas.iter().enumerate() {
+        k[(nc + j, nc + j)] = lam;
+    }
+    k.as_mut()
+        .submatrix_mut(nc + nm, nc + nm, na_cols, na_cols)
+        .copy_from(&lower_gram(pattern, kv, phi_a));
+    // M: the constraint modes' rows, the identities
+    m.as_mut()
+        .submatrix_mut(0, 0, nc, nc)
+        .copy_from(&lower_gram(pattern, mv, phi_c));
+    let m_rest = cross_gram(pattern, mv, phi_c, phi.subcols(nc, nm + na_cols));
+    m.as_mut()
+        .submatrix_mut(0, nc, nc, nm + na_cols)
+        .copy_from(&m_rest);
+    m.as_mut()
+        .submatrix_mut(nc, 0, nm + na_cols, nc)
+        .copy_from(m_rest.transpose());
+    for j in nc..nr {
+        m[(j, j)] = 1.0;
+    }
+    (k, m)
+}
+
+/// X^T A Y for a symmetric sparse A and dense blocks X, Y, in blocks of [`PANEL`] columns of Y
+/// on both cores (each block serial: the same bits on any number of threads).
+fn cross_gram(
+    pattern: &Pattern,
+    values: &[f64],
+    x: MatRef<'_, f64>,
+    y: MatRef<'_, f64>,
+) -> Mat<f64> {
+    let mut c = Mat::<f64>::zeros(x.ncols(), y.ncols());
+    c.as_mut()
+        .par_col_chunks_mut(PANEL)
+        .enumerate()
+        .for_each(|(p, mut col)| {
+            let (j0, w) = (p * PANEL, col.ncols());
+            let ay = sparse_times(pattern, values, y.subcols(j0, w));
+            matmul(
+                col.as_mut(),
+                Accum::Replace,
+                x.transpose(),
+                ay.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+        });
+    c
 }
 
 /// X^T A X for a symmetric sparse A and a dense block X, in blocks of [`PANEL`] columns on both
