@@ -82,6 +82,7 @@ pub fn system_modes(
     keep_lambda: f64,
 ) -> Result<SystemModes, SystemError> {
     let n = k.nrows();
+    let t0 = std::time::Instant::now();
     let (d, ks, ms) = unit_mass_scaling(&k, m);
     let chol = ms
         .llt(Side::Lower)
@@ -110,6 +111,10 @@ pub fn system_modes(
     // 1e-4 of the full FE model below half the cut-off (README, "ROM against the full model").
     // The block exceeds the kept modes by half so lambda_{p+1} stays well above the highest
     // kept one (the default engine keeps 240 modes: 400).
+    log::info!(
+        "system: dense eigen-decomposition of {n} in {:.2} s",
+        t0.elapsed().as_secs_f64()
+    );
     let kept = lambdas.iter().take_while(|&&l| l <= keep_lambda).count();
     let p = n.min(400.max(3 * kept / 2));
     if p > 0 {

@@ -862,10 +862,14 @@ fn left_out(inp: &RomInputs<'_>, n_g: usize, b: &Basis) -> Vec<String> {
 /// needs.
 pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, RomError> {
     let t0 = Instant::now();
+    let progress = |what: &str| {
+        log::info!("{:7.2} s  {what}", t0.elapsed().as_secs_f64());
+        progress(what)
+    };
     crate::linalg::thread_count_invariant();
     let data = PartData::new(inp)?;
     let rows = &data.rows;
-    let (liner, crankcase, sources) = reduce_parts(inp, &data, progress)?;
+    let (liner, crankcase, sources) = reduce_parts(inp, &data, &progress)?;
     progress("assembling the engine");
     let (crankcase_map, liner_maps, n_g) = layout(&liner, &crankcase, &inp.cylinders);
     let mut placements = vec![Placement {
@@ -914,6 +918,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     let mut parts: Vec<(&PartReduction, &[usize])> = vec![(&crankcase, &crankcase_map)];
     parts.extend(liner_maps.iter().map(|m| (&liner, m.as_slice())));
     let estimated_error = truncation_error(inp, &parts, &kg, &mg, &sys);
+    log::info!("{:7.2} s  built", t0.elapsed().as_secs_f64());
     let info = RomInfo {
         full_dofs: crankcase.stats.full_dofs + inp.cylinders.len() * liner.stats.full_dofs,
         reduced_dofs: n_g,
