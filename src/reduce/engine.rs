@@ -150,7 +150,7 @@ pub fn system_modes(
 const EVD_SPLIT: usize = 2;
 
 /// All eigenpairs A z = lambda z of a symmetric matrix (lower triangle read), ascending, on a
-/// fixed [`EVD_SPLIT`]-way split of faer's parallel kernels: the split, and so every sum, is
+/// fixed two-way (`EVD_SPLIT`) split of faer's parallel kernels: the split, and so every sum, is
 /// the same whatever number of threads runs it (a 1-CPU task gets the same bits as a 2-core
 /// machine; unit test), unlike the machine-sized default, while the decomposition of the
 /// system's few thousand coordinates, the largest serial cost of a ROM build, gets both cores.
