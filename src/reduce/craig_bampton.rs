@@ -590,17 +590,22 @@ fn orthonormalise_attachments(
     });
     let nk = keep.len();
     let rows = phi.nrows();
-    let mut u = phi.as_mut().subcols_mut(a0, nu);
-    let mut r0 = 0;
-    while r0 < rows {
-        let h = (rows - r0).min(4096);
-        let block = u.as_ref().subrows(r0, h) * &tr;
-        u.as_mut()
-            .subrows_mut(r0, h)
-            .subcols_mut(0, nk)
-            .copy_from(&block);
-        r0 += h;
-    }
+    // row blocks in parallel, each product serial: the same bits on any number of threads
+    phi.as_mut()
+        .subcols_mut(a0, nu)
+        .par_row_chunks_mut(1024)
+        .for_each(|u| {
+            let mut block = Mat::<f64>::zeros(u.nrows(), nk);
+            matmul(
+                block.as_mut(),
+                Accum::Replace,
+                u.as_ref(),
+                tr.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+            u.subcols_mut(0, nk).copy_from(&block);
+        });
     phi.truncate(rows, a0 + nk);
     Ok(nk)
 }
