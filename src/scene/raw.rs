@@ -213,7 +213,7 @@ pub struct RawRom {
     /// Residual vectors of the contact loads: a hat-shaped load pattern every this many
     /// bore-line nodes per side (1: every node; 0: none, static correction only). They give the
     /// liner wall its local mass at the slap: with them the ROM matches the full-order model on
-    /// the slap window (default 2 on the default engine: 1.25 %; every node 0.13 %; none ~50 %;
+    /// the slap window (default 2 on the default engine: 1.57 %; every node 1.03 %; none ~50 %;
     /// docs/physics.md), every node at ~1.5x the modes and cycle time of every 2nd node.
     #[serde(default = "default_residual_spacing")]
     pub residual_vector_spacing: usize,
