@@ -9,3 +9,4 @@ pub mod interface;
 pub mod part_cache;
 pub mod rom;
 pub mod scene_rom;
+pub mod substructure;

@@ -208,6 +208,10 @@ pub struct RomInputs<'a> {
     /// Residual-vector load patterns: a hat function every this many bore-line nodes on each
     /// side (1: every node; 0: none, static correction only).
     pub residual_vector_spacing: usize,
+    /// Components the crankcase is cut into (1: reduced in one piece; [`super::substructure`]).
+    pub crankcase_components: usize,
+    /// Shapes per cut between crankcase components.
+    pub cut_shapes: usize,
     /// Keep full bases for recovery (mode shapes on the meshes).
     pub keep_bases: bool,
     /// The component cache directory: each part's reduction read from it or stored in it
@@ -1043,8 +1047,31 @@ fn reduce_parts(
     progress("reducing the liner");
     let (l, ls) = reduce_cached(&liner, &settings, dir)?;
     progress("reducing the crankcase");
-    let (c, cs) = reduce_cached(&crankcase, &settings, dir)?;
+    let (c, cs) = match crankcase_split(inp) {
+        Some(split) => super::substructure::reduce_split(&crankcase, &settings, &split, dir)?,
+        None => reduce_cached(&crankcase, &settings, dir)?,
+    };
     Ok((l, c, [ls, cs]))
+}
+
+/// The crankcase's cut planes when it is substructured (`crankcase_components` > 1, no full
+/// bases asked for): the cylinders shared out evenly, each cut midway between the bores of
+/// neighbouring groups.
+fn crankcase_split(inp: &RomInputs<'_>) -> Option<super::substructure::Split> {
+    let (n, nc) = (inp.axis_x.len(), inp.crankcase_components);
+    if nc <= 1 || inp.keep_bases {
+        return None;
+    }
+    let cuts_x = (1..nc)
+        .map(|j| {
+            let first = j * n / nc;
+            (inp.axis_x[first - 1] + inp.axis_x[first]) / 2.0
+        })
+        .collect();
+    Some(super::substructure::Split {
+        cuts_x,
+        cut_shapes: inp.cut_shapes,
+    })
 }
 
 /// One component's reduction into the component cache (`inp.part_cache`), for a scheduler's

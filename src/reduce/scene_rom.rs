@@ -364,6 +364,11 @@ pub fn key_description(scene: &Scene) -> Result<String> {
         "residual_vector_spacing": scene.rom.residual_vector_spacing,
         "cylinders": scene.rom.cylinders,
     });
+    // only when substructured, so one-piece builds keep the keys of earlier builds
+    if scene.rom.crankcase_components > 1 {
+        d["crankcase_components"] = serde_json::json!(scene.rom.crankcase_components);
+        d["cut_shapes"] = serde_json::json!(scene.rom.cut_shapes);
+    }
     // only when present, so the keys of dry scenes stay those of earlier builds
     let surface = liner_surface_mass(scene);
     if !surface.is_empty() {
@@ -432,6 +437,8 @@ pub fn rom_inputs<'a>(scene: &Scene, em: &'a EngineMeshes, keep_bases: bool) -> 
         cutoff_hz: scene.rom.cutoff_hz,
         harmonics: scene.rom.harmonics,
         residual_vector_spacing: scene.rom.residual_vector_spacing,
+        crankcase_components: scene.rom.crankcase_components,
+        cut_shapes: scene.rom.cut_shapes,
         keep_bases,
         part_cache: None,
     }

@@ -93,6 +93,10 @@ pub struct Rom {
     pub harmonics: usize,
     /// Residual-vector pattern spacing in bore-line nodes (0: none).
     pub residual_vector_spacing: usize,
+    /// Components the crankcase is cut into (1: one piece).
+    pub crankcase_components: usize,
+    /// Shapes per cut between crankcase components.
+    pub cut_shapes: usize,
     /// Modelled cylinders, 1-based, ascending.
     pub cylinders: Vec<usize>,
     pub cache_dir: PathBuf,

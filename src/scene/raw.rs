@@ -217,6 +217,15 @@ pub struct RawRom {
     /// docs/physics.md), every node at ~1.5x the modes and cycle time of every 2nd node.
     #[serde(default = "default_residual_spacing")]
     pub residual_vector_spacing: usize,
+    /// Components the crankcase is cut into for its reduction (substructuring), 1..=cylinders:
+    /// planes midway between bores, the cylinders shared out evenly. 1 reduces it in one piece;
+    /// more bound the memory by one component's factor (a production-size crankcase).
+    #[serde(default = "default_components")]
+    pub crankcase_components: usize,
+    /// Shapes carried by each cut between crankcase components (the lowest eigenvectors of the
+    /// cut's block of the crankcase's matrices), >= 1; cuts with fewer DOFs keep all of them.
+    #[serde(default = "default_cut_shapes")]
+    pub cut_shapes: usize,
     /// Cylinders whose liners are modelled (1-based); empty = all.
     #[serde(default)]
     pub cylinders: Vec<usize>,
@@ -232,6 +241,8 @@ impl Default for RawRom {
             cutoff_factor: default_cutoff_factor(),
             interface_harmonics: default_harmonics(),
             residual_vector_spacing: default_residual_spacing(),
+            crankcase_components: default_components(),
+            cut_shapes: default_cut_shapes(),
             cylinders: Vec::new(),
             cache_dir: default_cache_dir(),
         }
@@ -242,6 +253,12 @@ fn default_band() -> f64 {
 }
 fn default_cutoff_factor() -> f64 {
     2.5
+}
+fn default_components() -> usize {
+    1
+}
+fn default_cut_shapes() -> usize {
+    200
 }
 fn default_residual_spacing() -> usize {
     2

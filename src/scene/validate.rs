@@ -298,11 +298,25 @@ pub(super) fn validate_rom(
             format!("cylinder {bad} does not exist (1..={})", engine.cylinders),
         ));
     }
+    if r.crankcase_components == 0 || r.crankcase_components > engine.cylinders {
+        return Err(c.err(
+            "rom.crankcase_components",
+            format!(
+                "must be 1..={} (the crankcase is cut midway between bores), got {}",
+                engine.cylinders, r.crankcase_components
+            ),
+        ));
+    }
+    if r.cut_shapes == 0 {
+        return Err(c.err("rom.cut_shapes", "must be at least 1, got 0".to_string()));
+    }
     let rom = Rom {
         band_hz,
         cutoff_hz: band_hz * r.cutoff_factor,
         harmonics: r.interface_harmonics,
         residual_vector_spacing: r.residual_vector_spacing,
+        crankcase_components: r.crankcase_components,
+        cut_shapes: r.cut_shapes,
         cylinders,
         cache_dir: base.join(&r.cache_dir),
     };
