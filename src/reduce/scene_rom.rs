@@ -284,10 +284,13 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
     // a mesh from a file is sized only once read: the engine model it makes is checked now
     if imported {
         let cylinders = axis_x.len();
-        let est = budget::rom_parts(
+        let est = budget::rom_split(
             3.0 * cm.nodes.len() as f64,
             3.0 * lm.nodes.len() as f64,
             (cylinders * budget::interface_columns(scene.rom.harmonics)) as f64,
+            cylinders,
+            scene.rom.crankcase_components,
+            scene.rom.cut_shapes,
         );
         Limits::of(scene).check(scene, &est)?;
     }

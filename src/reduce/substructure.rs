@@ -26,8 +26,8 @@
 //! K_r = T^T K_A T, M_r = T^T M_A T.
 
 use super::craig_bampton::{
-    gram_cut, symmetrise, CbSettings, CbStats, InterfaceBlock, Load, Output, Part,
-    PartReduction, ReduceError,
+    gram_cut, symmetrise, CbSettings, CbStats, InterfaceBlock, Load, Output, Part, PartReduction,
+    ReduceError,
 };
 use super::part_cache::{reduce_cached, PartCacheError, Source};
 use crate::fem::dofs::{DofMap, FIXED};
@@ -137,7 +137,11 @@ fn sub_mesh(mesh: &Mesh, keep: &[bool]) -> (Mesh, Vec<usize>) {
 /// cuts on its sides) and each cut's nodes (part numbering, ascending). Refused when a slab is
 /// empty, two cuts share a node (slabs thinner than an element) or a cut is empty (the part
 /// falls apart).
-fn split_mesh(part: &str, mesh: &Mesh, cuts_x: &[f64]) -> Result<(Vec<Component>, Vec<Vec<usize>>), ReduceError> {
+fn split_mesh(
+    part: &str,
+    mesh: &Mesh,
+    cuts_x: &[f64],
+) -> Result<(Vec<Component>, Vec<Vec<usize>>), ReduceError> {
     let slabs = element_slabs(mesh, cuts_x);
     let nc = cuts_x.len() + 1;
     let mut comps = Vec::with_capacity(nc);
@@ -178,7 +182,11 @@ fn split_mesh(part: &str, mesh: &Mesh, cuts_x: &[f64]) -> Result<(Vec<Component>
             let comp = &mut comps[c];
             let local: Vec<usize> = cut
                 .iter()
-                .map(|&n| comp.nodes.binary_search(&n).expect("cut node in both sides"))
+                .map(|&n| {
+                    comp.nodes
+                        .binary_search(&n)
+                        .expect("cut node in both sides")
+                })
                 .collect();
             comp.mesh.node_sets.insert(cut_set(j), local);
         }
@@ -186,9 +194,32 @@ fn split_mesh(part: &str, mesh: &Mesh, cuts_x: &[f64]) -> Result<(Vec<Component>
     Ok((comps, cuts))
 }
 
+/// Element layers on each side of a cut in the slab its shapes come from. Measured on the
+/// default engine cut into 3 components with 200 shapes per cut (lowest system eigenvalue
+/// against the one-piece reduction): 1 layer 2.0e-3, 3 layers 2.0e-4, 5 layers 2.0e-4 at
+/// twice the cost, 8 layers 1.6e-4 (benches/RESULTS.md).
+const SLAB_LAYERS: usize = 3;
+
+/// The elements within `layers` element layers of the nodes flagged `on_cut`.
+fn slab_elements(mesh: &Mesh, on_cut: &[bool], layers: usize) -> Vec<bool> {
+    let mut near = on_cut.to_vec();
+    let mut keep = vec![false; mesh.num_elements()];
+    for _ in 0..layers {
+        for (e, (_, nodes)) in mesh.elements().enumerate() {
+            keep[e] |= nodes.iter().any(|&n| near[n]);
+        }
+        for (e, (_, nodes)) in mesh.elements().enumerate() {
+            if keep[e] {
+                nodes.iter().for_each(|&n| near[n] = true);
+            }
+        }
+    }
+    keep
+}
+
 /// The shapes of one cut (3 rows per cut node, in `cut` order): the traces on the cut of the
-/// lowest `count` free modes of the slab of elements touching it (both sides; the part's fixed
-/// sets held), orthonormalised (an SVD, directions below 1e-8 of the largest dropped) and each
+/// lowest `count` free modes of the slab of [`SLAB_LAYERS`] element layers either side of it
+/// (the part's fixed sets held), orthonormalised (an SVD, directions below 1e-8 of the largest dropped) and each
 /// scaled to a largest entry of 1. The slab's rigid motions give the cut's rigid motions
 /// exactly; its membrane and bending modes give smooth fields that respect the cut's
 /// connectivity (separate pieces move on their own), ordered by stiffness as the part sees
@@ -197,17 +228,19 @@ fn cut_shapes(p: &Part<'_>, cut: &[usize], count: usize) -> Result<Mat<f64>, Red
     let mesh = p.mesh;
     let mut on_cut = vec![false; mesh.nodes.len()];
     cut.iter().for_each(|&n| on_cut[n] = true);
-    let keep: Vec<bool> = mesh
-        .elements()
-        .map(|(_, nodes)| nodes.iter().any(|&n| on_cut[n]))
-        .collect();
+    let keep = slab_elements(mesh, &on_cut, SLAB_LAYERS);
     let (slab, nodes) = sub_mesh(mesh, &keep);
-    let fix: Vec<String> = p.fix.iter().filter(|s| slab.node_set(s).is_some()).cloned().collect();
+    let fix: Vec<String> = p
+        .fix
+        .iter()
+        .filter(|s| slab.node_set(s).is_some())
+        .cloned()
+        .collect();
     let err_model = |source| ReduceError::Model {
         part: p.name.to_string(),
         source,
     };
-    let mut model = FeModel::build_with(slab, p.material, &fix, &[]).map_err(err_model)?;
+    let model = FeModel::build_with(slab, p.material, &fix, &[]).map_err(err_model)?;
     let local: Vec<usize> = cut
         .iter()
         .map(|&c| nodes.binary_search(&c).expect("cut node in its slab"))
@@ -230,20 +263,36 @@ fn cut_shapes(p: &Part<'_>, cut: &[usize], count: usize) -> Result<Mat<f64>, Red
     }
     // a shift below the slab's lowest elastic mode: 1e-6 of its mean eigenvalue trace(K)/trace(M)
     let km = &model.km;
-    let diag = |v: &[f64]| km.pattern.lower_entries(v).filter(|e| e.0 == e.1).map(|e| e.2).sum::<f64>();
+    let diag = |v: &[f64]| {
+        km.pattern
+            .lower_entries(v)
+            .filter(|e| e.0 == e.1)
+            .map(|e| e.2)
+            .sum::<f64>()
+    };
     let sigma = -1e-6 * diag(&km.k) / diag(&km.m);
+    let t = Instant::now();
     let n = model.n_free();
-    let sol = model.modes(count, sigma, 8).map_err(|e| {
-        other(p.name, format!("substructuring: the cut shapes' eigen-solve failed: {e}"))
-    })?;
-    let v = &sol.modes.vectors;
+    let llt = model
+        .analysis
+        .llt(&km.pattern, &km.shifted(sigma))
+        .map_err(|e| err_model(e.into()))?;
+    let x = low_subspace(&km.pattern, &km.m, &llt, n, count);
+    log::info!(
+        "[{}] cut shapes: slab of {n} DOFs, {count} vectors in {:.2} s",
+        p.name,
+        t.elapsed().as_secs_f64()
+    );
     let traces = Mat::from_fn(3 * cut.len(), count, |r, j| {
         pairs
             .binary_search_by_key(&r, |&(row, _)| row)
-            .map_or(0.0, |k| v[j * n + pairs[k].1])
+            .map_or(0.0, |k| x[(pairs[k].1, j)])
     });
     let svd = traces.thin_svd().map_err(|e| {
-        other(p.name, format!("substructuring: the cut shapes' SVD failed: {e:?}"))
+        other(
+            p.name,
+            format!("substructuring: the cut shapes' SVD failed: {e:?}"),
+        )
     })?;
     let s = svd.S().column_vector();
     let smax = (0..s.nrows()).map(|i| s[i]).fold(0.0f64, f64::max);
@@ -257,6 +306,39 @@ fn cut_shapes(p: &Part<'_>, cut: &[usize], count: usize) -> Result<Mat<f64>, Red
         }
     }
     Ok(psi)
+}
+
+/// Passes of [`low_subspace`]: each damps a mode's share by its eigenvalue's ratio to the
+/// block's, so the span settles on the lowest modes within a few.
+const SUBSPACE_PASSES: usize = 5;
+
+/// A basis of about the lowest `count` modes of (K, M) (n DOFs): subspace iteration
+/// X <- (K - sigma M)^-1 M X from a fixed pseudo-random start, [`SUBSPACE_PASSES`] passes, each
+/// block solved in panels of 64 columns on both cores and orthonormalised (QR). Only the span
+/// is wanted (the traces keep all its directions), not converged eigenvectors: a block method
+/// needs a tenth of the solve cost per vector of Lanczos and none of its O(n ncv^2) work.
+fn low_subspace(
+    pattern: &crate::linalg::sparse::Pattern,
+    m: &[f64],
+    llt: &crate::linalg::factor::Llt<'_>,
+    n: usize,
+    count: usize,
+) -> Mat<f64> {
+    use rayon::prelude::*;
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut x = Mat::from_fn(n, count, |_, _| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    });
+    for _ in 0..SUBSPACE_PASSES {
+        let mut y = Mat::<f64>::zeros(n, count);
+        pattern.mul_dense(m, x.as_ref(), y.as_mut());
+        y.par_col_chunks_mut(64).for_each(|p| llt.solve_in_place(p));
+        x = y.qr().compute_thin_Q();
+    }
+    x
 }
 
 /// What a component's reduction reads, owned (names, remapped sets, loads and outputs) with
@@ -275,11 +357,9 @@ struct ComponentPart {
 
 /// The first component holding all of `nodes` (part numbering).
 fn home(comps: &[Component], nodes: impl Iterator<Item = usize> + Clone) -> Option<usize> {
-    comps.iter().position(|c| {
-        nodes
-            .clone()
-            .all(|n| c.nodes.binary_search(&n).is_ok())
-    })
+    comps
+        .iter()
+        .position(|c| nodes.clone().all(|n| c.nodes.binary_search(&n).is_ok()))
 }
 
 /// Distributes the part's interfaces, loads and outputs over the components (each to the
@@ -322,7 +402,10 @@ fn component_parts(
     }
     for (k, l) in p.loads.iter().enumerate() {
         let c = home(comps, l.entries.iter().map(|e| e.0)).ok_or_else(|| {
-            other(p.name, format!("substructuring: load '{}' straddles a cut plane", l.name))
+            other(
+                p.name,
+                format!("substructuring: load '{}' straddles a cut plane", l.name),
+            )
         })?;
         out[c].loads.push(Load {
             name: l.name.clone(),
@@ -397,12 +480,14 @@ pub fn reduce_split(
         reductions.push(r);
     }
     let assembled = assemble(p, &cparts, &reductions, &cut_psi);
-    let dofs = DofMap::with_fixed_sets(p.mesh, p.fix).map_err(|e| {
-        other(part, format!("substructuring: {e}"))
-    })?;
+    let dofs = DofMap::with_fixed_sets(p.mesh, p.fix)
+        .map_err(|e| other(part, format!("substructuring: {e}")))?;
     let mut r = second_level(part, assembled, settings.cutoff_hz, dofs)?;
     r.stats.seconds = t0.elapsed().as_secs_f64();
-    r.stats.interior_dofs = reductions.iter().map(|c| c.stats.interior_dofs).sum::<usize>()
+    r.stats.interior_dofs = reductions
+        .iter()
+        .map(|c| c.stats.interior_dofs)
+        .sum::<usize>()
         + cuts.iter().map(|c| 3 * c.len()).sum::<usize>();
     log::info!(
         "[{part}] substructured: {} coordinates ({} constraint, {} modes, {} attachments) in {:.2} s",
@@ -412,7 +497,11 @@ pub fn reduce_split(
         r.stats.attachment_modes,
         r.stats.seconds
     );
-    let source = if all_cached { Source::Cached } else { Source::Reduced };
+    let source = if all_cached {
+        Source::Cached
+    } else {
+        Source::Reduced
+    };
     Ok((r, source))
 }
 
@@ -438,7 +527,12 @@ fn assemble(
     // global columns of every interface block (part's, then cuts')
     let mut block_cols = Vec::new();
     let mut next = 0;
-    for w in p.interfaces.iter().map(|b| b.psi.ncols()).chain(cut_psi.iter().map(|m| m.ncols())) {
+    for w in p
+        .interfaces
+        .iter()
+        .map(|b| b.psi.ncols())
+        .chain(cut_psi.iter().map(|m| m.ncols()))
+    {
         block_cols.push(next..next + w);
         next += w;
     }
@@ -498,7 +592,14 @@ fn assemble(
 /// C = A^T B on both cores with a split that does not depend on the thread count.
 fn atb(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let mut c = Mat::<f64>::zeros(a.ncols(), b.ncols());
-    faer::linalg::matmul::matmul(c.as_mut(), faer::Accum::Replace, a.transpose(), b, 1.0, faer::Par::rayon(0));
+    faer::linalg::matmul::matmul(
+        c.as_mut(),
+        faer::Accum::Replace,
+        a.transpose(),
+        b,
+        1.0,
+        faer::Par::rayon(0),
+    );
     c
 }
 
@@ -522,11 +623,20 @@ fn second_level(
     };
     let (k_ii, k_ib) = (sub(&a.k, nb, ni, nb, ni), sub(&a.k, nb, ni, 0, nb));
     let (m_ii, m_ib) = (sub(&a.m, nb, ni, nb, ni), sub(&a.m, nb, ni, 0, nb));
-    let fail = |what: &str| other(part, format!("substructuring: the assembled components' {what}"));
+    let fail = |what: &str| {
+        other(
+            part,
+            format!("substructuring: the assembled components' {what}"),
+        )
+    };
     // K_ii^-1 on the unit-mass-scaled interior (coordinates of unrelated scales)
-    let d: Vec<f64> = (0..ni).map(|i| 1.0 / m_ii[(i, i)].max(f64::MIN_POSITIVE).sqrt()).collect();
+    let d: Vec<f64> = (0..ni)
+        .map(|i| 1.0 / m_ii[(i, i)].max(f64::MIN_POSITIVE).sqrt())
+        .collect();
     let ks = Mat::from_fn(ni, ni, |i, j| d[i] * k_ii[(i, j)] * d[j]);
-    let kchol = ks.llt(Side::Lower).map_err(|_| fail("interior stiffness is not positive definite (the interfaces do not hold it)"))?;
+    let kchol = ks.llt(Side::Lower).map_err(|_| {
+        fail("interior stiffness is not positive definite (the interfaces do not hold it)")
+    })?;
     let solve = |rhs: &Mat<f64>| -> Mat<f64> {
         let mut x = Mat::from_fn(ni, rhs.ncols(), |i, j| d[i] * rhs[(i, j)]);
         use faer::linalg::solvers::SolveCore;
@@ -551,7 +661,9 @@ fn second_level(
     // attachment candidates: the loads' interior rows, then the interface inertia M_ib + M_ii X
     let nl = a.loads.ncols();
     let mut f = Mat::<f64>::zeros(ni, nl + nb);
-    f.as_mut().subcols_mut(0, nl).copy_from(a.loads.as_ref().subrows(nb, ni));
+    f.as_mut()
+        .subcols_mut(0, nl)
+        .copy_from(a.loads.as_ref().subrows(nb, ni));
     let inertia = &m_ib + ab(m_ii.as_ref(), x.as_ref());
     f.as_mut().subcols_mut(nl, nb).copy_from(&inertia);
     let mut u = solve(&f);
@@ -573,7 +685,9 @@ fn second_level(
     }
     t.as_mut().submatrix_mut(nb, 0, ni, nb).copy_from(&x);
     t.as_mut().submatrix_mut(nb, nb, ni, nk).copy_from(&phi_k);
-    t.as_mut().submatrix_mut(nb, nb + nk, ni, na).copy_from(&phi_a);
+    t.as_mut()
+        .submatrix_mut(nb, nb + nk, ni, na)
+        .copy_from(&phi_a);
     let mut k = atb(t.as_ref(), ab(a.k.as_ref(), t.as_ref()).as_ref());
     let mut m = atb(t.as_ref(), ab(a.m.as_ref(), t.as_ref()).as_ref());
     symmetrise(&mut k);
@@ -612,7 +726,9 @@ fn orthonormalise(part: &str, m: &Mat<f64>, u: &Mat<f64>) -> Result<Mat<f64>, Re
     }
     let mut gram = atb(u.as_ref(), ab(m.as_ref(), u.as_ref()).as_ref());
     symmetrise(&mut gram);
-    let d: Vec<f64> = (0..nu).map(|j| 1.0 / gram[(j, j)].max(f64::MIN_POSITIVE).sqrt()).collect();
+    let d: Vec<f64> = (0..nu)
+        .map(|j| 1.0 / gram[(j, j)].max(f64::MIN_POSITIVE).sqrt())
+        .collect();
     let gram = Mat::from_fn(nu, nu, |i, j| d[i] * gram[(i, j)] * d[j]);
     let (s, v) = super::engine::symmetric_evd(gram.as_ref())
         .map_err(|e| other(part, format!("substructuring: attachment modes: {e}")))?;
@@ -646,7 +762,9 @@ mod tests {
         let (comps, cuts) = split_mesh("bar", &mesh, &[0.2]).unwrap();
         assert_eq!(comps.len(), 2);
         assert_eq!(cuts[0].len(), 4);
-        assert!(cuts[0].iter().all(|&n| (mesh.nodes[n][0] - 0.2).abs() < 1e-12));
+        assert!(cuts[0]
+            .iter()
+            .all(|&n| (mesh.nodes[n][0] - 0.2).abs() < 1e-12));
         assert_eq!(comps[0].nodes.len(), 12);
         assert_eq!(comps[1].mesh.node_set(&cut_set(0)).unwrap().len(), 4);
         // planes closer than an element are refused

@@ -215,21 +215,60 @@ pub fn part_reduction_bytes(dofs: f64, columns: f64) -> f64 {
         + 8.0 * dofs * columns
 }
 
-/// The ROM build from its parts' DOFs: the liner and the crankcase are reduced at once, so
-/// their peaks add; the crankcase's basis holds twice its interface columns (constraint modes
-/// and their inertia loads) plus modes and loads. Time grows as (n_c + n_l)^1.5 from the
-/// default engine's build.
+/// The ROM build from its parts' DOFs: their peaks add (conservative: the parts are reduced one
+/// after the other, but the measured peak exceeds either part's alone); the crankcase's basis holds twice its interface
+/// columns (constraint modes and their inertia loads) plus modes and loads. Time grows as
+/// (n_c + n_l)^1.5 from the default engine's build.
 pub fn rom_parts(crankcase_dofs: f64, liner_dofs: f64, interface_cols: f64) -> Estimate {
-    let cc = part_reduction_bytes(crankcase_dofs, 2.0 * interface_cols + 100.0);
+    rom_split(crankcase_dofs, liner_dofs, interface_cols, 1, 1, 0)
+}
+
+/// As [`rom_parts`] with the crankcase of `cylinders` cut into `components`
+/// (`reduce::substructure`), `cut_shapes` per cut: the crankcase's peak is that of its largest
+/// component (ceil(cylinders / components) cylinders' share of its DOFs and interface columns,
+/// plus two cuts' shapes) and of the dense assembly of the components (n_A^2, about six
+/// matrices of it); time adds over the components.
+pub fn rom_split(
+    crankcase_dofs: f64,
+    liner_dofs: f64,
+    interface_cols: f64,
+    cylinders: usize,
+    components: usize,
+    cut_shapes: usize,
+) -> Estimate {
+    let (cyl, n) = (cylinders.max(1) as f64, components.max(1) as f64);
+    let share = (cyl / n).ceil() / cyl;
+    let cuts = if components > 1 {
+        2.0 * cut_shapes as f64
+    } else {
+        0.0
+    };
+    let piece_dofs = crankcase_dofs * share;
+    let piece_cols = interface_cols * share + cuts;
+    let piece = part_reduction_bytes(piece_dofs, 2.0 * piece_cols + 100.0);
+    let n_a = if components > 1 {
+        2.0 * interface_cols + (n - 1.0) * cut_shapes as f64
+    } else {
+        0.0
+    };
+    let cc = piece + 6.0 * 8.0 * n_a * n_a;
     let liner = part_reduction_bytes(liner_dofs, 400.0);
-    let n = crankcase_dofs + liner_dofs;
+    let t = |dofs: f64| REF_ROM_SECONDS * (dofs / REF_ROM_DOFS).powf(1.5);
+    let split = if components > 1 {
+        format!(
+            ", in {components} components of about {} DOFs",
+            num(piece_dofs.round())
+        )
+    } else {
+        String::new()
+    };
     Estimate {
         what: "the ROM build",
         memory: cc + liner,
-        seconds: REF_ROM_SECONDS * (n / REF_ROM_DOFS).powf(1.5),
-        keys: "liner.mesh.* / crankcase.mesh.* (element counts and sizes), engine.cylinders or rom.interface_harmonics",
+        seconds: n * t(piece_dofs) + t(liner_dofs),
+        keys: "rom.crankcase_components (the crankcase cut into up to engine.cylinders components: memory bounded by one), liner.mesh.* / crankcase.mesh.* (element counts and sizes) or rom.interface_harmonics",
         detail: format!(
-            "crankcase {} DOFs, liner {} DOFs, {} interface columns",
+            "crankcase {} DOFs{split}, liner {} DOFs, {} interface columns",
             num(crankcase_dofs.round()),
             num(liner_dofs.round()),
             num(interface_cols)
@@ -238,17 +277,20 @@ pub fn rom_parts(crankcase_dofs: f64, liner_dofs: f64, interface_cols: f64) -> E
 }
 
 /// The ROM build of a scene with generated meshes, from its parts' estimated DOFs
-/// ([`rom_parts`]).
+/// ([`rom_split`]).
 pub fn rom_build(scene: &Scene) -> Option<Estimate> {
     let (cc, liner) = part_dofs(scene)?;
     let cylinders = scene.crankcase.as_ref().map_or(0, |c| match &c.source {
         CrankcaseSource::Parametric { geometry, .. } => geometry.cylinders,
         CrankcaseSource::File(_) => 0,
     });
-    Some(rom_parts(
+    Some(rom_split(
         cc,
         liner,
         (cylinders * interface_columns(scene.rom.harmonics)) as f64,
+        cylinders,
+        scene.rom.crankcase_components,
+        scene.rom.cut_shapes,
     ))
 }
 
