@@ -149,11 +149,12 @@ enum Command {
         json: bool,
         #[command(flatten)]
         cache: CacheArgs,
-        /// Reduce only component I of the engine's N = 2 (1 liner, 2 crankcase) into the
-        /// component cache and stop: one task of a job array; a later `rom` assembles the
-        /// engine from the cached components in seconds. `auto` takes I/N from a Slurm job
+        /// Reduce only component I of the engine's N into the component cache and stop: one
+        /// task of a job array; a later `rom` assembles the engine from the cached components
+        /// in seconds. N = 2 (1 liner, 2 crankcase), or 1 + rom.crankcase_components when the
+        /// crankcase is substructured (2.. its components). `auto` takes I/N from a Slurm job
         /// array (SLURM_ARRAY_TASK_ID/MIN/MAX) or a Kubernetes Indexed Job
-        /// (JOB_COMPLETION_INDEX, N = 2).
+        /// (JOB_COMPLETION_INDEX).
         #[arg(long, value_name = "I/N|auto")]
         component: Option<String>,
     },

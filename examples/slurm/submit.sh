@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Submits a sharded linercav sweep to Slurm as four jobs chained by dependencies:
-#   1. components.sbatch  a 2-task array: the liner's and the crankcase's reductions, each
-#                    into the shared component cache (`linercav rom --component auto`),
+#   1. components.sbatch  an array of the engine's components (the liner, the crankcase or
+#                    each of its rom.crankcase_components), each reduced into the shared
+#                    component cache (`linercav rom --component auto`),
 #   2. rom.sbatch    assembles the engine ROM from the cached components (seconds),
 #   3. shard.sbatch  an array job, one task per shard (`linercav sweep` takes its shard from
 #                    SLURM_ARRAY_TASK_ID/MIN/MAX), each writing part-I-of-N.json,
@@ -14,6 +15,8 @@
 #               (or --vary KEY=V1,V2 ...); arguments must not contain spaces.
 # environment (all optional):
 #   SHARDS=10          number of array tasks
+#   COMPONENTS=2       component tasks: 2, or 1 + rom.crankcase_components when the scene
+#                      (or SETS) substructures the crankcase
 #   CPUS=2             CPUs per shard (the shard's runs go in parallel on them)
 #   SETS="K=V K2=V2"   fixed scene overrides for the ROM and every run
 #   WORK=OUT_DIR.work  shared directory (all nodes): ROM cache, parts, logs
@@ -23,7 +26,7 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 if [ $# -lt 3 ]; then
-  sed -n '2,25p' "$0" >&2
+  sed -n '2,28p' "$0" >&2
   exit 2
 fi
 scene=$(realpath "$1")
@@ -39,7 +42,7 @@ export SCENE=$scene CACHE=$work/cache PARTS=$work/parts OUT=$out
 export SETS_ARGS="${sets[*]:-}" SWEEP_ARGS="$*"
 common=(--parsable --chdir "$work" ${SBATCH_ARGS:-})
 components=$(sbatch "${common[@]}" --job-name linercav-components --cpus-per-task "${CPUS:-2}" \
-  --array 1-2 --output "$work/logs/component-%A_%a.out" "$here/components.sbatch")
+  --array "1-${COMPONENTS:-2}" --output "$work/logs/component-%A_%a.out" "$here/components.sbatch")
 rom=$(sbatch "${common[@]}" --job-name linercav-rom --cpus-per-task "${CPUS:-2}" \
   --dependency "afterok:$components" --output "$work/logs/rom-%j.out" "$here/rom.sbatch")
 array=$(sbatch "${common[@]}" --job-name linercav-shard --cpus-per-task "${CPUS:-2}" \

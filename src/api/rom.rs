@@ -224,13 +224,14 @@ pub fn reduce_component(
     arg: &str,
 ) -> Result<crate::reduce::scene_rom::ComponentDone> {
     use crate::scene::design::Shard;
-    let count = crate::reduce::rom::COMPONENTS.len();
+    let names = crate::reduce::rom::component_names(scene.rom.crankcase_components);
+    let count = names.len();
     let task = if arg == "auto" {
         Shard::from_env(&|k| std::env::var(k).ok(), Some(count))?.ok_or_else(|| {
             crate::scene::SceneError::Field {
                 path: scene.path.clone(),
                 key: "--component auto".into(),
-                msg: "no scheduler task in the environment (SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX): give --component I/2".into(),
+                msg: format!("no scheduler task in the environment (SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX): give --component I/{count}"),
             }
         })?
     } else {
@@ -241,7 +242,8 @@ pub fn reduce_component(
             path: scene.path.clone(),
             key: "--component".into(),
             msg: format!(
-                "the engine has {count} components (liner, crankcase), the task names {} (an array of {count} tasks is needed)",
+                "the engine has {count} components ({}), the task names {} (an array of {count} tasks is needed)",
+                names.join(", "),
                 task.count
             ),
         }

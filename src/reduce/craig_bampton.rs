@@ -66,6 +66,10 @@ pub enum ReduceError {
     },
     #[error("part '{part}': {msg}")]
     Other { part: String, msg: String },
+    /// A substructuring the part's mesh or the scene does not allow (cut planes, interfaces
+    /// across them, full bases asked of a substructured part): the user can change it.
+    #[error("part '{part}': substructuring (rom.crankcase_components): {msg}")]
+    Substructure { part: String, msg: String },
     #[error("part '{part}': {source}")]
     Eigen {
         part: String,

@@ -192,6 +192,80 @@ pub fn key(p: &Part<'_>, settings: &CbSettings) -> String {
     h.0.finalize().to_hex()[..32].to_string()
 }
 
+/// The cache key of data computed from a mesh alone (a substructuring cut's shapes): the
+/// format, `name`, the mesh (nodes, elements, materials, every node set), the material, the
+/// fixed sets and the method's numbers `extra` (32 hex characters).
+pub fn mesh_key(
+    name: &str,
+    mesh: &crate::mesh::Mesh,
+    material: &crate::fem::material::Elastic,
+    fix: &[String],
+    extra: &[f64],
+) -> String {
+    let p = Part {
+        name,
+        mesh,
+        material,
+        surface: &[],
+        fix,
+        interfaces: &[],
+        loads: &[],
+        outputs: &[],
+    };
+    let mut h = KeyHasher(blake3::Hasher::new());
+    h.str(&key(
+        &p,
+        &CbSettings {
+            cutoff_hz: 0.0,
+            keep_basis: false,
+        },
+    ));
+    h.usize(mesh.node_sets.len());
+    for name in mesh.node_sets.keys() {
+        h.set(&p, name);
+    }
+    h.floats(extra);
+    h.0.finalize().to_hex()[..32].to_string()
+}
+
+/// A dense matrix computed from a mesh (a cut's shapes), as stored.
+#[derive(Serialize, Deserialize)]
+pub struct StoredMatrix(Dense);
+
+impl Entry for StoredMatrix {
+    const MAGIC: &'static [u8; 8] = b"LCAVMAT\0";
+    const FORMAT: u32 = PART_FORMAT;
+    fn validate(&self) -> Result<(), String> {
+        if self.0.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err("non-finite values in a stored matrix".into())
+        }
+    }
+}
+
+/// The matrix of cache file `file` under `key` in `dir` when a valid entry exists, else made by
+/// `make` (and stored when `dir` is given). A corrupt entry is reported and replaced.
+pub fn cached_matrix(
+    dir: Option<&Path>,
+    file: &str,
+    key: &str,
+    make: impl FnOnce() -> Result<Mat<f64>, super::craig_bampton::ReduceError>,
+) -> Result<(Mat<f64>, Source), PartCacheError> {
+    let Some(dir) = dir else {
+        return Ok((make()?, Source::Reduced));
+    };
+    let path = dir.join(format!("{file}-{key}.bin"));
+    match cache::load::<StoredMatrix>(&path, key)? {
+        Lookup::Hit(stored) => return Ok((to_faer(&stored.0), Source::Cached)),
+        Lookup::Corrupt(reason) => log::warn!("{}: {reason}; computing it again", path.display()),
+        Lookup::Miss => {}
+    }
+    let m = make()?;
+    cache::store(&path, key, &StoredMatrix(from_faer(&m)))?;
+    Ok((m, Source::Reduced))
+}
+
 /// Path of a part's entry in the cache directory.
 pub fn path_for(dir: &Path, part: &str, key: &str) -> PathBuf {
     dir.join(format!("part-{part}-{key}.bin"))

@@ -255,7 +255,9 @@ impl RomError {
         match self {
             RomError::Set { .. } | RomError::PartCache(_) => 2,
             RomError::Reduce(ReduceError::Interface { .. }) => 2,
-            RomError::Reduce(ReduceError::TooManyModes { .. }) => 2,
+            RomError::Reduce(
+                ReduceError::TooManyModes { .. } | ReduceError::Substructure { .. },
+            ) => 2,
             RomError::Reduce(ReduceError::Model {
                 source: ModelError::Set(_) | ModelError::NoDofs | ModelError::Surface(_),
                 ..
@@ -970,8 +972,21 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     })
 }
 
-/// The engine's components, in the order of their task indices (1-based in `rom --component`).
+/// The engine's parts, liner and crankcase.
 pub const COMPONENTS: [&str; 2] = ["liner", "crankcase"];
+
+/// The engine's components in the order of their task indices (1-based in `rom --component`):
+/// the liner, then the crankcase, or each of its `crankcase_components` when it is
+/// substructured (`crankcase.1`, ...).
+pub fn component_names(crankcase_components: usize) -> Vec<String> {
+    let mut names = vec![COMPONENTS[0].to_string()];
+    if crankcase_components <= 1 {
+        names.push(COMPONENTS[1].to_string());
+    } else {
+        names.extend((1..=crankcase_components).map(|c| format!("{}.{c}", COMPONENTS[1])));
+    }
+    names
+}
 
 /// What the parts' reductions read besides the inputs: interface fields, loads, outputs.
 struct PartData {
@@ -1047,6 +1062,13 @@ fn reduce_parts(
     progress("reducing the liner");
     let (l, ls) = reduce_cached(&liner, &settings, dir)?;
     progress("reducing the crankcase");
+    if inp.keep_bases && inp.crankcase_components > 1 {
+        return Err(super::craig_bampton::ReduceError::Substructure {
+            part: COMPONENTS[1].into(),
+            msg: "mode shapes on the meshes need the crankcase's full basis, which a substructured reduction does not keep: set rom.crankcase_components = 1 for this command".into(),
+        }
+        .into());
+    }
     let (c, cs) = match crankcase_split(inp) {
         Some(split) => super::substructure::reduce_split(&crankcase, &settings, &split, dir)?,
         None => reduce_cached(&crankcase, &settings, dir)?,
@@ -1059,7 +1081,7 @@ fn reduce_parts(
 /// neighbouring groups.
 fn crankcase_split(inp: &RomInputs<'_>) -> Option<super::substructure::Split> {
     let (n, nc) = (inp.axis_x.len(), inp.crankcase_components);
-    if nc <= 1 || inp.keep_bases {
+    if nc <= 1 {
         return None;
     }
     let cuts_x = (1..nc)
@@ -1075,19 +1097,23 @@ fn crankcase_split(inp: &RomInputs<'_>) -> Option<super::substructure::Split> {
 }
 
 /// One component's reduction into the component cache (`inp.part_cache`), for a scheduler's
-/// task: `index` 0 the liner, 1 the crankcase ([`COMPONENTS`]). A later build finds it there.
+/// task: `index` 0 the liner, then the crankcase or its components ([`component_names`]). A
+/// later build finds it there.
 pub fn reduce_component(
     inp: &RomInputs<'_>,
     index: usize,
 ) -> Result<(PartReduction, Source), RomError> {
     crate::linalg::thread_count_invariant();
     let data = PartData::new(inp)?;
-    let part = &data.parts(inp)[index];
-    Ok(reduce_cached(
-        part,
-        &cb_settings(inp),
-        inp.part_cache.as_deref(),
-    )?)
+    let [liner, crankcase] = data.parts(inp);
+    let (settings, dir) = (cb_settings(inp), inp.part_cache.as_deref());
+    Ok(match (index, crankcase_split(inp)) {
+        (0, _) => reduce_cached(&liner, &settings, dir)?,
+        (_, None) => reduce_cached(&crankcase, &settings, dir)?,
+        (c, Some(split)) => {
+            super::substructure::reduce_one(&crankcase, &settings, &split, dir, c - 1)?
+        }
+    })
 }
 
 /// The liner's output rows (contact DOFs, then points) scattered onto each modelled

@@ -530,8 +530,8 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions, progress: &dyn Fn(&str)) -> R
 /// One component's reduction done for a scheduler's task.
 #[derive(Debug, serde::Serialize)]
 pub struct ComponentDone {
-    /// "liner" or "crankcase".
-    pub component: &'static str,
+    /// "liner", "crankcase" or a crankcase component ("crankcase.2").
+    pub component: String,
     /// Its index among the engine's components (1-based) and their number.
     pub index: usize,
     pub count: usize,
@@ -548,7 +548,7 @@ pub struct ComponentDone {
 /// would keep the result).
 pub fn reduce_component(scene: &Scene, opts: &CacheOptions, index: usize) -> Result<ComponentDone> {
     let t = Instant::now();
-    let names = super::rom::COMPONENTS;
+    let names = super::rom::component_names(scene.rom.crankcase_components);
     if opts.no_cache || index == 0 || index > names.len() {
         return Err(SceneRomError::Scene(SceneError::Field {
             path: scene.path.clone(),
@@ -574,7 +574,7 @@ pub fn reduce_component(scene: &Scene, opts: &CacheOptions, index: usize) -> Res
     inputs.part_cache = Some(dir);
     let (r, source) = super::rom::reduce_component(&inputs, index - 1)?;
     Ok(ComponentDone {
-        component: names[index - 1],
+        component: names[index - 1].clone(),
         index,
         count: names.len(),
         source,

@@ -65,6 +65,14 @@ fn other(part: &str, msg: String) -> ReduceError {
     }
 }
 
+/// A substructuring the mesh does not allow (exit 2: the scene can change it).
+fn refused(part: &str, msg: String) -> ReduceError {
+    ReduceError::Substructure {
+        part: part.into(),
+        msg,
+    }
+}
+
 /// The slab of each element: the number of cut planes below its centroid's x.
 fn element_slabs(mesh: &Mesh, cuts_x: &[f64]) -> Vec<usize> {
     mesh.elements()
@@ -149,9 +157,12 @@ fn split_mesh(
     for c in 0..nc {
         let keep: Vec<bool> = slabs.iter().map(|&s| s == c).collect();
         if !keep.contains(&true) {
-            return Err(other(
+            return Err(refused(
                 part,
-                format!("substructuring: no element lies in component {} of {nc} (cut planes x = {cuts_x:?} m)", c + 1),
+                format!(
+                    "no element lies in component {} of {nc} (cut planes x = {cuts_x:?} m)",
+                    c + 1
+                ),
             ));
         }
         let (m, nodes) = sub_mesh(mesh, &keep);
@@ -164,18 +175,18 @@ fn split_mesh(
             [_] | [] => {}
             [a, b] if b - a == 1 => cuts[*a].push(n),
             _ => {
-                return Err(other(
+                return Err(refused(
                     part,
-                    format!("substructuring: node {} at {:?} lies in components {:?}: the cut planes x = {cuts_x:?} m are closer than an element", n + 1, mesh.nodes[n], o.iter().map(|c| c + 1).collect::<Vec<_>>()),
+                    format!("node {} at {:?} lies in components {:?}: the cut planes x = {cuts_x:?} m are closer than an element", n + 1, mesh.nodes[n], o.iter().map(|c| c + 1).collect::<Vec<_>>()),
                 ))
             }
         }
     }
     for (j, cut) in cuts.iter().enumerate() {
         if cut.is_empty() {
-            return Err(other(
+            return Err(refused(
                 part,
-                format!("substructuring: the cut at x = {} m crosses no node shared by its two sides (the part would fall apart there)", cuts_x[j]),
+                format!("the cut at x = {} m crosses no node shared by its two sides (the part would fall apart there)", cuts_x[j]),
             ));
         }
         for c in [j, j + 1] {
@@ -192,6 +203,50 @@ fn split_mesh(
         }
     }
     Ok((comps, cuts))
+}
+
+/// The slab a cut's shapes come from: its mesh (own numbering, the part's sets restricted),
+/// its nodes' part indices, the cut's nodes (part numbering) and the part's fixed sets in it.
+struct Slab {
+    mesh: Mesh,
+    nodes: Vec<usize>,
+    cut: Vec<usize>,
+    fix: Vec<String>,
+}
+
+impl Slab {
+    /// The [`SLAB_LAYERS`] element layers either side of `cut` in part `p`.
+    fn of(p: &Part<'_>, cut: &[usize]) -> Self {
+        let mut on_cut = vec![false; p.mesh.nodes.len()];
+        cut.iter().for_each(|&n| on_cut[n] = true);
+        let keep = slab_elements(p.mesh, &on_cut, SLAB_LAYERS);
+        let (mesh, nodes) = sub_mesh(p.mesh, &keep);
+        let fix = p
+            .fix
+            .iter()
+            .filter(|s| mesh.node_set(s).is_some())
+            .cloned()
+            .collect();
+        Self {
+            mesh,
+            nodes,
+            cut: cut.to_vec(),
+            fix,
+        }
+    }
+
+    /// Cache key of the slab's shapes: the slab (mesh, sets, material, fixed sets), its cut's
+    /// nodes, the shape count and the method's constants.
+    fn key(&self, p: &Part<'_>, count: usize) -> String {
+        let cut: Vec<f64> = self
+            .cut
+            .iter()
+            .map(|&n| self.nodes.binary_search(&n).expect("cut node in its slab") as f64)
+            .collect();
+        let mut extra = vec![count as f64, SLAB_LAYERS as f64, SUBSPACE_PASSES as f64];
+        extra.extend(cut);
+        super::part_cache::mesh_key("cut", &self.mesh, p.material, &self.fix, &extra)
+    }
 }
 
 /// Element layers on each side of a cut in the slab its shapes come from. Measured on the
@@ -224,23 +279,14 @@ fn slab_elements(mesh: &Mesh, on_cut: &[bool], layers: usize) -> Vec<bool> {
 /// exactly; its membrane and bending modes give smooth fields that respect the cut's
 /// connectivity (separate pieces move on their own), ordered by stiffness as the part sees
 /// it. A cut with few DOFs keeps all of them (unit shapes): no reduction, exact coupling.
-fn cut_shapes(p: &Part<'_>, cut: &[usize], count: usize) -> Result<Mat<f64>, ReduceError> {
-    let mesh = p.mesh;
-    let mut on_cut = vec![false; mesh.nodes.len()];
-    cut.iter().for_each(|&n| on_cut[n] = true);
-    let keep = slab_elements(mesh, &on_cut, SLAB_LAYERS);
-    let (slab, nodes) = sub_mesh(mesh, &keep);
-    let fix: Vec<String> = p
-        .fix
-        .iter()
-        .filter(|s| slab.node_set(s).is_some())
-        .cloned()
-        .collect();
+fn cut_shapes(p: &Part<'_>, slab: &Slab, count: usize) -> Result<Mat<f64>, ReduceError> {
+    let (nodes, cut, fix) = (&slab.nodes, &slab.cut, &slab.fix);
+    let slab = slab.mesh.clone();
     let err_model = |source| ReduceError::Model {
         part: p.name.to_string(),
         source,
     };
-    let model = FeModel::build_with(slab, p.material, &fix, &[]).map_err(err_model)?;
+    let model = FeModel::build_with(slab, p.material, fix, &[]).map_err(err_model)?;
     let local: Vec<usize> = cut
         .iter()
         .map(|&c| nodes.binary_search(&c).expect("cut node in its slab"))
@@ -254,7 +300,7 @@ fn cut_shapes(p: &Part<'_>, cut: &[usize], count: usize) -> Result<Mat<f64>, Red
             })
         })
         .collect();
-    if pairs.len() <= 2 * count + 16 {
+    if pairs.len() <= count.saturating_mul(2).saturating_add(16) {
         let mut psi = Mat::<f64>::zeros(3 * cut.len(), pairs.len());
         for (c, &(r, _)) in pairs.iter().enumerate() {
             psi[(r, c)] = 1.0;
@@ -392,7 +438,13 @@ fn component_parts(
     for (k, b) in p.interfaces.iter().enumerate() {
         let nodes = p.mesh.node_set(&b.set).unwrap_or(&[]);
         let c = home(comps, nodes.iter().copied()).ok_or_else(|| {
-            other(p.name, format!("substructuring: interface set '{}' straddles a cut plane; place the cuts elsewhere", b.set))
+            refused(
+                p.name,
+                format!(
+                    "interface set '{}' straddles a cut plane; place the cuts elsewhere",
+                    b.set
+                ),
+            )
         })?;
         out[c].interfaces.push(InterfaceBlock {
             set: b.set.clone(),
@@ -401,12 +453,8 @@ fn component_parts(
         out[c].blocks.push(k);
     }
     for (k, l) in p.loads.iter().enumerate() {
-        let c = home(comps, l.entries.iter().map(|e| e.0)).ok_or_else(|| {
-            other(
-                p.name,
-                format!("substructuring: load '{}' straddles a cut plane", l.name),
-            )
-        })?;
+        let c = home(comps, l.entries.iter().map(|e| e.0))
+            .ok_or_else(|| refused(p.name, format!("load '{}' straddles a cut plane", l.name)))?;
         out[c].loads.push(Load {
             name: l.name.clone(),
             entries: l.entries.iter().map(|&(n, f)| (local(c, n), f)).collect(),
@@ -433,6 +481,95 @@ fn component_parts(
     Ok(out)
 }
 
+/// The components of a split part with their reduction inputs: the cuts' shapes come from
+/// the component cache `dir` or are computed (and stored); only the cuts `wanted` (by index)
+/// are computed, the others left without shapes (a task that reduces one component).
+struct Prepared {
+    comps: Vec<Component>,
+    cuts: Vec<Vec<usize>>,
+    cut_psi: Vec<Mat<f64>>,
+    cparts: Vec<ComponentPart>,
+}
+
+fn prepare(
+    p: &Part<'_>,
+    split: &Split,
+    dir: Option<&Path>,
+    wanted: &dyn Fn(usize) -> bool,
+) -> Result<Prepared, PartCacheError> {
+    let t0 = Instant::now();
+    let part = p.name;
+    let (comps, cuts) = split_mesh(part, p.mesh, &split.cuts_x)?;
+    let mut cut_psi = Vec::with_capacity(cuts.len());
+    for (j, cut) in cuts.iter().enumerate() {
+        if !wanted(j) {
+            cut_psi.push(Mat::zeros(3 * cut.len(), 0));
+            continue;
+        }
+        let slab = Slab::of(p, cut);
+        let key = slab.key(p, split.cut_shapes);
+        let file = format!("cut-{part}-{}", j + 1);
+        let (psi, _) = super::part_cache::cached_matrix(dir, &file, &key, || {
+            cut_shapes(p, &slab, split.cut_shapes)
+        })?;
+        cut_psi.push(psi);
+    }
+    log::info!(
+        "[{part}] {} components, cut DOFs {:?}, cut shapes {:?} ({:.2} s)",
+        comps.len(),
+        cuts.iter().map(|c| 3 * c.len()).collect::<Vec<_>>(),
+        cut_psi.iter().map(|m| m.ncols()).collect::<Vec<_>>(),
+        t0.elapsed().as_secs_f64()
+    );
+    let cparts = component_parts(p, &comps, &cut_psi)?;
+    Ok(Prepared {
+        comps,
+        cuts,
+        cut_psi,
+        cparts,
+    })
+}
+
+/// Component `c`'s reduction through the component cache `dir`.
+fn reduce_component(
+    p: &Part<'_>,
+    prep: &Prepared,
+    c: usize,
+    settings: &CbSettings,
+    dir: Option<&Path>,
+) -> Result<(PartReduction, Source), PartCacheError> {
+    let (comp, cp) = (&prep.comps[c], &prep.cparts[c]);
+    let sub = Part {
+        name: &cp.name,
+        mesh: &comp.mesh,
+        material: p.material,
+        surface: p.surface,
+        fix: &cp.fix,
+        interfaces: &cp.interfaces,
+        loads: &cp.loads,
+        outputs: &cp.outputs,
+    };
+    let cb = CbSettings {
+        cutoff_hz: settings.cutoff_hz,
+        keep_basis: false,
+    };
+    reduce_cached(&sub, &cb, dir)
+}
+
+/// One component (`c`, 0-based) of a split part reduced into the component cache `dir` with
+/// the shapes of its own cuts: one task of a component job array; a later
+/// [`reduce_split`] finds it there.
+pub fn reduce_one(
+    p: &Part<'_>,
+    settings: &CbSettings,
+    split: &Split,
+    dir: Option<&Path>,
+    c: usize,
+) -> Result<(PartReduction, Source), PartCacheError> {
+    let prep = prepare(p, split, dir, &|j| j + 1 == c || j == c)?;
+    reduce_component(p, &prep, c, settings, dir)
+}
+
 /// Reduces a part by substructuring (module doc): cut shapes, each component's Craig-Bampton
 /// reduction through the component cache `dir` (keyed by the component's own inputs, its cut
 /// shapes among them), then their assembly and the second Craig-Bampton step. Returns the
@@ -445,41 +582,15 @@ pub fn reduce_split(
 ) -> Result<(PartReduction, Source), PartCacheError> {
     let t0 = Instant::now();
     let part = p.name;
-    let (comps, cuts) = split_mesh(part, p.mesh, &split.cuts_x)?;
-    let cut_psi = cuts
-        .iter()
-        .map(|cut| cut_shapes(p, cut, split.cut_shapes))
-        .collect::<Result<Vec<_>, _>>()?;
-    log::info!(
-        "[{part}] {} components, cut DOFs {:?}, cut shapes {:?} ({:.2} s)",
-        comps.len(),
-        cuts.iter().map(|c| 3 * c.len()).collect::<Vec<_>>(),
-        cut_psi.iter().map(|m| m.ncols()).collect::<Vec<_>>(),
-        t0.elapsed().as_secs_f64()
-    );
-    let cparts = component_parts(p, &comps, &cut_psi)?;
-    let mut reductions = Vec::with_capacity(comps.len());
+    let prep = prepare(p, split, dir, &|_| true)?;
+    let mut reductions = Vec::with_capacity(prep.comps.len());
     let mut all_cached = true;
-    for (comp, cp) in comps.iter().zip(&cparts) {
-        let sub = Part {
-            name: &cp.name,
-            mesh: &comp.mesh,
-            material: p.material,
-            surface: p.surface,
-            fix: &cp.fix,
-            interfaces: &cp.interfaces,
-            loads: &cp.loads,
-            outputs: &cp.outputs,
-        };
-        let cb = CbSettings {
-            cutoff_hz: settings.cutoff_hz,
-            keep_basis: false,
-        };
-        let (r, source) = reduce_cached(&sub, &cb, dir)?;
+    for c in 0..prep.comps.len() {
+        let (r, source) = reduce_component(p, &prep, c, settings, dir)?;
         all_cached &= source == Source::Cached;
         reductions.push(r);
     }
-    let assembled = assemble(p, &cparts, &reductions, &cut_psi);
+    let assembled = assemble(p, &prep.cparts, &reductions, &prep.cut_psi);
     let dofs = DofMap::with_fixed_sets(p.mesh, p.fix)
         .map_err(|e| other(part, format!("substructuring: {e}")))?;
     let mut r = second_level(part, assembled, settings.cutoff_hz, dofs)?;
@@ -488,7 +599,7 @@ pub fn reduce_split(
         .iter()
         .map(|c| c.stats.interior_dofs)
         .sum::<usize>()
-        + cuts.iter().map(|c| 3 * c.len()).sum::<usize>();
+        + prep.cuts.iter().map(|c| 3 * c.len()).sum::<usize>();
     log::info!(
         "[{part}] substructured: {} coordinates ({} constraint, {} modes, {} attachments) in {:.2} s",
         r.size(),
@@ -746,8 +857,8 @@ fn orthonormalise(part: &str, m: &Mat<f64>, u: &Mat<f64>) -> Result<Mat<f64>, Re
 mod tests {
     use super::*;
 
-    /// The cut of a lattice bar: elements split by centroid, the shared node plane found,
-    /// sets restricted in order.
+    /// The cut of a lattice bar: elements split by centroid, the shared node plane found and
+    /// given to both sides; a slab with no element refused.
     #[test]
     fn split_finds_the_shared_plane() {
         let coord = |k: [usize; 3]| [k[0] as f64 * 0.1, k[1] as f64 * 0.1, k[2] as f64 * 0.1];
@@ -765,7 +876,10 @@ mod tests {
         assert!(cuts[0]
             .iter()
             .all(|&n| (mesh.nodes[n][0] - 0.2).abs() < 1e-12));
-        assert_eq!(comps[0].nodes.len(), 12);
+        // lattice indices step 2 per cell (room for mid-side nodes): cells 0.2 m long, the
+        // first component the one cell left of the plane
+        assert_eq!(comps[0].nodes.len(), 8);
+        assert_eq!(comps[1].nodes.len(), 16);
         assert_eq!(comps[1].mesh.node_set(&cut_set(0)).unwrap().len(), 4);
         // planes closer than an element are refused
         assert!(split_mesh("bar", &mesh, &[0.2, 0.21]).is_err());

@@ -218,12 +218,15 @@ pub struct RawRom {
     #[serde(default = "default_residual_spacing")]
     pub residual_vector_spacing: usize,
     /// Components the crankcase is cut into for its reduction (substructuring), 1..=cylinders:
-    /// planes midway between bores, the cylinders shared out evenly. 1 reduces it in one piece;
-    /// more bound the memory by one component's factor (a production-size crankcase).
+    /// planes midway between bores, the cylinders shared out evenly, each component reduced on
+    /// its own. 1 reduces it in one piece; more bound the memory by one component (a
+    /// production-size crankcase) at a cost in accuracy set by `cut_shapes` (default engine in 3
+    /// components: frequencies 1e-4 to 5e-4 from the one-piece build; docs/physics.md).
     #[serde(default = "default_components")]
     pub crankcase_components: usize,
-    /// Shapes carried by each cut between crankcase components (the lowest eigenvectors of the
-    /// cut's block of the crankcase's matrices), >= 1; cuts with fewer DOFs keep all of them.
+    /// Shapes carried by each cut between crankcase components (traces of the lowest free modes
+    /// of a slab around the cut), >= 1; a cut with at most 2 x this + 16 DOFs keeps every DOF
+    /// (exact coupling).
     #[serde(default = "default_cut_shapes")]
     pub cut_shapes: usize,
     /// Cylinders whose liners are modelled (1-based); empty = all.
