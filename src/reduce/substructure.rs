@@ -3,16 +3,18 @@
 //! A part too large to factorise at once (a production crankcase of millions of DOFs) is cut
 //! into components by planes x = x_j across its long axis: every element goes to the slab its
 //! centroid lies in, and the nodes a slab shares with the next form the cut j. Each cut's
-//! displacement is expanded in cut shapes, the lowest eigenvectors of the cut's own block of
-//! the part's matrices (K_ss psi = mu M_ss psi, every other node held: the stiffness of the
-//! cut as the whole part sees it, smooth fields on the cut surface that respect its
-//! connectivity). Both neighbours evaluate the same shapes on the same nodes, so they share
+//! displacement is expanded in cut shapes: the traces on the cut of the lowest free modes of a
+//! slab a few element layers either side of it (the cut's rigid motions exactly, then smooth
+//! fields by stiffness as the part near the cut has it, each piece of the section on its own;
+//! `cut_shapes`). Both neighbours evaluate the same shapes on the same nodes, so they share
 //! the cut coordinates: the coupling is exact in the span of the shapes and converges as
-//! their number grows (measured in tests/rom.rs and benches/RESULTS.md).
+//! their number grows (measured in tests/rom.rs and benches/RESULTS.md). Shapes tried and
+//! dropped there: the eigenvectors of the cut's own block (K_ss, M_ss), which localise on
+//! weakly held nodes, and a thin slab's Schur complement on the cut.
 //!
-//! Each component is reduced by [`craig_bampton::reduce`] on its own (its share of the part's
-//! interfaces, loads, outputs and fixed sets, plus its cuts as interfaces), one after the
-//! other: the peak memory is that of the largest component. Assembled over the shared cut
+//! Each component is reduced by [`super::craig_bampton::reduce`] on its own (its share of
+//! the part's interfaces, loads, outputs and fixed sets, plus its cuts as interfaces), one
+//! after the other: the peak memory is that of the largest component. Assembled over the shared cut
 //! coordinates the components give a model (K_A, M_A) in coordinates [b | i]: b the part's
 //! interface coordinates, i the cut coordinates and every component's modes and attachments.
 //! A second Craig-Bampton step on this dense model gives the part the same structure as a
@@ -41,7 +43,7 @@ use std::time::Instant;
 /// How a part is cut into components.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Split {
-    /// Cut planes x = x_j [m], ascending: components = cuts + 1.
+    /// Cut planes x = x_j \[m\], ascending: components = cuts + 1.
     pub cuts_x: Vec<f64>,
     /// Shapes per cut (fewer when the cut has fewer DOFs).
     pub cut_shapes: usize,
@@ -272,13 +274,13 @@ fn slab_elements(mesh: &Mesh, on_cut: &[bool], layers: usize) -> Vec<bool> {
     keep
 }
 
-/// The shapes of one cut (3 rows per cut node, in `cut` order): the traces on the cut of the
-/// lowest `count` free modes of the slab of [`SLAB_LAYERS`] element layers either side of it
-/// (the part's fixed sets held), orthonormalised (an SVD, directions below 1e-8 of the largest dropped) and each
-/// scaled to a largest entry of 1. The slab's rigid motions give the cut's rigid motions
-/// exactly; its membrane and bending modes give smooth fields that respect the cut's
-/// connectivity (separate pieces move on their own), ordered by stiffness as the part sees
-/// it. A cut with few DOFs keeps all of them (unit shapes): no reduction, exact coupling.
+/// The shapes of one cut (3 rows per cut node, in the slab's cut order): the traces on the
+/// cut of a basis of about the lowest `count` free modes of the slab (the part's fixed sets
+/// held; [`low_subspace`]), orthonormalised (an SVD, directions below 1e-8 of the largest
+/// dropped), each scaled to a largest entry of 1. The slab's rigid motions give the cut's
+/// rigid motions exactly; its membrane and bending modes give smooth fields that respect the
+/// cut's connectivity (separate pieces move on their own). A cut with at most 2 `count` + 16
+/// free DOFs keeps all of them (unit shapes): no reduction, exact coupling.
 fn cut_shapes(p: &Part<'_>, slab: &Slab, count: usize) -> Result<Mat<f64>, ReduceError> {
     let (nodes, cut, fix) = (&slab.nodes, &slab.cut, &slab.fix);
     let slab = slab.mesh.clone();
@@ -718,6 +720,62 @@ fn ab(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     atb(a.transpose(), b)
 }
 
+/// K_ii^-1 of the assembled components' interior, factorised on its unit-mass scaling
+/// (D = diag(M_ii)^-1/2: coordinates of unrelated scales, cut shapes next to modes).
+struct InteriorSolve {
+    d: Vec<f64>,
+    chol: faer::linalg::solvers::Llt<f64>,
+}
+
+impl InteriorSolve {
+    /// None when D K_ii D is not positive definite.
+    fn new(k_ii: &Mat<f64>, m_ii: &Mat<f64>) -> Option<Self> {
+        let ni = k_ii.nrows();
+        let d: Vec<f64> = (0..ni)
+            .map(|i| 1.0 / m_ii[(i, i)].max(f64::MIN_POSITIVE).sqrt())
+            .collect();
+        let ks = Mat::from_fn(ni, ni, |i, j| d[i] * k_ii[(i, j)] * d[j]);
+        let chol = ks.llt(Side::Lower).ok()?;
+        Some(Self { d, chol })
+    }
+
+    /// K_ii^-1 rhs = D (D K_ii D)^-1 D rhs.
+    fn solve(&self, rhs: &Mat<f64>) -> Mat<f64> {
+        use faer::linalg::solvers::SolveCore;
+        let d = &self.d;
+        let mut x = Mat::from_fn(d.len(), rhs.ncols(), |i, j| d[i] * rhs[(i, j)]);
+        self.chol
+            .solve_in_place_with_conj(faer::Conj::No, x.as_mut());
+        for j in 0..x.ncols() {
+            for (i, di) in d.iter().enumerate() {
+                x[(i, j)] *= di;
+            }
+        }
+        x
+    }
+}
+
+/// Residual static responses u = K_ii^-1 f - Phi_k Lambda_k^-1 Phi_k^T f: what the kept modes
+/// (eigenvalues `lambdas`, M-normalised `phi_k`) miss of the static response to each column f.
+fn residual_static(
+    solver: &InteriorSolve,
+    lambdas: &[f64],
+    phi_k: &Mat<f64>,
+    f: &Mat<f64>,
+) -> Mat<f64> {
+    let mut u = solver.solve(f);
+    if !lambdas.is_empty() {
+        let mut pf = atb(phi_k.as_ref(), f.as_ref());
+        for (r, lam) in lambdas.iter().enumerate() {
+            for j in 0..pf.ncols() {
+                pf[(r, j)] /= lam;
+            }
+        }
+        u -= ab(phi_k.as_ref(), pf.as_ref());
+    }
+    u
+}
+
 /// The second Craig-Bampton step on the assembled components (module doc): T = [[I, 0, 0],
 /// [X, Phi_k, Phi_a]] and K_r = T^T K_A T, M_r = T^T M_A T with the loads and output rows
 /// carried through T.
@@ -740,25 +798,10 @@ fn second_level(
             format!("substructuring: the assembled components' {what}"),
         )
     };
-    // K_ii^-1 on the unit-mass-scaled interior (coordinates of unrelated scales)
-    let d: Vec<f64> = (0..ni)
-        .map(|i| 1.0 / m_ii[(i, i)].max(f64::MIN_POSITIVE).sqrt())
-        .collect();
-    let ks = Mat::from_fn(ni, ni, |i, j| d[i] * k_ii[(i, j)] * d[j]);
-    let kchol = ks.llt(Side::Lower).map_err(|_| {
+    let solver = InteriorSolve::new(&k_ii, &m_ii).ok_or_else(|| {
         fail("interior stiffness is not positive definite (the interfaces do not hold it)")
     })?;
-    let solve = |rhs: &Mat<f64>| -> Mat<f64> {
-        let mut x = Mat::from_fn(ni, rhs.ncols(), |i, j| d[i] * rhs[(i, j)]);
-        use faer::linalg::solvers::SolveCore;
-        kchol.solve_in_place_with_conj(faer::Conj::No, x.as_mut());
-        for j in 0..x.ncols() {
-            for i in 0..ni {
-                x[(i, j)] *= d[i];
-            }
-        }
-        x
-    };
+    let solve = |rhs: &Mat<f64>| solver.solve(rhs);
     let mut x = solve(&k_ib);
     for v in x.col_iter_mut().flat_map(|c| c.iter_mut()) {
         *v = -*v;
@@ -777,16 +820,7 @@ fn second_level(
         .copy_from(a.loads.as_ref().subrows(nb, ni));
     let inertia = &m_ib + ab(m_ii.as_ref(), x.as_ref());
     f.as_mut().subcols_mut(nl, nb).copy_from(&inertia);
-    let mut u = solve(&f);
-    if nk > 0 {
-        let mut pf = atb(phi_k.as_ref(), f.as_ref());
-        for (r, lam) in lambdas.iter().enumerate() {
-            for j in 0..pf.ncols() {
-                pf[(r, j)] /= lam;
-            }
-        }
-        u -= ab(phi_k.as_ref(), pf.as_ref());
-    }
+    let u = residual_static(&solver, &lambdas, &phi_k, &f);
     let phi_a = orthonormalise(part, &m_ii, &u)?;
     let na = phi_a.ncols();
     let nr = nb + nk + na;
