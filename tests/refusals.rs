@@ -323,3 +323,46 @@ fn regression_a_generated_liner_mesh_is_sized_before_it_is_made() {
         );
     }
 }
+
+/// Regression (issue 37's substructuring keys): components beyond the cylinders, no cut
+/// shapes, and engine mode shapes on the meshes (`modes --assembly --rom --vtu`) of a
+/// substructured crankcase (which keeps no full basis) are refused naming the key (exit 2),
+/// the last before any part is reduced and with nothing written.
+#[test]
+fn regression_substructuring_keys_are_checked() {
+    refused(
+        &[
+            "rom",
+            SMALL,
+            "--no-cache",
+            "--set",
+            "rom.crankcase_components=3",
+        ],
+        2,
+        "rom.crankcase_components",
+    );
+    refused(
+        &["rom", SMALL, "--no-cache", "--set", "rom.cut_shapes=0"],
+        2,
+        "rom.cut_shapes",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let vtu = dir.path().join("shapes.vtu");
+    refused(
+        &[
+            "modes",
+            SMALL,
+            "--assembly",
+            "--rom",
+            "--count",
+            "5",
+            "--vtu",
+            vtu.to_str().unwrap(),
+            "--set",
+            "rom.crankcase_components=2",
+        ],
+        2,
+        "rom.crankcase_components",
+    );
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}

@@ -1056,12 +1056,7 @@ fn reduce_parts(
     data: &PartData,
     progress: &dyn Fn(&str),
 ) -> Result<(PartReduction, PartReduction, [Source; 2]), RomError> {
-    let settings = cb_settings(inp);
-    let [liner, crankcase] = data.parts(inp);
-    let dir = inp.part_cache.as_deref();
-    progress("reducing the liner");
-    let (l, ls) = reduce_cached(&liner, &settings, dir)?;
-    progress("reducing the crankcase");
+    // refused before any work: the liner's reduction would be lost
     if inp.keep_bases && inp.crankcase_components > 1 {
         return Err(super::craig_bampton::ReduceError::Substructure {
             part: COMPONENTS[1].into(),
@@ -1069,6 +1064,12 @@ fn reduce_parts(
         }
         .into());
     }
+    let settings = cb_settings(inp);
+    let [liner, crankcase] = data.parts(inp);
+    let dir = inp.part_cache.as_deref();
+    progress("reducing the liner");
+    let (l, ls) = reduce_cached(&liner, &settings, dir)?;
+    progress("reducing the crankcase");
     let (c, cs) = match crankcase_split(inp) {
         Some(split) => super::substructure::reduce_split(&crankcase, &settings, &split, dir)?,
         None => reduce_cached(&crankcase, &settings, dir)?,
