@@ -170,13 +170,13 @@ fn lanczos(
     drop(shifted);
     let t_factor = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let (pattern, m) = (&km.pattern, &km.m);
+    let mass = km.pattern.compress(&km.m);
     let mut settings = EigenSettings::new(nev, sigma);
     settings.seed = seed;
     let modes = solve_modes(
         km.pattern.n,
         &settings,
-        |x, y| pattern.matvec(m, x, y),
+        |x, y| mass.matvec(x, y),
         |x| llt.solve_vec(x),
     )?;
     Ok((modes, (t_factor, t.elapsed().as_secs_f64())))

@@ -20,7 +20,7 @@ use crate::fem::dofs::{DofMap, FIXED};
 use crate::fem::material::Elastic;
 use crate::fem::model::{FeModel, ModelError};
 use crate::fem::surface::SurfaceMass;
-use crate::linalg::sparse::Pattern;
+use crate::linalg::sparse::{Pattern, SymCsc};
 use crate::mesh::Mesh;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
@@ -187,8 +187,12 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
     let (lambdas, modes_b) = fixed_interface_modes(p, &inner, &llt, settings.cutoff_hz, &tick)?;
     tick("modes");
     let b_to_a = interior_to_full(&full, &inner);
+    let mass = full.km.pattern.compress(&full.km.m);
+    let boundary = boundary_dofs(na, &b_to_a);
     let interior = Interior {
         full: &full,
+        mass: &mass,
+        boundary: &boundary,
         llt: &llt,
         b_to_a: &b_to_a,
         lambdas: &lambdas,
@@ -214,9 +218,9 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
     attachment_candidates(&interior, &f_a, known.as_ref().subcols(0, nc), candidates);
     tick(&format!("{} attachment candidates", nl + nc));
     drop(llt);
-    let na_cols = orthonormalise_attachments(part, &full, &mut phi, nc + nm)?;
+    let na_cols = orthonormalise_attachments(part, &mass, &mut phi, nc + nm)?;
     let nr = nc + nm + na_cols;
-    let (k, m) = project(&full, &b_to_a, &lambdas, phi.as_ref(), nc);
+    let (k, m) = project(&full, &mass, &b_to_a, &lambdas, phi.as_ref(), nc);
     tick(&format!("projected onto {nr} coordinates"));
     log_conditioning(part, &k, &m);
     let loads_r = phi.transpose() * &f_a;
@@ -330,8 +334,7 @@ fn fixed_interface_modes(
     if count == 0 {
         return Ok((Vec::new(), Mat::zeros(nb, 0)));
     }
-    let pattern = &inner.km.pattern;
-    let m = &inner.km.m;
+    let mass = inner.km.pattern.compress(&inner.km.m);
     // certified by the count: the `count` lowest computed must all lie below the cut-off (a
     // mode the iteration skipped shows as one above it); else solved again with a margin and
     // another start vector
@@ -342,7 +345,7 @@ fn fixed_interface_modes(
         let modes = solve_modes(
             nb,
             &settings,
-            |x, y| pattern.matvec(m, x, y),
+            |x, y| mass.matvec(x, y),
             |x| llt.solve_vec(x),
         )
         .map_err(|source| ReduceError::Eigen {
@@ -401,6 +404,15 @@ fn interior_to_full(full: &FeModel, inner: &FeModel) -> Vec<usize> {
     b_to_a
 }
 
+/// The DOFs of a model with `na` DOFs that `b_to_a` does not map to (the boundary), ascending.
+fn boundary_dofs(na: usize, b_to_a: &[usize]) -> Vec<usize> {
+    let mut interior = vec![false; na];
+    for &a in b_to_a {
+        interior[a] = true;
+    }
+    (0..na).filter(|&a| !interior[a]).collect()
+}
+
 /// Columns per block of right-hand sides: a 64-column block solve costs about a tenth per
 /// column of a single-vector solve (the factor is read once per block).
 const PANEL: usize = 64;
@@ -433,11 +445,7 @@ fn constraint_modes(
         col += b.psi.ncols();
     }
     phi_c.par_col_chunks_mut(PANEL).for_each(|mut panel| {
-        let kg = sparse_times(&full.km.pattern, &full.km.k, panel.as_ref());
-        let mut rhs = interior.gather(kg.as_ref());
-        for v in rhs.col_iter_mut().flat_map(|c| c.iter_mut()) {
-            *v = -*v;
-        }
+        let mut rhs = interior.boundary_load(panel.as_ref());
         interior.llt.solve_in_place(rhs.as_mut());
         interior.scatter(rhs.as_ref(), panel.as_mut());
     });
@@ -463,6 +471,10 @@ fn load_matrix(full: &FeModel, loads: &[Load]) -> Mat<f64> {
 /// The interior problem the constraint and attachment modes are solved on.
 struct Interior<'a> {
     full: &'a FeModel,
+    /// The full model's M without its zero entries ([`Pattern::compress`]).
+    mass: &'a SymCsc,
+    /// The full model's DOFs that are not interior, ascending.
+    boundary: &'a [usize],
     llt: &'a crate::linalg::factor::Llt<'a>,
     b_to_a: &'a [usize],
     lambdas: &'a [f64],
@@ -471,6 +483,47 @@ struct Interior<'a> {
 }
 
 impl Interior<'_> {
+    /// -K_ib X_b, the interior rows of -K X for a block X over the full DOFs that vanishes
+    /// on the interior (constraint-mode loads), from the entries of K that couple the interior
+    /// with the boundary alone (a twentieth of K's on the default crankcase): each row sums
+    /// its boundary terms in its stored order, the terms a full product would add to zero
+    /// left out (the same bits).
+    fn boundary_load(&self, x: MatRef<'_, f64>) -> Mat<f64> {
+        let (pattern, kv) = (&self.full.km.pattern, &self.full.km.k);
+        let mut on_boundary = vec![false; self.full.n_free()];
+        for &d in self.boundary {
+            on_boundary[d] = true;
+        }
+        // the interior rows coupled to the boundary (column d holds row d: both triangles)
+        let mut touched: Vec<usize> = self
+            .boundary
+            .iter()
+            .flat_map(|&d| &pattern.row_idx[pattern.col_ptr[d]..pattern.col_ptr[d + 1]])
+            .copied()
+            .filter(|&a| !on_boundary[a])
+            .collect();
+        touched.sort_unstable();
+        touched.dedup();
+        let mut a_to_b = vec![usize::MAX; self.full.n_free()];
+        for (b, &a) in self.b_to_a.iter().enumerate() {
+            a_to_b[a] = b;
+        }
+        let mut y = Mat::<f64>::zeros(self.b_to_a.len(), x.ncols());
+        for j in 0..x.ncols() {
+            for &a in &touched {
+                let mut sum = 0.0;
+                for q in pattern.col_ptr[a]..pattern.col_ptr[a + 1] {
+                    let d = pattern.row_idx[q];
+                    if on_boundary[d] {
+                        sum += kv[q] * x[(d, j)];
+                    }
+                }
+                y[(a_to_b[a], j)] = -sum;
+            }
+        }
+        y
+    }
+
     /// The interior rows of a block over the full model's DOFs.
     fn gather(&self, x: MatRef<'_, f64>) -> Mat<f64> {
         Mat::from_fn(self.b_to_a.len(), x.ncols(), |bi, j| {
@@ -515,8 +568,11 @@ fn attachment_candidates(
                 .copy_from(f_a.as_ref().subcols(j0.min(nl), n_loads));
             if n_loads < w {
                 let c0 = j0 + n_loads - nl;
-                let mphi =
-                    sparse_times(&full.km.pattern, &full.km.m, phi_c.subcols(c0, w - n_loads));
+                let mphi = sparse_times(
+                    &interior.mass.pattern,
+                    &interior.mass.values,
+                    phi_c.subcols(c0, w - n_loads),
+                );
                 f.as_mut()
                     .subcols_mut(n_loads, w - n_loads)
                     .copy_from(&mphi);
@@ -554,7 +610,7 @@ fn attachment_candidates(
 /// [.. | Phi_a]. Returns the number of kept columns.
 fn orthonormalise_attachments(
     part: &str,
-    full: &FeModel,
+    mass: &SymCsc,
     phi: &mut Mat<f64>,
     a0: usize,
 ) -> Result<usize, ReduceError> {
@@ -562,7 +618,7 @@ fn orthonormalise_attachments(
     if nu == 0 {
         return Ok(0);
     }
-    let gram = lower_gram(&full.km.pattern, &full.km.m, phi.as_ref().subcols(a0, nu));
+    let gram = lower_gram(&mass.pattern, &mass.values, phi.as_ref().subcols(a0, nu));
     // each candidate scaled to unit M-norm first: the loads' and the inertia loads' candidates
     // come in unrelated units, and a cut relative to the largest of them dropped inertia
     // directions that mattered (see [`GRAM_CUT`])
@@ -649,20 +705,18 @@ pub fn gram_cut(s: &[f64]) -> usize {
 /// the brute-force products in tests/rom.rs).
 fn project(
     full: &FeModel,
+    mass: &SymCsc,
     b_to_a: &[usize],
     lambdas: &[f64],
     phi: MatRef<'_, f64>,
     nc: usize,
 ) -> (Mat<f64>, Mat<f64>) {
     let (na, nm, nr) = (full.n_free(), lambdas.len(), phi.ncols());
-    let (pattern, kv, mv) = (&full.km.pattern, &full.km.k, &full.km.m);
+    let (pattern, kv) = (&full.km.pattern, &full.km.k);
+    let (mp, mv) = (&mass.pattern, &mass.values);
     let na_cols = nr - nc - nm;
     let (phi_c, phi_a) = (phi.subcols(0, nc), phi.subcols(nc + nm, na_cols));
-    let mut interior = vec![false; na];
-    for &a in b_to_a {
-        interior[a] = true;
-    }
-    let boundary: Vec<usize> = (0..na).filter(|&a| !interior[a]).collect();
+    let boundary = boundary_dofs(na, b_to_a);
     let mut k = Mat::<f64>::zeros(nr, nr);
     let mut m = Mat::<f64>::zeros(nr, nr);
     // K_cc from the boundary rows of K Phi_c (column d of K is its row d: both triangles stored)
@@ -693,8 +747,8 @@ fn project(
     // M: the constraint modes' rows, the identities
     m.as_mut()
         .submatrix_mut(0, 0, nc, nc)
-        .copy_from(&lower_gram(pattern, mv, phi_c));
-    let m_rest = cross_gram(pattern, mv, phi_c, phi.subcols(nc, nm + na_cols));
+        .copy_from(&lower_gram(mp, mv, phi_c));
+    let m_rest = cross_gram(mp, mv, phi_c, phi.subcols(nc, nm + na_cols));
     m.as_mut()
         .submatrix_mut(0, nc, nc, nm + na_cols)
         .copy_from(&m_rest);

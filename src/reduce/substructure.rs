@@ -325,7 +325,7 @@ fn cut_shapes(p: &Part<'_>, slab: &Slab, count: usize) -> Result<Mat<f64>, Reduc
         .analysis
         .llt(&km.pattern, &km.shifted(sigma))
         .map_err(|e| err_model(e.into()))?;
-    let x = low_subspace(&km.pattern, &km.m, &llt, n, count);
+    let x = low_subspace(&km.pattern.compress(&km.m), &llt, n, count);
     log::info!(
         "[{}] cut shapes: slab of {n} DOFs, {count} vectors in {:.2} s",
         p.name,
@@ -366,8 +366,7 @@ const SUBSPACE_PASSES: usize = 5;
 /// is wanted (the traces keep all its directions), not converged eigenvectors: a block method
 /// needs a tenth of the solve cost per vector of Lanczos and none of its O(n ncv^2) work.
 fn low_subspace(
-    pattern: &crate::linalg::sparse::Pattern,
-    m: &[f64],
+    mass: &crate::linalg::sparse::SymCsc,
     llt: &crate::linalg::factor::Llt<'_>,
     n: usize,
     count: usize,
@@ -382,7 +381,7 @@ fn low_subspace(
     });
     for _ in 0..SUBSPACE_PASSES {
         let mut y = Mat::<f64>::zeros(n, count);
-        pattern.mul_dense(m, x.as_ref(), y.as_mut());
+        mass.mul_dense(x.as_ref(), y.as_mut());
         y.par_col_chunks_mut(64).for_each(|p| llt.solve_in_place(p));
         x = y.qr().compute_thin_Q();
     }
