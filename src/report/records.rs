@@ -8,7 +8,7 @@ use crate::files::{write_atomic, WriteError};
 use crate::piston::setup::simulation;
 use crate::piston::Piston;
 use crate::scene::Scene;
-use crate::transient::cycle::{CycleResult, Stats};
+use crate::transient::cycle::{CycleResult, EventSummary, Stats};
 use crate::transient::verify::FullOrderReport;
 use std::path::Path;
 
@@ -43,6 +43,10 @@ pub struct PointPeaks {
     /// The numerical uncertainty of the mean peak [m/s^2] ([`PointPeaks::numerical_uncertainty`]):
     /// what `numerical_uncertainty_scope` of the report says it holds.
     pub peak_negative_numerical_uncertainty_m_s2: f64,
+    /// The slap event (index into the cylinder's `slap_events`) whose onset the peak negative
+    /// acceleration follows in most averaged cycles, and in how many (`event_cycles`).
+    pub peak_negative_event: Option<usize>,
+    pub event_cycles: usize,
 }
 
 impl PointPeaks {
@@ -104,6 +108,10 @@ pub struct CylinderReport {
     pub slap_force_se_n: f64,
     pub peak_side_force_n: f64,
     pub side_force_crank_angle_deg: f64,
+    /// The slap events over the averaged cycles, in onset order: side, onset crank angle,
+    /// force, impact velocity and energy, each a mean with its standard error over the cycles
+    /// it occurred in (`cycles`) (`transient::cycle::EventSummary`).
+    pub slap_events: Vec<EventSummary>,
 }
 
 impl CylinderReport {
@@ -252,6 +260,8 @@ impl SimulateReport {
                             peak_negative_half_step_m_s2: None,
                             peak_negative_half_step_se_m_s2: None,
                             peak_negative_numerical_uncertainty_m_s2: 0.0,
+                            peak_negative_event: c.negative_events.get(k).and_then(|e| e.0),
+                            event_cycles: c.negative_events.get(k).map_or(0, |e| e.1),
                         };
                         point.refresh_uncertainty();
                         point
@@ -263,6 +273,7 @@ impl SimulateReport {
                 slap_force_se_n: c.slap_force.se,
                 peak_side_force_n: c.side_force.value,
                 side_force_crank_angle_deg: c.side_force.crank_angle_deg,
+                slap_events: c.slap_events.clone(),
             })
             .collect()
     }

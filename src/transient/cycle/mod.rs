@@ -35,12 +35,15 @@ use crate::reduce::rom::{CylinderRom, EngineRom};
 use ndarray::Array2;
 use rayon::prelude::*;
 
+mod events;
 mod record;
 mod result;
 mod settings;
 mod statistics;
 mod tolerance;
 
+use events::{EventRecorder, SideSample};
+pub use events::{EventSummary, Mean, SlapEvent, EVENT_CLUSTER_DEG, EVENT_SEPARATION_DEG};
 pub use record::OUTPUT_DIFFERENCE_REACH;
 use record::*;
 pub use result::*;
@@ -82,6 +85,8 @@ pub struct EngineRun<'a> {
     /// being advanced [s].
     substeps_left: usize,
     base_step: f64,
+    /// The slap events of every committed step ([`events`]).
+    events: EventRecorder,
 }
 
 /// Modes kept and the contact-DOF rows/flexibility/preload of the ROM.
@@ -205,6 +210,7 @@ impl<'a> EngineRun<'a> {
             prev_loaded: Vec::new(),
             substeps_left: 0,
             base_step: 0.0,
+            events: EventRecorder::new(ncyl),
         }
     }
 
@@ -290,11 +296,13 @@ impl<'a> EngineRun<'a> {
         let ns = skirt.heights.len();
         let pen_index = |b: usize, side: bool, i: usize| (2 * b + usize::from(!side)) * ns + i;
         let mut bodies = Vec::with_capacity(self.cyls.len());
+        let mut side_forces = Vec::with_capacity(self.cyls.len());
         for (b, cyl) in self.cyls.iter().enumerate() {
             let loads = piston.loads(theta - cyl.phase);
             let mut body = cyl.body;
             body.force = loads.force;
             bodies.push(body);
+            side_forces.push(loads.side_force);
             let bore = BoreLines {
                 thrust_z: &cyl.rom.thrust_z,
                 antithrust_z: &cyl.rom.antithrust_z,
@@ -365,6 +373,15 @@ impl<'a> EngineRun<'a> {
             cyl.body = *b;
         }
         self.record_step(&res, &slices, &meta, &after);
+        let view = StepView {
+            res: &res,
+            meta: &meta,
+            slices: &slices,
+            states: &before,
+            before: &bodies,
+            side_forces: &side_forces,
+        };
+        self.observe_events(theta, dt, &view);
         self.time = t1;
         self.stats.steps += 1;
         self.stats.newton_iterations += res.iterations;
@@ -467,6 +484,54 @@ impl<'a> EngineRun<'a> {
         self.prev_state.fill(SliceState::APART);
         for (k, &(b, side, i, _)) in meta.iter().enumerate() {
             self.prev_state[(2 * b + usize::from(!side)) * ns + i] = after[k];
+        }
+    }
+
+    /// Hands the committed step to the slap-event recorder: per cylinder the sides' summed
+    /// forces (from [`EngineRun::record_step`]), the side force, and for each side in contact
+    /// the piston's approach at the onset of its deepest slice: the step's fraction before
+    /// contact tau = -p_0 / (p_1 - p_0) (penetrations at the step's ends), the piston's
+    /// velocity then v = v_0 + tau dt a_0 (its motion before contact), the slice's velocity
+    /// toward the wall row . v and the secondary kinetic energy 1/2 v^T M_b v.
+    fn observe_events(&mut self, theta: f64, dt: f64, view: &StepView<'_, '_>) {
+        let nc = self.cyls.len();
+        // deepest slice of each (cylinder, side)
+        let mut deepest: Vec<[Option<usize>; 2]> = vec![[None; 2]; nc];
+        for (k, &(b, side, _, _)) in view.meta.iter().enumerate() {
+            let slot = &mut deepest[b][usize::from(!side)];
+            if slot.is_none_or(|j| view.res.penetrations[k] > view.res.penetrations[j]) {
+                *slot = Some(k);
+            }
+        }
+        for (b, cyl) in self.cyls.iter().enumerate() {
+            let m = view.before[b].mass;
+            let onset = |k: Option<usize>| -> (f64, f64) {
+                let Some(k) = k else { return (0.0, 0.0) };
+                let (p0, p1) = (view.states[k].penetration, view.res.penetrations[k]);
+                let tau = if p0 < 0.0 && p1 > p0 {
+                    (-p0 / (p1 - p0)).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let v: [f64; 2] =
+                    std::array::from_fn(|i| view.before[b].v[i] + tau * dt * view.before[b].a[i]);
+                let row = view.slices[k].row;
+                let energy = 0.5
+                    * (0..2)
+                        .map(|i| v[i] * (0..2).map(|j| m[i][j] * v[j]).sum::<f64>())
+                        .sum::<f64>();
+                (row[0] * v[0] + row[1] * v[1], energy)
+            };
+            let (thrust, anti) = (onset(deepest[b][0]), onset(deepest[b][1]));
+            let sample = SideSample {
+                global_deg: theta,
+                own_deg: (theta - cyl.phase).rem_euclid(720.0),
+                forces: self.last_forces[b],
+                side_force: view.side_forces[b],
+                rates: (thrust.0, anti.0),
+                kinetic_energy: (thrust.1, anti.1),
+            };
+            self.events.observe(b, &sample);
         }
     }
 
@@ -663,6 +728,7 @@ impl<'a> EngineRun<'a> {
         let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
         let mut prev_peaks: Option<CyclePeaks> = None;
         let mut kept: Vec<CyclePeaks> = Vec::with_capacity(averaged);
+        let mut kept_cycles: Vec<usize> = Vec::with_capacity(averaged);
         let mut power: Vec<Vec<PowerSum>> = vec![Vec::new(); self.cyls.len()];
         let mut last_series: Option<Series> = None;
         let mut building: Option<Series> = None;
@@ -702,12 +768,13 @@ impl<'a> EngineRun<'a> {
             }
             let (k, mut series) = pending.take().expect("ready");
             record.outputs(&self, &mut series, k, k + 1 == cycles, (spc, margin, dt));
-            let peaks = self.peaks(&series);
+            let peaks = self.peaks(&series, k);
             if let Some(prev) = &prev_peaks {
                 self.stats.cycle_change = largest_change(&peaks, prev);
             }
             if k + averaged >= cycles {
                 kept.push(peaks.clone());
+                kept_cycles.push(k);
                 self.add_spectra(&series, dt, &mut power);
             }
             prev_peaks = Some(peaks);
@@ -723,6 +790,8 @@ impl<'a> EngineRun<'a> {
         }
         let mut peaks = average_peaks(&kept);
         self.stats.autocorrelation_cycles = standard_errors(&kept, &mut peaks);
+        self.events.close();
+        self.attach_events(&kept, &kept_cycles, &mut peaks);
         let CyclePeaks {
             cylinders: peaks,
             negative: peak_negative,
@@ -900,6 +969,24 @@ impl<'a> EngineRun<'a> {
             .collect())
     }
 
+    /// Runs `steps` steps of `h` from the current state and returns each cylinder's slap
+    /// events with their onset in the window ([`events`]; an event in contact at the start
+    /// counts from there), so that settings can be compared on identical slaps.
+    pub fn window_events(
+        mut self,
+        steps: usize,
+        h: f64,
+    ) -> Result<Vec<Vec<SlapEvent>>, TransientError> {
+        self.events = EventRecorder::new(self.cyls.len());
+        let t0 = self.time;
+        for k in 1..=steps {
+            let target = t0 + k as f64 * h;
+            self.advance(target - self.time)?;
+        }
+        self.events.close();
+        Ok(self.events.done)
+    }
+
     /// Adds each cylinder's point spectra of the cycle in `series` to the power sums `power`
     /// (per cylinder, per point).
     fn add_spectra(&self, series: &Series, dt: f64, power: &mut [Vec<PowerSum>]) {
@@ -940,9 +1027,44 @@ impl<'a> EngineRun<'a> {
         }
     }
 
+    /// The averaged cycles' slap events per cylinder ([`events::summarise`]) and the event
+    /// each point's peak negative acceleration follows: in each averaged cycle the latest
+    /// onset at or before the peak's crank angle, the event most cycles name.
+    fn attach_events(&self, kept: &[CyclePeaks], cycles: &[usize], peaks: &mut CyclePeaks) {
+        for (c, cp) in peaks.cylinders.iter_mut().enumerate() {
+            let per_cycle: Vec<Vec<SlapEvent>> =
+                cycles.iter().map(|&k| self.events.in_cycle(c, k)).collect();
+            let all: Vec<SlapEvent> = per_cycle.iter().flatten().copied().collect();
+            let (summaries, group) = events::summarise(&all);
+            let np = peaks.negative.ncols();
+            cp.negative_events = (0..np)
+                .map(|p| {
+                    let mut votes = vec![0usize; summaries.len() + 1];
+                    let mut offset = 0;
+                    for (evs, cyc) in per_cycle.iter().zip(kept) {
+                        let angle = cyc.negative[[c, p]].crank_angle_deg;
+                        match events::event_before(evs, angle) {
+                            Some(i) => votes[group[offset + i]] += 1,
+                            None => votes[summaries.len()] += 1,
+                        }
+                        offset += evs.len();
+                    }
+                    let (best, &n) = votes
+                        .iter()
+                        .enumerate()
+                        .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(&a.0)))
+                        .expect("at least the None slot");
+                    ((best < summaries.len()).then_some(best), n)
+                })
+                .collect();
+            cp.slap_events = summaries;
+        }
+    }
+
     /// A cycle's peaks from its series: the filtered point accelerations' peaks located
-    /// between the samples ([`sampled_peak`]), the forces' largest samples.
-    fn peaks(&self, series: &Series) -> CyclePeaks {
+    /// between the samples ([`sampled_peak`]), the side force's largest sample, and the slap
+    /// force of the cycle's largest slap event ([`events`], at the sub-step resolution).
+    fn peaks(&self, series: &Series, cycle: usize) -> CyclePeaks {
         let nc = series.cylinders.len();
         let np = series
             .cylinders
@@ -964,9 +1086,13 @@ impl<'a> EngineRun<'a> {
                 }
                 best
             };
-            let dyn_force: Vec<f64> = (0..cs.side_force_n.len())
-                .map(|k| cs.thrust_force_n[k] - cs.antithrust_force_n[k] - cs.side_force_n[k])
-                .collect();
+            let slap_force = self
+                .events
+                .in_cycle(c, cycle)
+                .iter()
+                .map(|e| Peak::single(e.force_n, e.force_crank_angle_deg))
+                .max_by(|a, b| a.value.total_cmp(&b.value))
+                .unwrap_or(Peak::single(0.0, 0.0));
             // the filtered accelerations are band-limited: their peaks lie between samples
             let band_peak = |v: &[f64], sign: f64| -> Peak {
                 match sampled_peak(v, 0..v.len(), sign) {
@@ -984,12 +1110,25 @@ impl<'a> EngineRun<'a> {
             }
             out.cylinders.push(CylinderPeaks {
                 cylinder: cs.cylinder,
-                slap_force: arg(&dyn_force, &|x| x.abs()),
+                slap_force,
                 side_force: arg(&cs.side_force_n, &|x| x),
+                ..Default::default()
             });
         }
         out
     }
+}
+
+/// What the slap-event recorder reads of a committed step: its result, the slices (with
+/// their (cylinder, thrust side, slice, height)), the slices' states before it, the pistons
+/// before it and the quasi-static side forces.
+struct StepView<'r, 's> {
+    res: &'r contact::StepResult,
+    meta: &'r [(usize, bool, usize, f64)],
+    slices: &'r [Slice<'s>],
+    states: &'r [SliceState],
+    before: &'r [Body],
+    side_forces: &'r [f64],
 }
 
 /// A failed step attempt.

@@ -159,10 +159,18 @@ impl Peak {
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct CylinderPeaks {
     pub cylinder: usize,
-    /// Largest |net contact force - quasi-static side force| (the dynamic slap) \[N\].
+    /// The largest slap event's force (the dynamic slap, the contact force beyond the
+    /// quasi-static side force, at the sub-step resolution: [`SlapEvent`]) \[N\], at the
+    /// crank angle of its largest force.
     pub slap_force: Peak,
     /// Largest quasi-static side force toward thrust \[N\].
     pub side_force: Peak,
+    /// The slap events over the averaged cycles, in onset order ([`EventSummary`]).
+    pub slap_events: Vec<EventSummary>,
+    /// Per analysis point, the event (index into `slap_events`) whose onset its peak negative
+    /// acceleration follows in most averaged cycles (None: before every onset), and in how
+    /// many of them.
+    pub negative_events: Vec<(Option<usize>, usize)>,
 }
 
 /// A cycle's (or the averaged cycles') peaks: per cylinder the forces, and per cylinder

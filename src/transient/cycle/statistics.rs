@@ -30,6 +30,7 @@ pub(super) fn average_peaks(per_cycle: &[CyclePeaks]) -> CyclePeaks {
                 cylinder: cp.cylinder,
                 slap_force: over(&|x| x.cylinders[c].slap_force),
                 side_force: over(&|x| x.cylinders[c].side_force),
+                ..Default::default()
             })
             .collect(),
         negative: Array2::from_shape_fn(first.negative.dim(), |i| over(&|x| x.negative[i])),
