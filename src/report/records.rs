@@ -448,7 +448,7 @@ pub fn write_series(path: &Path, res: &CycleResult) -> Result<(), WriteError> {
             }
             write!(
                 w,
-                ",c{k}_lateral_um,c{k}_tilt_mrad,c{k}_thrust_force_n,c{k}_antithrust_force_n,c{k}_side_force_n,c{k}_pressure_bar"
+                ",c{k}_lateral_um,c{k}_tilt_mrad,c{k}_thrust_force_n,c{k}_antithrust_force_n,c{k}_thrust_impulse_n_s,c{k}_antithrust_impulse_n_s,c{k}_side_force_n,c{k}_pressure_bar"
             )?;
         }
         writeln!(w)?;
@@ -465,11 +465,13 @@ pub fn write_series(path: &Path, res: &CycleResult) -> Result<(), WriteError> {
                 }
                 write!(
                     w,
-                    ",{:.4},{:.5},{:.2},{:.2},{:.2},{:.3}",
+                    ",{:.4},{:.5},{:.2},{:.2},{:.6e},{:.6e},{:.2},{:.3}",
                     c.lateral_m[i] * 1e6,
                     c.tilt_rad[i] * 1e3,
                     c.thrust_force_n[i],
                     c.antithrust_force_n[i],
+                    c.thrust_impulse_n_s[i],
+                    c.antithrust_impulse_n_s[i],
                     c.side_force_n[i],
                     c.pressure_pa[i] / 1e5
                 )?;

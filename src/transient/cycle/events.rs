@@ -49,6 +49,8 @@ pub struct SlapEvent {
     pub force_crank_angle_deg: f64,
     pub impact_velocity_m_s: f64,
     pub impact_energy_j: f64,
+    /// The side's contact impulse over the event, rebounds included [N s].
+    pub impulse_n_s: f64,
 }
 
 /// A mean over cycles and its standard error s / sqrt(n).
@@ -84,6 +86,7 @@ pub struct EventSummary {
     pub force_n: Mean,
     pub impact_velocity_m_s: Mean,
     pub impact_energy_j: Mean,
+    pub impulse_n_s: Mean,
     /// Averaged cycles in which the event occurred.
     pub cycles: usize,
 }
@@ -101,6 +104,8 @@ pub(super) struct SideSample {
     /// in this step takes as its impact).
     pub rates: (f64, f64),
     pub kinetic_energy: (f64, f64),
+    /// Per side, the step's contact impulse [N s].
+    pub impulses: (f64, f64),
 }
 
 /// The open event of one side and when it last touched.
@@ -130,15 +135,21 @@ impl EventRecorder {
     pub(super) fn observe(&mut self, c: usize, s: &SideSample) {
         let dynamic = s.forces.0 - s.forces.1 - s.side_force;
         for (k, thrust) in [(0, true), (1, false)] {
-            let (force, rate, energy) = if thrust {
-                (s.forces.0, s.rates.0, s.kinetic_energy.0)
+            let (force, rate, energy, impulse) = if thrust {
+                (s.forces.0, s.rates.0, s.kinetic_energy.0, s.impulses.0)
             } else {
-                (s.forces.1, s.rates.1, s.kinetic_energy.1)
+                (s.forces.1, s.rates.1, s.kinetic_energy.1, s.impulses.1)
             };
+            let side = &mut self.sides[c][k];
             if force <= 0.0 {
+                // the step that separates still carries the contact's last impulse
+                if let Some(e) = side.open.as_mut() {
+                    if s.global_deg - side.last_contact_deg <= EVENT_SEPARATION_DEG {
+                        e.impulse_n_s += impulse;
+                    }
+                }
                 continue;
             }
-            let side = &mut self.sides[c][k];
             let rebound = side
                 .open
                 .is_some_and(|_| s.global_deg - side.last_contact_deg <= EVENT_SEPARATION_DEG);
@@ -154,10 +165,12 @@ impl EventRecorder {
                     force_crank_angle_deg: s.own_deg,
                     impact_velocity_m_s: rate,
                     impact_energy_j: energy,
+                    impulse_n_s: 0.0,
                 });
             }
             side.last_contact_deg = s.global_deg;
             let e = side.open.as_mut().expect("opened above");
+            e.impulse_n_s += impulse;
             let f = if thrust { dynamic } else { -dynamic };
             if f > e.force_n {
                 e.force_n = f;
@@ -245,6 +258,7 @@ pub(super) fn summarise(events: &[SlapEvent]) -> (Vec<EventSummary>, Vec<usize>)
                     force_n: pick(&|e| e.force_n),
                     impact_velocity_m_s: pick(&|e| e.impact_velocity_m_s),
                     impact_energy_j: pick(&|e| e.impact_energy_j),
+                    impulse_n_s: pick(&|e| e.impulse_n_s),
                     cycles: per_cycle.len(),
                 },
             )
@@ -285,6 +299,7 @@ mod tests {
             side_force: side,
             rates: (0.3, 0.2),
             kinetic_energy: (0.5, 0.4),
+            impulses: (0.01, 0.02),
         }
     }
 

@@ -87,6 +87,10 @@ pub struct EngineRun<'a> {
     base_step: f64,
     /// The slap events of every committed step ([`events`]).
     events: EventRecorder,
+    /// Per cylinder (thrust, anti-thrust): the weighted contact force C of the last committed
+    /// step ([`EngineRun::contact_impulses`]) and the contact impulse since the last sample.
+    applied_contact: Vec<(f64, f64)>,
+    impulse_acc: Vec<(f64, f64)>,
 }
 
 /// Modes kept and the contact-DOF rows/flexibility/preload of the ROM.
@@ -211,6 +215,8 @@ impl<'a> EngineRun<'a> {
             substeps_left: 0,
             base_step: 0.0,
             events: EventRecorder::new(ncyl),
+            applied_contact: vec![(0.0, 0.0); ncyl],
+            impulse_acc: vec![(0.0, 0.0); ncyl],
         }
     }
 
@@ -372,6 +378,7 @@ impl<'a> EngineRun<'a> {
         for (cyl, b) in self.cyls.iter_mut().zip(&bodies_after) {
             cyl.body = *b;
         }
+        let step_impulses = self.contact_impulses(dt, &res, &meta, &impulses);
         self.record_step(&res, &slices, &meta, &after);
         let view = StepView {
             res: &res,
@@ -380,6 +387,7 @@ impl<'a> EngineRun<'a> {
             states: &before,
             before: &bodies,
             side_forces: &side_forces,
+            impulses: &step_impulses,
         };
         self.observe_events(theta, dt, &view);
         self.time = t1;
@@ -487,6 +495,55 @@ impl<'a> EngineRun<'a> {
         }
     }
 
+    /// Each cylinder's contact impulse per side over the committed step of `dt`, as the
+    /// integrator delivers it to the pistons, M (v_{n+1} - v_n) = dt ((1 - gamma) M a_n +
+    /// gamma M a_{n+1}): dt ((1 - gamma) C_n + gamma C_{n+1}) with C_{n+1} = (1 + alpha) F_{n+1}
+    /// - alpha F_n the side's summed slice force as HHT-alpha weights it (alpha = 0, gamma = 1/2:
+    /// the trapezoid), plus the onset corrections' impulses when they are applied. Summed over
+    /// steps it is the momentum the contact gave the piston; also added to the impulses since
+    /// the last sample. Call before [`EngineRun::record_step`] (F_n is the last step's).
+    fn contact_impulses(
+        &mut self,
+        dt: f64,
+        res: &contact::StepResult,
+        meta: &[(usize, bool, usize, f64)],
+        kicks: &[f64],
+    ) -> Vec<(f64, f64)> {
+        let (alpha, gamma) = (self.settings.scheme.alpha, self.settings.scheme.gamma);
+        let n = self.cyls.len();
+        let (mut now, mut kick) = (vec![(0.0, 0.0); n], vec![(0.0, 0.0); n]);
+        let corrected = self.settings.onset_correction;
+        for (k, &(b, side, _, _)) in meta.iter().enumerate() {
+            let (f, j) = if side {
+                (&mut now[b].0, &mut kick[b].0)
+            } else {
+                (&mut now[b].1, &mut kick[b].1)
+            };
+            *f += res.forces[k];
+            if corrected {
+                *j += kicks[k];
+            }
+        }
+        (0..n)
+            .map(|b| {
+                let old = self.last_forces.get(b).copied().unwrap_or((0.0, 0.0));
+                let c = (
+                    (1.0 + alpha) * now[b].0 - alpha * old.0,
+                    (1.0 + alpha) * now[b].1 - alpha * old.1,
+                );
+                let prev = self.applied_contact[b];
+                let imp = (
+                    dt * ((1.0 - gamma) * prev.0 + gamma * c.0) + kick[b].0,
+                    dt * ((1.0 - gamma) * prev.1 + gamma * c.1) + kick[b].1,
+                );
+                self.applied_contact[b] = c;
+                self.impulse_acc[b].0 += imp.0;
+                self.impulse_acc[b].1 += imp.1;
+                imp
+            })
+            .collect()
+    }
+
     /// Hands the committed step to the slap-event recorder: per cylinder the sides' summed
     /// forces (from [`EngineRun::record_step`]), the side force, and for each side in contact
     /// the piston's approach at the onset of its deepest slice: the step's fraction before
@@ -530,6 +587,7 @@ impl<'a> EngineRun<'a> {
                 side_force: view.side_forces[b],
                 rates: (thrust.0, anti.0),
                 kinetic_energy: (thrust.1, anti.1),
+                impulses: view.impulses[b],
             };
             self.events.observe(b, &sample);
         }
@@ -753,6 +811,7 @@ impl<'a> EngineRun<'a> {
             if let Some(series) = building.as_mut().filter(|_| cycle < cycles) {
                 self.sample(series, cycle);
             }
+            self.impulse_acc.fill((0.0, 0.0));
             on_step(g + 1, total);
             if g + 1 == total {
                 if let Some(done) = building.take() {
@@ -857,6 +916,8 @@ impl<'a> EngineRun<'a> {
             let (ft, fa) = self.last_forces.get(c).copied().unwrap_or((0.0, 0.0));
             cs.thrust_force_n.push(ft);
             cs.antithrust_force_n.push(fa);
+            cs.thrust_impulse_n_s.push(self.impulse_acc[c].0);
+            cs.antithrust_impulse_n_s.push(self.impulse_acc[c].1);
             let loads = self.setup.piston.loads(theta - self.cyls[c].phase);
             cs.side_force_n.push(loads.side_force);
             cs.pressure_pa.push(loads.pressure);
@@ -1129,6 +1190,8 @@ struct StepView<'r, 's> {
     states: &'r [SliceState],
     before: &'r [Body],
     side_forces: &'r [f64],
+    /// Per cylinder, the step's contact impulse of each side ([`EngineRun::contact_impulses`]).
+    impulses: &'r [(f64, f64)],
 }
 
 /// A failed step attempt.

@@ -70,6 +70,11 @@ pub struct CylinderSeries {
     /// Summed contact force on the thrust and anti-thrust side \[N\].
     pub thrust_force_n: Vec<f64>,
     pub antithrust_force_n: Vec<f64>,
+    /// Contact impulse of each side over the base step ending at the sample, its sub-steps
+    /// included [N s]: summed over a slap it is the momentum the contact gave the piston (the
+    /// force samples above are the base steps' ends and miss a slap shorter than a step).
+    pub thrust_impulse_n_s: Vec<f64>,
+    pub antithrust_impulse_n_s: Vec<f64>,
     /// Quasi-static side force \[N\] and cylinder pressure \[Pa\].
     pub side_force_n: Vec<f64>,
     pub pressure_pa: Vec<f64>,
