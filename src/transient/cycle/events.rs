@@ -27,13 +27,13 @@
 
 use serde::Serialize;
 
-/// A side apart for more than this crank angle begins a new event at its next contact [deg]
+/// A side apart for more than this crank angle begins a new event at its next contact \[deg\]
 /// (the impact and its first rebounds last about 1.5 deg on the default engine:
 /// `transient.slap_span_deg`).
 pub const EVENT_SEPARATION_DEG: f64 = 3.0;
 
 /// Onsets of the same side within this crank angle of each other, in different cycles, are
-/// one event [deg] (the firing slap's onset moves by a few degrees from cycle to cycle).
+/// one event \[deg\] (the firing slap's onset moves by a few degrees from cycle to cycle).
 pub const EVENT_CLUSTER_DEG: f64 = 10.0;
 
 /// One cycle's slap event (see the module docs).
@@ -45,11 +45,11 @@ pub struct SlapEvent {
     pub thrust: bool,
     pub crank_angle_deg: f64,
     pub force_n: f64,
-    /// The cylinder's own crank angle of the largest force [deg].
+    /// The cylinder's own crank angle of the largest force \[deg\].
     pub force_crank_angle_deg: f64,
     pub impact_velocity_m_s: f64,
     pub impact_energy_j: f64,
-    /// The side's contact impulse over the event, rebounds included [N s].
+    /// The side's contact impulse over the event, rebounds included \[N s\].
     pub impulse_n_s: f64,
 }
 
@@ -81,7 +81,7 @@ impl Mean {
 pub struct EventSummary {
     /// "thrust" or "antithrust".
     pub side: &'static str,
-    /// Mean onset crank angle (the cylinder's own) [deg].
+    /// Mean onset crank angle (the cylinder's own) \[deg\].
     pub crank_angle_deg: f64,
     pub force_n: Mean,
     pub impact_velocity_m_s: Mean,
@@ -93,18 +93,18 @@ pub struct EventSummary {
 
 /// What one committed step shows of one cylinder.
 pub(super) struct SideSample {
-    /// Global crank angle at the end of the step, and the cylinder's own [deg].
+    /// Global crank angle at the end of the step, and the cylinder's own \[deg\].
     pub global_deg: f64,
     pub own_deg: f64,
     /// Summed contact force of the thrust and anti-thrust side, quasi-static side force [N].
     pub forces: (f64, f64),
     pub side_force: f64,
     /// Per side, the approach rate of its deepest slice and the piston's secondary kinetic
-    /// energy at that slice's contact onset within the step ([m/s], [J]; what an event starting
+    /// energy at that slice's contact onset within the step ([m/s], \[J\]; what an event starting
     /// in this step takes as its impact).
     pub rates: (f64, f64),
     pub kinetic_energy: (f64, f64),
-    /// Per side, the step's contact impulse [N s].
+    /// Per side, the step's contact impulse \[N s\].
     pub impulses: (f64, f64),
 }
 

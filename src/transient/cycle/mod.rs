@@ -497,9 +497,10 @@ impl<'a> EngineRun<'a> {
 
     /// Each cylinder's contact impulse per side over the committed step of `dt`, as the
     /// integrator delivers it to the pistons, M (v_{n+1} - v_n) = dt ((1 - gamma) M a_n +
-    /// gamma M a_{n+1}): dt ((1 - gamma) C_n + gamma C_{n+1}) with C_{n+1} = (1 + alpha) F_{n+1}
-    /// - alpha F_n the side's summed slice force as HHT-alpha weights it (alpha = 0, gamma = 1/2:
-    /// the trapezoid), plus the onset corrections' impulses when they are applied. Summed over
+    /// gamma M a_{n+1}): dt ((1 - gamma) C_n + gamma C_{n+1}) with
+    /// C_{n+1} = (1 + alpha) F_{n+1} - alpha F_n the side's summed slice force as HHT-alpha
+    /// weights it (alpha = 0, gamma = 1/2: the trapezoid), plus the onset corrections'
+    /// impulses when they are applied. Summed over
     /// steps it is the momentum the contact gave the piston; also added to the impulses since
     /// the last sample. Call before [`EngineRun::record_step`] (F_n is the last step's).
     fn contact_impulses(
@@ -1031,7 +1032,7 @@ impl<'a> EngineRun<'a> {
     }
 
     /// Runs `steps` steps of `h` from the current state and returns each cylinder's slap
-    /// events with their onset in the window ([`events`]; an event in contact at the start
+    /// events with their onset in the window ([`SlapEvent`]; an event in contact at the start
     /// counts from there), so that settings can be compared on identical slaps.
     pub fn window_events(
         mut self,

@@ -71,7 +71,7 @@ pub struct CylinderSeries {
     pub thrust_force_n: Vec<f64>,
     pub antithrust_force_n: Vec<f64>,
     /// Contact impulse of each side over the base step ending at the sample, its sub-steps
-    /// included [N s]: summed over a slap it is the momentum the contact gave the piston (the
+    /// included \[N s\]: summed over a slap it is the momentum the contact gave the piston (the
     /// force samples above are the base steps' ends and miss a slap shorter than a step).
     pub thrust_impulse_n_s: Vec<f64>,
     pub antithrust_impulse_n_s: Vec<f64>,
@@ -228,7 +228,7 @@ impl StepError {
 /// The firing-slap window of the step-error estimate, in the cylinder's own crank angle \[deg\].
 pub const STEP_ERROR_WINDOW_DEG: (f64, f64) = (320.0, 430.0);
 /// How much of each end of the window the output filter may take before the window is
-/// widened (the compared part keeps covering 355-395 deg, the firing slap) [deg].
+/// widened (the compared part keeps covering 355-395 deg, the firing slap) \[deg\].
 pub(super) const SLAP_MARGIN_DEG: f64 = 35.0;
 
 /// Estimated relative step error of the mean of all peaks: 2 |sum (P_h - P_{h/2})| / sum P_h
