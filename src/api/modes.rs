@@ -38,6 +38,9 @@ pub struct ModesReport {
     /// Modes the first Lanczos solve missed (found by the Sturm count) and a second solve
     /// recovered; 0 when none was missed.
     pub recovered_modes: usize,
+    /// The shift frequency the modes were solved at \[Hz\]: the one asked for, or where the
+    /// solver moved a shift far below the wanted modes (`eigen::modal::placed_shift`; a
+    /// warning says so).
     pub shift_hz: f64,
     pub factor_nnz: usize,
     pub solves: usize,
@@ -109,6 +112,15 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
         vtu::write_part_modes(path, &model.mesh, &model.dofs, &shapes, &freqs)?;
     }
     let max_residual = sol.residuals.iter().copied().fold(0.0, f64::max);
+    let mut warnings = part.checks.warnings;
+    let used_hz = (-sol.sigma).max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
+    if sol.sigma != sigma {
+        warnings.push(format!(
+            "the shift {shift_hz} Hz lay far below the lowest {} modes: they were solved at {} Hz (--shift-hz near the lowest modes saves the extra factorisation)",
+            req.count,
+            crate::text::num(used_hz)
+        ));
+    }
     Ok(ModesReport {
         frequencies_hz: (0..sol.modes.count())
             .map(|j| sol.modes.frequency_hz(j))
@@ -125,13 +137,13 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
         m_orthogonality_error: sol.m_orthogonality,
         sturm: sol.sturm,
         recovered_modes: sol.recovered,
-        shift_hz,
+        shift_hz: used_hz,
         factor_nnz: model.analysis.factor_nnz(),
         solves: sol.modes.solves,
         mass_products: sol.modes.mass_products,
         ncv: sol.modes.ncv,
         timings: model.timings.clone(),
-        warnings: part.checks.warnings,
+        warnings,
         material,
     })
 }
