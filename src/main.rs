@@ -575,6 +575,10 @@ struct ModesOptions {
     /// Shift frequency f_s of sigma = -(2 pi f_s)^2 [Hz] (default: the scene's, or 100).
     #[arg(long, value_name = "HZ")]
     shift_hz: Option<f64>,
+    /// Solve at the shift as given, even far below the wanted modes (by default such a shift
+    /// is moved to them, with a warning).
+    #[arg(long)]
+    keep_shift: bool,
     /// Print JSON on stdout.
     #[arg(long)]
     json: bool,
@@ -603,6 +607,7 @@ fn modes_command(
     let ModesOptions {
         count,
         shift_hz,
+        keep_shift,
         json,
         vtu,
         assembly,
@@ -637,6 +642,7 @@ fn modes_command(
         },
         vtu,
         shift_hz,
+        keep_shift,
     };
     let report = modes::run(&req, started)?;
     print_report(json, &report, || report.to_text());

@@ -18,6 +18,8 @@ pub struct ModesRequest {
     pub vtu: Option<PathBuf>,
     /// Overrides the scene's shift frequency \[Hz\].
     pub shift_hz: Option<f64>,
+    /// Solve at the shift as given (`eigen::modal::placed_shift` not asked).
+    pub keep_shift: bool,
 }
 
 /// The result as printed (JSON with `--json`).
@@ -103,7 +105,7 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
     }
     progress.phase("factorising and solving (ARPACK shift-invert)");
     let sigma = -(2.0 * std::f64::consts::PI * shift_hz).powi(2);
-    let sol = model.modes(req.count, sigma, part.guard_modes)?;
+    let sol = model.modes_at(req.count, sigma, part.guard_modes, !req.keep_shift)?;
     if let Some(path) = &req.vtu {
         progress.phase("writing VTU");
         let n = sol.modes.count();

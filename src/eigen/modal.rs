@@ -49,7 +49,19 @@ impl FeModel {
         sigma: f64,
         guard: usize,
     ) -> Result<ModalSolution, ModalError> {
-        let (sol, t) = certified_modes(&self.km, &self.analysis, count, sigma, guard)?;
+        self.modes_at(count, sigma, guard, true)
+    }
+
+    /// As [`FeModel::modes`]; `place`: move a shift far below the wanted modes to them
+    /// ([`placed_shift`]), else solve at `sigma` as given.
+    pub fn modes_at(
+        &mut self,
+        count: usize,
+        sigma: f64,
+        guard: usize,
+        place: bool,
+    ) -> Result<ModalSolution, ModalError> {
+        let (sol, t) = certified_modes(&self.km, &self.analysis, count, sigma, guard, place)?;
         self.timings.factorisation = t.factorisation;
         self.timings.eigen = t.eigen;
         self.timings.certification = t.certification;
@@ -77,10 +89,18 @@ pub fn certified_modes(
     count: usize,
     sigma: f64,
     guard: usize,
+    place: bool,
 ) -> Result<(ModalSolution, Timings), ModalError> {
     // the shift is checked on the first solve; re-solves keep the one it chose
     let solve = |nev: usize, attempt: usize, sigma: f64| {
-        lanczos(km, analysis, nev, sigma, attempt as u64, attempt == 0)
+        lanczos(
+            km,
+            analysis,
+            nev,
+            sigma,
+            attempt as u64,
+            place && attempt == 0,
+        )
     };
     certify_with_recovery(km, analysis, count, sigma, guard, solve)
 }
@@ -348,7 +368,7 @@ mod tests {
         let model = FeModel::build(mesh, &steel, &["x0".to_string()]).unwrap();
         let sigma = -1e4;
         let (km, an) = (&model.km, &model.analysis);
-        let (direct, _) = certified_modes(km, an, 8, sigma, 2).unwrap();
+        let (direct, _) = certified_modes(km, an, 8, sigma, 2, true).unwrap();
         let drop_mode = |mut m: Modes, j: usize| {
             let n = m.n;
             m.eigenvalues.remove(j);

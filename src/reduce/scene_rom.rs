@@ -609,6 +609,7 @@ pub fn full_modes(scene: &Scene, count: usize) -> Result<SceneFullModes> {
         count,
         scene.solver.sigma(),
         scene.solver.guard_modes,
+        true,
     )?;
     let modes = super::full::FullModes {
         frequencies_hz: (0..sol.modes.count())

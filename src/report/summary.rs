@@ -113,6 +113,45 @@ fn ranking_resolution(r: &Report) -> String {
     text
 }
 
+/// Each cylinder's worst point and the slap event its peak follows (`peak_negative_event`),
+/// with the event's means and standard errors, as a markdown section (empty without events).
+fn slap_section(r: &Report) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let rows: Vec<String> = r
+        .simulate
+        .cylinders
+        .iter()
+        .filter_map(|c| {
+            let w = c.worst_point()?;
+            let e = c.slap_events.get(w.peak_negative_event?)?;
+            Some(format!(
+                "| {} | {} | {} | {:.1} | {:.2} ± {:.2} | {:.3} ± {:.3} | {:.1} ± {:.1} | {} of {} |",
+                c.cylinder,
+                w.point,
+                e.side,
+                e.crank_angle_deg,
+                e.force_n.value / 1e3,
+                e.force_n.se / 1e3,
+                e.impact_velocity_m_s.value,
+                e.impact_velocity_m_s.se,
+                e.impact_energy_j.value * 1e3,
+                e.impact_energy_j.se * 1e3,
+                w.event_cycles,
+                r.simulate.stats.cycles_averaged,
+            ))
+        })
+        .collect();
+    if rows.is_empty() {
+        return s;
+    }
+    let _ = writeln!(s, "\n## The slaps behind the peaks\n\nEach cylinder's worst point and the slap event its peak negative acceleration follows (the event whose onset precedes the peak in most averaged cycles, and in how many), with the event's means ± standard errors over the cycles it occurs in; all events are in `simulate.json` (`slap_events`).\n\n| cylinder | worst point | side | onset [deg] | force [kN] | impact velocity [m/s] | impact energy [mJ] | peak follows it in |\n|---|---|---|---|---|---|---|---|");
+    for row in rows {
+        let _ = writeln!(s, "{row}");
+    }
+    s
+}
+
 /// `summary.md` of report `r` of `scene` written to `out`.
 pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     use std::fmt::Write;
@@ -159,6 +198,7 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
             cr.side_force_crank_angle_deg
         );
     }
+    s.push_str(&slap_section(r));
     let _ = writeln!(s, "\n## Why the cylinders differ\n\nDominant response {:.0} Hz. Nearest system modes, with each cylinder's largest normalised radial coefficient at its analysis points and the correlation of those with the per-cylinder peak:\n", ev.dominant_hz);
     let _ = writeln!(s, "| mode [Hz] | coefficients (cylinders {:?}) | Pearson r | Spearman rho |\n|---|---|---|---|", ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>());
     for m in &ev.nearest_modes {

@@ -49,7 +49,9 @@ pub struct SlapEvent {
     pub force_crank_angle_deg: f64,
     pub impact_velocity_m_s: f64,
     pub impact_energy_j: f64,
-    /// The side's contact impulse over the event, rebounds included \[N s\].
+    /// The side's contact impulse over the whole event, from the onset to the step that
+    /// separates after its last rebound: the slap's momentum and, when the side stays in
+    /// contact, the steady support against the side force until it lifts off \[N s\].
     pub impulse_n_s: f64,
 }
 
