@@ -121,200 +121,258 @@ fn start_vector(n: usize, seed: u64) -> Vec<f64> {
 }
 
 /// Lowest `settings.count` eigenpairs of (K, M) given y = M x (`mass`) and x <- A^{-1} x
-/// (`solve`, A = K - sigma M).
+/// (`solve`, A = K - sigma M): ARPACK's workspace (`Workspace::new`, refused when it would not
+/// fit in memory), its reverse-communication loop (`Workspace::iterate`) and the Ritz
+/// vectors (`Workspace::extract`), under the process-wide ARPACK lock.
 pub fn solve_modes(
     n: usize,
     settings: &EigenSettings,
-    mut mass: impl FnMut(&[f64], &mut [f64]),
-    mut solve: impl FnMut(&mut [f64]),
+    mass: impl FnMut(&[f64], &mut [f64]),
+    solve: impl FnMut(&mut [f64]),
 ) -> Result<Modes, EigenError> {
-    let nev = settings.count;
-    if nev == 0 || nev >= n {
-        return Err(EigenError::TooMany { count: nev, n });
-    }
-    let ncv = if settings.ncv == 0 {
-        (2 * nev + 1).max(nev + 16).min(n)
-    } else {
-        settings.ncv.clamp(nev + 1, n)
-    };
-    // the Lanczos basis n x ncv, the eigenvectors n x nev and ARPACK's workspace
-    let need = 8.0 * (n as f64 * (ncv + nev) as f64 + (ncv * (ncv + 8)) as f64);
-    let available = crate::machine::available_memory() as f64;
-    if need > 0.8 * available {
-        return Err(EigenError::TooLarge {
-            count: nev,
-            n,
-            gb: crate::text::num(need / 1e9),
-            available_gb: crate::text::num(available / 1e9),
-        });
-    }
-    let lworkl = ncv * (ncv + 8);
-    let mut resid = start_vector(n, settings.seed);
-    let mut v = vec![0.0; n * ncv];
-    let mut workd = vec![0.0; 3 * n];
-    let mut workl = vec![0.0; lworkl];
-    let mut iparam = [0 as c_int; 11];
-    let mut ipntr = [0 as c_int; 11];
-    iparam[0] = 1; // exact shifts
-    iparam[2] = settings.max_restarts as c_int;
-    iparam[6] = 3; // shift-invert mode
-    let mut ido: c_int = 0;
-    let mut info: c_int = 1; // use resid as the start vector
-    let bmat = c"G";
-    let which = c"LM";
-    let (mut solves, mut mass_products) = (0usize, 0usize);
-    let mut tmp = vec![0.0; n];
-    let (mut t_solve, mut t_mass, mut t_arpack) = (0.0, 0.0, 0.0);
-    let clock = std::time::Instant::now;
+    let mut ws = Workspace::new(n, settings)?;
     let _guard = ARPACK_LOCK.lock().unwrap_or_else(|p| p.into_inner());
     super::arpack::single_threaded_blas();
     take_lapack_error();
-    let lapack_failed =
-        || take_lapack_error().map(|(routine, argument)| EigenError::Lapack { routine, argument });
-    loop {
-        let t0 = clock();
-        // SAFETY: all arrays have the sizes dsaupd documents (resid n, v n x ncv, workd 3n,
-        // workl lworkl, iparam/ipntr 11); strings are NUL-terminated.
-        unsafe {
-            dsaupd_c(
-                &mut ido,
-                bmat.as_ptr(),
-                n as c_int,
-                which.as_ptr(),
-                nev as c_int,
-                settings.tol,
-                resid.as_mut_ptr(),
-                ncv as c_int,
-                v.as_mut_ptr(),
-                n as c_int,
-                iparam.as_mut_ptr(),
-                ipntr.as_mut_ptr(),
-                workd.as_mut_ptr(),
-                workl.as_mut_ptr(),
-                lworkl as c_int,
-                &mut info,
-            );
-        }
-        t_arpack += t0.elapsed().as_secs_f64();
-        if let Some(e) = lapack_failed() {
-            return Err(e);
-        }
-        let x0 = ipntr[0] as usize - 1;
-        let y0 = ipntr[1] as usize - 1;
-        match ido {
-            -1 => {
-                // y = A^{-1} M x
-                let t = clock();
-                mass(&workd[x0..x0 + n], &mut tmp);
-                mass_products += 1;
-                t_mass += t.elapsed().as_secs_f64();
-                let t = clock();
-                solve(&mut tmp);
-                solves += 1;
-                t_solve += t.elapsed().as_secs_f64();
-                workd[y0..y0 + n].copy_from_slice(&tmp);
-            }
-            1 => {
-                // y = A^{-1} (M x), M x supplied at ipntr[2]
-                let b0 = ipntr[2] as usize - 1;
-                tmp.copy_from_slice(&workd[b0..b0 + n]);
-                let t = clock();
-                solve(&mut tmp);
-                solves += 1;
-                t_solve += t.elapsed().as_secs_f64();
-                workd[y0..y0 + n].copy_from_slice(&tmp);
-            }
-            2 => {
-                let t = clock();
-                mass(&workd[x0..x0 + n], &mut tmp);
-                mass_products += 1;
-                t_mass += t.elapsed().as_secs_f64();
-                workd[y0..y0 + n].copy_from_slice(&tmp);
-            }
-            99 => break,
-            other => unreachable!("ARPACK asked for unknown ido = {other}"),
-        }
-    }
-    let restarts = iparam[2] as usize;
-    if info < 0 {
-        return Err(EigenError::Saupd {
-            info,
-            msg: saupd_message(info),
-        });
-    }
-    let converged = iparam[4] as usize;
-    if converged < nev {
-        return Err(EigenError::NotConverged {
-            converged,
-            wanted: nev,
-            restarts,
-            msg: saupd_message(info),
-        });
-    }
-    let t0 = clock();
-    let select = vec![0 as c_int; ncv];
-    let mut d = vec![0.0; nev];
-    let mut z = vec![0.0; n * nev];
-    let mut info2: c_int = 0;
-    // SAFETY: as above; z is n x nev, d has nev entries, select ncv.
-    unsafe {
-        dseupd_c(
-            1,
-            c"A".as_ptr(),
-            select.as_ptr(),
-            d.as_mut_ptr(),
-            z.as_mut_ptr(),
-            n as c_int,
-            settings.sigma,
-            bmat.as_ptr(),
-            n as c_int,
-            which.as_ptr(),
-            nev as c_int,
-            settings.tol,
-            resid.as_mut_ptr(),
-            ncv as c_int,
-            v.as_mut_ptr(),
-            n as c_int,
-            iparam.as_mut_ptr(),
-            ipntr.as_mut_ptr(),
-            workd.as_mut_ptr(),
-            workl.as_mut_ptr(),
-            lworkl as c_int,
-            &mut info2,
-        );
-    }
-    if let Some(e) = lapack_failed() {
-        return Err(e);
-    }
+    let work = ws.iterate(settings, mass, solve)?;
+    let t0 = std::time::Instant::now();
+    let (eigenvalues, vectors) = ws.extract(settings)?;
     drop(_guard);
-    t_arpack += t0.elapsed().as_secs_f64();
-    if info2 != 0 {
-        return Err(EigenError::Seupd {
-            info: info2,
-            msg: seupd_message(info2),
-        });
-    }
-    if let Some(index) = d.iter().position(|x| !x.is_finite()) {
-        return Err(EigenError::NonFinite { index });
-    }
-    // ascending order
-    let mut order: Vec<usize> = (0..nev).collect();
-    order.sort_by(|&a, &b| d[a].total_cmp(&d[b]));
-    let eigenvalues = order.iter().map(|&i| d[i]).collect();
-    let mut vectors = Vec::with_capacity(n * nev);
-    for &i in &order {
-        vectors.extend_from_slice(&z[i * n..(i + 1) * n]);
-    }
     Ok(Modes {
         eigenvalues,
         vectors,
         n,
-        solves,
-        mass_products,
-        restarts,
-        ncv,
-        seconds_solve: t_solve,
-        seconds_mass: t_mass,
-        seconds_arpack: t_arpack,
+        solves: work.solves,
+        mass_products: work.mass_products,
+        restarts: work.restarts,
+        ncv: ws.ncv,
+        seconds_solve: work.seconds_solve,
+        seconds_mass: work.seconds_mass,
+        seconds_arpack: work.seconds_arpack + t0.elapsed().as_secs_f64(),
     })
+}
+
+/// The LAPACK argument error recorded inside ARPACK since the last check, as an error.
+fn lapack_failed() -> Option<EigenError> {
+    take_lapack_error().map(|(routine, argument)| EigenError::Lapack { routine, argument })
+}
+
+/// What the reverse-communication loop did.
+struct Work {
+    solves: usize,
+    mass_products: usize,
+    restarts: usize,
+    seconds_solve: f64,
+    seconds_mass: f64,
+    seconds_arpack: f64,
+}
+
+/// ARPACK's arrays for one solve, sized as dsaupd documents them: resid n, v n x ncv, workd 3n,
+/// workl ncv (ncv + 8), iparam and ipntr 11.
+struct Workspace {
+    n: usize,
+    nev: usize,
+    ncv: usize,
+    resid: Vec<f64>,
+    v: Vec<f64>,
+    workd: Vec<f64>,
+    workl: Vec<f64>,
+    iparam: [c_int; 11],
+    ipntr: [c_int; 11],
+}
+
+impl Workspace {
+    /// The workspace of `settings` on n DOFs: ncv = max(2 nev + 1, nev + 16) (or the
+    /// settings' own) at most n; refused when nev is not below n, or when the Lanczos basis
+    /// n x ncv, the eigenvectors n x nev and ARPACK's work would take more than 80 % of the
+    /// available memory.
+    fn new(n: usize, settings: &EigenSettings) -> Result<Self, EigenError> {
+        let nev = settings.count;
+        if nev == 0 || nev >= n {
+            return Err(EigenError::TooMany { count: nev, n });
+        }
+        let ncv = if settings.ncv == 0 {
+            (2 * nev + 1).max(nev + 16).min(n)
+        } else {
+            settings.ncv.clamp(nev + 1, n)
+        };
+        let need = 8.0 * (n as f64 * (ncv + nev) as f64 + (ncv * (ncv + 8)) as f64);
+        let available = crate::machine::available_memory() as f64;
+        if need > 0.8 * available {
+            return Err(EigenError::TooLarge {
+                count: nev,
+                n,
+                gb: crate::text::num(need / 1e9),
+                available_gb: crate::text::num(available / 1e9),
+            });
+        }
+        let mut iparam = [0 as c_int; 11];
+        iparam[0] = 1; // exact shifts
+        iparam[2] = settings.max_restarts as c_int;
+        iparam[6] = 3; // shift-invert mode
+        Ok(Workspace {
+            n,
+            nev,
+            ncv,
+            resid: start_vector(n, settings.seed),
+            v: vec![0.0; n * ncv],
+            workd: vec![0.0; 3 * n],
+            workl: vec![0.0; ncv * (ncv + 8)],
+            iparam,
+            ipntr: [0 as c_int; 11],
+        })
+    }
+
+    /// dsaupd's reverse-communication loop: y = A^{-1} M x (ido -1), y = A^{-1} (M x) with M x
+    /// given (ido 1), y = M x (ido 2), until it is done (99); then its info and the number of
+    /// converged Ritz values checked.
+    fn iterate(
+        &mut self,
+        settings: &EigenSettings,
+        mut mass: impl FnMut(&[f64], &mut [f64]),
+        mut solve: impl FnMut(&mut [f64]),
+    ) -> Result<Work, EigenError> {
+        let (n, nev, ncv) = (self.n, self.nev, self.ncv);
+        let mut work = Work {
+            solves: 0,
+            mass_products: 0,
+            restarts: 0,
+            seconds_solve: 0.0,
+            seconds_mass: 0.0,
+            seconds_arpack: 0.0,
+        };
+        let mut tmp = vec![0.0; n];
+        let mut ido: c_int = 0;
+        let mut info: c_int = 1; // use resid as the start vector
+        let clock = std::time::Instant::now;
+        loop {
+            let t0 = clock();
+            // SAFETY: all arrays have the sizes dsaupd documents (Workspace); strings are
+            // NUL-terminated.
+            unsafe {
+                dsaupd_c(
+                    &mut ido,
+                    c"G".as_ptr(),
+                    n as c_int,
+                    c"LM".as_ptr(),
+                    nev as c_int,
+                    settings.tol,
+                    self.resid.as_mut_ptr(),
+                    ncv as c_int,
+                    self.v.as_mut_ptr(),
+                    n as c_int,
+                    self.iparam.as_mut_ptr(),
+                    self.ipntr.as_mut_ptr(),
+                    self.workd.as_mut_ptr(),
+                    self.workl.as_mut_ptr(),
+                    self.workl.len() as c_int,
+                    &mut info,
+                );
+            }
+            work.seconds_arpack += t0.elapsed().as_secs_f64();
+            if let Some(e) = lapack_failed() {
+                return Err(e);
+            }
+            if ido == 99 {
+                break;
+            }
+            let x0 = self.ipntr[0] as usize - 1;
+            let y0 = self.ipntr[1] as usize - 1;
+            // M x first, where ARPACK does not supply it
+            match ido {
+                -1 | 2 => {
+                    let t = clock();
+                    mass(&self.workd[x0..x0 + n], &mut tmp);
+                    work.mass_products += 1;
+                    work.seconds_mass += t.elapsed().as_secs_f64();
+                }
+                1 => {
+                    let b0 = self.ipntr[2] as usize - 1;
+                    tmp.copy_from_slice(&self.workd[b0..b0 + n]);
+                }
+                other => unreachable!("ARPACK asked for unknown ido = {other}"),
+            }
+            if ido != 2 {
+                let t = clock();
+                solve(&mut tmp);
+                work.solves += 1;
+                work.seconds_solve += t.elapsed().as_secs_f64();
+            }
+            self.workd[y0..y0 + n].copy_from_slice(&tmp);
+        }
+        work.restarts = self.iparam[2] as usize;
+        if info < 0 {
+            return Err(EigenError::Saupd {
+                info,
+                msg: saupd_message(info),
+            });
+        }
+        let converged = self.iparam[4] as usize;
+        if converged < nev {
+            return Err(EigenError::NotConverged {
+                converged,
+                wanted: nev,
+                restarts: work.restarts,
+                msg: saupd_message(info),
+            });
+        }
+        Ok(work)
+    }
+
+    /// dseupd's Ritz values and vectors of a converged loop, ascending: (eigenvalues, vectors
+    /// column-major n x nev); a non-finite eigenvalue is an error naming the mode.
+    fn extract(&mut self, settings: &EigenSettings) -> Result<(Vec<f64>, Vec<f64>), EigenError> {
+        let (n, nev, ncv) = (self.n, self.nev, self.ncv);
+        let select = vec![0 as c_int; ncv];
+        let mut d = vec![0.0; nev];
+        let mut z = vec![0.0; n * nev];
+        let mut info: c_int = 0;
+        // SAFETY: as in `iterate`; z is n x nev, d has nev entries, select ncv.
+        unsafe {
+            dseupd_c(
+                1,
+                c"A".as_ptr(),
+                select.as_ptr(),
+                d.as_mut_ptr(),
+                z.as_mut_ptr(),
+                n as c_int,
+                settings.sigma,
+                c"G".as_ptr(),
+                n as c_int,
+                c"LM".as_ptr(),
+                nev as c_int,
+                settings.tol,
+                self.resid.as_mut_ptr(),
+                ncv as c_int,
+                self.v.as_mut_ptr(),
+                n as c_int,
+                self.iparam.as_mut_ptr(),
+                self.ipntr.as_mut_ptr(),
+                self.workd.as_mut_ptr(),
+                self.workl.as_mut_ptr(),
+                self.workl.len() as c_int,
+                &mut info,
+            );
+        }
+        if let Some(e) = lapack_failed() {
+            return Err(e);
+        }
+        if info != 0 {
+            return Err(EigenError::Seupd {
+                info,
+                msg: seupd_message(info),
+            });
+        }
+        if let Some(index) = d.iter().position(|x| !x.is_finite()) {
+            return Err(EigenError::NonFinite { index });
+        }
+        let mut order: Vec<usize> = (0..nev).collect();
+        order.sort_by(|&a, &b| d[a].total_cmp(&d[b]));
+        let eigenvalues = order.iter().map(|&i| d[i]).collect();
+        let mut vectors = Vec::with_capacity(n * nev);
+        for &i in &order {
+            vectors.extend_from_slice(&z[i * n..(i + 1) * n]);
+        }
+        Ok((eigenvalues, vectors))
+    }
 }
