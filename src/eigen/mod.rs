@@ -5,5 +5,6 @@ pub mod arpack;
 pub mod certify;
 pub mod modal;
 pub mod shift_invert;
+pub mod subspace;
 
 pub use shift_invert::{solve_modes, EigenError, EigenSettings, Modes};

@@ -266,7 +266,6 @@ pub fn placed_shift(
     sigma: f64,
 ) -> Option<f64> {
     use faer::Mat;
-    use rayon::prelude::*;
     let n = km.pattern.n;
     let nev = nev.min(n.saturating_sub(1));
     let b = (2 * nev).min(n.saturating_sub(1));
@@ -274,19 +273,14 @@ pub fn placed_shift(
         return None;
     }
     let mass = km.pattern.compress(&km.m);
-    let mut state = 0x2545_f491_4f6c_dd1du64;
-    let mut x = Mat::from_fn(n, b, |_, _| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    });
-    for _ in 0..SHIFT_CHECK_PASSES {
-        let mut y = Mat::<f64>::zeros(n, b);
-        mass.mul_dense(x.as_ref(), y.as_mut());
-        y.par_col_chunks_mut(64).for_each(|p| llt.solve_in_place(p));
-        x = y.qr().compute_thin_Q();
-    }
+    let x = super::subspace::inverse_subspace(
+        &mass,
+        llt,
+        n,
+        b,
+        SHIFT_CHECK_PASSES,
+        0x2545_f491_4f6c_dd1d,
+    );
     let (mut kx, mut mx) = (Mat::<f64>::zeros(n, b), Mat::<f64>::zeros(n, b));
     km.pattern.mul_dense(&km.k, x.as_ref(), kx.as_mut());
     mass.mul_dense(x.as_ref(), mx.as_mut());

@@ -276,8 +276,8 @@ fn slab_elements(mesh: &Mesh, on_cut: &[bool], layers: usize) -> Vec<bool> {
 
 /// The shapes of one cut (3 rows per cut node, in the slab's cut order): the traces on the
 /// cut of a basis of about the lowest `count` free modes of the slab (the part's fixed sets
-/// held; [`low_subspace`]), orthonormalised (an SVD, directions below 1e-8 of the largest
-/// dropped), each scaled to a largest entry of 1. The slab's rigid motions give the cut's
+/// held; [`crate::eigen::subspace::inverse_subspace`]), orthonormalised (an SVD, directions
+/// below 1e-8 of the largest dropped), each scaled to a largest entry of 1. The slab's rigid motions give the cut's
 /// rigid motions exactly; its membrane and bending modes give smooth fields that respect the
 /// cut's connectivity (separate pieces move on their own). A cut with at most 2 `count` + 16
 /// free DOFs keeps all of them (unit shapes): no reduction, exact coupling.
@@ -325,7 +325,14 @@ fn cut_shapes(p: &Part<'_>, slab: &Slab, count: usize) -> Result<Mat<f64>, Reduc
         .analysis
         .llt(&km.pattern, &km.shifted(sigma))
         .map_err(|e| err_model(e.into()))?;
-    let x = low_subspace(&km.pattern.compress(&km.m), &llt, n, count);
+    let x = crate::eigen::subspace::inverse_subspace(
+        &km.pattern.compress(&km.m),
+        &llt,
+        n,
+        count,
+        SUBSPACE_PASSES,
+        0x9e37_79b9_7f4a_7c15,
+    );
     log::info!(
         "[{}] cut shapes: slab of {n} DOFs, {count} vectors in {:.2} s",
         p.name,
@@ -356,37 +363,13 @@ fn cut_shapes(p: &Part<'_>, slab: &Slab, count: usize) -> Result<Mat<f64>, Reduc
     Ok(psi)
 }
 
-/// Passes of [`low_subspace`]: each damps a mode's share by its eigenvalue's ratio to the
-/// block's, so the span settles on the lowest modes within a few.
+/// Passes of the cut slab's subspace iteration
+/// ([`crate::eigen::subspace::inverse_subspace`]): each damps a mode's share by its
+/// eigenvalue's ratio to the block's, so the span settles on the lowest modes within a few.
+/// Only the span is wanted (the traces keep all its directions), not converged eigenvectors:
+/// a block method needs a tenth of the solve cost per vector of Lanczos and none of its
+/// O(n ncv^2) work.
 const SUBSPACE_PASSES: usize = 5;
-
-/// A basis of about the lowest `count` modes of (K, M) (n DOFs): subspace iteration
-/// X <- (K - sigma M)^-1 M X from a fixed pseudo-random start, [`SUBSPACE_PASSES`] passes, each
-/// block solved in panels of 64 columns on both cores and orthonormalised (QR). Only the span
-/// is wanted (the traces keep all its directions), not converged eigenvectors: a block method
-/// needs a tenth of the solve cost per vector of Lanczos and none of its O(n ncv^2) work.
-fn low_subspace(
-    mass: &crate::linalg::sparse::SymCsc,
-    llt: &crate::linalg::factor::Llt<'_>,
-    n: usize,
-    count: usize,
-) -> Mat<f64> {
-    use rayon::prelude::*;
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let mut x = Mat::from_fn(n, count, |_, _| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    });
-    for _ in 0..SUBSPACE_PASSES {
-        let mut y = Mat::<f64>::zeros(n, count);
-        mass.mul_dense(x.as_ref(), y.as_mut());
-        y.par_col_chunks_mut(64).for_each(|p| llt.solve_in_place(p));
-        x = y.qr().compute_thin_Q();
-    }
-    x
-}
 
 /// What a component's reduction reads, owned (names, remapped sets, loads and outputs) with
 /// where its pieces go in the part: `blocks[k]` the part interface (or, from
