@@ -1021,3 +1021,53 @@ fn verification_slap_events_match_a_sixteenth_step_run() {
         }
     }
 }
+
+/// Verification (liner maps): at the analysis points the surface map equals the point
+/// outputs. The map's node rows are formed apart from the points' (another association of
+/// the residual flexibility, the filter applied per coordinate by FFT instead of per point
+/// directly, the minimum found through brackets), so agreement to roundoff checks the whole
+/// chain: each point's node is the surface row equal to its point row (1e-9 of the row's
+/// norm: roundoff of products over ~3,000 coordinates), and in every averaged cycle the peak
+/// negative acceleration there equals the point's (mean and largest per-cycle peak within
+/// 1e-9 relative, the same roundoff carried through a linear filter).
+#[test]
+fn verification_liner_maps_equal_the_point_outputs_at_the_points() {
+    let rom = small_rom();
+    let r = simulate(&[], |s| {
+        s.tolerance = None;
+        s.step_error = false;
+        s.surface_maps = true;
+    })
+    .unwrap();
+    assert_eq!(r.surface.len(), rom.cylinders.len());
+    for (c, (cyl, map)) in rom.cylinders.iter().zip(&r.surface).enumerate() {
+        let ns = cyl.surface.nodes.len();
+        assert!(ns > 100, "cylinder {}: {ns} surface nodes", cyl.cylinder);
+        assert_eq!(map.per_cycle.nrows(), ns);
+        assert_eq!(map.per_cycle.ncols(), r.stats.cycles_averaged);
+        let nm = cyl.point_modes.ncols();
+        for p in 0..cyl.point_modes.nrows() {
+            let dist = |n: usize| {
+                (0..nm)
+                    .map(|j| (cyl.surface.modes[[n, j]] - cyl.point_modes[[p, j]]).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            };
+            let n = (0..ns).min_by(|&a, &b| dist(a).total_cmp(&dist(b))).unwrap();
+            let norm = (0..nm).map(|j| cyl.point_modes[[p, j]].powi(2)).sum::<f64>().sqrt();
+            assert!(dist(n) <= 1e-9 * norm, "point {}: row {} of {norm}", p + 1, dist(n));
+            let res = (0..cyl.point_residual.ncols())
+                .map(|j| (cyl.surface.residual[[n, j]] - cyl.point_residual[[p, j]]).abs())
+                .fold(0.0, f64::max);
+            let res_norm = cyl.point_residual.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(res <= 1e-9 * res_norm, "point {}: residual {res} of {res_norm}", p + 1);
+            let row = map.per_cycle.row(n);
+            let mean = row.sum() / row.len() as f64;
+            let largest = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let point = r.peak_negative[[c, p]];
+            println!("cylinder {} point {}: map {mean} / {largest}, point {} / {}", cyl.cylinder, p + 1, point.value, point.max);
+            assert!((mean - point.value).abs() <= 1e-9 * point.value);
+            assert!((largest - point.max).abs() <= 1e-9 * point.max);
+        }
+    }
+}

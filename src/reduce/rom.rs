@@ -12,12 +12,13 @@ use super::interface::{self, Direction, InterfaceShape};
 use super::part_cache::{reduce_cached, PartCacheError, Source};
 use crate::fem::material::Elastic;
 use crate::fem::surface::SurfaceMass;
+use crate::mesh::liner::COOLANT_WETTED;
 use crate::mesh::Mesh;
-use faer::Mat;
+use faer::{Mat, MatRef};
 use std::time::Instant;
 
 /// Version of the ROM layout; part of the cache key (5: matrices stored as ndarray arrays).
-pub const ROM_FORMAT: u32 = 7;
+pub const ROM_FORMAT: u32 = 8;
 
 /// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
 /// system modes along the stated direction.
@@ -47,6 +48,21 @@ pub struct CylinderRom {
     /// Offset of this cylinder's contact DOFs (thrust, then anti-thrust) in the residual
     /// flexibility matrix.
     pub contact_offset: usize,
+    /// The liner's wet outer surface, for the liner maps (no nodes when the liner mesh has no
+    /// `coolant_wetted` set).
+    pub surface: SurfaceRows,
+}
+
+/// Rows of a liner's wet outer surface (node set `coolant_wetted`), each like an analysis
+/// point's: u_n = phi_n . eta + R_nc F along the outward radial direction (x, y, 0) / r.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct SurfaceRows {
+    /// Liner mesh node of each row, ascending.
+    pub nodes: Vec<usize>,
+    /// Outward radial displacement of the modes (nodes x modes).
+    pub modes: Dense,
+    /// Residual flexibility to this cylinder's contact DOFs (nodes x contact DOFs) [m/N].
+    pub residual: Dense,
 }
 
 /// Per-part summary.
@@ -141,6 +157,9 @@ impl EngineRom {
                 nm,
             )?;
             check_dense(&at("point residual"), &c.point_residual, np, nt + na)?;
+            let ns = c.surface.nodes.len();
+            check_dense(&at("surface modes"), &c.surface.modes, ns, nm)?;
+            check_dense(&at("surface residual"), &c.surface.residual, ns, nt + na)?;
             let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
             if c.preload_thrust.len() != nt
                 || c.preload_antithrust.len() != na
@@ -561,6 +580,9 @@ struct LinerRows {
     loads: Vec<Load>,
     /// Column of the clamp load among `loads`.
     clamp_load: usize,
+    /// The wet outer surface's nodes (`coolant_wetted`; empty without it), whose outputs
+    /// follow the points'.
+    surface: Vec<usize>,
     outputs: Vec<Output>,
 }
 
@@ -589,12 +611,27 @@ impl LinerRows {
         let mut outputs: Vec<Output> = thrust.iter().map(output([0.0, 1.0, 0.0])).collect();
         outputs.extend(anti.iter().map(output([0.0, -1.0, 0.0])));
         outputs.extend(points.iter().map(output([0.0, 1.0, 0.0])));
+        let mut surface = lm.node_set(COOLANT_WETTED).unwrap_or(&[]).to_vec();
+        surface.sort_unstable();
+        surface.dedup();
+        // outward radial, (x, y, 0) / r in the liner's frame (its axis is z); a node on the
+        // axis has no radial direction and is left out
+        surface.retain(|&n| lm.nodes[n][0].hypot(lm.nodes[n][1]) > 0.0);
+        outputs.extend(surface.iter().map(|&node| {
+            let [x, y, _] = lm.nodes[node];
+            let r = x.hypot(y);
+            Output {
+                node,
+                dir: [x / r, y / r, 0.0],
+            }
+        }));
         Ok(LinerRows {
             thrust,
             anti,
             points,
             loads,
             clamp_load,
+            surface,
             outputs,
         })
     }
@@ -738,6 +775,8 @@ fn point_residual(g_all: &Mat<f64>, sys: &SystemModes, b: &Basis, ncon: usize) -
 struct Assembled<'a> {
     inp: &'a RomInputs<'a>,
     rows: &'a LinerRows,
+    liner: &'a PartReduction,
+    liner_maps: &'a [Vec<usize>],
     crankcase: &'a PartReduction,
     crankcase_map: &'a [usize],
     sys: &'a SystemModes,
@@ -748,9 +787,10 @@ struct Assembled<'a> {
 
 /// One modelled cylinder's rows of the ROM: its liner's contact and point rows `g_all` (global
 /// coordinates) projected on the modes, the crankcase's point rows, the preload.
-fn cylinder_rom(a: &Assembled<'_>, cyl: usize, g_all: &Mat<f64>, offset: usize) -> CylinderRom {
+fn cylinder_rom(a: &Assembled<'_>, cyl: usize, g_all: &Mat<f64>, idx: usize) -> CylinderRom {
     let (inp, r) = (a.inp, a.rows);
     let (nt, na, np) = (r.thrust.len(), r.anti.len(), r.points.len());
+    let offset = idx * (nt + na);
     let modes_rows = g_all * &a.basis.modes;
     let pre = g_all * a.u0;
     let c = cyl - 1;
@@ -787,6 +827,44 @@ fn cylinder_rom(a: &Assembled<'_>, cyl: usize, g_all: &Mat<f64>, offset: usize) 
         preload_points: column(nt + na, np),
         point_residual: point_residual(g_all, a.sys, a.basis, nt + na),
         contact_offset: offset,
+        surface: surface_rows(a, idx, g_all.as_ref().subrows(0, nt + na)),
+    }
+}
+
+/// A cylinder's wet-surface rows ([`SurfaceRows`]) from the liner's outputs after the points
+/// (`G_s`, liner coordinates), gathered through the cylinder's map into global coordinates:
+/// modes G_s Y, and the residual flexibility to the contact rows `g_c` as in
+/// [`point_residual`], associated as G_s [Y_d L_d^-1 (g_c Y_d)^T] - (G_s Ys)(g_c Ys)^T so
+/// that no product spans both the surface rows and the dropped modes.
+fn surface_rows(a: &Assembled<'_>, idx: usize, g_c: MatRef<'_, f64>) -> SurfaceRows {
+    let r = a.rows;
+    let ns = r.surface.len();
+    if ns == 0 {
+        return SurfaceRows {
+            nodes: Vec::new(),
+            modes: Dense::zeros((0, a.basis.modes.ncols())),
+            residual: Dense::zeros((0, g_c.nrows())),
+        };
+    }
+    let (map, outputs) = (&a.liner_maps[idx], &a.liner.outputs);
+    let s0 = outputs.nrows() - ns;
+    let gather = |m: MatRef<'_, f64>| Mat::from_fn(map.len(), m.ncols(), |i, j| m[(map[i], j)]);
+    let g_s = outputs.as_ref().subrows(s0, ns);
+    let modes = g_s * gather(a.basis.modes.as_ref());
+    let (kept, n) = (a.basis.kept, a.sys.lambdas.len());
+    let y_d = a.sys.vectors.as_ref().subcols(kept, n - kept);
+    let mut gy = g_c * y_d;
+    for j in 0..n - kept {
+        let s = 1.0 / a.sys.lambdas[kept + j];
+        gy.col_mut(j).iter_mut().for_each(|v| *v *= s);
+    }
+    let w = y_d * gy.transpose();
+    let gys_c = g_c * &a.basis.ys;
+    let residual = g_s * gather(w.as_ref()) - (g_s * gather(a.basis.ys.as_ref())) * gys_c.transpose();
+    SurfaceRows {
+        nodes: r.surface.clone(),
+        modes: crate::linalg::dense::from_faer(&modes),
+        residual: crate::linalg::dense::from_faer(&residual),
     }
 }
 
@@ -892,7 +970,8 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     let sys = engine::system_modes(kg.clone(), &mg, omega_c2)?;
     let kept = sys.lambdas.iter().take_while(|&&l| l <= omega_c2).count();
     let ncon = rows.thrust.len() + rows.anti.len();
-    let (g_rows, gc) = output_rows(&liner, &liner_maps, ncon, n_g);
+    let n_rows = ncon + rows.points.len();
+    let (g_rows, gc) = output_rows(&liner, &liner_maps, ncon, n_rows, n_g);
     progress("residual vectors");
     let patterns = hat_patterns(
         &[rows.thrust.len(), rows.anti.len()],
@@ -905,6 +984,8 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
     let assembled = Assembled {
         inp,
         rows,
+        liner: &liner,
+        liner_maps: &liner_maps,
         crankcase: &crankcase,
         crankcase_map: &crankcase_map,
         sys: &sys,
@@ -916,7 +997,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         .iter()
         .zip(&g_rows)
         .enumerate()
-        .map(|(idx, (&cyl, g_all))| cylinder_rom(&assembled, cyl, g_all, idx * ncon))
+        .map(|(idx, (&cyl, g_all))| cylinder_rom(&assembled, cyl, g_all, idx))
         .collect();
     let gcs = &gc * &basis.ys;
     let rflex = residual_flexibility(&gc, &sys, kept) - &gcs * gcs.transpose();
@@ -1124,12 +1205,12 @@ fn output_rows(
     liner: &PartReduction,
     liner_maps: &[Vec<usize>],
     ncon: usize,
+    n_rows: usize,
     n_g: usize,
 ) -> (Vec<Mat<f64>>, Mat<f64>) {
-    let n_lout = liner.outputs.nrows();
     let g_rows: Vec<Mat<f64>> = liner_maps
         .iter()
-        .map(|map| scatter_rows(&liner.outputs, map, 0, n_lout, n_g))
+        .map(|map| scatter_rows(&liner.outputs, map, 0, n_rows, n_g))
         .collect();
     let mut gc = Mat::<f64>::zeros(ncon * g_rows.len(), n_g);
     for (i, g) in g_rows.iter().enumerate() {

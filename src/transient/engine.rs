@@ -35,6 +35,7 @@ pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
         tolerance: Some(t.tolerance),
         slap_substeps: t.slap_substeps,
         slap_span_deg: t.slap_span_deg,
+        surface_maps: false,
     }
 }
 

@@ -40,6 +40,7 @@ mod record;
 mod result;
 mod settings;
 mod statistics;
+mod surface;
 mod tolerance;
 
 use events::{EventRecorder, SideSample};
@@ -49,6 +50,8 @@ use record::*;
 pub use result::*;
 pub use settings::*;
 use statistics::*;
+pub use surface::SurfacePeaks;
+use surface::SurfaceRecord;
 pub use tolerance::run_with_tolerance;
 
 /// A piston slice's fixed data: which side, and its bore line.
@@ -785,6 +788,9 @@ impl<'a> EngineRun<'a> {
         let margin = self.output_margin(dt);
         let total = cycles * spc + margin;
         let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
+        let mut surface = (self.settings.surface_maps
+            && self.cyls.iter().any(|c| !c.rom.surface.nodes.is_empty()))
+        .then(|| SurfaceRecord::new(&self, ((cycles - averaged) * spc).saturating_sub(margin)));
         let mut prev_peaks: Option<CyclePeaks> = None;
         let mut kept: Vec<CyclePeaks> = Vec::with_capacity(averaged);
         let mut kept_cycles: Vec<usize> = Vec::with_capacity(averaged);
@@ -809,6 +815,9 @@ impl<'a> EngineRun<'a> {
             }
             self.checked_step(((g + 1) as f64) * dt)?;
             record.push(&self, g);
+            if let Some(s) = surface.as_mut() {
+                s.push(&self, g);
+            }
             if let Some(series) = building.as_mut().filter(|_| cycle < cycles) {
                 self.sample(series, cycle);
             }
@@ -833,6 +842,9 @@ impl<'a> EngineRun<'a> {
                 self.stats.cycle_change = largest_change(&peaks, prev);
             }
             if k + averaged >= cycles {
+                if let Some(s) = surface.as_mut() {
+                    s.map_cycle(&self, k, (spc, margin, dt));
+                }
                 kept.push(peaks.clone());
                 kept_cycles.push(k);
                 self.add_spectra(&series, dt, &mut power);
@@ -877,6 +889,7 @@ impl<'a> EngineRun<'a> {
             // the first failing window in time order, as a serial run would report it
             .collect::<Result<Vec<StepError>, TransientError>>()?;
         self.stats.step_error_estimate = mean_step_error(&step_error);
+        let surface = surface.map_or_else(Vec::new, |s| s.finish(&self));
         Ok(CycleResult {
             peaks,
             peak_negative,
@@ -884,6 +897,7 @@ impl<'a> EngineRun<'a> {
             series,
             stats: self.stats,
             step_error,
+            surface,
         })
     }
 

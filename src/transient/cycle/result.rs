@@ -202,6 +202,10 @@ pub struct CycleResult {
     pub stats: Stats,
     /// Step-error estimate of each cylinder's firing slap ([`StepError`]).
     pub step_error: Vec<StepError>,
+    /// Per cylinder, the wet surface's peak negative accelerations in each averaged cycle
+    /// (empty unless `surface_maps`).
+    #[serde(skip)]
+    pub surface: Vec<SurfacePeaks>,
 }
 
 /// The step error of one cylinder's peak negative accelerations, measured on its firing

@@ -56,6 +56,9 @@ pub struct CycleSettings {
     /// the modes above the band are kept for the contact response, not as outputs). None: the
     /// unfiltered sum.
     pub output_band_hz: Option<f64>,
+    /// Map the averaged cycles' peak negative acceleration over every liner's wet outer
+    /// surface ([`SurfacePeaks`]; false: the analysis points only).
+    pub surface_maps: bool,
 }
 
 /// Coupling of the cylinders within one implicit step.
