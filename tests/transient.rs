@@ -1053,19 +1053,42 @@ fn verification_liner_maps_equal_the_point_outputs_at_the_points() {
                     .sum::<f64>()
                     .sqrt()
             };
-            let n = (0..ns).min_by(|&a, &b| dist(a).total_cmp(&dist(b))).unwrap();
-            let norm = (0..nm).map(|j| cyl.point_modes[[p, j]].powi(2)).sum::<f64>().sqrt();
-            assert!(dist(n) <= 1e-9 * norm, "point {}: row {} of {norm}", p + 1, dist(n));
+            let n = (0..ns)
+                .min_by(|&a, &b| dist(a).total_cmp(&dist(b)))
+                .unwrap();
+            let norm = (0..nm)
+                .map(|j| cyl.point_modes[[p, j]].powi(2))
+                .sum::<f64>()
+                .sqrt();
+            assert!(
+                dist(n) <= 1e-9 * norm,
+                "point {}: row {} of {norm}",
+                p + 1,
+                dist(n)
+            );
             let res = (0..cyl.point_residual.ncols())
                 .map(|j| (cyl.surface.residual[[n, j]] - cyl.point_residual[[p, j]]).abs())
                 .fold(0.0, f64::max);
-            let res_norm = cyl.point_residual.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            assert!(res <= 1e-9 * res_norm, "point {}: residual {res} of {res_norm}", p + 1);
+            let res_norm = cyl
+                .point_residual
+                .iter()
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(
+                res <= 1e-9 * res_norm,
+                "point {}: residual {res} of {res_norm}",
+                p + 1
+            );
             let row = map.per_cycle.row(n);
             let mean = row.sum() / row.len() as f64;
             let largest = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             let point = r.peak_negative[[c, p]];
-            println!("cylinder {} point {}: map {mean} / {largest}, point {} / {}", cyl.cylinder, p + 1, point.value, point.max);
+            println!(
+                "cylinder {} point {}: map {mean} / {largest}, point {} / {}",
+                cyl.cylinder,
+                p + 1,
+                point.value,
+                point.max
+            );
             assert!((mean - point.value).abs() <= 1e-9 * point.value);
             assert!((largest - point.max).abs() <= 1e-9 * point.max);
         }

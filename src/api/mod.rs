@@ -306,11 +306,13 @@ impl Variants {
     }
 
     /// Runs every variant's engine cycles in parallel (`labels[k]` names variant k in a
-    /// failure); `done()` is called after each run. Returns the results with each run's wall
-    /// time \[s\], in the variants' order.
+    /// failure; the first variant maps the liners' wet surfaces when `map_first`); `done()`
+    /// is called after each run. Returns the results with each run's wall time \[s\], in the
+    /// variants' order.
     pub fn run(
         &self,
         labels: &[String],
+        map_first: bool,
         done: impl Fn() + Sync,
     ) -> Result<Vec<(CycleResult, f64)>> {
         // every variant's mode cut-off checked before any run starts
@@ -321,24 +323,22 @@ impl Variants {
             .par_iter()
             .zip(self.rom_of.par_iter())
             .zip(labels.par_iter())
-            .map(|((sc, &ri), name)| {
+            .enumerate()
+            .map(|(k, ((sc, &ri), name))| {
                 let t = Instant::now();
                 let piston = piston_of(sc)?;
                 let sim = simulation(sc)?;
                 let rom = &self.roms[ri].rom;
-                let res = run_cycle(
-                    sc,
-                    rom,
-                    &piston,
-                    settings_of(sim, sc.rom.band_hz),
-                    |_, _| {},
-                )
-                .map_err(|source| Error::Run {
-                    name: name.clone(),
-                    source: Box::new(Error::Transient {
-                        path: sc.path.clone(),
-                        source,
-                    }),
+                let mut settings = settings_of(sim, sc.rom.band_hz);
+                settings.surface_maps = map_first && k == 0;
+                let res = run_cycle(sc, rom, &piston, settings, |_, _| {}).map_err(|source| {
+                    Error::Run {
+                        name: name.clone(),
+                        source: Box::new(Error::Transient {
+                            path: sc.path.clone(),
+                            source,
+                        }),
+                    }
                 })?;
                 done();
                 Ok((res, t.elapsed().as_secs_f64()))
@@ -366,6 +366,9 @@ pub struct ReportRuns {
     /// Speed against error of the fast path on the reference window.
     pub tradeoff: Vec<TradeoffPoint>,
     pub evaluation: Evaluation,
+    /// The scene's run mapped over every liner's wet outer surface (empty when the liner mesh
+    /// has no `coolant_wetted` set).
+    pub maps: Vec<crate::cavitation::maps::LinerMap>,
 }
 
 /// What a report run varies.
@@ -448,7 +451,10 @@ pub fn report_runs(
     phase("engine ROM");
     let variants = Variants::prepare(path, sets, &extra, cache, phase)?;
     phase("transients: the scene, clearance and pin-offset sweeps");
-    let mut results = variants.run(&labels, || {})?.into_iter().map(|(r, _)| r);
+    let mut results = variants
+        .run(&labels, true, || {})?
+        .into_iter()
+        .map(|(r, _)| r);
     let base = results.next().expect("the scene's run");
     let mut clearance = vec![SweepPoint::of(cur_c, &base)];
     let mut pin_offset = vec![SweepPoint::of(cur_o, &base)];
@@ -483,7 +489,13 @@ pub fn report_runs(
     let tradeoff = tradeoff?;
     let (half_step, half_step_seconds) = check?;
     let evaluation = evaluate_scene(scene, &rom.rom, &base)?;
+    let maps = crate::cavitation::maps::liner_maps(
+        &base.surface,
+        &crate::cavitation::Setup::new(&scene.cavitation)?,
+        base.stats.autocorrelation_cycles,
+    );
     Ok(ReportRuns {
+        maps,
         base,
         half_step,
         half_step_seconds,

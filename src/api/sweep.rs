@@ -229,7 +229,7 @@ fn execute(
     let bar = super::progress::Progress::counter(indices.len() as u64 + 1);
     let mut labels: Vec<String> = indices.iter().map(|&k| label(&keys, &all[k])).collect();
     labels.push("the base design".into());
-    let mut results = variants.run(&labels, || bar.inc())?;
+    let mut results = variants.run(&labels, false, || bar.inc())?;
     drop(bar);
     let (base_res, base_seconds) = results.pop().expect("the base design's run");
     let nb = indices.len();
@@ -573,7 +573,7 @@ fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepRepor
             .collect();
         let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache, &|_| {})?;
         let labels: Vec<String> = extra.iter().map(|e| e[0].clone()).collect();
-        let results = variants.run(&labels, || {})?;
+        let results = variants.run(&labels, false, || {})?;
         for (i, ((res, seconds), x)) in results.into_iter().zip(&batch).enumerate() {
             let ri = variants.rom_of[i];
             let run = sweep_run(

@@ -4,6 +4,7 @@
 pub mod calibration;
 pub mod criteria;
 pub mod evaluate;
+pub mod maps;
 
 use crate::coolant::Coolant;
 use crate::scene::CavitationSpec;

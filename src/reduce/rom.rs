@@ -860,7 +860,8 @@ fn surface_rows(a: &Assembled<'_>, idx: usize, g_c: MatRef<'_, f64>) -> SurfaceR
     }
     let w = y_d * gy.transpose();
     let gys_c = g_c * &a.basis.ys;
-    let residual = g_s * gather(w.as_ref()) - (g_s * gather(a.basis.ys.as_ref())) * gys_c.transpose();
+    let residual =
+        g_s * gather(w.as_ref()) - (g_s * gather(a.basis.ys.as_ref())) * gys_c.transpose();
     SurfaceRows {
         nodes: r.surface.clone(),
         modes: crate::linalg::dense::from_faer(&modes),

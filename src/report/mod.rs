@@ -3,6 +3,7 @@
 
 pub mod calibration;
 pub mod figures;
+pub mod maps;
 pub mod mtx;
 pub mod png;
 pub mod records;

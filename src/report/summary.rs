@@ -29,6 +29,9 @@ pub struct Report {
     /// check's own scatter left out).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ranking_resolution_slap_only: Option<Vec<RankStep>>,
+    /// Per cylinder, where the liner map's largest mean peak lies (`liner_maps.png`,
+    /// `liner_maps.vtu`); empty when the liner mesh has no `coolant_wetted` set.
+    pub liner_maps: Vec<crate::report::maps::MapSummary>,
     pub files: Vec<String>,
     pub seconds: f64,
 }
@@ -152,6 +155,34 @@ fn slap_section(r: &Report) -> String {
     s
 }
 
+/// The liner maps' section of summary.md: per cylinder where the largest mean peak lies.
+fn maps_section(r: &Report) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    if r.liner_maps.is_empty() {
+        return s;
+    }
+    let _ = writeln!(s, "\n## Where on the liner\n\nThe peak negative acceleration at every node of each liner's wet outer surface, mean over the averaged cycles (`liner_maps.png`: unrolled; `liner_maps.vtu`: for ParaView, with `ca` and `cavitating_fraction`, the share of the cycles with Ca < 1, and their standard errors). Per cylinder the node with the largest mean (angle from +x: thrust side 90 deg; depth below the liner top), its values ± standard errors, and the share of the wet surface whose mean peak is past Ca = 1.\n\n| cylinder | nodes | largest at [deg, mm] | peak negative [m/s^2] | Ca | cycles with Ca < 1 | surface past Ca = 1 |\n|---|---|---|---|---|---|---|");
+    for m in &r.liner_maps {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.0}, {:.0} | {:.0} ± {:.0} | {:.2} ± {:.2} | {:.0} ± {:.0} % | {:.1} % |",
+            m.cylinder,
+            m.nodes,
+            m.hottest_theta_deg,
+            m.hottest_depth_mm,
+            m.peak_negative_m_s2,
+            m.peak_negative_se_m_s2,
+            m.ca,
+            m.ca_se,
+            100.0 * m.cavitating_fraction,
+            100.0 * m.cavitating_fraction_se,
+            100.0 * m.share_ca_below_1
+        );
+    }
+    s
+}
+
 /// `summary.md` of report `r` of `scene` written to `out`.
 pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     use std::fmt::Write;
@@ -199,6 +230,7 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
         );
     }
     s.push_str(&slap_section(r));
+    s.push_str(&maps_section(r));
     let _ = writeln!(s, "\n## Why the cylinders differ\n\nDominant response {:.0} Hz. Nearest system modes, with each cylinder's largest normalised radial coefficient at its analysis points and the correlation of those with the per-cylinder peak:\n", ev.dominant_hz);
     let _ = writeln!(s, "| mode [Hz] | coefficients (cylinders {:?}) | Pearson r | Spearman rho |\n|---|---|---|---|", ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>());
     for m in &ev.nearest_modes {

@@ -145,8 +145,12 @@ impl SurfaceRecord {
                 let ncon = cyl.rom.thrust_z.len() + cyl.rom.antithrust_z.len();
                 let f_bar = window.outputs(loads, ncon, &batch);
                 let mut x = Mat::<f64>::zeros(eta_bar.nrows() + ncon, spc);
-                x.as_mut().subrows_mut(0, eta_bar.nrows()).copy_from(&eta_bar);
-                x.as_mut().subrows_mut(eta_bar.nrows(), ncon).copy_from(&f_bar);
+                x.as_mut()
+                    .subrows_mut(0, eta_bar.nrows())
+                    .copy_from(&eta_bar);
+                x.as_mut()
+                    .subrows_mut(eta_bar.nrows(), ncon)
+                    .copy_from(&f_bar);
                 let mut p = proj
                     .take()
                     .unwrap_or_else(|| Projector::new(surface, x.as_ref(), None));
@@ -372,8 +376,17 @@ impl Projector {
             );
             for i in 0..nb {
                 let n = n0 + i;
-                let y = yhat.col(i).try_as_col_major().expect("contiguous").as_slice();
-                let r = self.rows_t.col(n).try_as_col_major().expect("contiguous").as_slice();
+                let y = yhat
+                    .col(i)
+                    .try_as_col_major()
+                    .expect("contiguous")
+                    .as_slice();
+                let r = self
+                    .rows_t
+                    .col(n)
+                    .try_as_col_major()
+                    .expect("contiguous")
+                    .as_slice();
                 let exact = |t: usize| dot(r, column(t));
                 let (b, w) = (self.tail[n], ROUNDOFF * self.norm[n]);
                 let half = |t: usize| b * c[t] + w * xn[t];
