@@ -214,6 +214,11 @@ enum Command {
         /// does not: the coarse step's shift of the cycles' statistics between the slaps.
         #[arg(long)]
         check_step: bool,
+        /// Also map the peak negative acceleration over every node of each liner's wet outer
+        /// surface: per cylinder the largest mean and where it lies in the output, and with
+        /// --out liner_maps.png (unrolled) and liner_maps.vtu (ParaView).
+        #[arg(long)]
+        maps: bool,
         #[command(flatten)]
         cache: CacheArgs,
     },
@@ -431,6 +436,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             out,
             full_order,
             check_step,
+            maps,
             cache,
         } => {
             let req = simulate::SimulateRequest {
@@ -440,6 +446,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 cache: cache.options(),
                 full_order,
                 check_step,
+                maps,
             };
             let report = simulate::run(&req, started)?;
             print_report(json, &report, || report.to_text());

@@ -123,8 +123,43 @@ fn contract_report_writes_the_figure_set() {
         "criteria.png",
         "speed_error.png",
         "frf.png",
+        "liner_maps.png",
     ] {
         assert!(is_png(&out.join(f)), "{f}");
+    }
+    // the liner maps for ParaView: every field named, one value per surface node, and the
+    // largest mean peak of each map at least its worst analysis point's (the points are
+    // surface nodes)
+    let vtu = std::fs::read_to_string(out.join("liner_maps.vtu")).unwrap();
+    let points: usize = vtu
+        .split("NumberOfPoints=\"")
+        .nth(1)
+        .and_then(|r| r.split('"').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap();
+    for name in [
+        "peak_negative_m_s2",
+        "peak_negative_se_m_s2",
+        "ca",
+        "ca_se",
+        "cavitating_fraction",
+        "cavitating_fraction_se",
+        "cylinder",
+    ] {
+        let body = vtu
+            .split(&format!("Name=\"{name}\" format=\"ascii\">"))
+            .nth(1)
+            .unwrap_or_else(|| panic!("field {name}"));
+        let values = body.split("</DataArray>").next().unwrap();
+        assert_eq!(values.split_whitespace().count(), points, "{name}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let maps = json["liner_maps"].as_array().unwrap();
+    assert_eq!(maps.len(), 2);
+    for (m, c) in maps.iter().zip(json["evaluation"]["cylinders"].as_array().unwrap()) {
+        let worst = c["peak_negative_m_s2"].as_f64().unwrap();
+        assert!(m["peak_negative_m_s2"].as_f64().unwrap() >= worst * (1.0 - 1e-9), "{m}");
     }
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();

@@ -24,6 +24,7 @@ pub mod cavitation;
 pub mod export;
 pub mod full_modes;
 pub mod full_order;
+pub mod maps;
 pub mod modes;
 pub mod progress;
 pub mod rom;
@@ -489,11 +490,7 @@ pub fn report_runs(
     let tradeoff = tradeoff?;
     let (half_step, half_step_seconds) = check?;
     let evaluation = evaluate_scene(scene, &rom.rom, &base)?;
-    let maps = crate::cavitation::maps::liner_maps(
-        &base.surface,
-        &crate::cavitation::Setup::new(&scene.cavitation)?,
-        base.stats.autocorrelation_cycles,
-    );
+    let maps = maps::maps_of(scene, &base)?;
     Ok(ReportRuns {
         maps,
         base,

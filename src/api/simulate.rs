@@ -40,7 +40,13 @@ pub fn run_cycle_with_progress(
 }
 
 /// The files `simulate --out` writes.
-pub const OUTPUTS: &[&str] = &["simulate.json", "time_series.csv", "full_order_window.csv"];
+pub const OUTPUTS: &[&str] = &[
+    "simulate.json",
+    "time_series.csv",
+    "full_order_window.csv",
+    "liner_maps.png",
+    "liner_maps.vtu",
+];
 
 /// Request of `simulate`.
 pub struct SimulateRequest {
@@ -52,6 +58,8 @@ pub struct SimulateRequest {
     pub full_order: bool,
     /// Repeat every cycle at half the step ([`crate::transient::engine::run_half_step`]).
     pub check_step: bool,
+    /// Map the liners' wet surfaces ([`super::maps`]).
+    pub maps: bool,
 }
 
 /// Runs `simulate`.
@@ -78,7 +86,8 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     crate::transient::engine::check_mode_cutoff(&scene, sim, &loaded.rom)?;
     progress.phase("transient");
     let t = Instant::now();
-    let settings = settings_of(sim, scene.rom.band_hz);
+    let mut settings = settings_of(sim, scene.rom.band_hz);
+    settings.surface_maps = req.maps;
     let res = run_cycle_with_progress(
         &scene,
         &loaded.rom,
@@ -86,8 +95,14 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         settings.clone(),
         Some(&progress),
     )?;
+    settings.surface_maps = false;
     let transient_seconds = t.elapsed().as_secs_f64();
     let mut report = SimulateReport::new(&scene, &piston, &res, loaded.cache, transient_seconds);
+    let maps = if req.maps {
+        super::maps::maps_of(&scene, &res)?
+    } else {
+        Vec::new()
+    };
     if req.check_step {
         progress.phase("whole-run step check");
         let (half, seconds) =
@@ -114,11 +129,18 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         if let Some(cmp) = &report.full_order {
             super::full_order::write_window_series(&dir.join("full_order_window.csv"), cmp)?;
         }
+        if req.maps {
+            let (summaries, _) = super::maps::write_maps(&scene, &maps, &loaded.rom, Some(&dir))?;
+            report.liner_maps = Some(summaries);
+        }
         let json = dir.join("simulate.json");
         report.seconds = started.elapsed().as_secs_f64();
         let text = serde_json::to_string_pretty(&report).expect("serialisable");
         write_atomic(&json, |w| w.write_all(text.as_bytes()))?;
         stage.commit()?;
+    }
+    if req.maps && report.liner_maps.is_none() {
+        report.liner_maps = Some(super::maps::write_maps(&scene, &maps, &loaded.rom, None)?.0);
     }
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)

@@ -15,7 +15,6 @@ use crate::error::Result;
 use crate::files::write_all_atomic;
 use crate::piston::setup::piston_of;
 use crate::report::figures::Figures;
-use crate::report::maps::{write_maps_png, write_maps_vtu, MapSummary, SurfaceGeometry};
 use crate::report::records::SimulateReport;
 use crate::report::summary::markdown;
 pub use crate::report::summary::Report;
@@ -58,7 +57,8 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         rom: &runs.rom.rom,
     }
     .draw()?;
-    let (liner_maps, map_files) = write_maps(&scene, &runs, stage.path())?;
+    let (liner_maps, map_files) =
+        super::maps::write_maps(&scene, &runs.maps, &runs.rom.rom, Some(stage.path()))?;
     let figs: Vec<std::path::PathBuf> = figs.into_iter().chain(map_files).collect();
     let ranking_resolution = Report::ranking_resolution_of(&simulate, &runs.evaluation.ranking);
     let ranking_resolution_slap_only =
@@ -99,49 +99,3 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     Ok(report)
 }
 
-/// The liner maps of the report's run (`liner_maps.png`, `liner_maps.vtu` in `dir`) and their
-/// summaries; nothing when the run has no map (no `coolant_wetted` set on the liner mesh).
-fn write_maps(
-    scene: &crate::scene::Scene,
-    runs: &crate::api::ReportRuns,
-    dir: &Path,
-) -> Result<(Vec<MapSummary>, Vec<std::path::PathBuf>)> {
-    if runs.maps.is_empty() || runs.maps.iter().all(|m| m.nodes.is_empty()) {
-        return Ok((Vec::new(), Vec::new()));
-    }
-    let meshes = crate::reduce::scene_rom::load_meshes(scene)?;
-    let points = scene.liner_geometry.analysis_depths.len();
-    let geometry: Vec<SurfaceGeometry> = runs
-        .maps
-        .iter()
-        .map(|m| SurfaceGeometry::new(&meshes.liner, &m.nodes, points))
-        .collect();
-    let axis_x: Vec<f64> = runs
-        .maps
-        .iter()
-        .map(|m| {
-            runs.rom
-                .rom
-                .cylinders
-                .iter()
-                .find(|c| c.cylinder == m.cylinder)
-                .map_or(0.0, |c| c.axis_x)
-        })
-        .collect();
-    let (png, vtu) = (dir.join("liner_maps.png"), dir.join("liner_maps.vtu"));
-    let cav = crate::cavitation::Setup::new(&scene.cavitation)?;
-    let ca_one = crate::cavitation::criteria::threshold(
-        &cav.coolant,
-        cav.thresholds.k_p_pa_per_m_s2,
-        cav.gap,
-    );
-    write_maps_png(&png, &runs.maps, &geometry, ca_one)?;
-    write_maps_vtu(&vtu, &runs.maps, &geometry, &axis_x)?;
-    let summaries = runs
-        .maps
-        .iter()
-        .zip(&geometry)
-        .filter_map(|(m, g)| MapSummary::of(m, g))
-        .collect();
-    Ok((summaries, vec![png, vtu]))
-}

@@ -151,6 +151,9 @@ pub struct SimulateReport {
     /// The whole-run step check, when run.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub step_check: Option<StepCheck>,
+    /// With `--maps`: per cylinder where the liner map's largest mean peak lies.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub liner_maps: Option<Vec<crate::report::maps::MapSummary>>,
     /// What each point's `peak_negative_numerical_uncertainty_m_s2` holds: `"firing_slaps"`,
     /// the step error of each cylinder's firing slap re-run at half the step (not the shift the
     /// coarse step makes in the cycles' statistics between the slaps: up to 2-3 % at single
@@ -197,6 +200,7 @@ impl SimulateReport {
             rom_error_peak_negative: None,
             speedup: None,
             step_check: None,
+            liner_maps: None,
             numerical_uncertainty_scope: "firing_slaps",
         }
     }
@@ -422,6 +426,22 @@ impl SimulateReport {
                 "  ROM error (peak negative) {:.2e}, contact force {:.2e}, preload {:.2e}; speed-up {:.0}x ({:.1} s vs {:.4} s; stepping alone {:.0}x)\n",
                 c.rom_error_peak_negative, c.contact_force_error, c.preload_error, c.speedup, c.full_seconds, c.rom_seconds, c.speedup_stepping
             );
+        }
+        if let Some(maps) = &self.liner_maps {
+            s += "liner maps (wet outer surface): cyl  nodes  largest mean peak negative [m/s^2] at [deg, mm]   Ca   surface past Ca = 1\n";
+            for m in maps {
+                s += &format!(
+                    "  {:>3} {:>6}  {:>10.0} +- {:<5.0} at {:>3.0}, {:>3.0}   {:>5.2}   {:.1} %\n",
+                    m.cylinder,
+                    m.nodes,
+                    m.peak_negative_m_s2,
+                    m.peak_negative_se_m_s2,
+                    m.hottest_theta_deg,
+                    m.hottest_depth_mm,
+                    m.ca,
+                    100.0 * m.share_ca_below_1
+                );
+            }
         }
         if let Some(f) = &self.time_series_csv {
             s += &format!("time series: {f}\n");

@@ -438,3 +438,73 @@ fn smallest_upper(y: &[f64], c: &[f64], x: &[f64], (b, w): (f64, f64)) -> f64 {
     }
     upper
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic pseudo-random sequence in [-0.5, 0.5).
+    fn noise(seed: &mut u64) -> f64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+
+    /// The surface rows of `ns` nodes on `nm` modes and `nc` contact loads: smooth in space
+    /// (a few harmonics of the node index) plus a small rough part, so that the brackets'
+    /// directions leave a tail.
+    fn rows(ns: usize, nm: usize, nc: usize, seed: &mut u64) -> SurfaceRows {
+        let mut entry = |n: usize, j: usize| {
+            let x = n as f64 / ns as f64;
+            let smooth = ((j % 7 + 1) as f64 * 6.3 * x + j as f64).sin() / (1.0 + j as f64);
+            smooth + 1e-3 * noise(seed)
+        };
+        let modes = Dense::from_shape_fn((ns, nm), |(n, j)| entry(n, j));
+        let residual = Dense::from_shape_fn((ns, nc), |(n, j)| 1e-3 * entry(n, nm + j));
+        SurfaceRows {
+            nodes: (0..ns).collect(),
+            modes,
+            residual,
+        }
+    }
+
+    /// Signals: decaying rings of several frequencies per coordinate, the loads in newtons.
+    fn signals(m: usize, nc: usize, spc: usize, seed: &mut u64) -> Mat<f64> {
+        let phase: Vec<f64> = (0..m).map(|_| noise(seed) * 6.0).collect();
+        Mat::from_fn(m, spc, |j, t| {
+            let s = t as f64 / spc as f64;
+            let ring = (40.0 * s * (1.0 + j as f64 % 5.0) + phase[j]).sin() * (-3.0 * s).exp();
+            let scale = if j >= m - nc { 1e3 } else { 1.0 };
+            scale * (ring + 0.05 * noise(seed))
+        })
+    }
+
+    /// Verification: the brackets find each node's exact minimum. Against the brute force
+    /// (every sample's y_n = r_n . x(t) with the same dot product, then [`sampled_peak`] on the
+    /// whole series) the peaks are equal to the last bit, for a tail left by the direction
+    /// limit (more coordinates than [`MAX_DIRECTIONS`]) and for brackets made on another
+    /// cycle's signals (weights that do not fit).
+    #[test]
+    fn verification_bracketed_minima_equal_the_brute_force() {
+        let mut seed = 11u64;
+        let (ns, nm, nc, spc) = (150, 70, 12, 600);
+        let surface = rows(ns, nm, nc, &mut seed);
+        let own = signals(nm + nc, nc, spc, &mut seed);
+        let other = signals(nm + nc, nc, spc, &mut seed);
+        for (made_on, x) in [(&own, &own), (&other, &own)] {
+            let p = Projector::new(&surface, made_on.as_ref(), None);
+            assert!(p.p_scaled.ncols() <= MAX_DIRECTIONS);
+            let (peaks, exact) = p.peaks(x.as_ref());
+            assert!(exact < spc as f64, "every sample evaluated: {exact}");
+            for (n, &got) in peaks.iter().enumerate() {
+                let r = p.rows_t.col(n).try_as_col_major().unwrap().as_slice();
+                let y: Vec<f64> = (0..spc)
+                    .map(|t| dot(r, x.col(t).try_as_col_major().unwrap().as_slice()))
+                    .collect();
+                let (want, _) = sampled_peak(&y, 0..spc, -1.0).unwrap();
+                assert_eq!(got.to_bits(), want.to_bits(), "node {n}: {got} against {want}");
+            }
+        }
+    }
+}
