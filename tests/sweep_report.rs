@@ -157,9 +157,15 @@ fn contract_report_writes_the_figure_set() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let maps = json["liner_maps"].as_array().unwrap();
     assert_eq!(maps.len(), 2);
-    for (m, c) in maps.iter().zip(json["evaluation"]["cylinders"].as_array().unwrap()) {
+    for (m, c) in maps
+        .iter()
+        .zip(json["evaluation"]["cylinders"].as_array().unwrap())
+    {
         let worst = c["peak_negative_m_s2"].as_f64().unwrap();
-        assert!(m["peak_negative_m_s2"].as_f64().unwrap() >= worst * (1.0 - 1e-9), "{m}");
+        assert!(
+            m["peak_negative_m_s2"].as_f64().unwrap() >= worst * (1.0 - 1e-9),
+            "{m}"
+        );
     }
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();

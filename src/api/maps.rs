@@ -56,7 +56,10 @@ pub fn write_maps(
 
 /// The maps of `result` (a run of `scene` with `surface_maps`): the per-node criteria
 /// ([`crate::cavitation::maps::liner_maps`]).
-pub fn maps_of(scene: &Scene, result: &crate::transient::cycle::CycleResult) -> Result<Vec<LinerMap>> {
+pub fn maps_of(
+    scene: &Scene,
+    result: &crate::transient::cycle::CycleResult,
+) -> Result<Vec<LinerMap>> {
     Ok(crate::cavitation::maps::liner_maps(
         &result.surface,
         &crate::cavitation::Setup::new(&scene.cavitation)?,

@@ -98,4 +98,3 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     stage.commit()?;
     Ok(report)
 }
-

@@ -790,7 +790,13 @@ impl<'a> EngineRun<'a> {
         let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
         let mut surface = (self.settings.surface_maps
             && self.cyls.iter().any(|c| !c.rom.surface.nodes.is_empty()))
-        .then(|| SurfaceRecord::new(&self, ((cycles - averaged) * spc).saturating_sub(margin)));
+        .then(|| {
+            SurfaceRecord::new(
+                &self,
+                ((cycles - averaged) * spc).saturating_sub(margin),
+                (spc, margin, dt),
+            )
+        });
         let mut prev_peaks: Option<CyclePeaks> = None;
         let mut kept: Vec<CyclePeaks> = Vec::with_capacity(averaged);
         let mut kept_cycles: Vec<usize> = Vec::with_capacity(averaged);
@@ -843,7 +849,7 @@ impl<'a> EngineRun<'a> {
             }
             if k + averaged >= cycles {
                 if let Some(s) = surface.as_mut() {
-                    s.map_cycle(&self, k, (spc, margin, dt));
+                    s.map_cycle(k, (spc, margin));
                 }
                 kept.push(peaks.clone());
                 kept_cycles.push(k);

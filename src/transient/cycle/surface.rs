@@ -48,6 +48,12 @@ const ROUNDOFF: f64 = 1e-9;
 /// stays in the core's cache between the product and the scan).
 const NODE_BLOCK: usize = 16;
 
+/// Relative allowance for the single-precision bracket: its centres (products of length q
+/// of values rounded to f32) and its sums and comparisons carry errors of about (q + 4) 6e-8
+/// of |a_n| |z(t)| <= |w_n| |x'(t)|: 1e-5 of |w_n| |x'(t)| (3 ulps of f32 would do for the
+/// comparisons alone).
+const ROUNDOFF_SINGLE: f64 = 1e-5;
+
 /// When a cycle needed more exact samples per node than this, the next cycle's brackets are
 /// made anew with weights that take in that cycle's RMS as well.
 const REWEIGHT_ABOVE: f64 = 16.0;
@@ -64,30 +70,79 @@ pub struct SurfacePeaks {
 }
 
 /// The rolling record of the modal coordinates and each cylinder's contact loads (sample-major)
-/// from sample `start` on, and each cylinder's brackets ([`Projector`]).
+/// from sample `start` on. Each mapped cycle's segment goes to a worker thread ([`Mapper`]),
+/// which maps it while the transient runs on: the transient keeps one core busy, the maps
+/// the other.
 pub(super) struct SurfaceRecord {
     start: usize,
     nb: usize,
     eta: Vec<f64>,
     loads: Vec<Vec<f64>>,
-    projectors: Vec<Option<Projector>>,
-    peaks: Vec<Vec<Vec<f64>>>,
+    ncon: Vec<usize>,
+    jobs: Option<std::sync::mpsc::Sender<Job>>,
+    worker: Option<std::thread::JoinHandle<Vec<Vec<Vec<f64>>>>>,
+}
+
+/// One cycle's segment of the record, sample-major (zero before the record's start).
+struct Job {
+    eta: Vec<f64>,
+    loads: Vec<Vec<f64>>,
 }
 
 impl SurfaceRecord {
-    /// A record from global sample `from` on (nothing earlier is kept).
-    pub(super) fn new(run: &EngineRun<'_>, from: usize) -> Self {
-        SurfaceRecord {
-            start: from,
-            nb: run.structure.integrator.eta.len(),
-            eta: Vec::new(),
-            loads: run.cyls.iter().map(|_| Vec::new()).collect(),
+    /// A record from global sample `from` on (nothing earlier is kept), for cycles of `spc`
+    /// samples at step `dt` with the output filter's `margin`.
+    pub(super) fn new(
+        run: &EngineRun<'_>,
+        from: usize,
+        (spc, margin, dt): (usize, usize, f64),
+    ) -> Self {
+        let ncon: Vec<usize> = run
+            .cyls
+            .iter()
+            .map(|c| c.rom.thrust_z.len() + c.rom.antithrust_z.len())
+            .collect();
+        let nb = run.structure.integrator.eta.len();
+        let len = spc + 2 * margin;
+        let mut mapper = Mapper {
+            surfaces: run.cyls.iter().map(|c| c.rom.surface.clone()).collect(),
+            nb,
+            ncon: ncon.clone(),
             projectors: run.cyls.iter().map(|_| None).collect(),
             peaks: run
                 .cyls
                 .iter()
                 .map(|c| vec![Vec::new(); c.rom.surface.nodes.len()])
                 .collect(),
+            window: Window {
+                len,
+                margin,
+                spc,
+                dt,
+                batch: run
+                    .settings
+                    .output_band_hz
+                    .map(|band| BatchLowPass::new(len, dt, band)),
+            },
+        };
+        let (jobs, inbox) = std::sync::mpsc::channel::<Job>();
+        let worker = std::thread::Builder::new()
+            .name("liner-maps".into())
+            .spawn(move || {
+                for job in inbox {
+                    mapper.map(job);
+                }
+                mapper.peaks
+            })
+            .expect("a thread for the liner maps");
+        SurfaceRecord {
+            start: from,
+            nb,
+            eta: Vec::new(),
+            loads: run.cyls.iter().map(|_| Vec::new()).collect(),
+            ncon,
+            jobs: Some(jobs),
+            worker: Some(worker),
         }
     }
 
@@ -98,88 +153,66 @@ impl SurfaceRecord {
         }
         self.eta.extend_from_slice(&run.structure.integrator.eta);
         for (c, loads) in self.loads.iter_mut().enumerate() {
-            let rom = run.cyls[c].rom;
-            let (off, n) = (loads.len(), rom.thrust_z.len() + rom.antithrust_z.len());
-            loads.resize(off + n, 0.0);
+            let off = loads.len();
+            loads.resize(off + self.ncon[c], 0.0);
+            let first = run.cyls[c].rom.contact_offset;
             for (_, at, force) in run.prev_loaded.iter().filter(|(b, _, _)| *b == c) {
                 for i in 0..2 {
-                    loads[off + at.dofs[i] - rom.contact_offset] += at.weights[i] * force;
+                    loads[off + at.dofs[i] - first] += at.weights[i] * force;
                 }
             }
         }
     }
 
-    /// Maps cycle `k` (its record [k N - margin, (k + 1) N + margin) complete): appends each
-    /// surface node's peak negative acceleration, then drops what no later cycle needs.
-    pub(super) fn map_cycle(
-        &mut self,
-        run: &EngineRun<'_>,
-        k: usize,
-        (spc, margin, dt): (usize, usize, f64),
-    ) {
+    /// Hands cycle `k` (its record [k N - margin, (k + 1) N + margin) complete) to the
+    /// mapper, then drops what no later cycle needs.
+    pub(super) fn map_cycle(&mut self, k: usize, (spc, margin): (usize, usize)) {
         let lo = (k * spc) as isize - margin as isize;
         let len = spc + 2 * margin;
-        let batch = run
-            .settings
-            .output_band_hz
-            .map(|band| BatchLowPass::new(len, dt, band));
-        let window = Window {
-            start: self.start,
-            lo,
-            len,
-            margin,
-            spc,
-            dt,
-        };
-        let eta_bar = window.outputs(&self.eta, self.nb, &batch);
-        let results: Vec<(Option<Projector>, Vec<f64>)> = self
-            .projectors
-            .par_iter_mut()
-            .zip(self.loads.par_iter())
-            .zip(run.cyls.par_iter())
-            .map(|((proj, loads), cyl)| {
-                let surface = &cyl.rom.surface;
-                if surface.nodes.is_empty() {
-                    return (None, Vec::new());
+        let segment = |record: &[f64], m: usize| -> Vec<f64> {
+            let mut v = vec![0.0; len * m];
+            for s in 0..len {
+                let g = lo + s as isize;
+                if g >= self.start as isize {
+                    let i = (g as usize - self.start) * m;
+                    if let Some(src) = record.get(i..i + m) {
+                        v[s * m..(s + 1) * m].copy_from_slice(src);
+                    }
                 }
-                let ncon = cyl.rom.thrust_z.len() + cyl.rom.antithrust_z.len();
-                let f_bar = window.outputs(loads, ncon, &batch);
-                let mut x = Mat::<f64>::zeros(eta_bar.nrows() + ncon, spc);
-                x.as_mut()
-                    .subrows_mut(0, eta_bar.nrows())
-                    .copy_from(&eta_bar);
-                x.as_mut()
-                    .subrows_mut(eta_bar.nrows(), ncon)
-                    .copy_from(&f_bar);
-                let mut p = proj
-                    .take()
-                    .unwrap_or_else(|| Projector::new(surface, x.as_ref(), None));
-                let (peaks, exact) = p.peaks(x.as_ref());
-                if exact > REWEIGHT_ABOVE {
-                    p = Projector::new(surface, x.as_ref(), Some(&p.weight));
-                }
-                (Some(p), peaks)
-            })
-            .collect();
-        for (c, (proj, peaks)) in results.into_iter().enumerate() {
-            self.projectors[c] = proj;
-            for (series, p) in self.peaks[c].iter_mut().zip(peaks) {
-                series.push(p);
             }
+            v
+        };
+        let job = Job {
+            eta: segment(&self.eta, self.nb),
+            loads: self
+                .loads
+                .iter()
+                .zip(&self.ncon)
+                .map(|(l, &m)| segment(l, m))
+                .collect(),
+        };
+        if let Some(jobs) = &self.jobs {
+            // a closed inbox means the worker stopped: finish() reports it
+            let _ = jobs.send(job);
         }
         let keep_from = ((k + 1) * spc).saturating_sub(margin).max(self.start);
         let drop = keep_from - self.start;
         self.eta.drain(..(drop * self.nb).min(self.eta.len()));
-        for (loads, cyl) in self.loads.iter_mut().zip(&run.cyls) {
-            let ncon = cyl.rom.thrust_z.len() + cyl.rom.antithrust_z.len();
-            loads.drain(..(drop * ncon).min(loads.len()));
+        for (loads, &m) in self.loads.iter_mut().zip(&self.ncon) {
+            loads.drain(..(drop * m).min(loads.len()));
         }
         self.start = keep_from;
     }
 
-    /// The mapped cycles' peaks per cylinder.
-    pub(super) fn finish(self, run: &EngineRun<'_>) -> Vec<SurfacePeaks> {
-        self.peaks
+    /// Waits for the mapper and returns the mapped cycles' peaks per cylinder.
+    pub(super) fn finish(mut self, run: &EngineRun<'_>) -> Vec<SurfacePeaks> {
+        self.jobs = None;
+        let peaks = match self.worker.take().map(|w| w.join()) {
+            Some(Ok(p)) => p,
+            Some(Err(panic)) => std::panic::resume_unwind(panic),
+            None => Vec::new(),
+        };
+        peaks
             .into_iter()
             .zip(&run.cyls)
             .map(|(nodes, c)| {
@@ -194,48 +227,78 @@ impl SurfaceRecord {
     }
 }
 
-/// The samples of one cycle's outputs: [lo, lo + len) of a record whose first sample is
-/// `start` (earlier samples, before t = 0, are zero), the cycle's `spc` samples `margin` in.
+/// The maps' worker: each cylinder's surface rows and brackets, and the peaks so far.
+struct Mapper {
+    surfaces: Vec<SurfaceRows>,
+    nb: usize,
+    ncon: Vec<usize>,
+    projectors: Vec<Option<Projector>>,
+    peaks: Vec<Vec<Vec<f64>>>,
+    window: Window,
+}
+
+impl Mapper {
+    /// Maps one cycle's segment: appends each surface node's peak negative acceleration.
+    fn map(&mut self, job: Job) {
+        let eta_bar = self.window.outputs(&job.eta, self.nb);
+        for (c, loads) in job.loads.iter().enumerate() {
+            let surface = &self.surfaces[c];
+            if surface.nodes.is_empty() {
+                continue;
+            }
+            let ncon = self.ncon[c];
+            let f_bar = self.window.outputs(loads, ncon);
+            let mut x = Mat::<f64>::zeros(eta_bar.nrows() + ncon, self.window.spc);
+            x.as_mut()
+                .subrows_mut(0, eta_bar.nrows())
+                .copy_from(&eta_bar);
+            x.as_mut()
+                .subrows_mut(eta_bar.nrows(), ncon)
+                .copy_from(&f_bar);
+            let mut p = self.projectors[c]
+                .take()
+                .unwrap_or_else(|| Projector::new(surface, x.as_ref(), None));
+            let (peaks, exact) = p.peaks(x.as_ref());
+            if exact > REWEIGHT_ABOVE {
+                p = Projector::new(surface, x.as_ref(), Some(&p.weight));
+            }
+            self.projectors[c] = Some(p);
+            for (series, v) in self.peaks[c].iter_mut().zip(peaks) {
+                series.push(v);
+            }
+        }
+    }
+}
+
+/// One cycle's output window: `len` samples, the cycle's `spc` of them `margin` in, at step
+/// `dt`, and the low-pass (None: the outputs are not filtered).
 struct Window {
-    start: usize,
-    lo: isize,
     len: usize,
     margin: usize,
     spc: usize,
     dt: f64,
+    batch: Option<BatchLowPass>,
 }
 
 impl Window {
-    /// Each of the `m` series of a sample-major record as the point outputs form theirs
-    /// ([`Record::outputs`]): the fourth-order second difference of the window's samples, the
-    /// low-pass (`batch`, two series per transform), the cycle's samples; as a series x
-    /// samples matrix.
-    fn outputs(&self, record: &[f64], m: usize, batch: &Option<BatchLowPass>) -> Mat<f64> {
+    /// Each of the `m` series of a sample-major segment (`len` samples) as the point outputs
+    /// form theirs ([`Record::outputs`]): the fourth-order second difference, the low-pass (two
+    /// series per transform), the cycle's samples; as a series x samples matrix.
+    fn outputs(&self, segment: &[f64], m: usize) -> Mat<f64> {
         let mut series: Vec<Vec<f64>> = (0..m)
-            .into_par_iter()
             .map(|j| {
-                let raw: Vec<f64> = (0..self.len)
-                    .map(|s| {
-                        let g = self.lo + s as isize;
-                        if g < self.start as isize {
-                            0.0
-                        } else {
-                            record
-                                .get((g as usize - self.start) * m + j)
-                                .copied()
-                                .unwrap_or(0.0)
-                        }
-                    })
-                    .collect();
+                let raw: Vec<f64> = (0..self.len).map(|s| segment[s * m + j]).collect();
                 second_difference4(&raw, self.dt)
             })
             .collect();
-        if let Some(f) = batch {
-            series.par_chunks_mut(2).for_each(|pair| match pair {
-                [a, b] => f.apply_pair(a, b),
-                [a] => f.apply_pair(a, &mut vec![0.0; self.len]),
-                _ => {}
-            });
+        if let Some(f) = &self.batch {
+            for pair in series.chunks_mut(2) {
+                match pair {
+                    [a, b] => f.apply_pair(a, b),
+                    [a] => f.apply_pair(a, &mut vec![0.0; self.len]),
+                    _ => {}
+                }
+            }
         }
         Mat::from_fn(m, self.spc, |j, t| series[j][self.margin + t])
     }
@@ -249,8 +312,9 @@ struct Projector {
     weight: Vec<f64>,
     /// D^-1 P: coordinates x q (P orthonormal).
     p_scaled: Mat<f64>,
-    /// a_n = P^T w_n: nodes x q.
+    /// a_n = P^T w_n: nodes x q, and in single precision.
     a: Mat<f64>,
+    a32: Mat<f32>,
     /// b_n = |Q^T w_n| (with its roundoff allowance) and |w_n|.
     tail: Vec<f64>,
     norm: Vec<f64>,
@@ -322,11 +386,13 @@ impl Projector {
             })
             .collect();
         let p_scaled = Mat::from_fn(nm + nc, q, |j, i| p[(j, i)] / weight[j]);
+        let a32 = Mat::from_fn(ns, q, |n, i| a[(n, i)] as f32);
         Projector {
             rows_t,
             weight,
             p_scaled,
             a,
+            a32,
             tail,
             norm,
         }
@@ -359,19 +425,27 @@ impl Projector {
                 (all.sqrt(), ((all - head).max(0.0) + 1e-12 * all).sqrt())
             })
             .unzip();
+        // the bracket in single precision: centres, half widths and the comparisons, with
+        // the allowance ROUNDOFF_SINGLE |w_n| |x'(t)| for their rounding
+        let z32 = Mat::<f32>::from_fn(spc, q, |t, i| z[(t, i)] as f32);
+        let (c32, xn32): (Vec<f32>, Vec<f32>) = c
+            .iter()
+            .zip(&xn)
+            .map(|(&a, &b)| (a as f32, b as f32))
+            .unzip();
         let mut evaluated = 0usize;
         let mut out = Vec::with_capacity(self.a.nrows());
         let ns = self.a.nrows();
-        let mut yhat = Mat::<f64>::zeros(spc, NODE_BLOCK);
+        let mut yhat = Mat::<f32>::zeros(spc, NODE_BLOCK);
         for n0 in (0..ns).step_by(NODE_BLOCK) {
             let nb = NODE_BLOCK.min(ns - n0);
             // the bracket centres of a block of nodes, scanned while in cache
             matmul(
                 yhat.as_mut().subcols_mut(0, nb),
                 Accum::Replace,
-                z.as_ref(),
-                self.a.as_ref().subrows(n0, nb).transpose(),
-                1.0,
+                z32.as_ref(),
+                self.a32.as_ref().subrows(n0, nb).transpose(),
+                1.0f32,
                 Par::Seq,
             );
             for i in 0..nb {
@@ -388,12 +462,14 @@ impl Projector {
                     .expect("contiguous")
                     .as_slice();
                 let exact = |t: usize| dot(r, column(t));
-                let (b, w) = (self.tail[n], ROUNDOFF * self.norm[n]);
-                let half = |t: usize| b * c[t] + w * xn[t];
-                let upper = smallest_upper(y, &c, &xn, (b, w));
+                let (b, w) = (
+                    self.tail[n] as f32,
+                    ((ROUNDOFF_SINGLE + ROUNDOFF) * self.norm[n]) as f32,
+                );
+                let upper = smallest_upper(y, &c32, &xn32, (b, w));
                 let mut best: Option<(usize, f64)> = None;
-                for t in 0..spc {
-                    if y[t] - half(t) <= upper {
+                for (t, ((&yt, &ct), &xt)) in y.iter().zip(&c32).zip(&xn32).enumerate() {
+                    if yt - (b * ct + w * xt) <= upper {
                         evaluated += 1;
                         let v = exact(t);
                         if best.is_none_or(|(_, bv)| v < bv) {
@@ -419,22 +495,27 @@ impl Projector {
     }
 }
 
-/// min_t (y_t + b c_t + w x_t): the smallest upper bracket of a node (eight independent
+/// min_t (y_t + b c_t + w x_t): the smallest upper bracket of a node (sixteen independent
 /// running minima, so that the loop vectorises).
-fn smallest_upper(y: &[f64], c: &[f64], x: &[f64], (b, w): (f64, f64)) -> f64 {
-    let mut lanes = [f64::INFINITY; 8];
-    let n = y.len() / 8 * 8;
-    for t0 in (0..n).step_by(8) {
-        for (i, lane) in lanes.iter_mut().enumerate() {
-            let v = y[t0 + i] + (b * c[t0 + i] + w * x[t0 + i]);
-            if v < *lane {
-                *lane = v;
+fn smallest_upper(y: &[f32], c: &[f32], x: &[f32], (b, w): (f32, f32)) -> f32 {
+    let mut lanes = [f32::INFINITY; 16];
+    let (yc, cc, xc) = (y.chunks_exact(16), c.chunks_exact(16), x.chunks_exact(16));
+    let tail = yc
+        .remainder()
+        .iter()
+        .zip(cc.remainder())
+        .zip(xc.remainder());
+    for ((ys, cs), xs) in yc.zip(cc).zip(xc) {
+        for i in 0..16 {
+            let v = ys[i] + (b * cs[i] + w * xs[i]);
+            if v < lanes[i] {
+                lanes[i] = v;
             }
         }
     }
-    let mut upper = lanes.iter().copied().fold(f64::INFINITY, f64::min);
-    for t in n..y.len() {
-        upper = upper.min(y[t] + (b * c[t] + w * x[t]));
+    let mut upper = lanes.iter().copied().fold(f32::INFINITY, f32::min);
+    for ((&yt, &ct), &xt) in tail {
+        upper = upper.min(yt + (b * ct + w * xt));
     }
     upper
 }
@@ -503,7 +584,11 @@ mod tests {
                     .map(|t| dot(r, x.col(t).try_as_col_major().unwrap().as_slice()))
                     .collect();
                 let (want, _) = sampled_peak(&y, 0..spc, -1.0).unwrap();
-                assert_eq!(got.to_bits(), want.to_bits(), "node {n}: {got} against {want}");
+                assert_eq!(
+                    got.to_bits(),
+                    want.to_bits(),
+                    "node {n}: {got} against {want}"
+                );
             }
         }
     }
