@@ -254,7 +254,8 @@ pub fn write_maps_vtu(
             "<UnstructuredGrid>\n<Piece NumberOfPoints=\"{points}\" NumberOfCells=\"{cells}\">"
         )?;
         writeln!(w, "<PointData Scalars=\"peak_negative_m_s2\">")?;
-        let fields: [(&str, fn(&LinerMap) -> &Vec<f64>); 6] = [
+        type Field = fn(&LinerMap) -> &Vec<f64>;
+        let fields: [(&str, Field); 6] = [
             ("peak_negative_m_s2", |m| &m.peak_negative_m_s2),
             ("peak_negative_se_m_s2", |m| &m.peak_negative_se_m_s2),
             ("ca", |m| &m.ca),

@@ -69,7 +69,7 @@ pub fn fir_taps(dt: f64, band_hz: f64) -> Vec<f64> {
 
 /// The [`low_pass`] FIR (not cyclic) applied to many series of one length by FFT with the
 /// filter's transform computed once: y_i = sum_k h_k x_ext[i + k], x_ext the series with
-/// `half` zeros each side, as [`correlate_fft`]. Two real series go through one complex
+/// `half` zeros each side, as `correlate_fft`. Two real series go through one complex
 /// transform (x_a + i x_b: the real taps keep the parts apart). Equal to [`low_pass`] to
 /// roundoff (relative 1e-15 of the largest |x| sum |h|).
 pub struct BatchLowPass {
