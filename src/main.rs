@@ -193,35 +193,7 @@ enum Command {
     },
     /// Piston-slap transient of the engine on the ROM: peak liner accelerations per cylinder
     /// and analysis point, side and slap forces, time series, solver statistics.
-    Simulate {
-        /// Scene file (TOML).
-        scene: PathBuf,
-        /// Override any scene field: --set piston.clearance_um=120 (repeatable).
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        sets: Vec<String>,
-        /// Print JSON on stdout.
-        #[arg(long)]
-        json: bool,
-        /// Write time_series.csv and simulate.json into this directory.
-        #[arg(long, value_name = "DIR")]
-        out: Option<PathBuf>,
-        /// Also run the full-order FE model on a window around firing TDC of the first
-        /// cylinder (330-420 deg) and report the ROM's error and speed-up there.
-        #[arg(long)]
-        full_order: bool,
-        /// Also repeat every cycle at half the step (about twice the transient's time) and
-        /// report each peak's whole-run step error, which holds what the firing-slap estimate
-        /// does not: the coarse step's shift of the cycles' statistics between the slaps.
-        #[arg(long)]
-        check_step: bool,
-        /// Also map the peak negative acceleration over every node of each liner's wet outer
-        /// surface: per cylinder the largest mean and where it lies in the output, and with
-        /// --out liner_maps.png (unrolled) and liner_maps.vtu (ParaView).
-        #[arg(long)]
-        maps: bool,
-        #[command(flatten)]
-        cache: CacheArgs,
-    },
+    Simulate(SimulateArgs),
     /// Write K.mtx and M.mtx (Matrix Market, symmetric, constrained DOFs removed).
     ExportMatrices {
         #[command(flatten)]
@@ -379,6 +351,38 @@ enum Command {
     },
 }
 
+/// The options of `simulate`.
+#[derive(clap::Args)]
+struct SimulateArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Override any scene field: --set piston.clearance_um=120 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
+    /// Print JSON on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Write time_series.csv and simulate.json into this directory.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Also run the full-order FE model on a window around firing TDC of the first
+    /// cylinder (330-420 deg) and report the ROM's error and speed-up there.
+    #[arg(long)]
+    full_order: bool,
+    /// Also repeat every cycle at half the step (about twice the transient's time) and
+    /// report each peak's whole-run step error, which holds what the firing-slap estimate
+    /// does not: the coarse step's shift of the cycles' statistics between the slaps.
+    #[arg(long)]
+    check_step: bool,
+    /// Also map the peak negative acceleration over every node of each liner's wet outer
+    /// surface: per cylinder the largest mean and where it lies in the output, and with
+    /// --out liner_maps.png (unrolled) and liner_maps.vtu (ParaView).
+    #[arg(long)]
+    maps: bool,
+    #[command(flatten)]
+    cache: CacheArgs,
+}
+
 fn run(cli: Cli, started: Instant) -> Result<(), Error> {
     match cli.command {
         Command::Modes {
@@ -429,28 +433,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             json,
             cache,
         } => shapes_command(&scene, &sets, json, &cache)?,
-        Command::Simulate {
-            scene,
-            sets,
-            json,
-            out,
-            full_order,
-            check_step,
-            maps,
-            cache,
-        } => {
-            let req = simulate::SimulateRequest {
-                scene,
-                sets,
-                out,
-                cache: cache.options(),
-                full_order,
-                check_step,
-                maps,
-            };
-            let report = simulate::run(&req, started)?;
-            print_report(json, &report, || report.to_text());
-        }
+        Command::Simulate(args) => simulate_command(args, started)?,
         Command::Sweep {
             scene,
             vary,
@@ -529,6 +512,22 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             println!("wrote {} ({n} nodes)", out.display());
         }
     }
+    Ok(())
+}
+
+/// `simulate`: the transient of the scene, printed (or as JSON) and with `--out` written.
+fn simulate_command(args: SimulateArgs, started: Instant) -> Result<(), Error> {
+    let req = simulate::SimulateRequest {
+        scene: args.scene,
+        sets: args.sets,
+        out: args.out,
+        cache: args.cache.options(),
+        full_order: args.full_order,
+        check_step: args.check_step,
+        maps: args.maps,
+    };
+    let report = simulate::run(&req, started)?;
+    print_report(args.json, &report, || report.to_text());
     Ok(())
 }
 

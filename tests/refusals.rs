@@ -366,3 +366,41 @@ fn regression_substructuring_keys_are_checked() {
     );
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+/// Regression (hostile input): the liner maps are estimated before the run starts; beyond the
+/// memory limit `simulate --maps` exits 2 naming the maps, the estimate and the limit, and
+/// writes nothing; within it the same run maps.
+#[test]
+fn regression_maps_beyond_the_memory_limit_are_refused_before_the_run() {
+    let (_cache, dir) = small_rom_cache();
+    let out = tempfile::tempdir().unwrap();
+    let target = out.path().join("sim");
+    let args = |limit: &str| -> Vec<String> {
+        [
+            "simulate",
+            SMALL,
+            "--maps",
+            "--cache-dir",
+            &dir,
+            "--set",
+            &format!("limits.max_memory_gb={limit}"),
+            "--out",
+            target.to_str().unwrap(),
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    };
+    let refused: Vec<String> = args("0.005");
+    let (code, _, err) = linercav(&refused.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("mapping the liners") && err.contains("limits.max_memory_gb allows 0.005 GB"),
+        "{err}"
+    );
+    assert!(!target.exists());
+    let fits: Vec<String> = args("1");
+    let (code, _, err) = linercav(&fits.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    assert!(target.join("liner_maps.vtu").exists() && target.join("liner_maps.png").exists());
+}

@@ -66,3 +66,24 @@ pub fn maps_of(
         result.stats.autocorrelation_cycles,
     ))
 }
+
+/// Refuses the liner maps of a run of `scene` on `rom` beyond the limits
+/// ([`crate::scene::budget::maps`]), before the run starts.
+pub fn check_maps(scene: &Scene, rom: &EngineRom) -> Result<()> {
+    let nodes: Vec<usize> = rom
+        .cylinders
+        .iter()
+        .map(|c| c.surface.nodes.len())
+        .collect();
+    let contact = rom
+        .cylinders
+        .iter()
+        .map(|c| c.thrust_z.len() + c.antithrust_z.len())
+        .max()
+        .unwrap_or(0);
+    if let Some(est) = crate::scene::budget::maps(scene, &nodes, rom.frequencies_hz.len() + contact)
+    {
+        crate::scene::budget::Limits::of(scene).check(scene, &est)?;
+    }
+    Ok(())
+}

@@ -451,6 +451,7 @@ pub fn report_runs(
         .collect();
     phase("engine ROM");
     let variants = Variants::prepare(path, sets, &extra, cache, phase)?;
+    maps::check_maps(scene, &variants.roms[variants.rom_of[0]].rom)?;
     phase("transients: the scene, clearance and pin-offset sweeps");
     let mut results = variants
         .run(&labels, true, || {})?

@@ -84,6 +84,9 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     progress.phase("engine ROM");
     let loaded = get_rom_with_progress(&scene, &req.cache)?;
     crate::transient::engine::check_mode_cutoff(&scene, sim, &loaded.rom)?;
+    if req.maps {
+        super::maps::check_maps(&scene, &loaded.rom)?;
+    }
     progress.phase("transient");
     let t = Instant::now();
     let mut settings = settings_of(sim, scene.rom.band_hz);
@@ -138,6 +141,11 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         let text = serde_json::to_string_pretty(&report).expect("serialisable");
         write_atomic(&json, |w| w.write_all(text.as_bytes()))?;
         stage.commit()?;
+    }
+    if req.maps && maps.iter().all(|m| m.nodes.is_empty()) {
+        report.warnings.push(
+            "--maps: the liner mesh has no 'coolant_wetted' node set (the wet outer surface), so there is no map".into(),
+        );
     }
     if req.maps && report.liner_maps.is_none() {
         report.liner_maps = Some(super::maps::write_maps(&scene, &maps, &loaded.rom, None)?.0);

@@ -348,3 +348,33 @@ pub fn transient(scene: &Scene) -> Option<Estimate> {
         ),
     })
 }
+
+/// Time of the liner maps per surface node and sample of a mapped cycle [s] (default engine:
+/// 7.8 s of CPU for 20 cycles of 6 x 1,968 nodes x 2,880 samples, on the core the transient
+/// leaves idle; `benches/liner_maps.sh`).
+const MAP_SECONDS_PER_NODE_SAMPLE: f64 = 12e-9;
+
+/// The liner maps of a run (`report`, `simulate --maps`) on a ROM whose cylinders have
+/// `surface_nodes` wet-surface nodes each, `coordinates` = modes + contact DOFs: in memory
+/// (8 bytes each) the surface rows in four copies per cylinder (the ROM's, the mapper's and the
+/// brackets' unweighted and weighted), and per cycle the record segment, its second
+/// differences, filtered series and one cylinder's coordinates (4 (S + 2 margin) m); the time
+/// per node and sample of the averaged cycles.
+pub fn maps(scene: &Scene, surface_nodes: &[usize], coordinates: usize) -> Option<Estimate> {
+    let t = &scene.simulation.as_ref()?.transient;
+    let per_cycle = 720.0 / t.step_deg;
+    let nodes: f64 = surface_nodes.iter().map(|&n| n as f64).sum();
+    let m = coordinates as f64;
+    Some(Estimate {
+        what: "mapping the liners",
+        memory: 8.0 * (4.0 * nodes * m + 4.0 * 1.1 * per_cycle * m),
+        seconds: t.averaged_cycles as f64 * nodes * per_cycle * MAP_SECONDS_PER_NODE_SAMPLE,
+        keys: "liner.mesh (the wet surface's nodes), transient.step_deg, transient.averaged_cycles",
+        detail: format!(
+            "{} wet-surface nodes, {} coordinates, {} samples a cycle",
+            num(nodes),
+            coordinates,
+            num(per_cycle.round())
+        ),
+    })
+}
