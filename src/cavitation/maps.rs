@@ -14,6 +14,9 @@ use super::criteria;
 use super::Setup;
 use crate::transient::cycle::SurfacePeaks;
 
+/// The largest Ca a map holds (a node at rest has Ca = inf; far beyond any threshold).
+pub const CA_CAP: f64 = 1e6;
+
 /// One liner's map: per node of its wet outer surface (rows of `nodes`).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct LinerMap {
@@ -79,8 +82,10 @@ pub fn liner_maps(surface: &[SurfacePeaks], cav: &Setup, tau: f64) -> Vec<LinerM
                 let (f, f_se) = mean_se(&hits, tau);
                 m.peak_negative_m_s2.push(a);
                 m.peak_negative_se_m_s2.push(se);
-                m.ca.push(ca_of(a));
-                m.ca_se.push(slope.abs() * se);
+                // a node that never moves has Ca = inf: capped, so that every file can hold it
+                m.ca.push(ca_of(a).min(CA_CAP));
+                let ca_se = slope.abs() * se;
+                m.ca_se.push(if ca_se.is_finite() { ca_se } else { 0.0 });
                 m.cavitating_fraction.push(f);
                 m.cavitating_fraction_se.push(f_se);
             }

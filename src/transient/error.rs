@@ -37,4 +37,14 @@ pub enum TransientError {
     },
     #[error("singular contact system at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s)")]
     Singular { crank_angle_deg: f64, time_s: f64 },
+    #[error(
+        "the liner map of cylinder {cylinder} failed in cycle {cycle} (from rest, 0-based): {msg}"
+    )]
+    Maps {
+        cylinder: usize,
+        cycle: usize,
+        msg: String,
+    },
+    #[error("the liner maps stopped: {0}")]
+    MapsStopped(String),
 }

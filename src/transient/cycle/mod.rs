@@ -788,15 +788,16 @@ impl<'a> EngineRun<'a> {
         let margin = self.output_margin(dt);
         let total = cycles * spc + margin;
         let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
-        let mut surface = (self.settings.surface_maps
-            && self.cyls.iter().any(|c| !c.rom.surface.nodes.is_empty()))
-        .then(|| {
-            SurfaceRecord::new(
+        let mut surface = match self.settings.surface_maps
+            && self.cyls.iter().any(|c| !c.rom.surface.nodes.is_empty())
+        {
+            true => Some(SurfaceRecord::new(
                 &self,
                 ((cycles - averaged) * spc).saturating_sub(margin),
                 (spc, margin, dt),
-            )
-        });
+            )?),
+            false => None,
+        };
         let mut prev_peaks: Option<CyclePeaks> = None;
         let mut kept: Vec<CyclePeaks> = Vec::with_capacity(averaged);
         let mut kept_cycles: Vec<usize> = Vec::with_capacity(averaged);
@@ -895,7 +896,10 @@ impl<'a> EngineRun<'a> {
             // the first failing window in time order, as a serial run would report it
             .collect::<Result<Vec<StepError>, TransientError>>()?;
         self.stats.step_error_estimate = mean_step_error(&step_error);
-        let surface = surface.map_or_else(Vec::new, |s| s.finish(&self));
+        let surface = match surface {
+            Some(s) => s.finish(&self)?,
+            None => Vec::new(),
+        };
         Ok(CycleResult {
             peaks,
             peak_negative,

@@ -8,20 +8,20 @@
 //! Both are linear and time-invariant, so y_n(t) = r_n . xbar(t), xbar = h * d(x).
 //!
 //! The minimum over a cycle's S samples for N nodes would take N S m products (m = modes +
-//! contact loads: 6 x 1,800 x 2,880 x 605 per cycle on the default engine, about 40 times the
+//! contact loads: 6 x 1,968 x 2,880 x 605 per cycle on the default engine, about 40 times the
 //! transient's own work). It is found exactly with far fewer. With each coordinate weighted by
-//! its RMS D_j (w_n = D r_n, x' = D^-1 x), let P hold the q leading eigenvectors of W^T W and
+//! its RMS D_j (w_n = D r_n, x' = D^-1 xbar), let P hold the q leading eigenvectors of W^T W and
 //! Q the rest of an orthonormal basis. Then
-//!   y_n(t) = a_n . z(t) + (Q^T w_n) . (Q^T xbar'(t)),   a_n = P^T w_n,  z = h * (P^T d(x')),
-//! and by Cauchy-Schwarz and the triangle inequality over the taps the second term is at most
-//! b_n c(t), b_n = |Q^T w_n| = sqrt(|w_n|^2 - |a_n|^2) and
-//!   c(t) = sum_k |h_k| e(t + k),  e(s) = |Q^T d(x')(s)| = sqrt(|d(x')(s)|^2 - |P^T d(x')(s)|^2).
-//! So the q filtered projections bracket every y_n(t) within +-(b_n c(t) + roundoff) at a cost
-//! of q (m + N) per sample. Only the samples whose lower bracket reaches below the node's
-//! smallest upper bracket can hold its minimum; y_n is evaluated exactly there (and at the
-//! minimum's neighbours, for the vertex of [`sampled_peak`]), with xbar(t) formed by the FIR
-//! sum at those samples only. The result is the exact minimum of the sampled series whatever
-//! q and D are; they only decide how many samples are evaluated exactly.
+//!   y_n(t) = a_n . z(t) + (Q^T w_n) . (Q^T x'(t)),   a_n = P^T w_n,  z = P^T x',
+//! and by Cauchy-Schwarz the second term is at most b_n c(t), b_n = |Q^T w_n| =
+//! sqrt(|w_n|^2 - |a_n|^2), c(t) = |Q^T x'(t)| = sqrt(|x'(t)|^2 - |z(t)|^2). So the q
+//! projections bracket every y_n(t) within +-(b_n c(t) + rounding allowance) at a cost of
+//! q (m + N) per sample (the centres and the comparisons in single precision). Only the
+//! samples whose lower bracket reaches below the node's smallest upper bracket can hold its
+//! minimum; y_n is evaluated exactly there (and at the minimum's neighbours, for the vertex of
+//! [`sampled_peak`]). A bracket that is not finite admits its sample. The result is the exact
+//! minimum of the sampled series whatever q and D are; they only decide how many samples are
+//! evaluated exactly.
 
 #[allow(unused_imports)]
 use super::*;
@@ -79,12 +79,32 @@ pub(super) struct SurfaceRecord {
     eta: Vec<f64>,
     loads: Vec<Vec<f64>>,
     ncon: Vec<usize>,
-    jobs: Option<std::sync::mpsc::Sender<Job>>,
-    worker: Option<std::thread::JoinHandle<Vec<Vec<Vec<f64>>>>>,
+    jobs: Option<std::sync::mpsc::SyncSender<Job>>,
+    worker: Option<std::thread::JoinHandle<MapperResult>>,
+    /// Set when the run stops early: the worker drops the cycles still queued.
+    cancel: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
+
+impl Drop for SurfaceRecord {
+    /// A run that stops early (an error) stops the worker too and waits for it, so that no
+    /// mapping goes on after the run has returned.
+    fn drop(&mut self) {
+        self.cancel
+            .store(true, std::sync::atomic::Ordering::Relaxed);
+        self.jobs = None;
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+    }
+}
+
+/// What the mapper returns: per cylinder and node the peak of each mapped cycle, or the
+/// first failure.
+type MapperResult = Result<Vec<Vec<Vec<f64>>>, TransientError>;
 
 /// One cycle's segment of the record, sample-major (zero before the record's start).
 struct Job {
+    cycle: usize,
     eta: Vec<f64>,
     loads: Vec<Vec<f64>>,
 }
@@ -96,7 +116,7 @@ impl SurfaceRecord {
         run: &EngineRun<'_>,
         from: usize,
         (spc, margin, dt): (usize, usize, f64),
-    ) -> Self {
+    ) -> Result<Self, TransientError> {
         let ncon: Vec<usize> = run
             .cyls
             .iter()
@@ -125,17 +145,23 @@ impl SurfaceRecord {
                     .map(|band| BatchLowPass::new(len, dt, band)),
             },
         };
-        let (jobs, inbox) = std::sync::mpsc::channel::<Job>();
+        // at most two cycles queued: the transient waits rather than the record growing
+        let (jobs, inbox) = std::sync::mpsc::sync_channel::<Job>(2);
+        let cancel = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let stop = cancel.clone();
         let worker = std::thread::Builder::new()
             .name("liner-maps".into())
             .spawn(move || {
                 for job in inbox {
-                    mapper.map(job);
+                    if stop.load(std::sync::atomic::Ordering::Relaxed) {
+                        break;
+                    }
+                    mapper.map(job)?;
                 }
-                mapper.peaks
+                Ok(mapper.peaks)
             })
-            .expect("a thread for the liner maps");
-        SurfaceRecord {
+            .map_err(|e| TransientError::MapsStopped(format!("no thread for the maps: {e}")))?;
+        Ok(SurfaceRecord {
             start: from,
             nb,
             eta: Vec::new(),
@@ -143,7 +169,8 @@ impl SurfaceRecord {
             ncon,
             jobs: Some(jobs),
             worker: Some(worker),
-        }
+            cancel,
+        })
     }
 
     /// Appends global sample `g` (ignored before the record's start).
@@ -183,6 +210,7 @@ impl SurfaceRecord {
             v
         };
         let job = Job {
+            cycle: k,
             eta: segment(&self.eta, self.nb),
             loads: self
                 .loads
@@ -204,15 +232,26 @@ impl SurfaceRecord {
         self.start = keep_from;
     }
 
-    /// Waits for the mapper and returns the mapped cycles' peaks per cylinder.
-    pub(super) fn finish(mut self, run: &EngineRun<'_>) -> Vec<SurfacePeaks> {
+    /// Waits for the mapper and returns the mapped cycles' peaks per cylinder, or where it
+    /// failed.
+    pub(super) fn finish(
+        mut self,
+        run: &EngineRun<'_>,
+    ) -> Result<Vec<SurfacePeaks>, TransientError> {
         self.jobs = None;
         let peaks = match self.worker.take().map(|w| w.join()) {
-            Some(Ok(p)) => p,
-            Some(Err(panic)) => std::panic::resume_unwind(panic),
+            Some(Ok(p)) => p?,
+            Some(Err(panic)) => {
+                let msg = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "the mapping thread stopped".into());
+                return Err(TransientError::MapsStopped(msg));
+            }
             None => Vec::new(),
         };
-        peaks
+        Ok(peaks
             .into_iter()
             .zip(&run.cyls)
             .map(|(nodes, c)| {
@@ -223,7 +262,7 @@ impl SurfaceRecord {
                     per_cycle: Array2::from_shape_fn((nodes.len(), cycles), |(n, k)| nodes[n][k]),
                 }
             })
-            .collect()
+            .collect())
     }
 }
 
@@ -238,14 +277,20 @@ struct Mapper {
 }
 
 impl Mapper {
-    /// Maps one cycle's segment: appends each surface node's peak negative acceleration.
-    fn map(&mut self, job: Job) {
+    /// Maps one cycle's segment: appends each surface node's peak negative acceleration; a
+    /// non-finite coordinate or bracket is reported with the cylinder and the cycle.
+    fn map(&mut self, job: Job) -> Result<(), TransientError> {
         let eta_bar = self.window.outputs(&job.eta, self.nb);
         for (c, loads) in job.loads.iter().enumerate() {
             let surface = &self.surfaces[c];
             if surface.nodes.is_empty() {
                 continue;
             }
+            let fail = |msg: &str| TransientError::Maps {
+                cylinder: c + 1,
+                cycle: job.cycle,
+                msg: msg.into(),
+            };
             let ncon = self.ncon[c];
             let f_bar = self.window.outputs(loads, ncon);
             let mut x = Mat::<f64>::zeros(eta_bar.nrows() + ncon, self.window.spc);
@@ -255,18 +300,23 @@ impl Mapper {
             x.as_mut()
                 .subrows_mut(eta_bar.nrows(), ncon)
                 .copy_from(&f_bar);
-            let mut p = self.projectors[c]
-                .take()
-                .unwrap_or_else(|| Projector::new(surface, x.as_ref(), None));
+            if !x.is_all_finite() {
+                return Err(fail("the filtered coordinates are not finite"));
+            }
+            let mut p = match self.projectors[c].take() {
+                Some(p) => p,
+                None => Projector::new(surface, x.as_ref(), None).map_err(|m| fail(&m))?,
+            };
             let (peaks, exact) = p.peaks(x.as_ref());
             if exact > REWEIGHT_ABOVE {
-                p = Projector::new(surface, x.as_ref(), Some(&p.weight));
+                p = Projector::new(surface, x.as_ref(), Some(&p.weight)).map_err(|m| fail(&m))?;
             }
             self.projectors[c] = Some(p);
             for (series, v) in self.peaks[c].iter_mut().zip(peaks) {
                 series.push(v);
             }
         }
+        Ok(())
     }
 }
 
@@ -325,7 +375,11 @@ impl Projector {
     /// (coordinates x samples) or `previous`, whichever is larger, but at least 1e-3 of the
     /// largest of its group (modes, contact loads): a contact DOF idle in one cycle may carry
     /// the next one's slap.
-    fn new(surface: &SurfaceRows, x: MatRef<'_, f64>, previous: Option<&[f64]>) -> Self {
+    fn new(
+        surface: &SurfaceRows,
+        x: MatRef<'_, f64>,
+        previous: Option<&[f64]>,
+    ) -> Result<Self, String> {
         let (nc, ns) = (surface.residual.ncols(), surface.nodes.len());
         let nm = x.nrows() - nc;
         let rows_t = Mat::from_fn(nm + nc, ns, |j, n| {
@@ -344,7 +398,9 @@ impl Projector {
         for group in [0..nm, nm..nm + nc] {
             let top = weight[group.clone()].iter().copied().fold(0.0, f64::max);
             for w in &mut weight[group] {
-                *w = w.max(1e-3 * top).max(f64::MIN_POSITIVE);
+                // a group idle in this cycle (no contact yet) keeps unit weights: any positive
+                // weight is valid, and a vanishing one would overflow x / D later
+                *w = if top > 0.0 { w.max(1e-3 * top) } else { 1.0 };
             }
         }
         let w_t = Mat::from_fn(nm + nc, ns, |j, n| weight[j] * rows_t[(j, n)]);
@@ -359,7 +415,7 @@ impl Projector {
         );
         let evd = gram
             .self_adjoint_eigen(faer::Side::Lower)
-            .expect("the eigen-decomposition of a symmetric matrix");
+            .map_err(|e| format!("the eigen-decomposition of the weighted rows failed: {e:?}"))?;
         let s = evd.S().column_vector();
         let last = s.nrows() - 1;
         let q = (0..=last)
@@ -387,7 +443,7 @@ impl Projector {
             .collect();
         let p_scaled = Mat::from_fn(nm + nc, q, |j, i| p[(j, i)] / weight[j]);
         let a32 = Mat::from_fn(ns, q, |n, i| a[(n, i)] as f32);
-        Projector {
+        Ok(Projector {
             rows_t,
             weight,
             p_scaled,
@@ -395,7 +451,7 @@ impl Projector {
             a32,
             tail,
             norm,
-        }
+        })
     }
 
     /// Each node's peak negative acceleration (a positive magnitude, as [`sampled_peak`]
@@ -469,7 +525,9 @@ impl Projector {
                 let upper = smallest_upper(y, &c32, &xn32, (b, w));
                 let mut best: Option<(usize, f64)> = None;
                 for (t, ((&yt, &ct), &xt)) in y.iter().zip(&c32).zip(&xn32).enumerate() {
-                    if yt - (b * ct + w * xt) <= upper {
+                    // a bracket that is not finite (incomparable) admits its sample
+                    let lower = yt - (b * ct + w * xt);
+                    if lower.partial_cmp(&upper) != Some(std::cmp::Ordering::Greater) {
                         evaluated += 1;
                         let v = exact(t);
                         if best.is_none_or(|(_, bv)| v < bv) {
@@ -574,7 +632,7 @@ mod tests {
         let own = signals(nm + nc, nc, spc, &mut seed);
         let other = signals(nm + nc, nc, spc, &mut seed);
         for (made_on, x) in [(&own, &own), (&other, &own)] {
-            let p = Projector::new(&surface, made_on.as_ref(), None);
+            let p = Projector::new(&surface, made_on.as_ref(), None).unwrap();
             assert!(p.p_scaled.ncols() <= MAX_DIRECTIONS);
             let (peaks, exact) = p.peaks(x.as_ref());
             assert!(exact < spc as f64, "every sample evaluated: {exact}");
