@@ -13,6 +13,9 @@ use super::spec::{LinerGeometry, LinerMeshing};
 use super::{CrankcaseSource, MeshSource, Scene, SceneError};
 use crate::text::num;
 
+/// Cycles queued for the liner maps at most (`transient::cycle` surface record).
+const QUEUED_CYCLES: usize = 8;
+
 /// Full DOFs of the default engine's ROM build (six liners and the crankcase).
 const REF_DOFS: f64 = 367_842.0;
 /// Peak memory of that build [bytes] (`/usr/bin/time -v linercav rom models/engine.toml
@@ -357,9 +360,10 @@ const MAP_SECONDS_PER_NODE_SAMPLE: f64 = 12e-9;
 /// The liner maps of a run (`report`, `simulate --maps`) on a ROM whose cylinders have
 /// `surface_nodes` wet-surface nodes each, `coordinates` = modes + contact DOFs: in memory
 /// (8 bytes each) the surface rows in four copies per cylinder (the ROM's, the mapper's and the
-/// brackets' unweighted and weighted), and per cycle the record segment, its second
-/// differences, filtered series and one cylinder's coordinates (4 (S + 2 margin) m); the time
-/// per node and sample of the averaged cycles.
+/// brackets' unweighted and weighted), per cycle the record segment, its second differences,
+/// filtered series and one cylinder's coordinates (4 (S + 2 margin) m), and the record
+/// segments of the cycles queued for the maps; the time per node and sample of the averaged
+/// cycles.
 pub fn maps(scene: &Scene, surface_nodes: &[usize], coordinates: usize) -> Option<Estimate> {
     let t = &scene.simulation.as_ref()?.transient;
     let per_cycle = 720.0 / t.step_deg;
@@ -367,7 +371,7 @@ pub fn maps(scene: &Scene, surface_nodes: &[usize], coordinates: usize) -> Optio
     let m = coordinates as f64;
     Some(Estimate {
         what: "mapping the liners",
-        memory: 8.0 * (4.0 * nodes * m + 4.0 * 1.1 * per_cycle * m),
+        memory: 8.0 * (4.0 * nodes * m + (4.0 + QUEUED_CYCLES as f64) * 1.1 * per_cycle * m),
         seconds: t.averaged_cycles as f64 * nodes * per_cycle * MAP_SECONDS_PER_NODE_SAMPLE,
         keys: "liner.mesh (the wet surface's nodes), transient.step_deg, transient.averaged_cycles",
         detail: format!(

@@ -54,6 +54,10 @@ const NODE_BLOCK: usize = 16;
 /// comparisons alone).
 const ROUNDOFF_SINGLE: f64 = 1e-5;
 
+/// Cycles the transient may run ahead of the maps (each queued cycle holds its record
+/// segment: about 15 MB on the default engine); counted in `scene::budget::maps`.
+pub const QUEUED_CYCLES: usize = 8;
+
 /// When a cycle needed more exact samples per node than this, the next cycle's brackets are
 /// made anew with weights that take in that cycle's RMS as well.
 const REWEIGHT_ABOVE: f64 = 16.0;
@@ -145,8 +149,9 @@ impl SurfaceRecord {
                     .map(|band| BatchLowPass::new(len, dt, band)),
             },
         };
-        // at most two cycles queued: the transient waits rather than the record growing
-        let (jobs, inbox) = std::sync::mpsc::sync_channel::<Job>(2);
+        // at most QUEUED_CYCLES queued: the transient (faster than the maps on the default
+        // engine) runs ahead by that much, then waits rather than the queue growing
+        let (jobs, inbox) = std::sync::mpsc::sync_channel::<Job>(QUEUED_CYCLES);
         let cancel = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
         let stop = cancel.clone();
         let worker = std::thread::Builder::new()
