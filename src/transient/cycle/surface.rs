@@ -367,8 +367,7 @@ struct Projector {
     weight: Vec<f64>,
     /// D^-1 P: coordinates x q (P orthonormal).
     p_scaled: Mat<f64>,
-    /// a_n = P^T w_n: nodes x q, and in single precision.
-    a: Mat<f64>,
+    /// a_n = P^T w_n in single precision: nodes x q.
     a32: Mat<f32>,
     /// b_n = |Q^T w_n| (with its roundoff allowance) and |w_n|.
     tail: Vec<f64>,
@@ -452,7 +451,6 @@ impl Projector {
             rows_t,
             weight,
             p_scaled,
-            a,
             a32,
             tail,
             norm,
@@ -495,8 +493,8 @@ impl Projector {
             .map(|(&a, &b)| (a as f32, b as f32))
             .unzip();
         let mut evaluated = 0usize;
-        let mut out = Vec::with_capacity(self.a.nrows());
-        let ns = self.a.nrows();
+        let mut out = Vec::with_capacity(self.a32.nrows());
+        let ns = self.a32.nrows();
         let mut yhat = Mat::<f32>::zeros(spc, NODE_BLOCK);
         for n0 in (0..ns).step_by(NODE_BLOCK) {
             let nb = NODE_BLOCK.min(ns - n0);
@@ -552,7 +550,7 @@ impl Projector {
                 out.push(sampled_peak(&around, 0..around.len(), -1.0).map_or(0.0, |(g, _)| g));
             }
         }
-        let per_node = evaluated as f64 / self.a.nrows().max(1) as f64;
+        let per_node = evaluated as f64 / self.a32.nrows().max(1) as f64;
         log::debug!("surface map: {q} directions, {per_node:.2} exact samples per node of {spc}");
         (out, per_node)
     }
@@ -586,14 +584,7 @@ fn smallest_upper(y: &[f32], c: &[f32], x: &[f32], (b, w): (f32, f32)) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A deterministic pseudo-random sequence in [-0.5, 0.5).
-    fn noise(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (*seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    }
+    use crate::transient::signal::tests::noise;
 
     /// The surface rows of `ns` nodes on `nm` modes and `nc` contact loads: smooth in space
     /// (a few harmonics of the node index) plus a small rough part, so that the brackets'
