@@ -3,6 +3,7 @@
 
 pub mod arpack;
 pub mod certify;
+pub mod dense_lanczos;
 pub mod modal;
 pub mod shift_invert;
 pub mod subspace;

@@ -15,8 +15,10 @@
 //! Preload: K_g u0 = F_clamp (liner flange top pressed down, bolt reaction up on the deck).
 
 use super::craig_bampton::{symmetrise, PartReduction};
+use crate::eigen::dense_lanczos;
 use faer::linalg::solvers::Solve;
-use faer::{Mat, Side};
+use faer::{Mat, MatRef, Side};
+use rayon::prelude::*;
 
 pub use crate::linalg::dense::Dense;
 
@@ -27,15 +29,35 @@ pub struct Placement<'a> {
     pub map: Vec<usize>,
 }
 
-/// Result of the dense system eigen-solve.
+/// The system's lowest modes and what the dropped ones leave: the stiffness factor for static
+/// solves and the flexibility of the modes above the kept ones.
 pub struct SystemModes {
-    /// Eigenvalues of all system modes, ascending.
+    /// Eigenvalues of the lowest system modes, ascending: the kept modes and a block above
+    /// them (p = max(400, 3/2 x kept) of them from the whole decomposition, 3/2 x kept + 64
+    /// from block Lanczos; all when the system is smaller).
     pub lambdas: Vec<f64>,
-    /// Mass-normalised eigenvectors (global coordinates x modes).
+    /// Mass-normalised eigenvectors (global coordinates x `lambdas.len()`).
     pub vectors: Mat<f64>,
-    /// The assembled stiffness (kept for static solves).
+    /// The assembled stiffness and mass.
     pub k: Mat<f64>,
+    pub m: Mat<f64>,
+    /// The unit-modal-mass scaling D and the Cholesky factor of K' = D K D.
+    scale: Vec<f64>,
+    kchol: faer::linalg::solvers::Llt<f64>,
 }
+
+/// Systems with more coordinates than this are solved for their lowest modes by block
+/// Lanczos ([`crate::eigen::dense_lanczos`]); smaller ones are decomposed whole.
+pub const LANCZOS_ABOVE: usize = 1500;
+
+/// Accepted relative error bound of each Lanczos eigenvalue up to a tenth above the cut-off's
+/// (the kept modes and any that could be among them) before the Rayleigh-Ritz step: 1e-8, far
+/// below the 1e-5 the ROM is held to and above the roundoff floor of the shift-invert
+/// products (1e-10 to 3e-9 near 9 kHz on the default engine).
+const LANCZOS_TOL: f64 = 1e-8;
+
+/// The same bound for the modes above, which only seed the error estimate's refinement.
+const LANCZOS_REST_TOL: f64 = 1e-4;
 
 /// Failure of the dense system solve.
 #[derive(Debug, thiserror::Error)]
@@ -68,22 +90,165 @@ pub fn assemble(n: usize, parts: &[Placement<'_>]) -> (Mat<f64>, Mat<f64>) {
     (k, m)
 }
 
-/// Solves K y = lambda M y densely (all modes), mass-normalised; the modes the ROM keeps
-/// (eigenvalues up to `keep_lambda`) are refined by subspace iteration on a block of
-/// p = max(400, 3/2 x their count) vectors (see the body).
+/// The lowest system modes of K y = lambda M y, mass-normalised: those up to `keep_lambda` (the
+/// kept modes) and a block above them ([`SystemModes::lambdas`]), which the error estimate may
+/// refine from. The dropped modes are not computed: what the ROM needs of them is their
+/// flexibility, K^-1 less the kept modes' ([`SystemModes::dropped_flexibility`]).
 ///
 /// The coordinates are first scaled to unit modal mass (D = diag(M)^-1/2, K' = D K D,
 /// M' = D M D): constraint-mode columns carry metre-sized interface shapes next to
-/// mass-normalised modes, and without the scaling roundoff in C^-1 K C^-T grows with the
-/// spread of their magnitudes.
+/// mass-normalised modes, and without the scaling roundoff grows with the spread of their
+/// magnitudes. Systems above [`LANCZOS_ABOVE`] coordinates are solved by block Lanczos and
+/// certified by a Sturm count at the gap above the kept modes; a count that disagrees (a
+/// missed mode) or an iteration that does not converge falls back to the whole decomposition
+/// ([`dense_lowest`]), which cannot miss one.
 pub fn system_modes(
     k: Mat<f64>,
     m: &Mat<f64>,
     keep_lambda: f64,
 ) -> Result<SystemModes, SystemError> {
+    system_modes_by(k, m, keep_lambda, Method::Auto)
+}
+
+/// How [`system_modes_by`] finds the lowest modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Block Lanczos above [`LANCZOS_ABOVE`] coordinates (its basis at most half the system,
+    /// else the whole decomposition), the whole decomposition below.
+    Auto,
+    /// The whole decomposition ([`dense_lowest`]).
+    Dense,
+    /// Block Lanczos whatever the size (basis up to the whole system), falling back as
+    /// [`Method::Auto`] does (tests).
+    Lanczos,
+}
+
+/// [`system_modes`] by a chosen method.
+pub fn system_modes_by(
+    k: Mat<f64>,
+    m: &Mat<f64>,
+    keep_lambda: f64,
+    method: Method,
+) -> Result<SystemModes, SystemError> {
     let n = k.nrows();
     let t0 = std::time::Instant::now();
     let (d, ks, ms) = unit_mass_scaling(&k, m);
+    let kchol = ks
+        .llt(Side::Lower)
+        .map_err(|_| SystemError::StiffnessSingular)?;
+    let below = |l: &[f64]| l.iter().take_while(|&&x| x <= keep_lambda).count();
+    // the dense path's refinement block (module docs of `dense_lowest`)
+    let wanted = |l: &[f64]| n.min(400.max(3 * below(l) / 2));
+    // Lanczos needs no refinement block: the kept modes and half again as many above (the
+    // error estimate's start vectors when it refines), a block at least.
+    let wanted_lanczos = |l: &[f64]| n.min(3 * below(l) / 2 + dense_lanczos::BLOCK);
+    let lanczos = match method {
+        Method::Auto if n > LANCZOS_ABOVE => {
+            lanczos_lowest(&ks, &ms, &kchol, &wanted_lanczos, keep_lambda, n / 2)
+        }
+        Method::Lanczos => lanczos_lowest(&ks, &ms, &kchol, &wanted_lanczos, keep_lambda, n),
+        _ => None,
+    };
+    let (lambdas, mut y) = match lanczos {
+        Some(found) => found,
+        None => dense_lowest(&ks, &ms, &kchol, &wanted)?,
+    };
+    log::info!(
+        "system: lowest {} of {n} modes in {:.2} s",
+        lambdas.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    for j in 0..y.ncols() {
+        for i in 0..n {
+            y[(i, j)] *= d[i];
+        }
+    }
+    log::info!(
+        "system: n = {n}, lowest eigenvalues {:?}",
+        &lambdas[..lambdas.len().min(4)]
+    );
+    if lambdas.first().is_some_and(|&l| l <= 0.0) {
+        return Err(SystemError::StiffnessSingular);
+    }
+    Ok(SystemModes {
+        lambdas,
+        vectors: y,
+        k,
+        m: m.clone(),
+        scale: d,
+        kchol,
+    })
+}
+
+/// Block Lanczos for the lowest modes of the scaled pencil, certified: the number of
+/// eigenvalues below the midpoint of the gap above the kept ones (Sturm count) must equal the
+/// number found there. `None` (with a log line) when the iteration gave no answer or the count
+/// disagrees.
+fn lanczos_lowest(
+    ks: &Mat<f64>,
+    ms: &Mat<f64>,
+    kchol: &faer::linalg::solvers::Llt<f64>,
+    wanted: &dyn Fn(&[f64]) -> usize,
+    keep_lambda: f64,
+    max_basis: usize,
+) -> Option<(Vec<f64>, Mat<f64>)> {
+    use crate::eigen::dense_lanczos::{count_below, lowest_modes, Target};
+    let n = ks.nrows();
+    let target = Target {
+        count: wanted,
+        accurate_below: 1.1 * keep_lambda,
+        tol: LANCZOS_TOL,
+        rest_tol: LANCZOS_REST_TOL,
+    };
+    let low = match lowest_modes(ks.as_ref(), ms.as_ref(), kchol, &target, max_basis) {
+        Ok(low) => low,
+        Err(e) => {
+            log::warn!("system: block Lanczos gave no answer ({e}); decomposing all {n} modes");
+            return None;
+        }
+    };
+    let kept = low
+        .lambdas
+        .iter()
+        .take_while(|&&l| l <= keep_lambda)
+        .count();
+    if kept < low.lambdas.len() {
+        let lo = if kept > 0 { low.lambdas[kept - 1] } else { 0.0 };
+        let sigma = 0.5 * (lo.max(keep_lambda) + low.lambdas[kept]);
+        let t = std::time::Instant::now();
+        let below = count_below(ks.as_ref(), ms.as_ref(), sigma);
+        log::debug!("system: Sturm count in {:.2} s", t.elapsed().as_secs_f64());
+        if below != kept {
+            log::warn!(
+                "system: the Sturm count at {:.1} Hz found {below} modes below, block Lanczos {kept}; decomposing all {n} modes",
+                hz(sigma)
+            );
+            return None;
+        }
+        log::info!(
+            "system: certified: {kept} modes below {:.1} Hz (Sturm count)",
+            hz(sigma)
+        );
+    }
+    Some((low.lambdas, low.vectors))
+}
+
+/// All modes of the scaled pencil by the symmetric eigenproblem of C^-1 K' C^-T (M' = C C^T),
+/// then the lowest p = `wanted` refined by subspace iteration ([`subspace_refine`]) and the
+/// rest dropped.
+///
+/// The dense solve has an absolute eigenvalue error of order eps times the largest eigenvalue
+/// of the standard form, which on the default engine moved low modes by up to 15 % (a spurious
+/// mode at 1094 Hz, others below the full FE model's, which a Ritz reduction cannot give).
+/// Refining the lowest p modes by subspace iteration with K'^-1 M' (Rayleigh-Ritz each pass,
+/// K' factorised once): W = K'^-1 M' Y, (W^T K' W) x = lambda (W^T M' W) x, Y = W X. The Ritz
+/// values are upper bounds of the exact ones and converge at (lambda_i / lambda_{p+1})^k.
+fn dense_lowest(
+    ks: &Mat<f64>,
+    ms: &Mat<f64>,
+    kchol: &faer::linalg::solvers::Llt<f64>,
+    wanted: &dyn Fn(&[f64]) -> usize,
+) -> Result<(Vec<f64>, Mat<f64>), SystemError> {
     let chol = ms
         .llt(Side::Lower)
         .map_err(|_| SystemError::MassNotPositive)?;
@@ -96,28 +261,10 @@ pub fn system_modes(
         y.as_mut(),
         faer::Par::rayon(0),
     );
-    // The dense solve above has an absolute eigenvalue error of order eps times the largest
-    // eigenvalue of the standard form, which on the default engine moved low modes by up to
-    // 15 % (a spurious mode at 1094 Hz, others below the full FE model's, which a Ritz
-    // reduction cannot give). Refine the lowest p modes by subspace iteration with K'^-1 M'
-    // (Rayleigh-Ritz each pass, K' factorised once): W = K'^-1 M' Y, (W^T K' W) x =
-    // lambda (W^T M' W) x, Y = W X. The Ritz values are upper bounds of the exact ones and
-    // converge at (lambda_i / lambda_{p+1})^k; three passes bring the default engine within
-    // 1e-4 of the full FE model below half the cut-off (README, "ROM against the full model").
-    // The block exceeds the kept modes by half so lambda_{p+1} stays well above the highest
-    // kept one (the default engine keeps 240 modes: 400).
-    log::info!(
-        "system: dense eigen-decomposition of {n} in {:.2} s",
-        t0.elapsed().as_secs_f64()
-    );
-    let kept = lambdas.iter().take_while(|&&l| l <= keep_lambda).count();
-    let p = n.min(400.max(3 * kept / 2));
+    let p = wanted(&lambdas);
     if p > 0 {
-        let kchol = ks
-            .llt(Side::Lower)
-            .map_err(|_| SystemError::StiffnessSingular)?;
         let before: Vec<f64> = lambdas[..p].to_vec();
-        let (ritz, ys) = subspace_refine(&ks, &ms, &kchol, y.as_ref().subcols(0, p).to_owned())?;
+        let (ritz, ys) = subspace_refine(ks, ms, kchol, y.as_ref().subcols(0, p).to_owned())?;
         lambdas[..p].copy_from_slice(&ritz);
         y.as_mut().subcols_mut(0, p).copy_from(&ys);
         if log::log_enabled!(log::Level::Info) {
@@ -127,23 +274,50 @@ pub fn system_modes(
             log::info!("system: refined {p} modes, largest relative eigenvalue change {change:e}");
         }
     }
-    for i in 0..n {
-        for j in 0..n {
-            y[(i, j)] *= d[i];
+    lambdas.truncate(p);
+    Ok((lambdas, y.as_ref().subcols(0, p).to_owned()))
+}
+
+impl SystemModes {
+    /// K^-1 x = D K'^-1 D x, solved in panels of 16 columns on both cores.
+    pub fn static_solve(&self, f: MatRef<'_, f64>) -> Mat<f64> {
+        let d = &self.scale;
+        let mut x = Mat::from_fn(f.nrows(), f.ncols(), |i, j| d[i] * f[(i, j)]);
+        let l = self.kchol.L();
+        x.par_col_chunks_mut(16).for_each(|mut c| {
+            faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+                l,
+                c.as_mut(),
+                faer::Par::Seq,
+            );
+            faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+                l.transpose(),
+                c,
+                faer::Par::Seq,
+            );
+        });
+        for j in 0..x.ncols() {
+            for i in 0..x.nrows() {
+                x[(i, j)] *= d[i];
+            }
         }
+        x
     }
-    log::info!(
-        "system: n = {n}, lowest eigenvalues {:?}",
-        &lambdas[..n.min(4)]
-    );
-    if lambdas.first().is_some_and(|&l| l <= 0.0) {
-        return Err(SystemError::StiffnessSingular);
+
+    /// The flexibility of the modes above the first `kept`, applied to the rows `g` (rows x
+    /// global coordinates): F_d G^T = Y_d L_d^-1 Y_d^T G^T = K^-1 G^T - Y_k L_k^-1 (G Y_k)^T
+    /// (global x rows), since K^-1 = Y L^-1 Y^T over all modes. Needs only the kept modes.
+    pub fn dropped_flexibility(&self, kept: usize, g: MatRef<'_, f64>) -> Mat<f64> {
+        let mut f = self.static_solve(g.transpose());
+        let yk = self.vectors.as_ref().subcols(0, kept);
+        let mut gy = mul(g, yk);
+        for j in 0..kept {
+            let s = 1.0 / self.lambdas[j];
+            gy.col_mut(j).iter_mut().for_each(|v| *v *= s);
+        }
+        f -= mul(yk, gy.transpose());
+        f
     }
-    Ok(SystemModes {
-        lambdas,
-        vectors: y,
-        k,
-    })
 }
 
 /// Work split of [`symmetric_evd`]: a fixed degree, not the machine's thread count.
@@ -273,6 +447,30 @@ pub fn refined_eigenvalues(
     Ok(subspace_refine(&ks, &ms, &kchol, ys)?.0)
 }
 
+/// The lowest `count` eigenvalues of K y = lambda M y by block Lanczos after the
+/// unit-modal-mass scaling of [`system_modes`], those up to `accurate_below` to a relative
+/// error bound of 1e-8; `None` when the iteration gives no answer within half the system.
+pub fn lowest_eigenvalues(
+    k: &Mat<f64>,
+    m: &Mat<f64>,
+    count: usize,
+    accurate_below: f64,
+) -> Option<Vec<f64>> {
+    use crate::eigen::dense_lanczos::{lowest_modes, Target};
+    let (_, ks, ms) = unit_mass_scaling(k, m);
+    let kchol = ks.llt(Side::Lower).ok()?;
+    let target = Target {
+        count: &|_| count,
+        accurate_below,
+        tol: LANCZOS_TOL,
+        rest_tol: LANCZOS_REST_TOL,
+    };
+    let n = k.nrows();
+    lowest_modes(ks.as_ref(), ms.as_ref(), &kchol, &target, n / 2)
+        .ok()
+        .map(|low| low.lambdas)
+}
+
 /// All eigenvalues of K y = lambda M y (ascending), rigid-body zeros allowed (diagnostics and
 /// tests of free parts).
 pub fn system_modes_allow_rigid(k: Mat<f64>, m: &Mat<f64>) -> Result<Vec<f64>, SystemError> {
@@ -300,68 +498,44 @@ pub fn hz(lambda: f64) -> f64 {
     lambda.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
 }
 
-/// Residual flexibility of the modes from `kept` on at the rows `g` (outputs x global):
-/// R = G (sum_{j >= kept} y_j y_j^T / lambda_j) G^T.
-pub fn residual_flexibility(g: &Mat<f64>, sys: &SystemModes, kept: usize) -> Mat<f64> {
-    let n = sys.lambdas.len();
-    let nd = n - kept;
-    let mut gy = g * sys.vectors.as_ref().subcols(kept, nd);
-    for j in 0..nd {
-        let s = 1.0 / sys.lambdas[kept + j].sqrt();
-        for i in 0..gy.nrows() {
-            gy[(i, j)] *= s;
-        }
-    }
-    &gy * gy.transpose()
+/// Residual flexibility of the modes above the kept ones at the rows `g`, given
+/// W = F_d G^T ([`SystemModes::dropped_flexibility`]): R = G W, symmetrised.
+pub fn residual_flexibility(g: MatRef<'_, f64>, w: MatRef<'_, f64>) -> Mat<f64> {
+    let mut r = mul(g, w);
+    symmetrise(&mut r);
+    r
 }
 
-/// Static solve K_g u = f with the assembled (SPD) stiffness.
-pub fn static_solve(sys: &SystemModes, f: &Mat<f64>) -> Result<Mat<f64>, SystemError> {
-    let chol = sys
-        .k
-        .llt(Side::Lower)
-        .map_err(|_| SystemError::StiffnessSingular)?;
-    Ok(chol.solve(f))
-}
-
-/// Residual vectors (modal truncation augmentation) for loads `g^T P` (`g`: output rows x
-/// global, `patterns`: rows x load patterns): with the dropped modes Y_d, Lambda_d and
-/// B = Y_d^T g^T P, the vectors X = Y_d Lambda_d^-1 B span the dropped modes' static response
-/// to the patterns. Projected on X, K_a = B^T Lambda_d^-1 B and M_a = B^T Lambda_d^-2 B; their
+/// Residual vectors (modal truncation augmentation) for loads G^T P (G: output rows x global,
+/// P: rows x load patterns), given W = F_d G^T ([`SystemModes::dropped_flexibility`]): the
+/// vectors X = W P = Y_d L_d^-1 Y_d^T G^T P span the dropped modes' static response to the
+/// patterns; X is M-orthogonalised against the kept modes (it lies in span Y_d, so this only
+/// removes roundoff). Projected on X, K_a = X^T K X (= P^T G X) and M_a = X^T M X; their
 /// eigenvectors Z (M_a-normalised, directions with M_a ~ 0 dropped) give pseudo-modes
-/// Y_a = X Z, mass-normalised and orthogonal to the kept modes (they lie in span Y_d), with
-/// frequencies above the cut-off. Added to the kept modes they represent the patterns' static
-/// response exactly (sum Y_a Y_a^T / mu = X K_a^-1 X^T) and the first inertia of the dropped
-/// modes: a fast contact load sees the local liner mass, not only its static flexibility.
+/// Y_a = X Z, mass-normalised and orthogonal to the kept modes, with frequencies above the
+/// cut-off. Added to the kept modes they represent the patterns' static response exactly
+/// (sum Y_a Y_a^T / mu = X K_a^-1 X^T) and the first inertia of the dropped modes: a fast
+/// contact load sees the local liner mass, not only its static flexibility.
 /// Returns Y_a (global x m) and mu (ascending).
 pub fn residual_vectors(
     sys: &SystemModes,
     kept: usize,
-    g: &Mat<f64>,
+    w: MatRef<'_, f64>,
     patterns: &Mat<f64>,
 ) -> Result<(Mat<f64>, Vec<f64>), SystemError> {
-    let n = sys.lambdas.len();
-    let nd = n - kept;
-    if nd == 0 || patterns.ncols() == 0 {
+    let n = sys.k.nrows();
+    if patterns.ncols() == 0 || kept >= n {
         return Ok((Mat::zeros(n, 0), Vec::new()));
     }
-    let yd = sys.vectors.as_ref().subcols(kept, nd);
-    let loads = g.transpose() * patterns; // global x patterns
-    let mut c = yd.transpose() * &loads; // nd x patterns: B, then Lambda^-1 B
-    for i in 0..nd {
-        let s = 1.0 / sys.lambdas[kept + i];
-        for j in 0..c.ncols() {
-            c[(i, j)] *= s;
-        }
-    }
-    let mut lc = c.clone(); // Lambda C
-    for i in 0..nd {
-        for j in 0..c.ncols() {
-            lc[(i, j)] *= sys.lambdas[kept + i];
-        }
-    }
-    let ka = c.transpose() * &lc;
-    let ma = c.transpose() * &c;
+    let mut x = mul(w, patterns.as_ref());
+    let yk = sys.vectors.as_ref().subcols(0, kept);
+    let myk = mul(sys.m.as_ref(), yk);
+    let c = mul(myk.transpose(), x.as_ref());
+    x -= mul(yk, c.as_ref());
+    let mut ka = mul(x.transpose(), mul(sys.k.as_ref(), x.as_ref()).as_ref());
+    let mut ma = mul(x.transpose(), mul(sys.m.as_ref(), x.as_ref()).as_ref());
+    symmetrise(&mut ka);
+    symmetrise(&mut ma);
     let evd = ma
         .self_adjoint_eigen(Side::Lower)
         .map_err(|_| SystemError::Eigen)?;
@@ -380,7 +554,7 @@ pub fn residual_vectors(
         .map(|i| evd2.S().column_vector()[i])
         .collect();
     let z = &t * evd2.U();
-    let ya = yd * (&c * &z);
+    let ya = mul(x.as_ref(), z.as_ref());
     Ok((ya, mu))
 }
 

@@ -5,9 +5,7 @@
 use super::craig_bampton::{
     CbSettings, CbStats, InterfaceBlock, Load, Output, Part, PartReduction,
 };
-use super::engine::{
-    self, assemble, hz, residual_flexibility, static_solve, Dense, Placement, SystemModes,
-};
+use super::engine::{self, assemble, hz, residual_flexibility, Dense, Placement, SystemModes};
 use super::interface::{self, Direction, InterfaceShape};
 use super::part_cache::{reduce_cached, PartCacheError, Source};
 use crate::fem::material::Elastic;
@@ -17,8 +15,9 @@ use crate::mesh::Mesh;
 use faer::{Mat, MatRef};
 use std::time::Instant;
 
-/// Version of the ROM layout; part of the cache key (5: matrices stored as ndarray arrays).
-pub const ROM_FORMAT: u32 = 8;
+/// Version of the ROM layout; part of the cache key (5: matrices stored as ndarray arrays;
+/// 9: residual vectors and residual flexibility from the dropped modes' exact flexibility).
+pub const ROM_FORMAT: u32 = 9;
 
 /// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
 /// system modes along the stated direction.
@@ -707,14 +706,16 @@ struct Basis {
     ys: Mat<f64>,
 }
 
+/// The basis from the system modes and W = F_d G_c^T, the dropped modes' flexibility at the
+/// contact rows ([`SystemModes::dropped_flexibility`]).
 fn basis(
     sys: &SystemModes,
     kept: usize,
-    gc: &Mat<f64>,
+    w: MatRef<'_, f64>,
     patterns: &Mat<f64>,
 ) -> Result<Basis, RomError> {
     let n_g = sys.vectors.nrows();
-    let (ya, mu) = engine::residual_vectors(sys, kept, gc, patterns)?;
+    let (ya, mu) = engine::residual_vectors(sys, kept, w, patterns)?;
     let mut modes = Mat::<f64>::zeros(n_g, kept + mu.len());
     modes
         .as_mut()
@@ -753,20 +754,13 @@ fn preload_vector(
 }
 
 /// Residual cross flexibility points x contact not carried by the modes:
-/// (G_p Y_d L_d^-1/2)(G_c Y_d L_d^-1/2)^T - (G_p Ys)(G_c Ys)^T, Y_d the dropped system modes
-/// (eigenvalues L_d), G_p / G_c the point / contact rows of `g_all` (contact rows first).
-fn point_residual(g_all: &Mat<f64>, sys: &SystemModes, b: &Basis, ncon: usize) -> Dense {
-    let (kept, np) = (b.kept, g_all.nrows() - ncon);
-    let nd = sys.lambdas.len() - kept;
-    let mut gy = g_all * sys.vectors.as_ref().subcols(kept, nd);
-    for j in 0..nd {
-        let sc = 1.0 / sys.lambdas[kept + j].sqrt();
-        for i in 0..gy.nrows() {
-            gy[(i, j)] *= sc;
-        }
-    }
+/// G_p F_d G_c^T - (G_p Ys)(G_c Ys)^T, F_d the flexibility of the dropped system modes, with
+/// `w` = F_d G_c^T (global x contact rows) and G_p / G_c the point / contact rows of `g_all`
+/// (contact rows first).
+fn point_residual(g_all: &Mat<f64>, w: MatRef<'_, f64>, b: &Basis, ncon: usize) -> Dense {
+    let np = g_all.nrows() - ncon;
     let gys = g_all * &b.ys;
-    let r = gy.as_ref().subrows(ncon, np) * gy.as_ref().subrows(0, ncon).transpose()
+    let r = g_all.as_ref().subrows(ncon, np) * w
         - gys.as_ref().subrows(ncon, np) * gys.as_ref().subrows(0, ncon).transpose();
     crate::linalg::dense::from_faer(&r)
 }
@@ -779,7 +773,10 @@ struct Assembled<'a> {
     liner_maps: &'a [Vec<usize>],
     crankcase: &'a PartReduction,
     crankcase_map: &'a [usize],
-    sys: &'a SystemModes,
+    /// Global coordinates.
+    n_g: usize,
+    /// W = F_d G_c^T for every modelled cylinder's contact rows (cylinder-major columns).
+    w: &'a Mat<f64>,
     basis: &'a Basis,
     /// The static preload displacement (global coordinates x 1).
     u0: &'a Mat<f64>,
@@ -794,7 +791,8 @@ fn cylinder_rom(a: &Assembled<'_>, cyl: usize, g_all: &Mat<f64>, idx: usize) -> 
     let modes_rows = g_all * &a.basis.modes;
     let pre = g_all * a.u0;
     let c = cyl - 1;
-    let n_g = a.sys.vectors.nrows();
+    let n_g = a.n_g;
+    let w = a.w.as_ref().subcols(idx * (nt + na), nt + na);
     let g_cc = scatter_rows(
         &a.crankcase.outputs,
         a.crankcase_map,
@@ -825,18 +823,23 @@ fn cylinder_rom(a: &Assembled<'_>, cyl: usize, g_all: &Mat<f64>, idx: usize) -> 
         preload_thrust: column(0, nt),
         preload_antithrust: column(nt, na),
         preload_points: column(nt + na, np),
-        point_residual: point_residual(g_all, a.sys, a.basis, nt + na),
+        point_residual: point_residual(g_all, w, a.basis, nt + na),
         contact_offset: offset,
-        surface: surface_rows(a, idx, g_all.as_ref().subrows(0, nt + na)),
+        surface: surface_rows(a, idx, g_all.as_ref().subrows(0, nt + na), w),
     }
 }
 
 /// A cylinder's wet-surface rows ([`SurfaceRows`]) from the liner's outputs after the points
 /// (`G_s`, liner coordinates), gathered through the cylinder's map into global coordinates:
 /// modes G_s Y, and the residual flexibility to the contact rows `g_c` as in
-/// [`point_residual`], associated as G_s [Y_d L_d^-1 (g_c Y_d)^T] - (G_s Ys)(g_c Ys)^T so
-/// that no product spans both the surface rows and the dropped modes.
-fn surface_rows(a: &Assembled<'_>, idx: usize, g_c: MatRef<'_, f64>) -> SurfaceRows {
+/// [`point_residual`], G_s [F_d g_c^T] - (G_s Ys)(g_c Ys)^T with `w` = F_d g_c^T (global x
+/// contact rows).
+fn surface_rows(
+    a: &Assembled<'_>,
+    idx: usize,
+    g_c: MatRef<'_, f64>,
+    w: MatRef<'_, f64>,
+) -> SurfaceRows {
     let r = a.rows;
     let ns = r.surface.len();
     if ns == 0 {
@@ -851,17 +854,8 @@ fn surface_rows(a: &Assembled<'_>, idx: usize, g_c: MatRef<'_, f64>) -> SurfaceR
     let gather = |m: MatRef<'_, f64>| Mat::from_fn(map.len(), m.ncols(), |i, j| m[(map[i], j)]);
     let g_s = outputs.as_ref().subrows(s0, ns);
     let modes = g_s * gather(a.basis.modes.as_ref());
-    let (kept, n) = (a.basis.kept, a.sys.lambdas.len());
-    let y_d = a.sys.vectors.as_ref().subcols(kept, n - kept);
-    let mut gy = g_c * y_d;
-    for j in 0..n - kept {
-        let s = 1.0 / a.sys.lambdas[kept + j];
-        gy.col_mut(j).iter_mut().for_each(|v| *v *= s);
-    }
-    let w = y_d * gy.transpose();
     let gys_c = g_c * &a.basis.ys;
-    let residual =
-        g_s * gather(w.as_ref()) - (g_s * gather(a.basis.ys.as_ref())) * gys_c.transpose();
+    let residual = g_s * gather(w) - (g_s * gather(a.basis.ys.as_ref())) * gys_c.transpose();
     SurfaceRows {
         nodes: r.surface.clone(),
         modes: crate::linalg::dense::from_faer(&modes),
@@ -871,9 +865,10 @@ fn surface_rows(a: &Assembled<'_>, idx: usize, g_c: MatRef<'_, f64>) -> SurfaceR
 
 /// Error estimate of the Craig-Bampton truncation: the largest relative change of the system
 /// frequencies in the band when the parts' mode cut-off is lowered to 2/3 (NaN when that
-/// smaller system cannot be solved). The smaller system's band eigenvalues are refined from
-/// the full system's modes restricted to its coordinates (block as large as the system's
-/// refined block) rather than solved densely from scratch.
+/// smaller system cannot be solved). The smaller system's band eigenvalues come from block
+/// Lanczos when it is large ([`engine::lowest_eigenvalues`]), else (or when that gives no
+/// answer) they are refined from the full system's modes restricted to its coordinates (block
+/// as large as the system's refined block) rather than solved densely from scratch.
 fn truncation_error(
     inp: &RomInputs<'_>,
     parts: &[(&PartReduction, &[usize])],
@@ -897,9 +892,22 @@ fn truncation_error(
     let in_band = sys.lambdas.iter().take_while(|&&l| l <= band).count();
     let cut = (2.0 * std::f64::consts::PI * inp.cutoff_hz).powi(2);
     let kept = sys.lambdas.iter().take_while(|&&l| l <= cut).count();
-    let p = idx.len().min(400.max(3 * kept / 2)).max(in_band);
-    let start = Mat::from_fn(idx.len(), p, |i, j| sys.vectors[(idx[i], j)]);
-    match engine::refined_eigenvalues(&kk, &mm, start.as_ref()) {
+    let p = idx
+        .len()
+        .min(400.max(3 * kept / 2))
+        .max(in_band)
+        .min(sys.vectors.ncols());
+    let lanczos = (idx.len() > engine::LANCZOS_ABOVE)
+        .then(|| engine::lowest_eigenvalues(&kk, &mm, in_band, 1.1 * band))
+        .flatten();
+    let smaller = match lanczos {
+        Some(l2) => Ok(l2),
+        None => {
+            let start = Mat::from_fn(idx.len(), p, |i, j| sys.vectors[(idx[i], j)]);
+            engine::refined_eigenvalues(&kk, &mm, start.as_ref())
+        }
+    };
+    match smaller {
         Ok(l2) => sys.lambdas[..in_band]
             .iter()
             .zip(&l2)
@@ -979,9 +987,10 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         g_rows.len(),
         inp.residual_vector_spacing,
     );
-    let basis = basis(&sys, kept, &gc, &patterns)?;
+    let w = sys.dropped_flexibility(kept, gc.as_ref());
+    let basis = basis(&sys, kept, w.as_ref(), &patterns)?;
     let f = preload_vector(&liner, rows.clamp_load, &liner_maps, &crankcase, n_g);
-    let u0 = static_solve(&sys, &f)?;
+    let u0 = sys.static_solve(f.as_ref());
     let assembled = Assembled {
         inp,
         rows,
@@ -989,7 +998,8 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         liner_maps: &liner_maps,
         crankcase: &crankcase,
         crankcase_map: &crankcase_map,
-        sys: &sys,
+        n_g,
+        w: &w,
         basis: &basis,
         u0: &u0,
     };
@@ -1001,7 +1011,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         .map(|(idx, (&cyl, g_all))| cylinder_rom(&assembled, cyl, g_all, idx))
         .collect();
     let gcs = &gc * &basis.ys;
-    let rflex = residual_flexibility(&gc, &sys, kept) - &gcs * gcs.transpose();
+    let rflex = residual_flexibility(gc.as_ref(), w.as_ref()) - &gcs * gcs.transpose();
     progress("error estimate");
     let mut parts: Vec<(&PartReduction, &[usize])> = vec![(&crankcase, &crankcase_map)];
     parts.extend(liner_maps.iter().map(|m| (&liner, m.as_slice())));
