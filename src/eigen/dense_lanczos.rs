@@ -27,6 +27,9 @@ use faer::linalg::solvers::Llt;
 use faer::{Mat, MatRef, Par};
 use rayon::prelude::*;
 
+/// Columns per panel of the triangular solves (one panel per core for a block).
+const PANEL: usize = 32;
+
 /// Columns per Lanczos block.
 pub const BLOCK: usize = 64;
 
@@ -68,21 +71,21 @@ fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     c
 }
 
-/// A x = L^-1 M L^-T x for a block x: two triangular solves (serial per panel of 16 columns,
-/// panels on both cores) around one product with M.
+/// A x = L^-1 M L^-T x for a block x: two triangular solves (serial per panel of [`PANEL`]
+/// columns, panels on both cores) around one product with M.
 fn apply(l: MatRef<'_, f64>, m: MatRef<'_, f64>, x: MatRef<'_, f64>) -> Mat<f64> {
     let mut y = x.to_owned();
     upper_solve(l, &mut y);
     let mut w = product(m, y.as_ref());
-    w.par_col_chunks_mut(16).for_each(|c| {
+    w.par_col_chunks_mut(PANEL).for_each(|c| {
         faer::linalg::triangular_solve::solve_lower_triangular_in_place(l, c, Par::Seq)
     });
     w
 }
 
-/// x <- L^-T x in panels of 16 columns on both cores.
+/// x <- L^-T x in panels of [`PANEL`] columns on both cores.
 fn upper_solve(l: MatRef<'_, f64>, x: &mut Mat<f64>) {
-    x.par_col_chunks_mut(16).for_each(|c| {
+    x.par_col_chunks_mut(PANEL).for_each(|c| {
         faer::linalg::triangular_solve::solve_upper_triangular_in_place(l.transpose(), c, Par::Seq)
     });
 }

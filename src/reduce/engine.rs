@@ -33,8 +33,8 @@ pub struct Placement<'a> {
 /// solves and the flexibility of the modes above the kept ones.
 pub struct SystemModes {
     /// Eigenvalues of the lowest system modes, ascending: the kept modes and a block above
-    /// them (p = max(400, 3/2 x kept) of them from the whole decomposition, 3/2 x kept + 64
-    /// from block Lanczos; all when the system is smaller).
+    /// them (p = max(400, 3/2 x kept) of them from the whole decomposition, kept + 64 from
+    /// block Lanczos; all when the system is smaller).
     pub lambdas: Vec<f64>,
     /// Mass-normalised eigenvectors (global coordinates x `lambdas.len()`).
     pub vectors: Mat<f64>,
@@ -139,9 +139,8 @@ pub fn system_modes_by(
     let below = |l: &[f64]| l.iter().take_while(|&&x| x <= keep_lambda).count();
     // the dense path's refinement block (module docs of `dense_lowest`)
     let wanted = |l: &[f64]| n.min(400.max(3 * below(l) / 2));
-    // Lanczos needs no refinement block: the kept modes and half again as many above (the
-    // error estimate's start vectors when it refines), a block at least.
-    let wanted_lanczos = |l: &[f64]| n.min(3 * below(l) / 2 + dense_lanczos::BLOCK);
+    // Lanczos needs no refinement block: the kept modes and a block above them.
+    let wanted_lanczos = |l: &[f64]| n.min(below(l) + dense_lanczos::BLOCK);
     let lanczos = match method {
         Method::Auto if n > LANCZOS_ABOVE => {
             lanczos_lowest(&ks, &ms, &kchol, &wanted_lanczos, keep_lambda, n / 2)
@@ -449,12 +448,14 @@ pub fn refined_eigenvalues(
 
 /// The lowest `count` eigenvalues of K y = lambda M y by block Lanczos after the
 /// unit-modal-mass scaling of [`system_modes`], those up to `accurate_below` to a relative
-/// error bound of 1e-8; `None` when the iteration gives no answer within half the system.
+/// error bound `tol` (the others to 1e-4); `None` when the iteration gives no answer within
+/// half the system.
 pub fn lowest_eigenvalues(
     k: &Mat<f64>,
     m: &Mat<f64>,
     count: usize,
     accurate_below: f64,
+    tol: f64,
 ) -> Option<Vec<f64>> {
     use crate::eigen::dense_lanczos::{lowest_modes, Target};
     let (_, ks, ms) = unit_mass_scaling(k, m);
@@ -462,7 +463,7 @@ pub fn lowest_eigenvalues(
     let target = Target {
         count: &|_| count,
         accurate_below,
-        tol: LANCZOS_TOL,
+        tol,
         rest_tol: LANCZOS_REST_TOL,
     };
     let n = k.nrows();

@@ -869,6 +869,10 @@ fn surface_rows(
 /// Lanczos when it is large ([`engine::lowest_eigenvalues`]), else (or when that gives no
 /// answer) they are refined from the full system's modes restricted to its coordinates (block
 /// as large as the system's refined block) rather than solved densely from scratch.
+/// Relative error bound of the smaller system's band eigenvalues in [`truncation_error`]: the
+/// estimate is a frequency change of order 1e-2 printed to three digits.
+const ESTIMATE_TOL: f64 = 1e-6;
+
 fn truncation_error(
     inp: &RomInputs<'_>,
     parts: &[(&PartReduction, &[usize])],
@@ -898,7 +902,7 @@ fn truncation_error(
         .max(in_band)
         .min(sys.vectors.ncols());
     let lanczos = (idx.len() > engine::LANCZOS_ABOVE)
-        .then(|| engine::lowest_eigenvalues(&kk, &mm, in_band, 1.1 * band))
+        .then(|| engine::lowest_eigenvalues(&kk, &mm, in_band, 1.1 * band, ESTIMATE_TOL))
         .flatten();
     let smaller = match lanczos {
         Some(l2) => Ok(l2),
