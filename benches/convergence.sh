@@ -12,7 +12,7 @@
 # The default runs go one at a time (their step-error windows use both cores, so their wall
 # time is the user's); the reference runs, single-threaded almost throughout, go JOBS at a time
 # (default 2, one per core; their wall time per cycle is then measured under that load).
-#   bash benches/convergence.sh [SCENE] [R_DEFAULT] [R_REFERENCE]   (defaults R = 4 and 4: ~40 min on 2 cores)
+#   bash benches/convergence.sh [SCENE] [R_DEFAULT] [R_REFERENCE]   (defaults R = 4 and 4: ~30 min on 2 cores: four reference runs of ~11 min two at a time, four default runs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scene=${1:-models/engine.toml}

@@ -98,8 +98,8 @@ fn regression_default_engine_peaks_match_the_baseline() {
             num(b, "slap_crank_angle_deg"),
         );
         // the dynamic slap force peaks at one of two sub-events per cycle (~364 and ~367 deg:
-        // single cycles 2-6 of the default engine gave 363.75-367.75 deg), and the medoid
-        // over five cycles may take either: 4.5 deg spans both
+        // single cycles of the default engine gave 363.75-367.75 deg), and the medoid over
+        // the averaged cycles may take either: 4.5 deg spans both
         assert!(
             (x - y).abs() <= 4.5,
             "cylinder {cyl}: slap at {x} vs {y} deg"

@@ -40,7 +40,7 @@ fn default_meshes() -> (Mesh, Mesh, LinerShape, Vec<f64>, Vec<f64>, f64) {
     };
     let e = &scene.engine;
     let axis_x = (0..e.cylinders)
-        .map(|c| (c as f64 - (e.cylinders as f64 - 1.0) / 2.0) * e.cylinder_pitch)
+        .map(|c| linercav::scene::bore_axis_x(e.cylinders, e.cylinder_pitch, c))
         .collect();
     (lm, cm, shape, axis_x, g.analysis_depths.clone(), e.bore)
 }

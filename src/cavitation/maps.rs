@@ -12,7 +12,7 @@
 
 use super::criteria;
 use super::Setup;
-use crate::transient::cycle::SurfacePeaks;
+use crate::transient::cycle::{statistics, SurfacePeaks};
 
 /// The largest Ca a map holds (a node at rest has Ca = inf; far beyond any threshold).
 pub const CA_CAP: f64 = 1e6;
@@ -37,18 +37,11 @@ pub struct LinerMap {
     pub cycles: usize,
 }
 
-/// Mean and standard error s sqrt(tau / n) of a series (0 for one value).
+/// Mean and standard error s sqrt(tau / n) of a series (0 for one value), by the transient's
+/// own statistics ([`statistics::mean_std`], [`statistics::se_factor`]).
 fn mean_se(v: &[f64], tau: f64) -> (f64, f64) {
-    let n = v.len() as f64;
-    if v.is_empty() {
-        return (0.0, 0.0);
-    }
-    let mean = v.iter().sum::<f64>() / n;
-    if v.len() < 2 {
-        return (mean, 0.0);
-    }
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var * tau.max(1.0) / n).sqrt())
+    let (mean, s) = statistics::mean_std(v);
+    (mean, s * statistics::se_factor(tau, v.len()))
 }
 
 /// The maps of every cylinder's surface peaks, `tau` the run's autocorrelation time.

@@ -101,7 +101,7 @@ pub fn assemble(n: usize, parts: &[Placement<'_>]) -> (Mat<f64>, Mat<f64>) {
 /// magnitudes. Systems above [`LANCZOS_ABOVE`] coordinates are solved by block Lanczos and
 /// certified by a Sturm count at the gap above the kept modes; a count that disagrees (a
 /// missed mode) or an iteration that does not converge falls back to the whole decomposition
-/// ([`dense_lowest`]), which cannot miss one.
+/// (`dense_lowest`), which cannot miss one.
 pub fn system_modes(
     k: Mat<f64>,
     m: &Mat<f64>,
@@ -116,7 +116,7 @@ pub enum Method {
     /// Block Lanczos above [`LANCZOS_ABOVE`] coordinates (its basis at most half the system,
     /// else the whole decomposition), the whole decomposition below.
     Auto,
-    /// The whole decomposition ([`dense_lowest`]).
+    /// The whole decomposition (`dense_lowest`).
     Dense,
     /// Block Lanczos whatever the size (basis up to the whole system), falling back as
     /// [`Method::Auto`] does (tests).

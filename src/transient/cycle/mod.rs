@@ -39,7 +39,7 @@ mod events;
 mod record;
 mod result;
 mod settings;
-mod statistics;
+pub mod statistics;
 mod surface;
 mod tolerance;
 

@@ -118,7 +118,8 @@ impl Peak {
         if n == 0 {
             return Peak::default();
         }
-        let mean = per_cycle.iter().map(|p| p.value).sum::<f64>() / n as f64;
+        let values: Vec<f64> = per_cycle.iter().map(|p| p.value).collect();
+        let (mean, std) = super::statistics::mean_std(&values);
         // circular distance on the 720 deg cycle
         let dist = |a: f64, b: f64| {
             let d = (a - b).rem_euclid(720.0);
@@ -137,16 +138,6 @@ impl Peak {
                 spread(a).total_cmp(&spread(b))
             })
             .expect("n > 0");
-        let std = if n > 1 {
-            (per_cycle
-                .iter()
-                .map(|p| (p.value - mean).powi(2))
-                .sum::<f64>()
-                / (n - 1) as f64)
-                .sqrt()
-        } else {
-            0.0
-        };
         Peak {
             value: mean,
             crank_angle_deg: medoid,

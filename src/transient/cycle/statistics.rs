@@ -98,7 +98,7 @@ pub(super) fn standard_errors(per_cycle: &[CyclePeaks], peaks: &mut CyclePeaks) 
         }
     }
     let tau = tau.clamp(1.0, n as f64);
-    let factor = (tau / n as f64).sqrt();
+    let factor = se_factor(tau, n);
     for (c, kind, p, _) in &all {
         let peak = match kind {
             0 => &mut peaks.negative[[*c, *p]],
@@ -108,4 +108,28 @@ pub(super) fn standard_errors(per_cycle: &[CyclePeaks], peaks: &mut CyclePeaks) 
         peak.se = peak.std * factor;
     }
     tau
+}
+
+/// Mean and sample standard deviation s = sqrt(sum (v_k - mean)^2 / (n - 1)) of a series
+/// (0, 0 when empty; s = 0 for one value).
+pub fn mean_std(v: &[f64]) -> (f64, f64) {
+    let n = v.len();
+    if n == 0 {
+        return (0.0, 0.0);
+    }
+    let mean = v.iter().sum::<f64>() / n as f64;
+    if n < 2 {
+        return (mean, 0.0);
+    }
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    (mean, var.sqrt())
+}
+
+/// The standard error's factor over the sample deviation for n correlated cycles with
+/// autocorrelation time tau: SE = s sqrt(tau / n), tau clamped to [1, n].
+pub fn se_factor(tau: f64, n: usize) -> f64 {
+    if n == 0 {
+        return 0.0;
+    }
+    (tau.clamp(1.0, n as f64) / n as f64).sqrt()
 }
