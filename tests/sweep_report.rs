@@ -170,8 +170,34 @@ fn contract_report_writes_the_figure_set() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(v["evaluation"]["cylinders"].as_array().unwrap().len(), 2);
-    assert_eq!(v["clearance_sweep"].as_array().unwrap().len(), 3);
+    // each sweep: the scene's own run (in the range) and eight more, at distinct values in the
+    // range, ascending; each maximum located at one of them, within the range
+    for (key, range) in [("clearance", (40.0, 120.0)), ("pin_offset", (-1.0, 1.0))] {
+        let values: Vec<f64> = v[format!("{key}_sweep")]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["value"].as_f64().unwrap())
+            .collect();
+        assert_eq!(
+            values.len(),
+            linercav::api::REPORT_SWEEP_RUNS,
+            "{key}: {values:?}"
+        );
+        assert!(values.windows(2).all(|w| w[1] > w[0]), "{key}: {values:?}");
+        assert!(values[0] >= range.0 && *values.last().unwrap() <= range.1);
+        for q in ["peak_slap_force_n", "peak_negative_m_s2"] {
+            let m = &v[format!("{key}_maximum")][q];
+            let at = m["at"].as_f64().unwrap();
+            assert!(values.contains(&at), "{key} {q}: {m}");
+            assert!(m["uncertainty"].as_f64().unwrap() > 0.0, "{key} {q}: {m}");
+        }
+    }
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(
+        md.contains("The largest mean slap force over the pin offset sweep"),
+        "{md}"
+    );
     assert!(md.contains("## Verdict") && md.contains("![peaks.png](peaks.png)"));
     // the report runs the whole-run step check and says so
     assert!(v["simulate"]["step_check"]["step_deg"].as_f64().unwrap() > 0.0);

@@ -179,3 +179,49 @@ mod tests {
         assert_eq!(next(&close, 0, 0.0, 1.0), None);
     }
 }
+
+/// The located maximum of one quantity over a refined key: the run with the largest value,
+/// its mean and standard error, and where the maximum lies: `at` +- `uncertainty` (half the
+/// larger spacing to the neighbouring runs: the response's maximum lies between them).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Maximum {
+    pub at: f64,
+    pub uncertainty: f64,
+    pub value: f64,
+    pub value_se: f64,
+}
+
+/// [`maximum`] of quantity `q` as a [`Maximum`].
+pub fn located(samples: &[Sample], q: usize) -> Option<Maximum> {
+    maximum(samples, q).map(|(at, value, value_se, uncertainty)| Maximum {
+        at,
+        uncertainty,
+        value,
+        value_se,
+    })
+}
+
+/// The next point of a refinement ([`next`]) that is neither sampled nor `pending`, advancing
+/// `round`; None when no useful interval is left or after 4 x `runs` rounds of repeats.
+pub fn next_unsampled(
+    samples: &[Sample],
+    pending: &[f64],
+    round: &mut usize,
+    (lo, hi): (f64, f64),
+    runs: usize,
+) -> Option<f64> {
+    loop {
+        let x = next(samples, *round, lo, hi)?;
+        *round += 1;
+        let repeat = pending
+            .iter()
+            .chain(samples.iter().map(|s| &s.x))
+            .any(|b| (b - x).abs() < 1e-12);
+        if !repeat {
+            return Some(x);
+        }
+        if *round > 4 * runs {
+            return None;
+        }
+    }
+}

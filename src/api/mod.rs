@@ -33,6 +33,7 @@ pub mod simulate;
 pub mod summary;
 pub mod sweep;
 
+use crate::analysis::refine::{initial, located, next_unsampled, Maximum, Sample};
 pub use crate::cavitation::evaluate::{evaluate, Evaluation};
 pub use crate::error::{Error, Result};
 use crate::fem::element::check_mesh as check_and_compact;
@@ -262,12 +263,33 @@ pub struct Variants {
     pub roms: Vec<LoadedRom>,
     /// Index into `roms` of each scene's ROM.
     pub rom_of: Vec<usize>,
+    /// The reduction input (key description) of each of `roms`.
+    keys: Vec<String>,
 }
 
 impl Variants {
     /// Loads the variants `variants` of the scene at `path` with the overrides `base`: a bad
     /// value stops here, before any run. `progress` hears the phases of a ROM build.
     pub fn prepare(
+        path: &Path,
+        base: &[String],
+        variants: &[Vec<String>],
+        cache: &CacheOptions,
+        progress: &dyn Fn(&str),
+    ) -> Result<Self> {
+        let none = Self {
+            scenes: Vec::new(),
+            roms: Vec::new(),
+            rom_of: Vec::new(),
+            keys: Vec::new(),
+        };
+        none.then(path, base, variants, cache, progress)
+    }
+
+    /// Other variants of the same scene on the ROMs loaded so far (a ROM not loaded yet is
+    /// loaded or built as in [`Variants::prepare`]; indices into `roms` stay valid).
+    pub fn then(
+        mut self,
         path: &Path,
         base: &[String],
         variants: &[Vec<String>],
@@ -284,26 +306,22 @@ impl Variants {
                 Ok(sc)
             })
             .collect::<Result<_>>()?;
-        let mut roms: Vec<LoadedRom> = Vec::new();
-        let mut rom_keys: BTreeMap<String, usize> = BTreeMap::new();
         let mut rom_of = Vec::with_capacity(scenes.len());
         for sc in &scenes {
             let k = key_description(sc)?;
-            let idx = match rom_keys.get(&k) {
-                Some(&i) => i,
+            let idx = match self.keys.iter().position(|x| *x == k) {
+                Some(i) => i,
                 None => {
-                    roms.push(get_rom(sc, cache, progress)?);
-                    rom_keys.insert(k, roms.len() - 1);
-                    roms.len() - 1
+                    self.roms.push(get_rom(sc, cache, progress)?);
+                    self.keys.push(k);
+                    self.roms.len() - 1
                 }
             };
             rom_of.push(idx);
         }
-        Ok(Self {
-            scenes,
-            roms,
-            rom_of,
-        })
+        self.scenes = scenes;
+        self.rom_of = rom_of;
+        Ok(self)
     }
 
     /// Runs every variant's engine cycles in parallel (`labels[k]` names variant k in a
@@ -348,9 +366,15 @@ impl Variants {
     }
 }
 
-/// Values of the report's sweeps (the scene's own value is added when missing).
-pub const CLEARANCES_UM: [f64; 3] = [40.0, 80.0, 120.0];
-pub const PIN_OFFSETS_MM: [f64; 3] = [-1.0, 0.0, 1.0];
+/// Ranges of the report's sweeps (the scene's own value is added when outside).
+pub const CLEARANCE_RANGE_UM: (f64, f64) = (40.0, 120.0);
+pub const PIN_OFFSET_RANGE_MM: (f64, f64) = (-1.0, 1.0);
+
+/// Runs of each report sweep, the scene's own included when it lies in the range: the ends and
+/// the middle of the range first, the rest placed where the maximum of the engine's largest
+/// mean slap force or peak acceleration can lie ([`crate::analysis::refine`], as
+/// `sweep --refine`), two at a time (one per sweep).
+pub const REPORT_SWEEP_RUNS: usize = 9;
 
 /// The transients behind a design-review report of a scene.
 pub struct ReportRuns {
@@ -364,6 +388,9 @@ pub struct ReportRuns {
     /// The clearance \[um\] and pin-offset \[mm\] sweeps, the scene's run included, ascending.
     pub clearance: Vec<SweepPoint>,
     pub pin_offset: Vec<SweepPoint>,
+    /// Where each sweep's largest engine-wide mean slap force and peak acceleration lie.
+    pub clearance_maximum: BTreeMap<&'static str, Maximum>,
+    pub pin_offset_maximum: BTreeMap<&'static str, Maximum>,
     /// Speed against error of the fast path on the reference window.
     pub tradeoff: Vec<TradeoffPoint>,
     pub evaluation: Evaluation,
@@ -414,10 +441,90 @@ pub fn half_step_check(
     Ok((half, t.elapsed().as_secs_f64()))
 }
 
-/// Runs the report's transients of `scene` (loaded from `path` with `sets`): the scene, its
-/// clearance sweep over [`CLEARANCES_UM`] and pin-offset sweep over [`PIN_OFFSETS_MM`] (the
-/// scene's own values not run twice) in parallel on shared ROMs, the speed-against-error
-/// windows, and the risk evaluation of the scene's run. `phase` hears what is being done.
+/// The quantities the report's sweeps refine on: the engine's largest mean slap force and its
+/// largest mean peak negative acceleration, each with its standard error (as `sweep --refine`).
+fn refined_quantities(r: &CycleResult) -> Vec<(f64, f64)> {
+    let slap = r
+        .peaks
+        .iter()
+        .map(|c| (c.slap_force.value, c.slap_force.se))
+        .fold((f64::MIN, 0.0), |m, x| if x.0 > m.0 { x } else { m });
+    let p = SweepPoint::of(0.0, r);
+    vec![slap, (p.largest_m_s2, p.largest_se_m_s2)]
+}
+
+/// Names of [`refined_quantities`] in the report's `*_maximum`.
+const REFINED: [&str; 2] = ["peak_slap_force_n", "peak_negative_m_s2"];
+
+/// One report sweep as it grows: its points (the scene's own run first) and the samples the
+/// refinement places its next runs from.
+struct ReportSweep {
+    range: (f64, f64),
+    points: Vec<SweepPoint>,
+    samples: Vec<Sample>,
+    round: usize,
+}
+
+impl ReportSweep {
+    fn new(range: (f64, f64), own: f64, base: &CycleResult) -> Self {
+        let mut s = ReportSweep {
+            range,
+            points: vec![SweepPoint::of(own, base)],
+            samples: Vec::new(),
+            round: 0,
+        };
+        if own >= range.0 && own <= range.1 {
+            s.samples.push(Sample {
+                x: own,
+                y: refined_quantities(base),
+            });
+        }
+        s
+    }
+
+    /// Adds a what-if run at `x` with its change against the scene's own run.
+    fn add(&mut self, x: f64, r: &CycleResult) {
+        let mut p = SweepPoint::of(x, r);
+        p.set_change(&self.points[0]);
+        self.points.push(p);
+        self.samples.push(Sample {
+            x,
+            y: refined_quantities(r),
+        });
+    }
+
+    /// The next value to run, while the sweep has fewer than [`REPORT_SWEEP_RUNS`] runs.
+    fn next(&mut self) -> Option<f64> {
+        if self.samples.len() >= REPORT_SWEEP_RUNS {
+            return None;
+        }
+        next_unsampled(
+            &self.samples,
+            &[],
+            &mut self.round,
+            self.range,
+            REPORT_SWEEP_RUNS,
+        )
+    }
+
+    /// The points by value, and the located maxima.
+    fn finish(mut self) -> (Vec<SweepPoint>, BTreeMap<&'static str, Maximum>) {
+        self.points.sort_by(|a, b| a.value.total_cmp(&b.value));
+        let maxima = REFINED
+            .iter()
+            .enumerate()
+            .filter_map(|(q, name)| located(&self.samples, q).map(|m| (*name, m)))
+            .collect();
+        (self.points, maxima)
+    }
+}
+
+/// Runs the report's transients of `scene` (loaded from `path` with `sets`): the scene and the
+/// first points of its clearance sweep over [`CLEARANCE_RANGE_UM`] and pin-offset sweep over
+/// [`PIN_OFFSET_RANGE_MM`] (the ends and the middle; the scene's own values not run twice) in
+/// parallel on shared ROMs, then each sweep's further runs placed adaptively, one per sweep at
+/// a time, up to [`REPORT_SWEEP_RUNS`]; the speed-against-error windows, and the risk
+/// evaluation of the scene's run. `phase` hears what is being done.
 pub fn report_runs(
     path: &Path,
     sets: &[String],
@@ -428,58 +535,80 @@ pub fn report_runs(
     let sim = simulation(scene)?;
     let cur_c = sim.piston.skirt.clearance * 1e6;
     let cur_o = sim.piston.pin_offset * 1e3;
+    let first = |(lo, hi): (f64, f64), own: f64| -> Vec<f64> {
+        initial(lo, hi, REPORT_SWEEP_RUNS)
+            .into_iter()
+            .filter(|&v| (v - own).abs() > 1e-9)
+            .collect()
+    };
     let mut jobs = vec![Swept::Scene];
     jobs.extend(
-        CLEARANCES_UM
-            .iter()
-            .filter(|&&c| (c - cur_c).abs() > 1e-9)
-            .map(|&c| Swept::Clearance(c)),
+        first(CLEARANCE_RANGE_UM, cur_c)
+            .into_iter()
+            .map(Swept::Clearance),
     );
     jobs.extend(
-        PIN_OFFSETS_MM
-            .iter()
-            .filter(|&&o| (o - cur_o).abs() > 1e-9)
-            .map(|&o| Swept::PinOffset(o)),
+        first(PIN_OFFSET_RANGE_MM, cur_o)
+            .into_iter()
+            .map(Swept::PinOffset),
     );
-    let extra: Vec<Vec<String>> = jobs.iter().map(|j| j.sets()).collect();
-    let labels: Vec<String> = extra
-        .iter()
-        .map(|e| match e.is_empty() {
-            true => scene.path.display().to_string(),
-            false => e.join(" "),
-        })
-        .collect();
+    let labels = |jobs: &[Swept]| -> (Vec<Vec<String>>, Vec<String>) {
+        let extra: Vec<Vec<String>> = jobs.iter().map(|j| j.sets()).collect();
+        let labels = extra
+            .iter()
+            .map(|e| match e.is_empty() {
+                true => scene.path.display().to_string(),
+                false => e.join(" "),
+            })
+            .collect();
+        (extra, labels)
+    };
     phase("engine ROM");
-    let variants = Variants::prepare(path, sets, &extra, cache, phase)?;
-    maps::check_maps(scene, &variants.roms[variants.rom_of[0]].rom)?;
+    let (extra, names) = labels(&jobs);
+    let mut variants = Variants::prepare(path, sets, &extra, cache, phase)?;
+    let scene_rom = variants.rom_of[0];
+    maps::check_maps(scene, &variants.roms[scene_rom].rom)?;
     phase("transients: the scene, clearance and pin-offset sweeps");
     let mut results = variants
-        .run(&labels, true, || {})?
+        .run(&names, true, || {})?
         .into_iter()
         .map(|(r, _)| r);
     let base = results.next().expect("the scene's run");
-    let mut clearance = vec![SweepPoint::of(cur_c, &base)];
-    let mut pin_offset = vec![SweepPoint::of(cur_o, &base)];
-    // each what-if with its change against the scene's own run
-    let own = SweepPoint::of(cur_c, &base);
-    let changed = |v: f64, r: &CycleResult| {
-        let mut p = SweepPoint::of(v, r);
-        p.set_change(&own);
-        p
+    let mut sweeps = [
+        ReportSweep::new(CLEARANCE_RANGE_UM, cur_c, &base),
+        ReportSweep::new(PIN_OFFSET_RANGE_MM, cur_o, &base),
+    ];
+    let add = |sweeps: &mut [ReportSweep; 2], job: &Swept, r: &CycleResult| match *job {
+        Swept::Clearance(v) => sweeps[0].add(v, r),
+        Swept::PinOffset(v) => sweeps[1].add(v, r),
+        Swept::Scene => {}
     };
     for (job, r) in jobs.iter().skip(1).zip(results) {
-        match *job {
-            Swept::Clearance(v) => clearance.push(changed(v, &r)),
-            Swept::PinOffset(v) => pin_offset.push(changed(v, &r)),
-            Swept::Scene => {}
+        add(&mut sweeps, job, &r);
+    }
+    phase("sweeps: runs placed where the maxima can lie");
+    loop {
+        let batch: Vec<Swept> = [
+            sweeps[0].next().map(Swept::Clearance),
+            sweeps[1].next().map(Swept::PinOffset),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        if batch.is_empty() {
+            break;
+        }
+        let (extra, names) = labels(&batch);
+        variants = variants.then(path, sets, &extra, cache, &|_| {})?;
+        for (job, (r, _)) in batch.iter().zip(variants.run(&names, false, || {})?) {
+            add(&mut sweeps, job, &r);
         }
     }
-    clearance.sort_by(|a, b| a.value.total_cmp(&b.value));
-    pin_offset.sort_by(|a, b| a.value.total_cmp(&b.value));
-    let Variants {
-        mut roms, rom_of, ..
-    } = variants;
-    let rom = roms.swap_remove(rom_of[0]);
+    let [clearance, pin_offset] = sweeps;
+    let (clearance, clearance_maximum) = clearance.finish();
+    let (pin_offset, pin_offset_maximum) = pin_offset.finish();
+    let Variants { mut roms, .. } = variants;
+    let rom = roms.swap_remove(scene_rom);
     let piston = piston_of(scene)?;
     let settings = settings_of(sim, scene.rom.band_hz);
     // the speed-against-error windows and the whole-run step check side by side
@@ -500,6 +629,8 @@ pub fn report_runs(
         rom,
         clearance,
         pin_offset,
+        clearance_maximum,
+        pin_offset_maximum,
         tradeoff,
         evaluation,
     })

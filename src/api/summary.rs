@@ -10,7 +10,7 @@
 //! (inertance from the slap location to each cylinder's worst point, from the modal model).
 
 use super::rom::CacheOptions;
-use crate::api::{report_runs, CLEARANCES_UM, PIN_OFFSETS_MM};
+use crate::api::{report_runs, REPORT_SWEEP_RUNS};
 use crate::error::Result;
 use crate::files::write_all_atomic;
 use crate::piston::setup::piston_of;
@@ -29,12 +29,13 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     let started = Instant::now();
     let scene = super::load_scene(scene_path, sets)?;
     let piston = piston_of(&scene)?;
-    // about ten transients (the scene, its two sweeps, the step check): refused before any work when beyond
-    // the limits, as is an output directory that cannot be written
+    // about twenty transients (the scene, its two sweeps, the step check): refused before any
+    // work when beyond the limits, as is an output directory that cannot be written
     if let Some(mut est) = crate::scene::budget::transient(&scene) {
         est.what = "the report's transients";
-        // on two cores, then the whole-run step check at half the step (about two transients)
-        est.seconds *= (1 + CLEARANCES_UM.len() + PIN_OFFSETS_MM.len()) as f64 / 2.0 + 2.0;
+        // two at a time (the sweeps' runs besides the scene's), then the whole-run step
+        // check at half the step (about two transients)
+        est.seconds *= (1 + 2 * REPORT_SWEEP_RUNS) as f64 / 2.0 + 2.0;
         crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
     }
     let stage = crate::files::OutputDir::create(out, OUTPUTS)?;
@@ -72,6 +73,8 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         evaluation: runs.evaluation,
         clearance_sweep: runs.clearance,
         pin_offset_sweep: runs.pin_offset,
+        clearance_maximum: runs.clearance_maximum,
+        pin_offset_maximum: runs.pin_offset_maximum,
         tradeoff: runs.tradeoff,
         ranking_resolution,
         ranking_resolution_slap_only,

@@ -481,16 +481,7 @@ impl SweepReport {
     }
 }
 
-/// The located maximum of one quantity over a refined key: the run with the largest value,
-/// its mean and standard error, and where the maximum lies: `at` +- `uncertainty` (half the
-/// larger spacing to the neighbouring runs: the response's maximum lies between them).
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct Maximum {
-    pub at: f64,
-    pub uncertainty: f64,
-    pub value: f64,
-    pub value_se: f64,
-}
+pub use crate::analysis::refine::Maximum;
 
 /// The refined quantities of a run: the engine's largest mean slap force and largest mean peak
 /// negative acceleration, each with the standard error of the cylinder or point holding it.
@@ -516,7 +507,7 @@ const REFINED: [&str; 2] = ["peak_slap_force_n", "peak_negative_m_s2"];
 /// per core), then the outputs of a one-key grid over the values run, with each quantity's
 /// located maximum. Not shardable (each round depends on the last).
 fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepReport> {
-    use crate::analysis::refine::{initial, maximum, next, Sample};
+    use crate::analysis::refine::{initial, located, next_unsampled, Sample};
     if !req.vary.is_empty() || req.sample.is_some() || !req.ranges.is_empty() || req.seed.is_some()
     {
         return Err(Error::Argument {
@@ -591,19 +582,10 @@ fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepRepor
         }
         batch.clear();
         while done.len() + batch.len() < runs && batch.len() < 2 {
-            let Some(x) = next(&samples, round, lo, hi) else {
+            let Some(x) = next_unsampled(&samples, &batch, &mut round, (lo, hi), runs) else {
                 break;
             };
-            round += 1;
-            if !batch
-                .iter()
-                .chain(samples.iter().map(|s| &s.x))
-                .any(|b| (b - x).abs() < 1e-12)
-            {
-                batch.push(x);
-            } else if round > 4 * runs {
-                break;
-            }
+            batch.push(x);
         }
     }
     done.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -620,19 +602,7 @@ fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepRepor
     let maxima = REFINED
         .iter()
         .enumerate()
-        .filter_map(|(q, name)| {
-            maximum(&samples, q).map(|(at, value, value_se, uncertainty)| {
-                (
-                    *name,
-                    Maximum {
-                        at,
-                        uncertainty,
-                        value,
-                        value_se,
-                    },
-                )
-            })
-        })
+        .filter_map(|(q, name)| located(&samples, q).map(|m| (*name, m)))
         .collect();
     let mut report = SweepReport {
         scene: req.scene.display().to_string(),

@@ -3,9 +3,11 @@
 //! speed against error of the fast path, the figures' list.
 
 use crate::analysis::ranking::{separations, RankStep};
+use crate::analysis::refine::Maximum;
 use crate::cavitation::evaluate::Evaluation;
 use crate::report::figures::{SweepPoint, TradeoffPoint};
 use crate::report::records::SimulateReport;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// What the report holds (summary.json).
@@ -20,6 +22,12 @@ pub struct Report {
     pub evaluation: Evaluation,
     pub clearance_sweep: Vec<SweepPoint>,
     pub pin_offset_sweep: Vec<SweepPoint>,
+    /// Where each sweep's largest engine-wide mean slap force (`peak_slap_force_n`) and peak
+    /// negative acceleration (`peak_negative_m_s2`) lie: the run with the largest value, its
+    /// mean and standard error, `at` +- `uncertainty` (half the larger spacing to the
+    /// neighbouring runs).
+    pub clearance_maximum: BTreeMap<&'static str, Maximum>,
+    pub pin_offset_maximum: BTreeMap<&'static str, Maximum>,
     pub tradeoff: Vec<TradeoffPoint>,
     /// Neighbours of the cylinder ranking, separated beyond their combined statistical and
     /// numerical uncertainty or tied ([`separations`]); the numerical uncertainty includes the
@@ -251,7 +259,7 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     for p in &r.clearance_sweep {
         let _ = writeln!(
             s,
-            "| {:.0} | {:.0} ± {:.0} | {} | {:.2} |",
+            "| {:.1} | {:.0} ± {:.0} | {} | {:.2} |",
             p.value,
             p.largest_m_s2,
             p.largest_se_m_s2,
@@ -259,11 +267,17 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
             p.peak_slap_force_n.iter().fold(0.0f64, |m, v| m.max(*v)) / 1e3
         );
     }
+    maxima_text(
+        &mut s,
+        ("clearance", "um", 1),
+        &r.clearance_sweep,
+        &r.clearance_maximum,
+    );
     let _ = writeln!(s, "\n| pin offset [mm] | largest peak negative [m/s^2] | change against the scene [m/s^2] | largest slap force [kN] | side-force peak [kN] at [deg] |\n|---|---|---|---|---|");
     for p in &r.pin_offset_sweep {
         let _ = writeln!(
             s,
-            "| {:+.1} | {:.0} ± {:.0} | {} | {:.2} | {:.1} at {:.1} |",
+            "| {:+.3} | {:.0} ± {:.0} | {} | {:.2} | {:.1} at {:.1} |",
             p.value,
             p.largest_m_s2,
             p.largest_se_m_s2,
@@ -273,6 +287,12 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
             p.side_force_crank_angle_deg.first().copied().unwrap_or(0.0)
         );
     }
+    maxima_text(
+        &mut s,
+        ("pin offset", "mm", 3),
+        &r.pin_offset_sweep,
+        &r.pin_offset_maximum,
+    );
     let _ = writeln!(s, "\n## Speed against error\n\nAgainst a converged reference (a step 64 times finer, uniform, all modes): the mode cut-off on one cylinder's window from rest (330-420 deg, largest error over its points), the step on the six firing slaps of cycle 3 from identical states (largest error over the cylinders' worst points).\n\n| setting | modes | error | wall time [ms] |\n|---|---|---|---|");
     for x in &r.tradeoff {
         let _ = writeln!(
@@ -316,5 +336,46 @@ fn change_text(p: &crate::report::figures::SweepPoint) -> String {
         }
         Some(c) => format!("{:+.0} ({})", c.delta_m_s2, c.verdict),
         None => "the scene's".into(),
+    }
+}
+
+/// Where a sweep's maxima lie, in words: the run with the largest engine-wide mean slap force
+/// and peak acceleration, each with its standard error, and the interval the response's
+/// maximum lies in (half the larger spacing to the neighbouring runs).
+fn maxima_text(
+    s: &mut String,
+    (key, unit, digits): (&str, &str, usize),
+    points: &[SweepPoint],
+    maxima: &BTreeMap<&'static str, Maximum>,
+) {
+    use std::fmt::Write;
+    let words = [
+        ("peak_slap_force_n", "slap force", 1e-3, "kN", 2),
+        (
+            "peak_negative_m_s2",
+            "peak negative acceleration",
+            1.0,
+            "m/s^2",
+            0,
+        ),
+    ];
+    let ends = points
+        .iter()
+        .map(|p| p.value)
+        .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    for (name, what, scale, u, d) in words {
+        if let Some(m) = maxima.get(name) {
+            let (value, se) = (m.value * scale, m.value_se * scale);
+            let _ = write!(
+                s,
+                "\nThe largest mean {what} over the {key} sweep: {value:.d$} ± {se:.d$} {u} at {:.digits$} {unit}",
+                m.at
+            );
+            let _ = if m.at <= ends.0 || m.at >= ends.1 {
+                writeln!(s, ", the end of the swept range: the response still rises there, so its maximum may lie beyond.")
+            } else {
+                writeln!(s, "; the maximum lies within ±{:.digits$} {unit} of it (runs placed where it can lie).", m.uncertainty)
+            };
+        }
     }
 }
