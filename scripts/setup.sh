@@ -1,10 +1,9 @@
 #!/usr/bin/env bash
 # Installs what linercav needs on a fresh Debian machine (idempotent, non-interactive):
-# ARPACK-NG (eigen-solver), METIS (fill-reducing ordering), pkg-config (to find ARPACK), and
-# the single-threaded OpenBLAS that the build links ahead of ARPACK's reference BLAS (build.rs).
+# ARPACK-NG (eigen-solver), METIS (fill-reducing ordering), pkg-config (to find ARPACK).
 set -euo pipefail
 need=()
-for pkg in libarpack2-dev libmetis-dev pkg-config libopenblas0-serial; do
+for pkg in libarpack2-dev libmetis-dev pkg-config; do
   dpkg -s "$pkg" >/dev/null 2>&1 || need+=("$pkg")
 done
 if [ ${#need[@]} -gt 0 ]; then
