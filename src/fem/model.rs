@@ -19,7 +19,7 @@ pub enum ModelError {
     #[error(transparent)]
     Assembly(#[from] AssemblyError),
     #[error("fill-reducing ordering failed: {0}")]
-    Ordering(String),
+    Ordering(#[from] crate::linalg::ordering::OrderingError),
     #[error(transparent)]
     Factor(#[from] FactorError),
     #[error("the model has no free DOFs")]

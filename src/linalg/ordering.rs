@@ -21,15 +21,24 @@ extern "C" {
 const METIS_NOPTIONS: usize = 40;
 const METIS_OK: c_int = 1;
 
+/// Why METIS gave no order.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OrderingError {
+    #[error("the graph has {0} adjacency entries, more than 32-bit METIS can index")]
+    TooLarge(usize),
+    #[error("METIS_NodeND failed with status {0}")]
+    Metis(i32),
+}
+
 /// Nested-dissection order of a graph in CSR form (no self loops, symmetric).
 /// Returns `perm` with `perm[new] = old`. Falls back to the identity for tiny graphs.
-pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>, String> {
+pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>, OrderingError> {
     let n = xadj.len() - 1;
     if n < 8 || adjncy.is_empty() {
         return Ok((0..n).collect());
     }
     if adjncy.len() > c_int::MAX as usize {
-        return Err("graph too large for 32-bit METIS".into());
+        return Err(OrderingError::TooLarge(adjncy.len()));
     }
     let x: Vec<c_int> = xadj.iter().map(|&v| v as c_int).collect();
     let a: Vec<c_int> = adjncy.iter().map(|&v| v as c_int).collect();
@@ -52,7 +61,7 @@ pub fn nested_dissection(xadj: &[usize], adjncy: &[usize]) -> Result<Vec<usize>,
         )
     };
     if rc != METIS_OK {
-        return Err(format!("METIS_NodeND failed with status {rc}"));
+        return Err(OrderingError::Metis(rc));
     }
     Ok(perm.into_iter().map(|v| v as usize).collect())
 }

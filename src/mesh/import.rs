@@ -117,7 +117,7 @@ pub fn resolve_material(
     for m in &mesh.materials {
         m.elastic
             .validate()
-            .map_err(|msg| bad(format!("material '{}': {msg}", m.name)))?;
+            .map_err(|e| bad(format!("material '{}': {e}", m.name)))?;
     }
     Ok((mesh.materials[0].elastic, MaterialSource::Deck))
 }

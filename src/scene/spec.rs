@@ -15,29 +15,31 @@ pub struct Elastic {
     pub density: f64,
 }
 
+/// An elastic constant outside its physical bounds ([`Elastic::validate`]); the message names
+/// the quantity, its bound and the value given.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ElasticError {
+    #[error("Young's modulus must be a positive number of Pa up to 1e14, got {}", crate::text::num(*.0))]
+    Young(f64),
+    #[error("Poisson's ratio must lie in (-1, 0.5), got {}", crate::text::num(*.0))]
+    Poisson(f64),
+    #[error("density must be a positive number of kg/m^3 up to 1e5, got {}", crate::text::num(*.0))]
+    Density(f64),
+}
+
 impl Elastic {
-    /// Checks the physical bounds; the message names the offending quantity and its bound.
-    /// Upper bounds: 100 times the stiffest (diamond, 1.2e12 Pa) and 4 times the densest
-    /// (osmium, 22,600 kg/m^3) solid; beyond them the matrices overflow or are no solid's.
-    pub fn validate(&self) -> Result<(), String> {
-        use crate::text::num;
+    /// Checks the physical bounds. Upper bounds: 100 times the stiffest (diamond, 1.2e12 Pa)
+    /// and 4 times the densest (osmium, 22,600 kg/m^3) solid; beyond them the matrices
+    /// overflow or are no solid's.
+    pub fn validate(&self) -> Result<(), ElasticError> {
         if !(self.young.is_finite() && self.young > 0.0 && self.young <= 1e14) {
-            return Err(format!(
-                "Young's modulus must be a positive number of Pa up to 1e14, got {}",
-                num(self.young)
-            ));
+            return Err(ElasticError::Young(self.young));
         }
         if !(self.poisson.is_finite() && self.poisson > -1.0 && self.poisson < 0.5) {
-            return Err(format!(
-                "Poisson's ratio must lie in (-1, 0.5), got {}",
-                num(self.poisson)
-            ));
+            return Err(ElasticError::Poisson(self.poisson));
         }
         if !(self.density.is_finite() && self.density > 0.0 && self.density <= 1e5) {
-            return Err(format!(
-                "density must be a positive number of kg/m^3 up to 1e5, got {}",
-                num(self.density)
-            ));
+            return Err(ElasticError::Density(self.density));
         }
         Ok(())
     }

@@ -14,7 +14,7 @@ pub(super) fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> 
             density: m.density_kg_m3,
         };
         el.validate()
-            .map_err(|msg| c.err(&format!("materials.{name}"), msg))?;
+            .map_err(|e| c.err(&format!("materials.{name}"), e.to_string()))?;
     }
     let material = |key: &str, name: &str| -> Result<Elastic, SceneError> {
         let m = raw.materials.get(name).ok_or_else(|| {
