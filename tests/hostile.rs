@@ -572,6 +572,29 @@ fn apply(text: &str, muts: &[Mutation]) -> String {
 /// mean a runaway (a huge count honoured, a loop that does not end).
 const CASE_LIMIT: Duration = Duration::from_secs(5);
 
+/// Runs one fuzz case on its own thread and waits at most [`CASE_LIMIT`] for it: a case that
+/// runs away fails the test instead of hanging it (its thread is left behind), a case that
+/// panics fails it, and a case's own check (`Err(message)`) fails it with the message.
+fn bounded(
+    case: impl FnOnce() -> Result<(), String> + Send + 'static,
+) -> Result<(), proptest::test_runner::TestCaseError> {
+    use proptest::test_runner::TestCaseError;
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(case());
+    });
+    match rx.recv_timeout(CASE_LIMIT) {
+        Ok(Ok(())) => Ok(()),
+        Ok(Err(msg)) => Err(TestCaseError::fail(msg)),
+        Err(std::sync::mpsc::RecvTimeoutError::Timeout) => Err(TestCaseError::fail(format!(
+            "the case ran past {CASE_LIMIT:?}"
+        ))),
+        Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+            Err(TestCaseError::fail("the case panicked"))
+        }
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 400, failure_persistence: None, ..ProptestConfig::default() })]
 
@@ -580,11 +603,12 @@ proptest! {
     #[test]
     fn fuzz_mutated_gmsh_files_never_panic(muts in prop::collection::vec(mutation(), 1..4)) {
         let text = apply(&fixture_text(MESH), &muts);
-        let t = Instant::now();
-        if let Ok(mut mesh) = linercav::mesh::gmsh::parse(Path::new("fuzz.msh"), &text) {
-            let _ = linercav::fem::element::check_mesh(&mut mesh);
-        }
-        prop_assert!(t.elapsed() < CASE_LIMIT);
+        bounded(move || {
+            if let Ok(mut mesh) = linercav::mesh::gmsh::parse(Path::new("fuzz.msh"), &text) {
+                let _ = linercav::fem::element::check_mesh(&mut mesh);
+            }
+            Ok(())
+        })?;
     }
 
     /// Fuzz (400 cases each): mutated Nastran and Abaqus decks (meshio-written fixtures) are
@@ -599,16 +623,17 @@ proptest! {
             ("tests/fixtures/block_hex20.inp", false),
         ] {
             let text = apply(&fixture_text(file), &muts);
-            let t = Instant::now();
-            let read = if nastran {
-                linercav::mesh::nastran::parse(Path::new(file), &text)
-            } else {
-                linercav::mesh::abaqus::parse(Path::new(file), &text)
-            };
-            if let Ok(mut mesh) = read {
-                let _ = linercav::fem::element::check_mesh(&mut mesh);
-            }
-            prop_assert!(t.elapsed() < CASE_LIMIT);
+            bounded(move || {
+                let read = if nastran {
+                    linercav::mesh::nastran::parse(Path::new(file), &text)
+                } else {
+                    linercav::mesh::abaqus::parse(Path::new(file), &text)
+                };
+                if let Ok(mut mesh) = read {
+                    let _ = linercav::fem::element::check_mesh(&mut mesh);
+                }
+                Ok(())
+            })?;
         }
     }
 
@@ -618,21 +643,24 @@ proptest! {
     #[test]
     fn fuzz_mutated_scenes_never_panic(muts in prop::collection::vec(mutation(), 1..3)) {
         let text = apply(&fixture_text(SMALL), &muts);
-        let t = Instant::now();
-        let path = Path::new(SMALL);
-        if let Ok(sc) = linercav::scene::Scene::from_str_with(path, &text, &[]) {
-            use linercav::scene::budget;
-            for e in [budget::rom_build(&sc), budget::transient(&sc)].into_iter().flatten() {
-                prop_assert!(!e.memory.is_nan() && !e.seconds.is_nan());
-                let _ = budget::Limits::of(&sc).check(&sc, &e);
+        bounded(move || {
+            let path = Path::new(SMALL);
+            if let Ok(sc) = linercav::scene::Scene::from_str_with(path, &text, &[]) {
+                use linercav::scene::budget;
+                for e in [budget::rom_build(&sc), budget::transient(&sc)].into_iter().flatten() {
+                    if e.memory.is_nan() || e.seconds.is_nan() {
+                        return Err(format!("an estimate is not a number: {e:?}"));
+                    }
+                    let _ = budget::Limits::of(&sc).check(&sc, &e);
+                }
             }
-        }
-        prop_assert!(t.elapsed() < CASE_LIMIT);
+            Ok(())
+        })?;
     }
 
     /// Fuzz (400 cases): mutated pressure curves and rig data CSVs never panic; each is read
-/// (a pressure curve finite and positive over the cycle) or refused naming its file, within
-/// the case limit.
+    /// (a pressure curve finite and positive over the cycle) or refused naming its file, within
+    /// the case limit.
     #[test]
     fn fuzz_mutated_csvs_never_panic(muts in prop::collection::vec(mutation(), 1..4)) {
         let pressure: String = std::iter::once("crank_angle_deg,pressure_bar".to_string())
@@ -640,25 +668,30 @@ proptest! {
             .collect::<Vec<_>>()
             .join("\n");
         let comma = |s: String| s.replace(' ', ",");
-        let t = Instant::now();
-        match linercav::piston::pressure::PressureCurve::parse(Path::new("p.csv"), &comma(apply(&pressure.replace(',', " "), &muts))) {
-            // a table read is a usable curve: finite and positive everywhere
-            Ok(c) => {
-                let usable = (0..72).map(|k| c.at(10.0 * k as f64 + 5.0)).all(|p| p.is_finite() && p > 0.0);
-                prop_assert!(usable, "a curve read that is not finite and positive");
-            }
-            // a refusal names the file
-            Err(e) => prop_assert!(e.to_string().contains("p.csv"), "{}", e),
-        }
+        let p_text = comma(apply(&pressure.replace(',', " "), &muts));
         let rig: String = std::iter::once("time_s,acceleration_m_s2,pressure_kpa".to_string())
             .chain((0..200).map(|k| format!("{},{},{}", k as f64 * 1e-4, (k as f64).sin() * 500.0, 150.0 + (k as f64).cos())))
             .collect::<Vec<_>>()
             .join("\n");
-        match linercav::cavitation::calibration::RigData::parse("r.csv", &comma(apply(&rig.replace(',', " "), &muts))) {
-            Ok(_) => {}
-            Err(e) => prop_assert!(e.to_string().contains("r.csv"), "{}", e),
-        }
-        prop_assert!(t.elapsed() < CASE_LIMIT);
+        let r_text = comma(apply(&rig.replace(',', " "), &muts));
+        bounded(move || {
+            match linercav::piston::pressure::PressureCurve::parse(Path::new("p.csv"), &p_text) {
+                // a table read is a usable curve: finite and positive everywhere
+                Ok(c) => {
+                    let usable = (0..72).map(|k| c.at(10.0 * k as f64 + 5.0)).all(|p| p.is_finite() && p > 0.0);
+                    if !usable {
+                        return Err("a curve read that is not finite and positive".into());
+                    }
+                }
+                // a refusal names the file
+                Err(e) if !e.to_string().contains("p.csv") => return Err(e.to_string()),
+                Err(_) => {}
+            }
+            match linercav::cavitation::calibration::RigData::parse("r.csv", &r_text) {
+                Err(e) if !e.to_string().contains("r.csv") => Err(e.to_string()),
+                _ => Ok(()),
+            }
+        })?;
     }
 }
 
