@@ -195,7 +195,7 @@ fn contract_report_writes_the_figure_set() {
     }
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(
-        md.contains("The largest mean slap force over the pin offset sweep"),
+        md.contains("The largest mean slap force over the pin offset sweep (-1.000 to 1.000 mm)"),
         "{md}"
     );
     assert!(md.contains("## Verdict") && md.contains("![peaks.png](peaks.png)"));

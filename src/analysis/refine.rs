@@ -202,7 +202,8 @@ pub fn located(samples: &[Sample], q: usize) -> Option<Maximum> {
 }
 
 /// The next point of a refinement ([`next`]) that is neither sampled nor `pending`, advancing
-/// `round`; None when no useful interval is left or after 4 x `runs` rounds of repeats.
+/// `round`; None when no useful interval is left, or at a repeat once `round` exceeds
+/// 4 x `runs`.
 pub fn next_unsampled(
     samples: &[Sample],
     pending: &[f64],

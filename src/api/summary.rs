@@ -10,7 +10,7 @@
 //! (inertance from the slap location to each cylinder's worst point, from the modal model).
 
 use super::rom::CacheOptions;
-use crate::api::{report_runs, REPORT_SWEEP_RUNS};
+use crate::api::{report_runs, CLEARANCE_RANGE_UM, PIN_OFFSET_RANGE_MM, REPORT_SWEEP_RUNS};
 use crate::error::Result;
 use crate::files::write_all_atomic;
 use crate::piston::setup::piston_of;
@@ -75,6 +75,8 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         pin_offset_sweep: runs.pin_offset,
         clearance_maximum: runs.clearance_maximum,
         pin_offset_maximum: runs.pin_offset_maximum,
+        clearance_range_um: [CLEARANCE_RANGE_UM.0, CLEARANCE_RANGE_UM.1],
+        pin_offset_range_mm: [PIN_OFFSET_RANGE_MM.0, PIN_OFFSET_RANGE_MM.1],
         tradeoff: runs.tradeoff,
         ranking_resolution,
         ranking_resolution_slap_only,

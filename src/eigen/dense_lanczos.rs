@@ -205,7 +205,8 @@ pub struct Target<'a> {
 
 /// The lowest eigenpairs of K y = lambda M y (module docs); `llt` is K's Cholesky factor.
 /// The projected problem is decomposed once the basis holds a quarter more columns than the
-/// first estimate of the wanted count, then whenever it has grown by an eighth. Fails when the
+/// first estimate of the wanted count, then whenever it has grown by a block or an eighth,
+/// whichever is more. Fails when the
 /// basis would exceed `max_basis` columns (or n) first.
 pub fn lowest_modes(
     k: MatRef<'_, f64>,
@@ -324,13 +325,14 @@ pub fn count_below(k: MatRef<'_, f64>, m: MatRef<'_, f64>, sigma: f64) -> usize 
     let mut i = 0;
     while i < n {
         if i + 1 < n && e[i] != 0.0 {
+            // eigenvalues of [a c; c d]: product det, sum a + d
             let det = d[i] * d[i + 1] - e[i] * e[i];
             count += if det < 0.0 {
                 1
-            } else if d[i] < 0.0 {
-                2
+            } else if det == 0.0 {
+                usize::from(d[i] + d[i + 1] < 0.0)
             } else {
-                0
+                2 * usize::from(d[i] < 0.0)
             };
             i += 2;
         } else {

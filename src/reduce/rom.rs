@@ -863,16 +863,17 @@ fn surface_rows(
     }
 }
 
-/// Error estimate of the Craig-Bampton truncation: the largest relative change of the system
-/// frequencies in the band when the parts' mode cut-off is lowered to 2/3 (NaN when that
-/// smaller system cannot be solved). The smaller system's band eigenvalues come from block
-/// Lanczos when it is large ([`engine::lowest_eigenvalues`]), else (or when that gives no
-/// answer) they are refined from the full system's modes restricted to its coordinates (block
-/// as large as the system's refined block) rather than solved densely from scratch.
 /// Relative error bound of the smaller system's band eigenvalues in [`truncation_error`]: the
 /// estimate is a frequency change of order 1e-2 printed to three digits.
 const ESTIMATE_TOL: f64 = 1e-6;
 
+/// Error estimate of the Craig-Bampton truncation: the largest relative change of the system
+/// frequencies in the band when the parts' mode cut-off is lowered to 2/3 (NaN when that
+/// smaller system cannot be solved). The smaller system's band eigenvalues come from block
+/// Lanczos when it is large ([`engine::lowest_eigenvalues`]), else (or when that gives no
+/// answer) they are refined from the full system's modes restricted to its coordinates (a
+/// block of up to max(400, 3/2 x kept) of them: as many as the system's solve returned, kept
+/// + 64 after block Lanczos) rather than solved densely from scratch.
 fn truncation_error(
     inp: &RomInputs<'_>,
     parts: &[(&PartReduction, &[usize])],

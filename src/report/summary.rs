@@ -28,6 +28,10 @@ pub struct Report {
     /// neighbouring runs).
     pub clearance_maximum: BTreeMap<&'static str, Maximum>,
     pub pin_offset_maximum: BTreeMap<&'static str, Maximum>,
+    /// The ranges the sweeps' runs are placed in (the scene's own run, listed in the sweep,
+    /// may lie outside and is then not among the runs the maxima are taken over).
+    pub clearance_range_um: [f64; 2],
+    pub pin_offset_range_mm: [f64; 2],
     pub tradeoff: Vec<TradeoffPoint>,
     /// Neighbours of the cylinder ranking, separated beyond their combined statistical and
     /// numerical uncertainty or tied ([`separations`]); the numerical uncertainty includes the
@@ -270,7 +274,7 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     maxima_text(
         &mut s,
         ("clearance", "um", 1),
-        &r.clearance_sweep,
+        r.clearance_range_um,
         &r.clearance_maximum,
     );
     let _ = writeln!(s, "\n| pin offset [mm] | largest peak negative [m/s^2] | change against the scene [m/s^2] | largest slap force [kN] | side-force peak [kN] at [deg] |\n|---|---|---|---|---|");
@@ -290,7 +294,7 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     maxima_text(
         &mut s,
         ("pin offset", "mm", 3),
-        &r.pin_offset_sweep,
+        r.pin_offset_range_mm,
         &r.pin_offset_maximum,
     );
     let _ = writeln!(s, "\n## Speed against error\n\nAgainst a converged reference (a step 64 times finer, uniform, all modes): the mode cut-off on one cylinder's window from rest (330-420 deg, largest error over its points), the step on the six firing slaps of cycle 3 from identical states (largest error over the cylinders' worst points).\n\n| setting | modes | error | wall time [ms] |\n|---|---|---|---|");
@@ -345,7 +349,7 @@ fn change_text(p: &crate::report::figures::SweepPoint) -> String {
 fn maxima_text(
     s: &mut String,
     (key, unit, digits): (&str, &str, usize),
-    points: &[SweepPoint],
+    ends: [f64; 2],
     maxima: &BTreeMap<&'static str, Maximum>,
 ) {
     use std::fmt::Write;
@@ -359,19 +363,15 @@ fn maxima_text(
             0,
         ),
     ];
-    let ends = points
-        .iter()
-        .map(|p| p.value)
-        .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
     for (name, what, scale, u, d) in words {
         if let Some(m) = maxima.get(name) {
             let (value, se) = (m.value * scale, m.value_se * scale);
             let _ = write!(
                 s,
-                "\nThe largest mean {what} over the {key} sweep: {value:.d$} ± {se:.d$} {u} at {:.digits$} {unit}",
-                m.at
+                "\nThe largest mean {what} over the {key} sweep ({:.digits$} to {:.digits$} {unit}): {value:.d$} ± {se:.d$} {u} at {:.digits$} {unit}",
+                ends[0], ends[1], m.at
             );
-            let _ = if m.at <= ends.0 || m.at >= ends.1 {
+            let _ = if m.at <= ends[0] || m.at >= ends[1] {
                 writeln!(s, ", the end of the swept range: the response still rises there, so its maximum may lie beyond.")
             } else {
                 writeln!(s, "; the maximum lies within ±{:.digits$} {unit} of it (runs placed where it can lie).", m.uncertainty)
