@@ -53,7 +53,7 @@ pub enum LanczosError {
 }
 
 /// Pseudo-random n x b block (xorshift from `seed`, entries in [-0.5, 0.5)).
-fn random_block(n: usize, b: usize, seed: u64) -> Mat<f64> {
+pub(crate) fn random_block(n: usize, b: usize, seed: u64) -> Mat<f64> {
     let mut state = seed;
     Mat::from_fn(n, b, |_, _| {
         state ^= state << 13;
@@ -63,9 +63,10 @@ fn random_block(n: usize, b: usize, seed: u64) -> Mat<f64> {
     })
 }
 
-/// C = A B on both cores (faer's parallel product sums each output block in the same order on
-/// any number of threads).
-fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+/// C = A B on both cores: faer's parallel product splits the output into blocks, each summed
+/// in the same order on any number of threads (unlike its dense factorisations, which stay
+/// serial during a ROM build: [`crate::linalg::thread_count_invariant`]).
+pub fn product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let mut c = Mat::<f64>::zeros(a.nrows(), b.ncols());
     faer::linalg::matmul::matmul(c.as_mut(), faer::Accum::Replace, a, b, 1.0, Par::rayon(0));
     c

@@ -19,13 +19,7 @@ pub fn inverse_subspace(
     passes: usize,
     seed: u64,
 ) -> Mat<f64> {
-    let mut state = seed;
-    let mut x = Mat::from_fn(n, count, |_, _| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    });
+    let mut x = super::dense_lanczos::random_block(n, count, seed);
     for _ in 0..passes {
         let mut y = Mat::<f64>::zeros(n, count);
         mass.mul_dense(x.as_ref(), y.as_mut());

@@ -15,7 +15,7 @@
 //! Preload: K_g u0 = F_clamp (liner flange top pressed down, bolt reaction up on the deck).
 
 use super::craig_bampton::{symmetrise, PartReduction};
-use crate::eigen::dense_lanczos;
+use crate::eigen::dense_lanczos::{self, product as mul};
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
 use rayon::prelude::*;
@@ -370,22 +370,6 @@ fn unit_mass_scaling(k: &Mat<f64>, m: &Mat<f64>) -> (Vec<f64>, Mat<f64>, Mat<f64
     let ks = Mat::from_fn(n, n, |i, j| d[i] * k[(i, j)] * d[j]);
     let ms = Mat::from_fn(n, n, |i, j| d[i] * m[(i, j)] * d[j]);
     (d, ks, ms)
-}
-
-/// A B on both cores: faer's parallel product splits the output into blocks, each summed in
-/// the same order on any number of threads (unlike its dense factorisations, which stay serial
-/// during a ROM build: [`crate::linalg::thread_count_invariant`]).
-fn mul(a: faer::MatRef<'_, f64>, b: faer::MatRef<'_, f64>) -> Mat<f64> {
-    let mut c = Mat::<f64>::zeros(a.nrows(), b.ncols());
-    faer::linalg::matmul::matmul(
-        c.as_mut(),
-        faer::Accum::Replace,
-        a,
-        b,
-        1.0,
-        faer::Par::rayon(0),
-    );
-    c
 }
 
 /// Three passes of subspace iteration with K'^-1 M' from the block `ys` (Rayleigh-Ritz each
