@@ -91,6 +91,8 @@ fn verification_ovalling_of_a_wet_ring_follows_ring_theory() {
         guide_height: length / 4.0,
         guide_bottom: 0.0,
         analysis_depths: vec![length / 2.0],
+        pilot_diameter: 2.0 * ro,
+        deck_underside: None,
     };
     let meshing = LinerMeshing {
         kind: ElementKind::Hex20,

@@ -34,6 +34,7 @@ fn default_meshes() -> (Mesh, Mesh, LinerShape, Vec<f64>, Vec<f64>, f64) {
         inner_radius: g.inner_diameter / 2.0,
         outer_radius: g.outer_diameter / 2.0,
         flange_radius: g.flange_outer_diameter / 2.0,
+        pilot_radius: g.pilot_diameter / 2.0,
         length: g.length,
         seat_z: g.length - g.flange_height,
         tol: 1e-6,

@@ -104,6 +104,8 @@ fn ring(length: f64) -> LinerGeometry {
         guide_height: length / 4.0,
         guide_bottom: 0.0,
         analysis_depths: vec![length / 2.0],
+        pilot_diameter: 0.135,
+        deck_underside: None,
     }
 }
 
@@ -150,4 +152,89 @@ fn verification_ovalling_frequency_converges_at_fourth_order() {
     println!("ovalling n=2: {:.3} {:.3} {:.3} Hz; observed rate {rate:.2}; extrapolated {extrapolated:.3} Hz; thin ring {thin:.3} Hz", f[0], f[1], f[2]);
     assert!((3.3..4.7).contains(&rate), "observed rate {rate}");
     assert!((extrapolated - thin).abs() / thin < 0.02);
+}
+
+/// Verification of the pilot surfaces (`liner.pilot_diameter_mm`): a liner whose guide band
+/// and deck part sit at r_p = 70 mm while its wet wall has r_o = 69 mm. Every outer-surface
+/// node lies on the radius its height asks for (to roundoff), no element is inverted, and the
+/// volume equals the stepped tube's closed form, a sum of annular frusta (the tapers straight
+/// between the levels). Tolerance 1e-4: the quadratic arcs of 48 elements around deviate from
+/// the circle by about R (2 pi / 48)^4 / 400 ~ 1e-6 R, while a pilot zone misplaced by one
+/// element layer or a missing taper moves the volume by more than 1e-3.
+#[test]
+fn verification_pilot_surfaces_make_a_stepped_tube() {
+    let (ri, ro, rp, rf, length) = (0.0575, 0.069, 0.070, 0.074, 0.2);
+    let geo = LinerGeometry {
+        outer_diameter: 2.0 * ro,
+        inner_diameter: 2.0 * ri,
+        length,
+        flange_outer_diameter: 2.0 * rf,
+        flange_height: 0.012,
+        guide_height: 0.03,
+        guide_bottom: 0.04,
+        analysis_depths: vec![0.04, 0.065],
+        pilot_diameter: 2.0 * rp,
+        deck_underside: Some(0.17),
+    };
+    let meshing = LinerMeshing {
+        kind: ElementKind::Hex20,
+        circumferential: 48,
+        radial: 2,
+        radial_flange: 1,
+        axial_size: 0.01,
+    };
+    let mut mesh = generate(&geo, &meshing);
+    let (g0, g1, deck, seat) = (0.04, 0.07, 0.17, length - 0.012);
+    // outer surface: the guide band and the deck part at r_p, the coolant zone at r_o
+    let r = |p: &[f64; 3]| p[0].hypot(p[1]);
+    for &n in &mesh.node_sets["lower_guide"] {
+        assert!((r(&mesh.nodes[n]) - rp).abs() < 1e-12, "guide node {n}");
+    }
+    for k in 1..=2 {
+        let n = mesh.node_sets[&format!("point_{k}")][0];
+        assert!((r(&mesh.nodes[n]) - ro).abs() < 1e-12, "point {k}");
+    }
+    let upper: Vec<usize> = mesh.node_sets["outer_thrust"]
+        .iter()
+        .copied()
+        .filter(|&n| mesh.nodes[n][2] >= deck - 1e-12)
+        .collect();
+    assert!(!upper.is_empty());
+    for n in upper {
+        assert!((r(&mesh.nodes[n]) - rp).abs() < 1e-12, "deck-bore node {n}");
+    }
+    linercav::fem::element::check_mesh(&mut mesh).expect("no inverted element");
+    // closed form: annular frusta between the levels where the outer radius changes
+    let frustum = |h: f64, a: f64, b: f64| std::f64::consts::PI * h * (a * a + a * b + b * b) / 3.0;
+    let mut corners: Vec<f64> = Vec::new();
+    for (_, nodes) in mesh.elements() {
+        for &n in &nodes[..8] {
+            let z = mesh.nodes[n][2];
+            if !corners.iter().any(|&w| (w - z).abs() < 1e-9) {
+                corners.push(z);
+            }
+        }
+    }
+    corners.sort_by(f64::total_cmp);
+    // the taper layers: the element layer below the band, above it, and below the deck
+    let below = |z: f64| corners.iter().copied().rfind(|&w| w < z - 1e-9).unwrap();
+    let above = |z: f64| corners.iter().copied().find(|&w| w > z + 1e-9).unwrap();
+    let (t0, t1, t2) = (below(g0), above(g1), below(deck));
+    let outer_volume = frustum(t0, ro, ro)
+        + frustum(g0 - t0, ro, rp)
+        + frustum(g1 - g0, rp, rp)
+        + frustum(t1 - g1, rp, ro)
+        + frustum(t2 - t1, ro, ro)
+        + frustum(deck - t2, ro, rp)
+        + frustum(seat - deck, rp, rp)
+        + frustum(length - seat, rf, rf);
+    let exact = outer_volume - std::f64::consts::PI * ri * ri * length;
+    let v: f64 = mesh
+        .elements()
+        .map(|(kind, nodes)| {
+            let c: Vec<[f64; 3]> = nodes.iter().map(|&n| mesh.nodes[n]).collect();
+            linercav::fem::element::volume(kind, &c)
+        })
+        .sum();
+    assert!((v / exact - 1.0).abs() < 1e-4, "volume {v} against {exact}");
 }

@@ -693,11 +693,18 @@ fn contract_component_cache_reuses_unchanged_parts() {
         no_cache: true,
         dir: None,
     };
-    for (set, expect) in [
-        ("liner.material=grey_cast_iron", (Reduced, Cached)),
-        ("crankcase.material=boron_cast_iron", (Cached, Reduced)),
+    // the wet wall 1 mm thicker, the pilots (the crankcase's bore) kept: the liner only
+    let wet_wall = ["liner.outer_diameter_mm=137", "liner.pilot_diameter_mm=135"];
+    for (sets, expect) in [
+        (&["liner.material=grey_cast_iron"][..], (Reduced, Cached)),
+        (&wet_wall[..], (Reduced, Cached)),
+        (
+            &["crankcase.material=boron_cast_iron"][..],
+            (Cached, Reduced),
+        ),
     ] {
-        let sc = scene(&[set]);
+        let set = sets.join(" ");
+        let sc = scene(sets);
         let r = get_rom(&sc, &opts, &|_| {}).unwrap();
         assert_eq!(r.cache, "miss", "{set}");
         assert_eq!(sources(&r), expect, "{set}");

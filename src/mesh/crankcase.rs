@@ -5,9 +5,9 @@
 //! its axis at x_c = (c - (N + 1) / 2) p, y = 0 (p the cylinder pitch).
 //!
 //! Plan: each cylinder owns a cell x in [x_c - p/2, x_c + p/2], y in [-b, b] (b = r_f + t_w,
-//! r_f the flange radius, t_w the jacket wall) meshed as an O-grid: ring 0 between the liner
-//! outer radius r_o and r_f, then `wall_layers` rings blending linearly from the circle r_f to
-//! the cell rectangle. The circumference is split into four sectors at the rectangle's corner
+//! r_f the flange radius, t_w the jacket wall) meshed as an O-grid: ring 0 between the bore
+//! r_b (the liner's pilot radius; its outer radius for a plain tube) and r_f, then
+//! `wall_layers` rings blending linearly from the circle r_f to the cell rectangle. The circumference is split into four sectors at the rectangle's corner
 //! angles (alpha = atan(b / (p/2))) so the rectangle's corners are nodes and neighbouring cells
 //! share their boundary nodes; thrust (+y) and anti-thrust lines fall on nodes.
 //!
@@ -18,17 +18,17 @@
 //!   y-sides), bulkheads (all rings on the x-sides, between cylinders and at the ends);
 //! - hanging zone (z in [0, z_g], z_g the guide band's lower edge; empty when the band ends the
 //!   liner): the wall rings only, ring 0 is the open space around the liner's free lower end;
-//! - lower support (z in [z_g, z_g + guide_height]): all rings; its bore (r = r_o) is the
+//! - lower support (z in [z_g, z_g + guide_height]): all rings; its bore (r = r_b) is the
 //!   liner's radial guide seat;
 //! - water jacket (up to the deck): the wall rings only; ring 0 is the coolant space;
 //! - deck (`deck_thickness` below the flange seat): all rings; its top face carries the liner
-//!   flange (seat annulus r_o..r_f) under the head-bolt clamp load.
+//!   flange (seat annulus r_b..r_f) under the head-bolt clamp load.
 //!
 //! Front (gear-end, -x) and rear (flywheel-end, +x) end walls of their own thickness close the
 //! block over its full height.
 //!
 //! Node sets: `seat_c` (deck top, r <= r_f around cylinder c), `guide_c` (support bore,
-//! r = r_o, over the guide band), `point_c_k` (jacket wall, thrust side, at the liner's
+//! r = r_b, over the guide band), `point_c_k` (jacket wall, thrust side, at the liner's
 //! analysis heights, top to bottom), `deck_top`, `pan_rail` (bottom face, z = -skirt_depth).
 
 use super::lattice::{level_at, subdivide, Key, Lattice};
@@ -130,7 +130,7 @@ fn zone(geo: &CrankcaseGeometry, z_levels: &[f64], k: usize) -> Zone {
     }
 }
 
-/// Cylinder `c`'s cell: rings from the liner's outer radius to the flange radius, then the
+/// Cylinder `c`'s cell: rings from the bore (the liner's pilot radius) to the flange radius, then the
 /// wall out to the cell's rectangle; the jacket and the hanging zone leave the coolant ring
 /// (i = 0) open, the bays the y sides.
 fn cylinder_cell(
@@ -139,7 +139,7 @@ fn cylinder_cell(
     z_levels: &[f64],
     c: usize,
 ) -> Mesh {
-    let (ro, rf) = (geo.liner_outer_radius, geo.flange_radius);
+    let (ro, rf) = (geo.bore_radius, geo.flange_radius);
     let (a, b) = (geo.pitch / 2.0, geo.half_width());
     let (alpha, s, nw) = (geo.corner_angle(), meshing.per_sector, meshing.wall_layers);
     let xc = geo.axis_x(c);
@@ -259,7 +259,7 @@ fn rails(geo: &CrankcaseGeometry, meshing: &CrankcaseMeshing, z_levels: &[f64]) 
 /// The named node sets: per cylinder the seat, the guide and the analysis points; the deck
 /// top and the pan rail.
 fn named_sets(nodes: &[[f64; 3]], geo: &CrankcaseGeometry) -> BTreeMap<String, Vec<usize>> {
-    let (ro, rf) = (geo.liner_outer_radius, geo.flange_radius);
+    let (ro, rf) = (geo.bore_radius, geo.flange_radius);
     let guide_top = geo.guide_bottom + geo.guide_height;
     let tol = 1e-6 * geo.pitch;
     let mut sets = BTreeMap::new();

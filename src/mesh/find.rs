@@ -48,6 +48,9 @@ pub struct LinerShape {
     pub inner_radius: f64,
     pub outer_radius: f64,
     pub flange_radius: f64,
+    /// Radius of the pilot surfaces (guide band, deck bore) where the crankcase holds the
+    /// liner; the outer radius on an imported liner.
+    pub pilot_radius: f64,
     pub length: f64,
     /// Height of the flange underside above the liner bottom.
     pub seat_z: f64,
@@ -290,6 +293,7 @@ fn measure_liner(mesh: &Mesh, tol: f64) -> Result<LinerShape, FindError> {
         inner_radius: inner,
         outer_radius: outer,
         flange_radius: flange,
+        pilot_radius: outer,
         length,
         seat_z,
         tol,

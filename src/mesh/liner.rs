@@ -1,5 +1,10 @@
 //! Parametric wet cylinder liner: an annular tube with a top flange.
 //!
+//! The wall's outer radius is the wet wall's r_o in the coolant zone and the pilot radius r_p
+//! (`pilot_diameter`, the crankcase's bore) on the lower guide band and inside the deck bore,
+//! from the deck's underside up to the flange; the element layer next to a pilot edge tapers
+//! straight between the two. A plain tube has r_p = r_o.
+//!
 //! Frame: z is the cylinder axis, z = 0 at the liner bottom and z = `length` at its top (the
 //! cylinder-head face). The thrust side is +y (theta = 90 deg), the anti-thrust side -y; x is
 //! along the crankshaft. The flange occupies the top `flange_height` between the outer diameter
@@ -29,6 +34,44 @@ pub use crate::scene::spec::LinerGeometry;
 
 pub use crate::scene::spec::LinerMeshing;
 
+/// The wall's outer radius at each axial level: the pilot radius r_p on the guide band and
+/// from the deck's underside up, the wet wall's r_o elsewhere. Between two levels of different
+/// radii the element is a straight taper (`level_at` puts mid-side nodes half-way).
+fn outer_radii(z_levels: &[f64], geo: &LinerGeometry, deck: Option<f64>) -> Vec<f64> {
+    let tol = 1e-9;
+    let (g0, g1) = (geo.guide_bottom, geo.guide_bottom + geo.guide_height);
+    z_levels
+        .iter()
+        .map(|&z| {
+            let pilot = (z > g0 - tol && z < g1 + tol) || deck.is_some_and(|d| z > d - tol);
+            if pilot {
+                geo.pilot_diameter / 2.0
+            } else {
+                geo.outer_diameter / 2.0
+            }
+        })
+        .collect()
+}
+
+/// Maps a lattice radius r (levels laid out for the wet wall [r_i, r_o] and the flange
+/// [r_o, r_f]) onto a wall whose outer radius is `outer` at this height:
+/// r' = r_i + (r - r_i) (outer - r_i) / (r_o - r_i) in the wall, r' = outer + (r - r_o) (r_f -
+/// outer) / (r_f - r_o) across the flange (identity where outer = r_o).
+fn pilot_radius(r: f64, outer: f64, geo: &LinerGeometry) -> f64 {
+    let (ri, ro, rf) = (
+        geo.inner_diameter / 2.0,
+        geo.outer_diameter / 2.0,
+        geo.flange_outer_diameter / 2.0,
+    );
+    if outer == ro {
+        r
+    } else if r <= ro {
+        ri + (r - ri) * (outer - ri) / (ro - ri)
+    } else {
+        outer + (r - ro) * (rf - outer) / (rf - ro)
+    }
+}
+
 /// Generates the liner mesh with its named node sets.
 pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
     let (ri, ro, rf) = (
@@ -49,7 +92,13 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
     }
     let z_flange = geo.length - geo.flange_height;
     let guide_top = geo.guide_bottom + geo.guide_height;
+    let rp = geo.pilot_diameter / 2.0;
+    // the upper pilot's lower edge, a lattice plane when the pilots differ from the wet wall
+    let deck = geo
+        .deck_underside
+        .filter(|&z| rp != ro && z > guide_top && z < z_flange);
     let mut planes: Vec<f64> = vec![0.0, geo.guide_bottom, guide_top, z_flange, geo.length];
+    planes.extend(deck);
     planes.extend(geo.analysis_depths.iter().map(|d| geo.length - d));
     planes.sort_by(|a, b| a.partial_cmp(b).unwrap());
     planes.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
@@ -64,8 +113,9 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
         .position(|&z| (z - z_flange).abs() < 1e-9)
         .expect("flange plane is a level");
     let active = |i: usize, _j: usize, k: usize| i < nr_wall || k >= k_flange;
+    let outer = outer_radii(&z_levels, geo, deck);
     let coord = |key: Key| {
-        let r = level_at(&r_levels, key[0]);
+        let r = pilot_radius(level_at(&r_levels, key[0]), level_at(&outer, key[2]), geo);
         let th = PI * key[1] as f64 / nt as f64;
         let z = level_at(&z_levels, key[2]);
         [r * th.cos(), r * th.sin(), z]

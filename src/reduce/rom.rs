@@ -206,8 +206,9 @@ pub struct RomInputs<'a> {
     pub crankcase: &'a Mesh,
     pub crankcase_material: Elastic,
     pub crankcase_fix: Vec<String>,
-    /// Liner radii and heights that define the interfaces \[m\].
-    pub liner_outer_radius: f64,
+    /// Radii and heights that define the interfaces \[m\]: the bore (the liner's pilot
+    /// radius), the flange, the seat height and the guide band.
+    pub bore_radius: f64,
     pub flange_radius: f64,
     pub seat_z: f64,
     pub guide_height: f64,
@@ -336,7 +337,7 @@ fn check_fit(inp: &RomInputs<'_>) -> Result<(), RomError> {
     for (c, &xc) in inp.axis_x.iter().enumerate() {
         if let Some(n) = inp.crankcase.nodes.iter().position(|p| {
             let r = ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
-            r < inp.liner_outer_radius - tol && p[2] > tol && p[2] < inp.seat_z - tol
+            r < inp.bore_radius - tol && p[2] > tol && p[2] < inp.seat_z - tol
         }) {
             return Err(RomError::Set {
                 part: "crankcase".into(),
@@ -447,7 +448,7 @@ pub fn interface_blocks(
 fn seat_and_guide(inp: &RomInputs<'_>) -> (InterfaceShape, InterfaceShape) {
     (
         InterfaceShape::Seat {
-            r_in: inp.liner_outer_radius,
+            r_in: inp.bore_radius,
             r_out: inp.flange_radius,
         },
         InterfaceShape::Guide {

@@ -341,6 +341,12 @@ pub struct RawLiner {
     /// shortens, which stiffens the liner's ovalling.
     #[serde(default)]
     pub guide_depth_mm: Option<f64>,
+    /// Diameter of the liner's pilot surfaces, the guide band and the part inside the crankcase
+    /// deck, which is also the crankcase's bore there \[mm\]. Omitted: `outer_diameter_mm` (a
+    /// plain tube). Given, the wet wall between the pilots has `outer_diameter_mm` and the
+    /// crankcase depends on this diameter only, so a wet-wall what-if re-reduces the liner alone.
+    #[serde(default)]
+    pub pilot_diameter_mm: Option<f64>,
     /// Depth of the first analysis point below the liner top \[mm\].
     pub analysis_first_depth_mm: f64,
     /// Spacing of the analysis points, top to bottom \[mm\] (paper: 25).

@@ -69,6 +69,14 @@ pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
             num(gap * 1e3)
         ));
     }
+    let g = &scene.liner_geometry;
+    if g.outer_diameter > g.pilot_diameter {
+        warnings.push(format!(
+            "liner.outer_diameter_mm = {} exceeds pilot_diameter_mm = {}: the wet wall is wider than the crankcase bore the liner passes through when fitted (modelled as a wall thickened into the coolant jacket)",
+            num(g.outer_diameter * 1e3),
+            num(g.pilot_diameter * 1e3)
+        ));
+    }
     if let Some(sim) = &scene.simulation {
         let skirt = &sim.piston.skirt;
         if skirt.length >= scene.liner_geometry.length {

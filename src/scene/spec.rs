@@ -77,6 +77,12 @@ pub struct LinerGeometry {
     pub guide_bottom: f64,
     /// Depths of the analysis points below the liner top, top to bottom.
     pub analysis_depths: Vec<f64>,
+    /// Diameter of the pilot surfaces (the guide band, and the part above `deck_underside`),
+    /// the crankcase's bore; equal to `outer_diameter` for a plain tube.
+    pub pilot_diameter: f64,
+    /// Height of the crankcase deck's underside above the liner bottom: from there up to the
+    /// flange the liner sits in the deck bore at the pilot diameter (None: no crankcase).
+    pub deck_underside: Option<f64>,
 }
 
 /// Mesh density and element kind of the generated liner.
@@ -98,8 +104,9 @@ pub struct LinerMeshing {
 pub struct CrankcaseGeometry {
     pub cylinders: usize,
     pub pitch: f64,
-    /// Liner outer radius r_o: bore of the deck ledge and of the lower support.
-    pub liner_outer_radius: f64,
+    /// Bore radius r_b (the liner's pilot radius): bore of the deck ledge and of the lower
+    /// support.
+    pub bore_radius: f64,
     /// Flange radius r_f: outer edge of the seat annulus, inner face of the jacket wall.
     pub flange_radius: f64,
     /// Height of the flange seat (deck top face) above the liner bottom.

@@ -64,6 +64,19 @@ pub(super) fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> 
             &material,
         )?),
     };
+    let (mut liner, mut liner_geometry) = (liner, liner_geometry);
+    if let Some(Crankcase {
+        source: CrankcaseSource::Parametric { geometry: deck, .. },
+        ..
+    }) = &crankcase
+    {
+        // the liner's upper pilot: inside the deck bore, from the deck's underside up
+        let underside = Some(deck.seat_z - deck.deck_thickness);
+        liner_geometry.deck_underside = underside;
+        if let MeshSource::Liner { geometry, .. } = &mut liner.source {
+            geometry.deck_underside = underside;
+        }
+    }
     let rom = validate_rom(&c, &raw.rom, base, &engine, &liner)?;
     let simulation = validate_simulation(&c, base, &raw, &engine, &liner_geometry)?;
     let cavitation = validate_cavitation(&c, base, &raw.cavitation)?;
@@ -148,6 +161,12 @@ pub(super) fn validate_liner_geometry(
         analysis_depths: (0..l.analysis_points)
             .map(|i| (l.analysis_first_depth_mm + i as f64 * l.analysis_spacing_mm) * 1e-3)
             .collect(),
+        pilot_diameter: 0.0,
+        deck_underside: None,
+    };
+    geometry.pilot_diameter = match l.pilot_diameter_mm {
+        Some(d) => c.mm("liner.pilot_diameter_mm", d)?,
+        None => geometry.outer_diameter,
     };
     if geometry.inner_diameter >= geometry.outer_diameter {
         return Err(c.err(
@@ -159,6 +178,15 @@ pub(super) fn validate_liner_geometry(
         return Err(c.err(
             "liner.inner_diameter_mm",
             format!("must equal engine.bore_mm ({} mm)", num(engine.bore * 1e3)),
+        ));
+    }
+    let plain = geometry.pilot_diameter == geometry.outer_diameter;
+    if geometry.pilot_diameter <= geometry.inner_diameter
+        || (!plain && geometry.pilot_diameter >= geometry.flange_outer_diameter)
+    {
+        return Err(c.err(
+            "liner.pilot_diameter_mm",
+            "must lie between inner_diameter_mm and flange_outer_diameter_mm",
         ));
     }
     if geometry.flange_outer_diameter < geometry.outer_diameter {
@@ -748,7 +776,7 @@ pub(super) fn validate_crankcase(
     let geometry = CrankcaseGeometry {
         cylinders: engine.cylinders,
         pitch: engine.cylinder_pitch,
-        liner_outer_radius: liner.outer_diameter / 2.0,
+        bore_radius: liner.pilot_diameter / 2.0,
         flange_radius: liner.flange_outer_diameter / 2.0,
         seat_z: liner.length - liner.flange_height,
         guide_height: liner.guide_height,
@@ -766,7 +794,7 @@ pub(super) fn validate_crankcase(
             .map(|d| liner.length - d)
             .collect(),
     };
-    if liner.flange_outer_diameter <= liner.outer_diameter {
+    if liner.flange_outer_diameter <= liner.outer_diameter.max(liner.pilot_diameter) {
         return Err(c.err(
             "liner.flange_outer_diameter_mm",
             "the crankcase needs a liner flange to seat on (flange diameter > outer diameter)",
