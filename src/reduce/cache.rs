@@ -21,23 +21,78 @@ pub trait Entry: serde::Serialize + serde::de::DeserializeOwned {
     const MAGIC: &'static [u8; 8];
     /// Format version in the header: an entry of another version is rebuilt.
     const FORMAT: u32;
-    fn validate(&self) -> Result<(), String>;
+    fn validate(&self) -> Result<(), Invalid>;
+}
+
+/// What an entry's own consistency check found wrong (a forged or mis-written file whose hash
+/// is valid).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Invalid {
+    #[error("{what}: {rows} x {cols}, expected {want_rows} x {want_cols} (row-major)")]
+    Shape {
+        what: String,
+        rows: usize,
+        cols: usize,
+        want_rows: usize,
+        want_cols: usize,
+    },
+    #[error("{what}: an entry is not finite")]
+    NotFinite { what: String },
+    #[error("{frequencies} frequencies for {system_modes} system modes and {residual_vectors} residual vectors (at least one system mode needed)")]
+    ModeCount {
+        frequencies: usize,
+        system_modes: usize,
+        residual_vectors: usize,
+    },
+    #[error("a frequency is negative or not finite")]
+    Frequency,
+    #[error("the frequencies are not in ascending order")]
+    Order,
+    #[error("no cylinder")]
+    NoCylinder,
+    #[error("cylinder {0}: bore lines, points or preload inconsistent or not finite")]
+    CylinderRows(usize),
+    #[error("inconsistent part reduction (shapes, ranges or non-finite values)")]
+    Part,
 }
 
 impl Entry for EngineRom {
     const MAGIC: &'static [u8; 8] = b"LCAVROM\0";
     const FORMAT: u32 = ROM_FORMAT;
-    fn validate(&self) -> Result<(), String> {
-        EngineRom::validate(self).map_err(|e| format!("inconsistent ROM: {e}"))
+    fn validate(&self) -> Result<(), Invalid> {
+        EngineRom::validate(self)
     }
+}
+
+/// Why a cache file that exists is not trusted.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Corruption {
+    #[error("{0} bytes, more than the machine's available memory")]
+    TooLarge(u64),
+    #[error("truncated header ({0} bytes)")]
+    Header(usize),
+    #[error("not a linercav cache file of this kind")]
+    Magic,
+    #[error("format version {found}, expected {expected}")]
+    Version { found: u32, expected: u32 },
+    #[error("payload is {found} bytes, header says {header} (truncated?)")]
+    Length { found: u64, header: u64 },
+    #[error("checksum mismatch (corrupt file)")]
+    Checksum,
+    #[error("cannot decode: {0}")]
+    Decode(String),
+    #[error("made from other inputs than its name says (a copied or forged file)")]
+    Description,
+    #[error("inconsistent entry: {0}")]
+    Invalid(#[from] Invalid),
 }
 
 /// Outcome of a cache lookup.
 pub enum Lookup<T = EngineRom> {
     Hit(Box<T>),
     Miss,
-    /// A file was there but failed the integrity check (reason).
-    Corrupt(String),
+    /// A file was there but failed the integrity check.
+    Corrupt(Corruption),
 }
 
 /// Path of the cache file for `key`.
@@ -75,9 +130,7 @@ pub fn load<T: Entry>(path: &Path, description: &str) -> Result<Lookup<T>, Cache
             return Ok(Lookup::Miss)
         }
         Err(ReadError::TooLarge { size, .. }) => {
-            return Ok(Lookup::Corrupt(format!(
-                "{size} bytes, more than the machine's available memory"
-            )))
+            return Ok(Lookup::Corrupt(Corruption::TooLarge(size)))
         }
         Err(source) => {
             return Err(CacheReadError {
@@ -92,36 +145,39 @@ pub fn load<T: Entry>(path: &Path, description: &str) -> Result<Lookup<T>, Cache
     })
 }
 
-fn decode<T: Entry>(bytes: &[u8], description: &str) -> Result<T, String> {
+fn decode<T: Entry>(bytes: &[u8], description: &str) -> Result<T, Corruption> {
     if bytes.len() < HEADER {
-        return Err(format!("truncated header ({} bytes)", bytes.len()));
+        return Err(Corruption::Header(bytes.len()));
     }
     if &bytes[..8] != T::MAGIC {
-        return Err("not a linercav cache file of this kind".into());
+        return Err(Corruption::Magic);
     }
     let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
     if version != T::FORMAT {
-        return Err(format!("format version {version}, expected {}", T::FORMAT));
+        return Err(Corruption::Version {
+            found: version,
+            expected: T::FORMAT,
+        });
     }
     let len = u64::from_le_bytes(bytes[12..20].try_into().expect("8 bytes"));
     let payload = &bytes[HEADER..];
     if payload.len() as u64 != len {
-        return Err(format!(
-            "payload is {} bytes, header says {len} (truncated?)",
-            payload.len()
-        ));
+        return Err(Corruption::Length {
+            found: payload.len() as u64,
+            header: len,
+        });
     }
     if blake3::hash(payload).as_bytes() != &bytes[20..52] {
-        return Err("checksum mismatch (corrupt file)".into());
+        return Err(Corruption::Checksum);
     }
     // bincode's length prefixes are bounded by the payload it reads from
     let (stored, entry): (String, T) = bincode::options()
         .with_fixint_encoding()
         .with_limit(len)
         .deserialize(payload)
-        .map_err(|e| format!("cannot decode: {e}"))?;
+        .map_err(|e| Corruption::Decode(e.to_string()))?;
     if stored != description {
-        return Err("made from other inputs than its name says (a copied or forged file)".into());
+        return Err(Corruption::Description);
     }
     entry.validate()?;
     Ok(entry)

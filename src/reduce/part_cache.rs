@@ -9,7 +9,7 @@
 //! depends on can be left out of its key. File `part-<name>-<key>.bin` beside the ROM files,
 //! with the same integrity checks (magic, version, length, checksum, stored key, consistency).
 
-use super::cache::{self, CacheReadError, Entry, Lookup};
+use super::cache::{self, CacheReadError, Entry, Invalid, Lookup};
 use super::craig_bampton::{CbSettings, CbStats, Part, PartReduction};
 use crate::fem::dofs::DofMap;
 use crate::files::WriteError;
@@ -43,7 +43,7 @@ impl Entry for StoredPart {
     const MAGIC: &'static [u8; 8] = b"LCAVPRT\0";
     const FORMAT: u32 = PART_FORMAT;
     /// The reduced matrices square and finite, the column ranges inside them.
-    fn validate(&self) -> Result<(), String> {
+    fn validate(&self) -> Result<(), Invalid> {
         let n = self.k.nrows();
         let shapes_ok = self.k.ncols() == n
             && self.m.dim() == (n, n)
@@ -61,7 +61,7 @@ impl Entry for StoredPart {
         if shapes_ok && ranges_ok && finite {
             Ok(())
         } else {
-            Err("inconsistent part reduction (shapes, ranges or non-finite values)".into())
+            Err(Invalid::Part)
         }
     }
 }
@@ -235,11 +235,13 @@ pub struct StoredMatrix(Dense);
 impl Entry for StoredMatrix {
     const MAGIC: &'static [u8; 8] = b"LCAVMAT\0";
     const FORMAT: u32 = PART_FORMAT;
-    fn validate(&self) -> Result<(), String> {
+    fn validate(&self) -> Result<(), Invalid> {
         if self.0.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err("non-finite values in a stored matrix".into())
+            Err(Invalid::NotFinite {
+                what: "stored matrix".into(),
+            })
         }
     }
 }

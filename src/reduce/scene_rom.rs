@@ -104,7 +104,7 @@ pub struct LoadedRom {
     /// Present when the ROM was built in this run with bases kept.
     pub build: Option<RomBuild>,
     /// A corrupt cache file that was replaced (reason).
-    pub replaced: Option<String>,
+    pub replaced: Option<cache::Corruption>,
 }
 
 /// BLAKE3 of a mesh file and of every file it includes (in the order found).

@@ -1,0 +1,18 @@
+//! Building the engine ROM from a scene: meshes, interface fields, one liner reduction reused
+//! for every modelled cylinder, the crankcase reduction, assembly, system modes, static
+//! correction and preload.
+//!
+//! `inputs` (what the build reads, interface fields, rows), `build` (the reduction, assembly and
+//! system phase), `model` (the stored ROM and its checks).
+
+mod build;
+mod inputs;
+mod model;
+
+pub use build::*;
+pub use inputs::*;
+pub use model::*;
+
+/// Version of the ROM layout; part of the cache key (5: matrices stored as ndarray arrays;
+/// 9: residual vectors and residual flexibility from the dropped modes' exact flexibility).
+pub const ROM_FORMAT: u32 = 9;

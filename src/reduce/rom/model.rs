@@ -1,0 +1,224 @@
+//! The engine ROM as stored: per-cylinder rows, the residual flexibility, the build's record,
+//! and the checks a loaded entry must pass.
+
+use crate::reduce::cache::Invalid;
+use crate::reduce::craig_bampton::CbStats;
+use crate::reduce::engine::Dense;
+use crate::reduce::part_cache::Source;
+
+/// Reduced data of one modelled cylinder. Mode rows hold the displacement of mass-normalised
+/// system modes along the stated direction.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct CylinderRom {
+    /// 1-based cylinder number.
+    pub cylinder: usize,
+    pub axis_x: f64,
+    /// Heights of the bore-line nodes (ascending) on the thrust (+y) and anti-thrust (-y) side.
+    pub thrust_z: Vec<f64>,
+    pub antithrust_z: Vec<f64>,
+    /// Outward radial displacement of the bore-line nodes (nodes x modes).
+    pub thrust_modes: Dense,
+    pub antithrust_modes: Dense,
+    /// Liner analysis points, radial toward the coolant (+y), top to bottom (points x modes).
+    pub point_modes: Dense,
+    /// Crankcase jacket-wall points facing them (+y).
+    pub crankcase_point_modes: Dense,
+    /// Head-bolt preload displacement at the bore-line nodes and points \[m\].
+    pub preload_thrust: Vec<f64>,
+    pub preload_antithrust: Vec<f64>,
+    pub preload_points: Vec<f64>,
+    /// Residual flexibility of the dropped system modes between the analysis points and this
+    /// cylinder's contact DOFs (points x (thrust, anti-thrust nodes)) [m/N]: the quasi-static
+    /// part of a point's response to a contact force near it, u_p = phi_p . eta + R_pc F.
+    pub point_residual: Dense,
+    /// Offset of this cylinder's contact DOFs (thrust, then anti-thrust) in the residual
+    /// flexibility matrix.
+    pub contact_offset: usize,
+    /// The liner's wet outer surface, for the liner maps (no nodes when the liner mesh has no
+    /// `coolant_wetted` set).
+    pub surface: SurfaceRows,
+}
+
+/// Rows of a liner's wet outer surface (node set `coolant_wetted`), each like an analysis
+/// point's: u_n = phi_n . eta + R_nc F along the outward radial direction (x, y, 0) / r.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct SurfaceRows {
+    /// Liner mesh node of each row, ascending.
+    pub nodes: Vec<usize>,
+    /// Outward radial displacement of the modes (nodes x modes).
+    pub modes: Dense,
+    /// Residual flexibility to this cylinder's contact DOFs (nodes x contact DOFs) [m/N].
+    pub residual: Dense,
+}
+
+/// Per-part summary.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct PartInfo {
+    pub name: String,
+    pub stats: CbStats,
+    /// How many copies of this reduction the engine uses.
+    pub copies: usize,
+    /// Reduced in the build, or read from the component cache.
+    pub source: Source,
+}
+
+/// What the ROM holds and how it was made.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct RomInfo {
+    pub full_dofs: usize,
+    pub reduced_dofs: usize,
+    pub system_modes: usize,
+    /// Residual vectors (pseudo-modes above the cut-off) of the contact load patterns,
+    /// appended to the system modes ([`engine::residual_vectors`]).
+    pub residual_vectors: usize,
+    pub band_hz: f64,
+    pub cutoff_hz: f64,
+    pub interface_harmonics: usize,
+    pub parts: Vec<PartInfo>,
+    pub build_seconds: f64,
+    /// Largest relative change of a system frequency below the band when the part-mode
+    /// cut-off is lowered to 2/3 of its value: an upper estimate of the truncation error.
+    pub estimated_error: f64,
+    pub left_out: Vec<String>,
+    /// Interfaces, points and materials found on imported meshes (none for generated ones).
+    pub interfaces: Option<crate::mesh::find::FoundInterfaces>,
+}
+
+/// The cached engine reduced-order model.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct EngineRom {
+    /// System modes kept (below the cut-off), ascending, then the residual vectors' pseudo-modes
+    /// (above the cut-off, ascending) \[Hz\].
+    pub frequencies_hz: Vec<f64>,
+    pub cylinders: Vec<CylinderRom>,
+    /// Residual flexibility of the dropped modes at all contact DOFs [m/N].
+    pub residual_flexibility: Dense,
+    pub info: RomInfo,
+}
+
+impl EngineRom {
+    /// Checks what a checksum cannot (a forged or mis-written file with a valid hash): at least
+    /// one system mode, frequencies finite, non-negative and ascending within the system and
+    /// the residual-vector groups, every matrix's dimensions consistent with the mode count and
+    /// the contact DOFs, and every entry finite. Returns what is wrong.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        let i = &self.info;
+        let nm = self.frequencies_hz.len();
+        if i.system_modes == 0 || nm != i.system_modes + i.residual_vectors {
+            return Err(Invalid::ModeCount {
+                frequencies: nm,
+                system_modes: i.system_modes,
+                residual_vectors: i.residual_vectors,
+            });
+        }
+        let f = &self.frequencies_hz;
+        if f.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+            return Err(Invalid::Frequency);
+        }
+        let ascending = |s: &[f64]| s.windows(2).all(|w| w[0] <= w[1]);
+        if !ascending(&f[..i.system_modes]) || !ascending(&f[i.system_modes..]) {
+            return Err(Invalid::Order);
+        }
+        if self.cylinders.is_empty() {
+            return Err(Invalid::NoCylinder);
+        }
+        let contact: usize = self
+            .cylinders
+            .iter()
+            .map(|c| c.thrust_z.len() + c.antithrust_z.len())
+            .sum();
+        let square = &self.residual_flexibility;
+        check_dense("residual flexibility", square, contact, contact)?;
+        for c in &self.cylinders {
+            let (nt, na) = (c.thrust_z.len(), c.antithrust_z.len());
+            let np = c.point_modes.nrows();
+            let at = |what: &str| format!("cylinder {}: {what}", c.cylinder);
+            check_dense(&at("thrust modes"), &c.thrust_modes, nt, nm)?;
+            check_dense(&at("anti-thrust modes"), &c.antithrust_modes, na, nm)?;
+            check_dense(&at("point modes"), &c.point_modes, np, nm)?;
+            let ncp = c.crankcase_point_modes.nrows();
+            check_dense(
+                &at("crankcase point modes"),
+                &c.crankcase_point_modes,
+                ncp,
+                nm,
+            )?;
+            check_dense(&at("point residual"), &c.point_residual, np, nt + na)?;
+            let ns = c.surface.nodes.len();
+            check_dense(&at("surface modes"), &c.surface.modes, ns, nm)?;
+            check_dense(&at("surface residual"), &c.surface.residual, ns, nt + na)?;
+            let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+            if c.preload_thrust.len() != nt
+                || c.preload_antithrust.len() != na
+                || c.preload_points.len() != np
+                || !finite(&c.preload_thrust)
+                || !finite(&c.preload_antithrust)
+                || !finite(&c.preload_points)
+                || !finite(&c.thrust_z)
+                || !finite(&c.antithrust_z)
+                || np == 0
+                || nt == 0
+                || na == 0
+                || c.contact_offset + nt + na > contact
+            {
+                return Err(Invalid::CylinderRows(c.cylinder));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A stored matrix has the expected dimensions and finite entries.
+pub(super) fn check_dense(what: &str, d: &Dense, rows: usize, cols: usize) -> Result<(), Invalid> {
+    if d.nrows() != rows || d.ncols() != cols || !d.is_standard_layout() {
+        return Err(Invalid::Shape {
+            what: what.into(),
+            rows: d.nrows(),
+            cols: d.ncols(),
+            want_rows: rows,
+            want_cols: cols,
+        });
+    }
+    if d.iter().any(|x| !x.is_finite()) {
+        return Err(Invalid::NotFinite { what: what.into() });
+    }
+    Ok(())
+}
+
+/// One system mode, the normalised thrust-side radial amplitude at each
+/// cylinder's analysis points (cylinder-major, points top to bottom).
+#[derive(serde::Serialize)]
+pub struct ShapeMode {
+    pub frequency_hz: f64,
+    pub coefficients: Vec<Vec<f64>>,
+}
+
+impl EngineRom {
+    /// Mode-shape coefficients: c_{cyl,p} = phi(point) / max |phi(points)| over all cylinders and
+    /// points of that mode (so the largest is +-1; the sign shows the phase between cylinders).
+    pub fn shapes(&self) -> Vec<ShapeMode> {
+        let rom = self;
+        (0..rom.frequencies_hz.len())
+            .map(|j| {
+                let raw: Vec<Vec<f64>> = rom
+                    .cylinders
+                    .iter()
+                    .map(|c| {
+                        (0..c.point_modes.nrows())
+                            .map(|p| c.point_modes[[p, j]])
+                            .collect()
+                    })
+                    .collect();
+                let max = raw.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+                let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
+                ShapeMode {
+                    frequency_hz: rom.frequencies_hz[j],
+                    coefficients: raw
+                        .into_iter()
+                        .map(|r| r.into_iter().map(|v| v * scale).collect())
+                        .collect(),
+                }
+            })
+            .collect()
+    }
+}
