@@ -47,7 +47,7 @@ pub struct RomInputs<'a> {
     /// Keep full bases for recovery (mode shapes on the meshes).
     pub keep_bases: bool,
     /// The component cache directory: each part's reduction read from it or stored in it
-    /// ([`super::part_cache`]; not with `keep_bases`).
+    /// ([`crate::reduce::part_cache`]; not with `keep_bases`).
     pub part_cache: Option<std::path::PathBuf>,
 }
 

@@ -69,7 +69,7 @@ pub struct RomInfo {
     pub reduced_dofs: usize,
     pub system_modes: usize,
     /// Residual vectors (pseudo-modes above the cut-off) of the contact load patterns,
-    /// appended to the system modes ([`engine::residual_vectors`]).
+    /// appended to the system modes ([`crate::reduce::engine::residual_vectors`]).
     pub residual_vectors: usize,
     pub band_hz: f64,
     pub cutoff_hz: f64,
