@@ -218,8 +218,11 @@ fn function_lengths(text: &str) -> Vec<(String, usize)> {
     for (i, l) in lines.iter().enumerate() {
         let t = l.trim_start();
         let indent = l.len() - t.len();
-        let t = t.strip_prefix("pub(crate) ").unwrap_or(t);
-        let t = t.strip_prefix("pub ").unwrap_or(t);
+        // any visibility: `pub`, `pub(crate)`, `pub(super)`, `pub(in path)`
+        let t = match t.strip_prefix("pub(") {
+            Some(r) => r.split_once(") ").map_or(t, |(_, rest)| rest),
+            None => t.strip_prefix("pub ").unwrap_or(t),
+        };
         let t = t.strip_prefix("const ").unwrap_or(t);
         let t = t.strip_prefix("unsafe ").unwrap_or(t);
         let t = t.strip_prefix("extern \"C\" ").unwrap_or(t);
@@ -244,10 +247,14 @@ fn function_lengths(text: &str) -> Vec<(String, usize)> {
 
 #[test]
 fn verification_function_length_scanner() {
-    let text = "fn a() {\n    x;\n}\n\n    pub fn b(\n        y: u8,\n    ) {\n    }\n";
+    let text = "fn a() {\n    x;\n}\n\n    pub fn b(\n        y: u8,\n    ) {\n    }\npub(super) fn c() {\n}\n";
     assert_eq!(
         function_lengths(text),
-        [("a".to_string(), 3), ("b".to_string(), 4)]
+        [
+            ("a".to_string(), 3),
+            ("b".to_string(), 4),
+            ("c".to_string(), 2)
+        ]
     );
 }
 

@@ -37,11 +37,7 @@ const YOUNG_RANGE: (f64, f64) = (1e9, 1e12);
 /// Refuses the absurd and lists the doubtful.
 pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
     let mut warnings = Vec::new();
-    let err = |key: &str, msg: String| SceneError::Field {
-        path: scene.path.clone(),
-        key: key.into(),
-        msg,
-    };
+    let err = |key: &str, msg: String| field_err(scene, key, msg);
     materials(scene, &mut warnings);
     if scene.rom.band_hz < MIN_BAND_HZ {
         return Err(err(
@@ -78,101 +74,131 @@ pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
         ));
     }
     if let Some(sim) = &scene.simulation {
-        let skirt = &sim.piston.skirt;
-        if skirt.length >= scene.liner_geometry.length {
-            return Err(err(
-                "piston.skirt_length_mm",
-                format!(
-                    "{} mm, longer than the {} mm liner",
-                    num(skirt.length * 1e3),
-                    num(scene.liner_geometry.length * 1e3)
-                ),
-            ));
-        }
-        let (clearance, bore) = (skirt.clearance, scene.engine.bore);
-        let said = || {
+        piston(scene, sim, &mut warnings)?;
+        step(scene, &sim.transient, &mut warnings)?;
+    }
+    Ok(warnings)
+}
+
+/// A refusal of scene key `key`.
+fn field_err(scene: &Scene, key: &str, msg: String) -> SceneError {
+    SceneError::Field {
+        path: scene.path.clone(),
+        key: key.into(),
+        msg,
+    }
+}
+
+/// The piston's skirt, clearance and offsets against the bore and the liner.
+fn piston(
+    scene: &Scene,
+    sim: &super::Simulation,
+    warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let err = |key: &str, msg: String| field_err(scene, key, msg);
+    let skirt = &sim.piston.skirt;
+    if skirt.length >= scene.liner_geometry.length {
+        return Err(err(
+            "piston.skirt_length_mm",
             format!(
-                "{} um is {} % of the {} mm bore",
-                num(clearance * 1e6),
-                num(100.0 * clearance / bore),
-                num(bore * 1e3)
-            )
-        };
-        if clearance > MAX_CLEARANCE * bore {
+                "{} mm, longer than the {} mm liner",
+                num(skirt.length * 1e3),
+                num(scene.liner_geometry.length * 1e3)
+            ),
+        ));
+    }
+    let (clearance, bore) = (skirt.clearance, scene.engine.bore);
+    let said = || {
+        format!(
+            "{} um is {} % of the {} mm bore",
+            num(clearance * 1e6),
+            num(100.0 * clearance / bore),
+            num(bore * 1e3)
+        )
+    };
+    if clearance > MAX_CLEARANCE * bore {
+        return Err(err(
+            "piston.clearance_um",
+            format!(
+                "{}: at most {} % (running clearances are 0.05-0.2 %; beyond, the skirt no longer guides the piston)",
+                said(),
+                num(100.0 * MAX_CLEARANCE)
+            ),
+        ));
+    }
+    if clearance > WIDE_CLEARANCE * bore {
+        warnings.push(format!(
+            "piston.clearance_um = {}: worn beyond any service limit (running clearances are 0.05-0.2 %)",
+            said()
+        ));
+    }
+    for (key, offset) in [
+        ("piston.pin_offset_mm", sim.piston.pin_offset),
+        ("piston.cg_offset_mm", sim.piston.cg_lateral),
+    ] {
+        if offset.abs() >= 0.5 * bore {
             return Err(err(
-                "piston.clearance_um",
+                key,
                 format!(
-                    "{}: at most {} % (running clearances are 0.05-0.2 %; beyond, the skirt no longer guides the piston)",
-                    said(),
-                    num(100.0 * MAX_CLEARANCE)
+                    "{} mm lies outside the piston (the bore's radius is {} mm)",
+                    num(offset * 1e3),
+                    num(0.5 * bore * 1e3)
                 ),
-            ));
-        }
-        if clearance > WIDE_CLEARANCE * bore {
-            warnings.push(format!(
-                "piston.clearance_um = {}: worn beyond any service limit (running clearances are 0.05-0.2 %)",
-                said()
-            ));
-        }
-        for (key, offset) in [
-            ("piston.pin_offset_mm", sim.piston.pin_offset),
-            ("piston.cg_offset_mm", sim.piston.cg_lateral),
-        ] {
-            if offset.abs() >= 0.5 * bore {
-                return Err(err(
-                    key,
-                    format!(
-                        "{} mm lies outside the piston (the bore's radius is {} mm)",
-                        num(offset * 1e3),
-                        num(0.5 * bore * 1e3)
-                    ),
-                ));
-            }
-        }
-        if sim.piston.pin_offset.abs() > WIDE_PIN_OFFSET * bore {
-            warnings.push(format!(
-                "piston.pin_offset_mm = {} is {} % of the bore (pin offsets are 0-2 %)",
-                num(sim.piston.pin_offset * 1e3),
-                num(100.0 * sim.piston.pin_offset.abs() / bore)
-            ));
-        }
-        let t = &sim.transient;
-        if t.cycles > 1 && t.averaged_cycles >= t.cycles {
-            warnings.push(format!(
-                "transient.averaged_cycles: all {} cycles are averaged, the first too, which starts from rest; average at most {} (transient.cycles - 1)",
-                t.cycles,
-                t.cycles - 1
-            ));
-        }
-        let dt = t.step_deg / (6.0 * scene.engine.speed_rpm);
-        let samples = 1.0 / (scene.rom.band_hz * dt);
-        let what = format!(
-            "{} deg ({} us at {} rpm) samples the band's top, {} Hz, {} times per period",
-            num(t.step_deg),
-            num(dt * 1e6),
-            num(scene.engine.speed_rpm),
-            num(scene.rom.band_hz),
-            num(samples)
-        );
-        if samples < MIN_SAMPLES {
-            return Err(err(
-                "transient.step_deg",
-                format!("{what}: at least {MIN_SAMPLES} are needed to represent it (10 for a few percent accuracy)"),
-            ));
-        }
-        if samples > MAX_SAMPLES {
-            return Err(err(
-                "transient.step_deg",
-                format!("{what}: more than {} is finer than any convergence study needs (the step-converged reference takes about 1000) and only costs time and memory", num(MAX_SAMPLES)),
-            ));
-        }
-        if samples < GOOD_SAMPLES {
-            warnings.push(format!(
-                "transient.step_deg = {what}: fewer than {GOOD_SAMPLES}, the band's top is under-resolved"
             ));
         }
     }
-    Ok(warnings)
+    if sim.piston.pin_offset.abs() > WIDE_PIN_OFFSET * bore {
+        warnings.push(format!(
+            "piston.pin_offset_mm = {} is {} % of the bore (pin offsets are 0-2 %)",
+            num(sim.piston.pin_offset * 1e3),
+            num(100.0 * sim.piston.pin_offset.abs() / bore)
+        ));
+    }
+    Ok(())
+}
+
+/// The averaged cycles and the time step against the band's top.
+fn step(
+    scene: &Scene,
+    t: &super::TransientSpec,
+    warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let err = |key: &str, msg: String| field_err(scene, key, msg);
+    if t.cycles > 1 && t.averaged_cycles >= t.cycles {
+        warnings.push(format!(
+            "transient.averaged_cycles: all {} cycles are averaged, the first too, which starts from rest; average at most {} (transient.cycles - 1)",
+            t.cycles,
+            t.cycles - 1
+        ));
+    }
+    let dt = t.step_deg / (6.0 * scene.engine.speed_rpm);
+    let samples = 1.0 / (scene.rom.band_hz * dt);
+    let what = format!(
+        "{} deg ({} us at {} rpm) samples the band's top, {} Hz, {} times per period",
+        num(t.step_deg),
+        num(dt * 1e6),
+        num(scene.engine.speed_rpm),
+        num(scene.rom.band_hz),
+        num(samples)
+    );
+    if samples < MIN_SAMPLES {
+        return Err(err(
+            "transient.step_deg",
+            format!("{what}: at least {MIN_SAMPLES} are needed to represent it (10 for a few percent accuracy)"),
+        ));
+    }
+    if samples > MAX_SAMPLES {
+        return Err(err(
+            "transient.step_deg",
+            format!("{what}: more than {} is finer than any convergence study needs (the step-converged reference takes about 1000) and only costs time and memory", num(MAX_SAMPLES)),
+        ));
+    }
+    if samples < GOOD_SAMPLES {
+        warnings.push(format!(
+            "transient.step_deg = {what}: fewer than {GOOD_SAMPLES}, the band's top is under-resolved"
+        ));
+    }
+    Ok(())
 }
 
 fn materials(scene: &Scene, warnings: &mut Vec<String>) {
