@@ -379,6 +379,11 @@ struct SimulateArgs {
     /// --out liner_maps.png (unrolled) and liner_maps.vtu (ParaView).
     #[arg(long)]
     maps: bool,
+    /// Decide the cylinder ranking: with the whole-run step check, add realisations (the run
+    /// repeated with the damping perturbed at 1e-6) until every neighbour pair is separated
+    /// or tied within 2 % of the mean peak, or the scene's transient.max_seconds is reached.
+    #[arg(long)]
+    rank: bool,
     #[command(flatten)]
     cache: CacheArgs,
 }
@@ -525,6 +530,7 @@ fn simulate_command(args: SimulateArgs, started: Instant) -> Result<(), Error> {
         full_order: args.full_order,
         check_step: args.check_step,
         maps: args.maps,
+        rank: args.rank,
     };
     let report = simulate::run(&req, started)?;
     print_report(args.json, &report, || report.to_text());

@@ -447,3 +447,80 @@ fn contract_thresholds_out_of_order_are_refused() {
         refused(&a, "need 0 < onset", None);
     }
 }
+
+/// `simulate --rank` (issue 38): the decided ranking on the small engine. The order is by the
+/// pooled worst-point means at half the step, every neighbour pair carries a verdict that follows the rule
+/// (separated: D > 2 u; tied: |D| + 2 u <= resolution; else undecided), the resolution is 2 %
+/// of the mean worst-point peak, and the run says where it stopped: with a budget below one
+/// realisation it stops after the first and names `transient.max_seconds` unless every pair
+/// is already decided; with room it pools more realisations until decided or the budget.
+#[test]
+fn contract_simulate_rank_decides_or_names_the_budget() {
+    let base = [
+        "simulate",
+        "tests/fixtures/engine_small.toml",
+        "--rank",
+        "--json",
+        "--set",
+        "transient.cycles=3",
+        "--set",
+        "transient.averaged_cycles=2",
+    ];
+    // at 120 um the first realisation leaves the pair open and a second is pooled
+    for (budget, clearance) in [("0.001", "80"), ("20", "80"), ("20", "120")] {
+        let mut a = base.to_vec();
+        let set = format!("transient.max_seconds={budget}");
+        let clearance = format!("piston.clearance_um={clearance}");
+        a.extend(["--set", &set, "--set", &clearance]);
+        let v = json(&linercav(&a));
+        let r = &v["ranking"];
+        let order = r["order"].as_array().unwrap();
+        let pairs = r["pairs"].as_array().unwrap();
+        assert_eq!(pairs.len() + 1, order.len(), "{r}");
+        // the best estimates: at half the step (the check runs with --rank)
+        let means: Vec<f64> = order
+            .iter()
+            .map(|o| o["peak_negative"]["half"][0].as_f64().unwrap())
+            .collect();
+        assert!(means.windows(2).all(|w| w[0] >= w[1]), "{means:?}");
+        let resolution = r["resolution_m_s2"].as_f64().unwrap();
+        let mean = means.iter().sum::<f64>() / means.len() as f64;
+        assert!((resolution / (0.02 * mean) - 1.0).abs() < 1e-12);
+        let realisations = r["realisations"].as_u64().unwrap();
+        assert_eq!(r["cycles_averaged"].as_u64().unwrap(), 2 * realisations);
+        for (k, p) in pairs.iter().enumerate() {
+            assert_eq!(p["upper"], order[k]["cylinder"]);
+            let (d, u) = (
+                p["difference"].as_f64().unwrap(),
+                p["uncertainty"].as_f64().unwrap(),
+            );
+            assert!((d - (means[k] - means[k + 1])).abs() <= 1e-9 * mean && u > 0.0);
+            let expect = if d > 2.0 * u {
+                "separated"
+            } else if d.abs() + 2.0 * u <= resolution {
+                "tied"
+            } else {
+                "undecided"
+            };
+            assert_eq!(p["verdict"], expect, "{p}");
+        }
+        let decided = r["decided"].as_bool().unwrap();
+        let undecided = pairs.iter().any(|p| p["verdict"] == "undecided");
+        assert_eq!(decided, !undecided);
+        let stopped = r["stopped"].as_str().unwrap();
+        if budget == "0.001" {
+            assert_eq!(realisations, 1);
+        }
+        if clearance.ends_with("120") {
+            assert!(realisations >= 2, "{r}");
+        }
+        if !decided {
+            assert!(stopped.contains("transient.max_seconds"), "{stopped}");
+        } else {
+            assert!(
+                stopped.contains("every neighbour pair decided"),
+                "{stopped}"
+            );
+        }
+    }
+}

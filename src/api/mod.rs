@@ -27,6 +27,7 @@ pub mod full_order;
 pub mod maps;
 pub mod modes;
 pub mod progress;
+pub mod rank;
 pub mod rom;
 pub mod rom_tradeoff;
 pub mod simulate;

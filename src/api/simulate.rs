@@ -60,6 +60,9 @@ pub struct SimulateRequest {
     pub check_step: bool,
     /// Map the liners' wet surfaces ([`super::maps`]).
     pub maps: bool,
+    /// Decide the cylinder ranking: the step check and pooled realisations within the
+    /// scene's `transient.max_seconds` ([`super::rank`]; implies `check_step`).
+    pub rank: bool,
 }
 
 /// Runs `simulate`.
@@ -69,9 +72,12 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     let piston = piston_of(&scene)?;
     // refused before any work: a transient beyond the limits, an output that cannot be written
     if let Some(mut est) = crate::scene::budget::transient(&scene) {
-        if req.check_step {
+        if req.check_step || req.rank {
             // the repeated run at half the step costs about twice the run
             est.seconds *= 3.0;
+        }
+        if req.rank {
+            est.seconds += sim.transient.max_seconds;
         }
         crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
     }
@@ -106,7 +112,7 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     } else {
         Vec::new()
     };
-    if req.check_step {
+    if req.check_step || req.rank {
         progress.phase("whole-run step check");
         let (half, seconds) =
             crate::api::half_step_check(&scene, &loaded.rom, &piston, &res, |k, n| {
@@ -115,6 +121,18 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
                 }
             })?;
         report.add_step_check(&half, seconds);
+        if req.rank {
+            // the run and its check count against the budget; another realisation runs the
+            // two side by side, about as long as the check
+            report.ranking = Some(super::rank::decided_ranking(
+                &scene,
+                &loaded.rom,
+                &piston,
+                (&res, &half),
+                (transient_seconds + seconds, seconds),
+                &|m| progress.phase(m),
+            )?);
+        }
     }
     if req.full_order {
         let cmp = compare(&scene, &loaded.rom, &piston, &settings, &|m| {

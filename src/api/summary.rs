@@ -29,13 +29,18 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     let started = Instant::now();
     let scene = super::load_scene(scene_path, sets)?;
     let piston = piston_of(&scene)?;
-    // about twenty transients (the scene, its two sweeps, the step check): refused before any
+    // about twenty transients (the scene, its two sweeps, the step check, the ranking's
+    // realisations): refused before any
     // work when beyond the limits, as is an output directory that cannot be written
     if let Some(mut est) = crate::scene::budget::transient(&scene) {
         est.what = "the report's transients";
         // two at a time (the sweeps' runs besides the scene's), then the whole-run step
         // check at half the step (about two transients)
         est.seconds *= (1 + 2 * REPORT_SWEEP_RUNS) as f64 / 2.0 + 2.0;
+        // and the decided ranking's realisations, within their budget
+        est.seconds += crate::piston::setup::simulation(&scene)?
+            .transient
+            .max_seconds;
         crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
     }
     let stage = crate::files::OutputDir::create(out, OUTPUTS)?;
@@ -61,9 +66,15 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     let (liner_maps, map_files) =
         super::maps::write_maps(&scene, &runs.maps, &runs.rom.rom, Some(stage.path()))?;
     let figs: Vec<std::path::PathBuf> = figs.into_iter().chain(map_files).collect();
-    let ranking_resolution = Report::ranking_resolution_of(&simulate, &runs.evaluation.ranking);
-    let ranking_resolution_slap_only =
-        Report::ranking_resolution_slap_only(&simulate, &runs.evaluation.ranking);
+    // the report's own run and check are the first realisation; the budget is for the others
+    let ranking = super::rank::decided_ranking(
+        &scene,
+        &runs.rom.rom,
+        &piston,
+        (&runs.base, &runs.half_step),
+        (0.0, runs.half_step_seconds),
+        &|m| progress.phase(m),
+    )?;
     let mut report = Report {
         scene: scene.path.display().to_string(),
         title: scene.title.clone(),
@@ -78,8 +89,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         clearance_range_um: [CLEARANCE_RANGE_UM.0, CLEARANCE_RANGE_UM.1],
         pin_offset_range_mm: [PIN_OFFSET_RANGE_MM.0, PIN_OFFSET_RANGE_MM.1],
         tradeoff: runs.tradeoff,
-        ranking_resolution,
-        ranking_resolution_slap_only,
+        ranking,
         liner_maps,
         files: figs
             .iter()

@@ -160,6 +160,10 @@ pub struct SimulateReport {
     /// cylinders of the default engine, docs/verification.md), or, with the whole-run check
     /// (`--check-step`), `"whole_run"`: the larger of that and 2 |P_h - P_{h/2}|.
     pub numerical_uncertainty_scope: &'static str,
+    /// With `--rank`: the decided ranking of pooled realisations
+    /// ([`crate::analysis::ranking::DecidedRanking`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ranking: Option<crate::analysis::ranking::DecidedRanking>,
     /// Physically doubtful scene values (also printed on stderr).
     pub warnings: Vec<String>,
 }
@@ -202,6 +206,7 @@ impl SimulateReport {
             step_check: None,
             liner_maps: None,
             numerical_uncertainty_scope: "firing_slaps",
+            ranking: None,
         }
     }
 
@@ -400,6 +405,15 @@ impl SimulateReport {
             s += "\n";
         } else {
             s += "  (from each cylinder's firing slap re-run at half the step; what the coarse step shifts between the slaps is not in it: --check-step measures it)\n";
+        }
+        if let Some(r) = &self.ranking {
+            s += &format!(
+                "decided ranking (worst points; > separated, = tied within {:.0} m/s^2 = {:.0} % of the mean, ? undecided; two combined standard uncertainties): {}\n  {}\n",
+                r.resolution_m_s2,
+                100.0 * r.resolution_fraction,
+                r.pairs_text(),
+                r.stopped
+            );
         }
         s += &format!(
             "ROM cache: {}; {:.2} s (transient {:.3} s)\n",

@@ -2,7 +2,7 @@
 //! with the ranking and its uncertainty, why the cylinders differ, the what-if sweeps, the
 //! speed against error of the fast path, the figures' list.
 
-use crate::analysis::ranking::{separations, RankStep};
+use crate::analysis::ranking::DecidedRanking;
 use crate::analysis::refine::Maximum;
 use crate::cavitation::evaluate::Evaluation;
 use crate::report::figures::{SweepPoint, TradeoffPoint};
@@ -33,65 +33,15 @@ pub struct Report {
     pub clearance_range_um: [f64; 2],
     pub pin_offset_range_mm: [f64; 2],
     pub tradeoff: Vec<TradeoffPoint>,
-    /// Neighbours of the cylinder ranking, separated beyond their combined statistical and
-    /// numerical uncertainty or tied ([`separations`]); the numerical uncertainty includes the
-    /// whole-run step check when it was run.
-    pub ranking_resolution: Vec<RankStep>,
-    /// With the whole-run step check: the same with the firing-slap step error only (the
-    /// check's own scatter left out).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub ranking_resolution_slap_only: Option<Vec<RankStep>>,
+    /// The decided ranking: each cylinder's worst point from pooled realisations of the run
+    /// and its half-step check, every neighbour pair separated, tied within the resolution or
+    /// undecided, and where it stopped ([`DecidedRanking`]).
+    pub ranking: DecidedRanking,
     /// Per cylinder, where the liner map's largest mean peak lies (`liner_maps.png`,
     /// `liner_maps.vtu`); empty when the liner mesh has no `coolant_wetted` set.
     pub liner_maps: Vec<crate::report::maps::MapSummary>,
     pub files: Vec<String>,
     pub seconds: f64,
-}
-
-impl Report {
-    /// Neighbours of `ranking` separated or tied beyond their combined uncertainty
-    /// ([`separations`] of `ranked_uncertainty`).
-    pub fn ranking_resolution_of(simulate: &SimulateReport, ranking: &[usize]) -> Vec<RankStep> {
-        separations(&ranked_uncertainty(simulate, ranking, true))
-    }
-
-    /// With the whole-run step check: the ranking's resolution with the firing-slap step
-    /// error as the numerical uncertainty (None without the check).
-    pub fn ranking_resolution_slap_only(
-        simulate: &SimulateReport,
-        ranking: &[usize],
-    ) -> Option<Vec<RankStep>> {
-        simulate
-            .step_check
-            .as_ref()
-            .map(|_| separations(&ranked_uncertainty(simulate, ranking, false)))
-    }
-}
-
-/// Each ranked cylinder's worst point: (cylinder, mean peak, sqrt(SE^2 + E^2)), SE its
-/// standard error (cycles correlated) and E its numerical uncertainty
-/// ([`crate::report::records::PointPeaks::numerical_uncertainty`]; `whole_run` false: the
-/// firing-slap step error alone).
-fn ranked_uncertainty(
-    simulate: &SimulateReport,
-    ranking: &[usize],
-    whole_run: bool,
-) -> Vec<(usize, f64, f64)> {
-    ranking
-        .iter()
-        .filter_map(|&cyl| {
-            let c = simulate.cylinders.iter().find(|c| c.cylinder == cyl)?;
-            c.worst_point().map(|p| {
-                let u = match whole_run {
-                    true => p.combined_uncertainty(),
-                    false => p
-                        .peak_negative_se_m_s2
-                        .hypot(p.peak_negative_step_error_m_s2),
-                };
-                (cyl, p.peak_negative_m_s2, u)
-            })
-        })
-        .collect()
 }
 
 /// The whole-run step check as a sentence, which covers that shift (empty without it).
@@ -103,29 +53,18 @@ fn step_check_sentence(simulate: &SimulateReport) -> String {
     }
 }
 
-/// The ranking with its uncertainty as a sentence ([`separations`]).
-fn ranking_resolution(r: &Report) -> String {
-    let pairs = |steps: &[RankStep]| {
-        steps
-            .iter()
-            .map(|s| {
-                let sign = if s.separated { ">" } else { "~" };
-                format!("{} {sign} {}", s.upper, s.lower)
-            })
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let mut text = format!(
-        "Ranking with its uncertainty (each cylinder's worst point; > separated by more than two combined standard uncertainties, standard error and numerical uncertainty; ~ tied): {}.",
-        pairs(&r.ranking_resolution)
-    );
-    if let Some(slap) = &r.ranking_resolution_slap_only {
-        text += &format!(
-            " With the firing-slap step error alone as the numerical uncertainty (the whole-run check's scatter left out): {}.",
-            pairs(slap)
-        );
-    }
-    text
+/// The decided ranking as a sentence.
+fn ranking_sentence(r: &Report) -> String {
+    let d = &r.ranking;
+    format!(
+        "Decided ranking (each cylinder's worst point at half the step, pooled over {} realisation(s) of {} cycles; > separated, = tied within {:.0} m/s^2 = {:.0} % of the mean, ? undecided, at two combined standard uncertainties, the cycles' scatter and the step error from the whole-run check): {}. Where it stopped: {}.",
+        d.realisations,
+        d.cycles_averaged / d.realisations.max(1),
+        d.resolution_m_s2,
+        100.0 * d.resolution_fraction,
+        d.pairs_text(),
+        d.stopped
+    )
 }
 
 /// Each cylinder's worst point and the slap event its peak follows (`peak_negative_event`),
@@ -210,7 +149,7 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     let n_avg = r.simulate.stats.cycles_averaged;
     if n_avg > 1 {
         let st = &r.simulate.stats;
-        let _ = writeln!(s, "Peaks are means over the last {n_avg} of {} cycles (slap on the ringing liner is not periodic), given as mean ± standard error (the cycles' correlation counted: autocorrelation time {:.2} cycles). Estimated step error of the mean peak: {:.1} % (tolerance {:.1} %, step {:.4} deg; from each cylinder's firing slap re-run at half the step, which does not hold the coarse step's shift of the cycles' statistics between the slaps; docs/verification.md). {} Risk and ranking use the means. {}\n", st.cycles_run, st.autocorrelation_cycles, 100.0 * st.step_error_estimate, 100.0 * r.simulate.tolerance, st.dt_s * r.speed_rpm * 6.0, step_check_sentence(&r.simulate), ranking_resolution(r));
+        let _ = writeln!(s, "Peaks are means over the last {n_avg} of {} cycles (slap on the ringing liner is not periodic), given as mean ± standard error (the cycles' correlation counted: autocorrelation time {:.2} cycles). Estimated step error of the mean peak: {:.1} % (tolerance {:.1} %, step {:.4} deg; from each cylinder's firing slap re-run at half the step, which does not hold the coarse step's shift of the cycles' statistics between the slaps; docs/verification.md). {} Risk and ranking use the means. {}\n", st.cycles_run, st.autocorrelation_cycles, 100.0 * st.step_error_estimate, 100.0 * r.simulate.tolerance, st.dt_s * r.speed_rpm * 6.0, step_check_sentence(&r.simulate), ranking_sentence(r));
     } else if r.simulate.step_check.is_some() {
         let _ = writeln!(s, "{}\n", step_check_sentence(&r.simulate));
     }

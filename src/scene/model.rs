@@ -151,6 +151,8 @@ pub struct TransientSpec {
     /// Sub-steps per base step around slap onsets, and for how long after one \[deg\].
     pub slap_substeps: usize,
     pub slap_span_deg: f64,
+    /// Time budget of a decided ranking \[s\].
+    pub max_seconds: f64,
 }
 
 /// What `simulate` needs beyond the ROM.

@@ -750,6 +750,7 @@ pub(super) fn validate_transient(
         },
         slap_substeps: t.slap_substeps,
         slap_span_deg: t.slap_span_deg,
+        max_seconds: c.positive("transient.max_seconds", t.max_seconds)?,
         tolerance: if t.tolerance.is_finite() && t.tolerance > 0.0 && t.tolerance < 1.0 {
             t.tolerance
         } else {
