@@ -419,7 +419,8 @@ fn changes_against_the_base(one_cycle: bool) {
 /// `sweep --refine KEY=LO:HI --runs N` (issue 38): N distinct runs within [LO, HI], written as a
 /// one-key grid; sweep.json's `maximum` names, for the largest slap force and the largest peak
 /// acceleration, the run that holds it (checked against the runs' own records) with a location
-/// uncertainty of half the larger spacing to its neighbours. Misused, it is refused by flag.
+/// uncertainty of half the larger spacing to its neighbours; every run carries its change
+/// against the base design with a verdict. Misused, it is refused by flag.
 #[test]
 fn contract_sweep_refine_places_its_runs_and_locates_the_maxima() {
     let dir = tempfile::tempdir().unwrap();
@@ -431,6 +432,10 @@ fn contract_sweep_refine_places_its_runs_and_locates_the_maxima() {
         "piston.pin_offset_mm=-1:1",
         "--runs",
         "7",
+        "--set",
+        "transient.cycles=3",
+        "--set",
+        "transient.averaged_cycles=2",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -447,6 +452,36 @@ fn contract_sweep_refine_places_its_runs_and_locates_the_maxima() {
     assert!(xs.windows(2).all(|w| w[0] < w[1]), "{xs:?}");
     assert!(xs.iter().all(|x| (-1.0..=1.0).contains(x)), "{xs:?}");
     let runs = v["runs"].as_array().unwrap();
+    // each run's change against the base design (the scene's 0 mm), per cylinder and point,
+    // with its standard error and the verdict of the grid sweep's rule; the run at 0 mm is
+    // the base itself
+    for (r, x) in runs.iter().zip(&xs) {
+        let changes = r["changes"].as_array().unwrap();
+        assert_eq!(changes.len(), r["cylinders"].as_array().unwrap().len());
+        for (c, cyl) in changes.iter().zip(r["cylinders"].as_array().unwrap()) {
+            let points = cyl["points"].as_array().unwrap();
+            assert_eq!(c.as_array().unwrap().len(), points.len());
+            for ch in c.as_array().unwrap() {
+                let d = ch["delta_m_s2"].as_f64().unwrap();
+                if *x == 0.0 {
+                    assert_eq!(d, 0.0, "the base against itself");
+                }
+                // one averaged cycle: no standard error, no verdict
+                let Some(s) = ch["se_m_s2"].as_f64() else {
+                    assert_eq!(ch["verdict"], "unknown (one cycle)", "{ch}");
+                    continue;
+                };
+                let expected = if d < -2.0 * s {
+                    "lower"
+                } else if d > 2.0 * s {
+                    "higher"
+                } else {
+                    "not distinguishable"
+                };
+                assert_eq!(ch["verdict"], expected, "{ch}");
+            }
+        }
+    }
     // the largest of each quantity over the runs, from their own records
     let slap = |r: &serde_json::Value| {
         r["cylinders"]

@@ -503,11 +503,8 @@ fn quantities(run: &SweepRun) -> Vec<(f64, f64)> {
 /// Names of [`quantities`] in `sweep.json`'s `maximum`.
 const REFINED: [&str; 2] = ["peak_slap_force_n", "peak_negative_m_s2"];
 
-/// `sweep --refine KEY=LO:HI --runs N`: N runs of one key placed adaptively (two at a time, one
-/// per core), then the outputs of a one-key grid over the values run, with each quantity's
-/// located maximum. Not shardable (each round depends on the last).
-fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepReport> {
-    use crate::analysis::refine::{initial, located, next_unsampled, Sample};
+/// The key, range and run count of `sweep --refine`, refused by flag when misused.
+fn refine_args(req: &SweepRequest, spec: &str) -> Result<(crate::scene::design::Range, usize)> {
     if !req.vary.is_empty() || req.sample.is_some() || !req.ranges.is_empty() || req.seed.is_some()
     {
         return Err(Error::Argument {
@@ -538,6 +535,16 @@ fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepRepor
             })
         }
     };
+    Ok((range, runs))
+}
+
+/// `sweep --refine KEY=LO:HI --runs N`: N runs of one key placed adaptively (two at a time, one
+/// per core), then the outputs of a one-key grid over the values run, each run's change against
+/// the base design (run with the first batch) with its standard error and verdict, and each
+/// quantity's located maximum. Not shardable (each round depends on the last).
+fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepReport> {
+    use crate::analysis::refine::{initial, located, next_unsampled, Sample};
+    let (range, runs) = refine_args(req, spec)?;
     let grid = |values: Vec<String>| Design::Grid {
         vary: vec![crate::scene::design::Vary {
             key: range.key.clone(),
@@ -556,15 +563,29 @@ fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepRepor
     let mut samples: Vec<Sample> = Vec::new();
     let mut batch = initial(lo, hi, runs);
     let mut round = 0;
+    let mut base: Option<SweepRun> = None;
     while !batch.is_empty() {
         let values: Vec<String> = batch.iter().map(|x| format!("{x}")).collect();
-        let extra: Vec<Vec<String>> = values
+        let mut extra: Vec<Vec<String>> = values
             .iter()
             .map(|v| vec![format!("{}={v}", range.key)])
             .collect();
+        let mut labels: Vec<String> = extra.iter().map(|e| e[0].clone()).collect();
+        if base.is_none() {
+            // the base design (the scene's own value) with the first batch: every run's
+            // change is measured against it, as in a grid sweep
+            extra.push(Vec::new());
+            labels.push("the base design".into());
+        }
         let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache, &|_| {})?;
-        let labels: Vec<String> = extra.iter().map(|e| e[0].clone()).collect();
-        let results = variants.run(&labels, false, || {})?;
+        let mut results = variants.run(&labels, false, || {})?;
+        if base.is_none() {
+            let nb = batch.len();
+            let (res, seconds) = results.pop().expect("the base design's run");
+            let rom = &variants.roms[variants.rom_of[nb]].rom;
+            let own = vec!["(scene)".to_string()];
+            base = Some(sweep_run(&variants.scenes[nb], rom, &own, &res, seconds)?);
+        }
         for (i, ((res, seconds), x)) in results.into_iter().zip(&batch).enumerate() {
             let ri = variants.rom_of[i];
             let run = sweep_run(
@@ -589,6 +610,11 @@ fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepRepor
         }
     }
     done.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if let Some(base) = &base {
+        for (_, run, _) in &mut done {
+            run.set_changes(base);
+        }
+    }
     let mut lines = Vec::with_capacity(done.len());
     let mut out_runs = Vec::with_capacity(done.len());
     let mut roms: Vec<String> = Vec::new();

@@ -595,7 +595,7 @@ pub struct RawTransient {
     #[serde(default = "default_slap_span")]
     pub slap_span_deg: f64,
     /// Time budget of a decided ranking (`simulate --rank`, `report`) \[s\], > 0 (default
-    /// 90). The ranking adds realisations (the run and its half-step check repeated with the
+    /// 90), beyond the run and its half-step check. The ranking adds realisations (the run and its half-step check repeated with the
     /// damping ratio perturbed at 1e-6, which decorrelates the slap history) while a neighbour
     /// pair of cylinders is neither separated nor tied at the resolution and the next
     /// realisation is expected to finish within the budget; it says where it stopped and why.
