@@ -74,6 +74,52 @@ fn pilot_radius(r: f64, outer: f64, geo: &LinerGeometry) -> f64 {
 
 /// Generates the liner mesh with its named node sets.
 pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
+    let (r_levels, z_levels, deck) = levels(geo, meshing);
+    let nr_wall = meshing.radial;
+    let nt = meshing.circumferential;
+    let z_flange = geo.length - geo.flange_height;
+    let k_flange = z_levels
+        .iter()
+        .position(|&z| (z - z_flange).abs() < 1e-9)
+        .expect("flange plane is a level");
+    let active = |i: usize, _j: usize, k: usize| i < nr_wall || k >= k_flange;
+    let outer = outer_radii(&z_levels, geo, deck);
+    let coord = |key: Key| {
+        let r = pilot_radius(level_at(&r_levels, key[0]), level_at(&outer, key[2]), geo);
+        let th = PI * key[1] as f64 / nt as f64;
+        let z = level_at(&z_levels, key[2]);
+        [r * th.cos(), r * th.sin(), z]
+    };
+    let lat = Lattice {
+        cells: [r_levels.len() - 1, nt, z_levels.len() - 1],
+        periodic_j: true,
+        active: &active,
+        coord: &coord,
+    };
+    let lm = lat.generate(meshing.kind);
+    let mut mesh = lm.mesh;
+    let levels = SetLevels {
+        z_levels: &z_levels,
+        k_flange,
+        nr_wall,
+        nt,
+    };
+    mesh.node_sets.extend(named_sets(&lm.keys, geo, &levels));
+    // sort bore lines by height so later stages can interpolate along them
+    for name in ["bore_thrust", "bore_antithrust", "outer_thrust"] {
+        let nodes = &mesh.nodes;
+        if let Some(v) = mesh.node_sets.get_mut(name) {
+            v.sort_by(|&a, &b| nodes[a][2].partial_cmp(&nodes[b][2]).unwrap());
+        }
+    }
+    mesh
+}
+
+/// The radial and axial lattice levels: the wall's radial layers, then the flange's; axial
+/// planes at the liner's ends, the guide band's edges, the flange underside, the analysis
+/// points and (when the pilots differ from the wet wall) the deck's underside, returned as
+/// the third value.
+fn levels(geo: &LinerGeometry, meshing: &LinerMeshing) -> (Vec<f64>, Vec<f64>, Option<f64>) {
     let (ri, ro, rf) = (
         geo.inner_diameter / 2.0,
         geo.outer_diameter / 2.0,
@@ -81,7 +127,6 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
     );
     let mut r_levels = vec![ri];
     subdivide(&mut r_levels, ri, ro, (ro - ri) / meshing.radial as f64);
-    let nr_wall = meshing.radial;
     if rf > ro {
         subdivide(
             &mut r_levels,
@@ -106,45 +151,41 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
     for w in planes.windows(2) {
         subdivide(&mut z_levels, w[0], w[1], meshing.axial_size);
     }
-    let nz = z_levels.len() - 1;
-    let nt = meshing.circumferential;
-    let k_flange = z_levels
-        .iter()
-        .position(|&z| (z - z_flange).abs() < 1e-9)
-        .expect("flange plane is a level");
-    let active = |i: usize, _j: usize, k: usize| i < nr_wall || k >= k_flange;
-    let outer = outer_radii(&z_levels, geo, deck);
-    let coord = |key: Key| {
-        let r = pilot_radius(level_at(&r_levels, key[0]), level_at(&outer, key[2]), geo);
-        let th = PI * key[1] as f64 / nt as f64;
-        let z = level_at(&z_levels, key[2]);
-        [r * th.cos(), r * th.sin(), z]
-    };
-    let lat = Lattice {
-        cells: [r_levels.len() - 1, nt, nz],
-        periodic_j: true,
-        active: &active,
-        coord: &coord,
-    };
-    let lm = lat.generate(meshing.kind);
-    let mut mesh = lm.mesh;
-    let keys = lm.keys;
-    let top = 2 * nz;
-    let kf = 2 * k_flange;
-    let iwall = 2 * nr_wall;
-    let jthrust = nt / 2; // theta = 90 deg in doubled indices (2 nt per turn)
-    let janti = 3 * nt / 2;
+    (r_levels, z_levels, deck)
+}
+
+/// Where the named sets lie in the lattice.
+struct SetLevels<'a> {
+    z_levels: &'a [f64],
+    k_flange: usize,
+    nr_wall: usize,
+    nt: usize,
+}
+
+/// The named node sets (module docs) from the nodes' lattice keys (doubled indices).
+fn named_sets(
+    keys: &[Key],
+    geo: &LinerGeometry,
+    l: &SetLevels<'_>,
+) -> std::collections::BTreeMap<String, Vec<usize>> {
+    let top = 2 * (l.z_levels.len() - 1);
+    let kf = 2 * l.k_flange;
+    let iwall = 2 * l.nr_wall;
+    let jthrust = l.nt / 2; // theta = 90 deg in doubled indices (2 nt per turn)
+    let janti = 3 * l.nt / 2;
     let z_index = |z: f64| {
-        2 * z_levels
+        2 * l
+            .z_levels
             .iter()
-            .position(|&l| (l - z).abs() < 1e-9)
+            .position(|&w| (w - z).abs() < 1e-9)
             .expect("plane is a level")
     };
+    let guide_top = geo.guide_bottom + geo.guide_height;
     let (kguide0, kguide1) = (z_index(geo.guide_bottom), z_index(guide_top));
     let select = |pred: &dyn Fn(&Key) -> bool| -> Vec<usize> {
         (0..keys.len()).filter(|&n| pred(&keys[n])).collect()
     };
-    let sets = &mut mesh.node_sets;
+    let mut sets = std::collections::BTreeMap::new();
     sets.insert(
         "flange_seat".into(),
         select(&|k| k[2] == kf && k[0] >= iwall),
@@ -180,12 +221,5 @@ pub fn generate(geo: &LinerGeometry, meshing: &LinerMeshing) -> Mesh {
             select(&|k| k[0] == iwall && k[1] == jthrust && k[2] == kz),
         );
     }
-    // sort bore lines by height so later stages can interpolate along them
-    for name in ["bore_thrust", "bore_antithrust", "outer_thrust"] {
-        let nodes = &mesh.nodes;
-        if let Some(v) = mesh.node_sets.get_mut(name) {
-            v.sort_by(|&a, &b| nodes[a][2].partial_cmp(&nodes[b][2]).unwrap());
-        }
-    }
-    mesh
+    sets
 }
