@@ -338,40 +338,7 @@ impl SimulateReport {
             self.peak_pressure_deg,
             self.hot_clearance_um
         );
-        let n = self.stats.cycles_averaged;
-        s += &format!(
-            "peaks: mean over the last {n} cycle(s); sample std; standard error of the mean (cycles correlated: tau {:.2}); estimated step error; largest\n",
-            self.stats.autocorrelation_cycles
-        );
-        s += "cyl  point  peak neg [m/s^2]   std    SE  step    max @deg   peak pos [m/s^2] @deg\n";
-        for c in &self.cylinders {
-            for p in &c.points {
-                s += &format!(
-                    "{:>3}  {:>5}  {:>16.0} {:>5.0} {:>5.0} {:>5.0} {:>6.0} {:>6.1}   {:>16.0} {:>6.1}\n",
-                    c.cylinder,
-                    p.point,
-                    p.peak_negative_m_s2,
-                    p.peak_negative_std_m_s2,
-                    p.peak_negative_se_m_s2,
-                    p.peak_negative_step_error_m_s2,
-                    p.peak_negative_max_m_s2,
-                    p.crank_angle_deg,
-                    p.peak_positive_m_s2,
-                    p.positive_crank_angle_deg
-                );
-            }
-        }
-        s += "cyl  side force peak [N] @deg   dynamic slap force [N] @deg\n";
-        for c in &self.cylinders {
-            s += &format!(
-                "{:>3}  {:>19.0} {:>6.1}   {:>22.0} {:>6.1}\n",
-                c.cylinder,
-                c.peak_side_force_n,
-                c.side_force_crank_angle_deg,
-                c.peak_slap_force_n,
-                c.slap_crank_angle_deg
-            );
-        }
+        s += &self.peaks_text();
         let st = &self.stats;
         s += &format!(
             "solver: {} steps (dt {:.2} us), {} Newton iterations (max {} per step), {} rejected, {} modes, energy balance {:.1e}, max penetration {:.2} um, last-cycle change {:.1e}, coupling lag {:.3} um\n",
@@ -419,6 +386,58 @@ impl SimulateReport {
             "ROM cache: {}; {:.2} s (transient {:.3} s)\n",
             self.cache, self.seconds, self.transient_seconds
         );
+        s += &self.full_order_text();
+        s += &self.maps_text();
+        if let Some(f) = &self.time_series_csv {
+            s += &format!("time series: {f}\n");
+        }
+        s
+    }
+
+    /// The peak tables: per cylinder and point the peak negative and positive accelerations
+    /// with their statistics; per cylinder the side and slap force peaks.
+    fn peaks_text(&self) -> String {
+        let mut s = String::new();
+        let n = self.stats.cycles_averaged;
+        s += &format!(
+            "peaks: mean over the last {n} cycle(s); sample std; standard error of the mean (cycles correlated: tau {:.2}); estimated step error; largest\n",
+            self.stats.autocorrelation_cycles
+        );
+        s += "cyl  point  peak neg [m/s^2]   std    SE  step    max @deg   peak pos [m/s^2] @deg\n";
+        for c in &self.cylinders {
+            for p in &c.points {
+                s += &format!(
+                    "{:>3}  {:>5}  {:>16.0} {:>5.0} {:>5.0} {:>5.0} {:>6.0} {:>6.1}   {:>16.0} {:>6.1}\n",
+                    c.cylinder,
+                    p.point,
+                    p.peak_negative_m_s2,
+                    p.peak_negative_std_m_s2,
+                    p.peak_negative_se_m_s2,
+                    p.peak_negative_step_error_m_s2,
+                    p.peak_negative_max_m_s2,
+                    p.crank_angle_deg,
+                    p.peak_positive_m_s2,
+                    p.positive_crank_angle_deg
+                );
+            }
+        }
+        s += "cyl  side force peak [N] @deg   dynamic slap force [N] @deg\n";
+        for c in &self.cylinders {
+            s += &format!(
+                "{:>3}  {:>19.0} {:>6.1}   {:>22.0} {:>6.1}\n",
+                c.cylinder,
+                c.peak_side_force_n,
+                c.side_force_crank_angle_deg,
+                c.peak_slap_force_n,
+                c.slap_crank_angle_deg
+            );
+        }
+        s
+    }
+
+    /// The full-order window's comparison, when run.
+    fn full_order_text(&self) -> String {
+        let mut s = String::new();
         if let Some(c) = &self.full_order {
             s += &format!(
                 "full-order check, cylinder {} from {:.0} to {:.0} deg ({} steps, both low-passed to {:.0} Hz): {} DOFs vs {} ROM modes\n",
@@ -441,6 +460,12 @@ impl SimulateReport {
                 c.rom_error_peak_negative, c.contact_force_error, c.preload_error, c.speedup, c.full_seconds, c.rom_seconds, c.speedup_stepping
             );
         }
+        s
+    }
+
+    /// Where each liner map's largest mean peak lies, when mapped.
+    fn maps_text(&self) -> String {
+        let mut s = String::new();
         if let Some(maps) = &self.liner_maps {
             s += "liner maps (wet outer surface): cyl  nodes  largest mean peak negative [m/s^2] at [deg, mm]   Ca   surface past Ca = 1\n";
             for m in maps {
@@ -456,9 +481,6 @@ impl SimulateReport {
                     100.0 * m.share_ca_below_1
                 );
             }
-        }
-        if let Some(f) = &self.time_series_csv {
-            s += &format!("time series: {f}\n");
         }
         s
     }
