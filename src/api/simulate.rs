@@ -113,26 +113,15 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         Vec::new()
     };
     if req.check_step || req.rank {
-        progress.phase("whole-run step check");
-        let (half, seconds) =
-            crate::api::half_step_check(&scene, &loaded.rom, &piston, &res, |k, n| {
-                if k % 200 == 0 {
-                    progress.phase(&format!("whole-run step check: step {k} of {n}"));
-                }
-            })?;
-        report.add_step_check(&half, seconds);
-        if req.rank {
-            // the run and its check are the first realisation (as in the report); another
-            // runs the two side by side, about as long as the check
-            report.ranking = Some(super::rank::decided_ranking(
-                &scene,
-                &loaded.rom,
-                &piston,
-                (&res, &half),
-                (0.0, seconds),
-                &|m| progress.phase(m),
-            )?);
-        }
+        check_and_rank(
+            &scene,
+            &loaded.rom,
+            &piston,
+            &res,
+            req.rank,
+            &progress,
+            &mut report,
+        )?;
     }
     if req.full_order {
         let cmp = compare(&scene, &loaded.rom, &piston, &settings, &|m| {
@@ -170,4 +159,37 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     }
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// The whole-run step check of the run `res` into `report`, and with `rank` the decided
+/// ranking ([`super::rank`]).
+fn check_and_rank(
+    scene: &Scene,
+    rom: &EngineRom,
+    piston: &Piston,
+    res: &CycleResult,
+    rank: bool,
+    progress: &Progress,
+    report: &mut SimulateReport,
+) -> Result<()> {
+    progress.phase("whole-run step check");
+    let (half, seconds) = crate::api::half_step_check(scene, rom, piston, res, |k, n| {
+        if k % 200 == 0 {
+            progress.phase(&format!("whole-run step check: step {k} of {n}"));
+        }
+    })?;
+    report.add_step_check(&half, seconds);
+    if rank {
+        // the run and its check are the first realisation (as in the report); another
+        // runs the two side by side, about as long as the check
+        report.ranking = Some(super::rank::decided_ranking(
+            scene,
+            rom,
+            piston,
+            (res, &half),
+            (0.0, seconds),
+            &|m| progress.phase(m),
+        )?);
+    }
+    Ok(())
 }
