@@ -766,6 +766,38 @@ pub(super) fn validate_transient(
     Ok(transient)
 }
 
+/// `[crankcase.mesh]`: element kind, elements per sector (even), wall layers, axial size.
+fn validate_crankcase_meshing(
+    c: &Checker<'_>,
+    m: &raw::RawCrankcaseMesh,
+) -> Result<CrankcaseMeshing, SceneError> {
+    let kind = match m.element.as_str() {
+        "hex20" => ElementKind::Hex20,
+        "tet10" => ElementKind::Tet10,
+        other => {
+            return Err(c.err(
+                "crankcase.mesh.element",
+                format!("expected \"hex20\" or \"tet10\", got \"{other}\""),
+            ))
+        }
+    };
+    if m.per_sector < 2 || m.per_sector % 2 != 0 {
+        return Err(c.err(
+            "crankcase.mesh.per_sector",
+            "must be even and at least 2 (the thrust line falls on nodes)",
+        ));
+    }
+    if m.wall_layers == 0 {
+        return Err(c.err("crankcase.mesh.wall_layers", "must be at least 1"));
+    }
+    Ok(CrankcaseMeshing {
+        kind,
+        per_sector: m.per_sector,
+        wall_layers: m.wall_layers,
+        axial_size: c.mm("crankcase.mesh.axial_size_mm", m.axial_size_mm)?,
+    })
+}
+
 pub(super) fn validate_crankcase(
     c: &Checker<'_>,
     base: &Path,
@@ -823,32 +855,7 @@ pub(super) fn validate_crankcase(
             "must be smaller than skirt_depth_mm",
         ));
     }
-    let m = &cc.mesh;
-    let kind = match m.element.as_str() {
-        "hex20" => ElementKind::Hex20,
-        "tet10" => ElementKind::Tet10,
-        other => {
-            return Err(c.err(
-                "crankcase.mesh.element",
-                format!("expected \"hex20\" or \"tet10\", got \"{other}\""),
-            ))
-        }
-    };
-    if m.per_sector < 2 || m.per_sector % 2 != 0 {
-        return Err(c.err(
-            "crankcase.mesh.per_sector",
-            "must be even and at least 2 (the thrust line falls on nodes)",
-        ));
-    }
-    if m.wall_layers == 0 {
-        return Err(c.err("crankcase.mesh.wall_layers", "must be at least 1"));
-    }
-    let meshing = CrankcaseMeshing {
-        kind,
-        per_sector: m.per_sector,
-        wall_layers: m.wall_layers,
-        axial_size: c.mm("crankcase.mesh.axial_size_mm", m.axial_size_mm)?,
-    };
+    let meshing = validate_crankcase_meshing(c, &cc.mesh)?;
     let source = match &cc.mesh_file {
         Some(f) => CrankcaseSource::File(base.join(mesh_file(c, "crankcase.mesh_file", f)?)),
         None => CrankcaseSource::Parametric { geometry, meshing },
