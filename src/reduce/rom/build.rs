@@ -379,6 +379,29 @@ pub(super) fn left_out(inp: &RomInputs<'_>, n_g: usize, b: &Basis) -> Vec<String
     out
 }
 
+/// The record of the two parts: their reductions' statistics, copies and sources.
+fn part_infos(
+    inp: &RomInputs<'_>,
+    liner: &PartReduction,
+    crankcase: &PartReduction,
+    sources: [Source; 2],
+) -> Vec<PartInfo> {
+    vec![
+        PartInfo {
+            name: "liner".into(),
+            stats: liner.stats.clone(),
+            copies: inp.cylinders.len(),
+            source: sources[0],
+        },
+        PartInfo {
+            name: "crankcase".into(),
+            stats: crankcase.stats.clone(),
+            copies: 1,
+            source: sources[1],
+        },
+    ]
+}
+
 /// Builds the engine ROM: Craig-Bampton reductions of the liner and the crankcase, their
 /// assembly over the modelled cylinders, the system modes below the cut-off with residual
 /// vectors of the contact load patterns, the preload, and per cylinder the rows the transient
@@ -455,20 +478,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         band_hz: inp.band_hz,
         cutoff_hz: inp.cutoff_hz,
         interface_harmonics: inp.harmonics,
-        parts: vec![
-            PartInfo {
-                name: "liner".into(),
-                stats: liner.stats.clone(),
-                copies: inp.cylinders.len(),
-                source: sources[0],
-            },
-            PartInfo {
-                name: "crankcase".into(),
-                stats: crankcase.stats.clone(),
-                copies: 1,
-                source: sources[1],
-            },
-        ],
+        parts: part_infos(inp, &liner, &crankcase, sources),
         build_seconds: t0.elapsed().as_secs_f64(),
         estimated_error,
         left_out: left_out(inp, n_g, &basis),
