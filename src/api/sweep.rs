@@ -538,6 +538,23 @@ fn refine_args(req: &SweepRequest, spec: &str) -> Result<(crate::scene::design::
     Ok((range, runs))
 }
 
+/// The lines, JSON runs and ROMs used of refined runs (value, run, ROM cache), by value.
+fn refined_rows(
+    done: &[(f64, SweepRun, String)],
+) -> (Vec<RunLine>, Vec<serde_json::Value>, Vec<String>) {
+    let mut lines = Vec::with_capacity(done.len());
+    let mut out_runs = Vec::with_capacity(done.len());
+    let mut roms: Vec<String> = Vec::new();
+    for (k, (_, run, rom)) in done.iter().enumerate() {
+        lines.push(line_of(k, run));
+        out_runs.push(serde_json::to_value(run).expect("serialisable"));
+        if roms.last() != Some(rom) {
+            roms.push(rom.clone());
+        }
+    }
+    (lines, out_runs, roms)
+}
+
 /// `sweep --refine KEY=LO:HI --runs N`: N runs of one key placed adaptively (two at a time, one
 /// per core), then the outputs of a one-key grid over the values run, each run's change against
 /// the base design (run with the first batch) with its standard error and verdict, and each
@@ -615,16 +632,7 @@ fn refine(req: &SweepRequest, spec: &str, started: Instant) -> Result<SweepRepor
             run.set_changes(base);
         }
     }
-    let mut lines = Vec::with_capacity(done.len());
-    let mut out_runs = Vec::with_capacity(done.len());
-    let mut roms: Vec<String> = Vec::new();
-    for (k, (_, run, rom)) in done.iter().enumerate() {
-        lines.push(line_of(k, run));
-        out_runs.push(serde_json::to_value(run).expect("serialisable"));
-        if roms.last() != Some(rom) {
-            roms.push(rom.clone());
-        }
-    }
+    let (lines, out_runs, roms) = refined_rows(&done);
     let maxima = REFINED
         .iter()
         .enumerate()
