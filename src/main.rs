@@ -219,52 +219,7 @@ enum Command {
     },
     /// What-if sweep: the Cartesian product of the varied keys, run in parallel on the cached
     /// ROM; sweep.csv (tidy), sweep.json and a PNG per numeric key in DIR.
-    Sweep {
-        /// Scene file (TOML).
-        scene: PathBuf,
-        /// A varied key and its values: --vary piston.clearance_um=40,80,120 (repeatable; the
-        /// runs are the Cartesian grid).
-        #[arg(long = "vary", value_name = "KEY=V1,V2,...")]
-        vary: Vec<String>,
-        /// A random design instead of a grid: Latin hypercube or Monte Carlo with N runs over
-        /// the --range keys.
-        #[arg(long, value_name = "lhs:N|mc:N")]
-        sample: Option<String>,
-        /// A sampled key, uniform over [LO, HI] (repeatable; with --sample).
-        #[arg(long = "range", value_name = "KEY=LO:HI", allow_hyphen_values = true)]
-        ranges: Vec<String>,
-        /// Seed of the sample (default 1): the same seed gives the same runs everywhere.
-        #[arg(long, value_name = "S")]
-        seed: Option<u64>,
-        /// Run only shard I of N (1-based) and write its part into --out PART_DIR; without it,
-        /// taken from a Slurm job array (SLURM_ARRAY_TASK_ID/MIN/MAX) or a Kubernetes Indexed
-        /// Job (JOB_COMPLETION_INDEX with --shards).
-        #[arg(long, value_name = "I/N")]
-        shard: Option<String>,
-        /// Number of shards of a Kubernetes Indexed Job (its completions).
-        #[arg(long, value_name = "N")]
-        shards: Option<usize>,
-        /// One key refined adaptively over [LO, HI] (with --runs): the runs placed where the
-        /// largest slap force and peak acceleration can lie and where the response changes
-        /// faster than its uncertainty; sweep.json gets each one's located maximum.
-        #[arg(long, value_name = "KEY=LO:HI", allow_hyphen_values = true)]
-        refine: Option<String>,
-        /// Number of runs of --refine (3-1000).
-        #[arg(long, value_name = "N")]
-        runs: Option<usize>,
-        /// Fixed overrides for every run (repeatable).
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        sets: Vec<String>,
-        /// Output directory (sweep.csv, sweep.json, PNGs; a sample adds probabilities.csv and
-        /// sweep_statistics.png); a shard's part directory. Without it only the summary prints.
-        #[arg(long, value_name = "DIR")]
-        out: Option<PathBuf>,
-        /// Print JSON on stdout.
-        #[arg(long)]
-        json: bool,
-        #[command(flatten)]
-        cache: CacheArgs,
-    },
+    Sweep(SweepArgs),
     /// Merges the parts of a sharded sweep (checked: one study, every run exactly once) into
     /// the outputs of the unsharded sweep.
     SweepMerge {
@@ -352,6 +307,55 @@ enum Command {
 }
 
 /// The options of `simulate`.
+/// `sweep`'s arguments.
+#[derive(clap::Args)]
+struct SweepArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// A varied key and its values: --vary piston.clearance_um=40,80,120 (repeatable; the
+    /// runs are the Cartesian grid).
+    #[arg(long = "vary", value_name = "KEY=V1,V2,...")]
+    vary: Vec<String>,
+    /// A random design instead of a grid: Latin hypercube or Monte Carlo with N runs over
+    /// the --range keys.
+    #[arg(long, value_name = "lhs:N|mc:N")]
+    sample: Option<String>,
+    /// A sampled key, uniform over [LO, HI] (repeatable; with --sample).
+    #[arg(long = "range", value_name = "KEY=LO:HI", allow_hyphen_values = true)]
+    ranges: Vec<String>,
+    /// Seed of the sample (default 1): the same seed gives the same runs everywhere.
+    #[arg(long, value_name = "S")]
+    seed: Option<u64>,
+    /// Run only shard I of N (1-based) and write its part into --out PART_DIR; without it,
+    /// taken from a Slurm job array (SLURM_ARRAY_TASK_ID/MIN/MAX) or a Kubernetes Indexed
+    /// Job (JOB_COMPLETION_INDEX with --shards).
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
+    /// Number of shards of a Kubernetes Indexed Job (its completions).
+    #[arg(long, value_name = "N")]
+    shards: Option<usize>,
+    /// One key refined adaptively over [LO, HI] (with --runs): the runs placed where the
+    /// largest slap force and peak acceleration can lie and where the response changes
+    /// faster than its uncertainty; sweep.json gets each one's located maximum.
+    #[arg(long, value_name = "KEY=LO:HI", allow_hyphen_values = true)]
+    refine: Option<String>,
+    /// Number of runs of --refine (3-1000).
+    #[arg(long, value_name = "N")]
+    runs: Option<usize>,
+    /// Fixed overrides for every run (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
+    /// Output directory (sweep.csv, sweep.json, PNGs; a sample adds probabilities.csv and
+    /// sweep_statistics.png); a shard's part directory. Without it only the summary prints.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Print JSON on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    cache: CacheArgs,
+}
+
 #[derive(clap::Args)]
 struct SimulateArgs {
     /// Scene file (TOML).
@@ -439,38 +443,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             cache,
         } => shapes_command(&scene, &sets, json, &cache)?,
         Command::Simulate(args) => simulate_command(args, started)?,
-        Command::Sweep {
-            scene,
-            vary,
-            sample,
-            ranges,
-            seed,
-            shard,
-            shards,
-            refine,
-            runs,
-            sets,
-            out,
-            json,
-            cache,
-        } => {
-            let req = sweep::SweepRequest {
-                scene,
-                sets,
-                vary,
-                sample,
-                ranges,
-                seed,
-                shard,
-                shards,
-                out,
-                cache: cache.options(),
-                refine,
-                runs,
-            };
-            let r = sweep::run(&req, started)?;
-            print_report(json, &r, || r.to_text());
-        }
+        Command::Sweep(args) => sweep_command(args, started)?,
         Command::SweepMerge { parts, out, json } => {
             let r = sweep::merge(&parts, &out, started)?;
             print_report(json, &r, || r.to_text());
@@ -517,6 +490,28 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             println!("wrote {} ({n} nodes)", out.display());
         }
     }
+    Ok(())
+}
+
+/// `sweep`: a designed study of the scene (grid, sample or adaptive refinement), printed (or as
+/// JSON) and with `--out` written.
+fn sweep_command(args: SweepArgs, started: Instant) -> Result<(), Error> {
+    let req = sweep::SweepRequest {
+        scene: args.scene,
+        sets: args.sets,
+        vary: args.vary,
+        sample: args.sample,
+        ranges: args.ranges,
+        seed: args.seed,
+        shard: args.shard,
+        shards: args.shards,
+        out: args.out,
+        cache: args.cache.options(),
+        refine: args.refine,
+        runs: args.runs,
+    };
+    let r = sweep::run(&req, started)?;
+    print_report(args.json, &r, || r.to_text());
     Ok(())
 }
 
