@@ -182,6 +182,37 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     }
     s.push_str(&slap_section(r));
     s.push_str(&maps_section(r));
+    s.push_str(&why_section(r));
+    s.push_str(&what_if_section(r));
+    let _ = writeln!(s, "\n## Speed against error\n\nAgainst a converged reference (a step 64 times finer, uniform, all modes): the mode cut-off on one cylinder's window from rest (330-420 deg, largest error over its points), the step on the six firing slaps of cycle 3 from identical states (largest error over the cylinders' worst points).\n\n| setting | modes | error | wall time [ms] |\n|---|---|---|---|");
+    for x in &r.tradeoff {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2e} | {:.1} |",
+            x.setting,
+            x.modes,
+            x.error,
+            x.seconds * 1e3
+        );
+    }
+    let _ = writeln!(s, "\n## Figures\n");
+    for f in &r.files {
+        let name = Path::new(f)
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let _ = writeln!(s, "![{name}]({name})");
+    }
+    let _ = writeln!(s, "\nReproduce: `linercav report {} --out {}` (solver: {} steps, {} Newton iterations, {} rejected, energy balance {:.1e}, cycle change {:.1e}).", scene.display(), out.display(), r.simulate.stats.steps, r.simulate.stats.newton_iterations, r.simulate.stats.rejected_steps, r.simulate.stats.energy_error, r.simulate.stats.cycle_change);
+    s
+}
+
+/// "Why the cylinders differ": the dominant response and the nearest system modes with their
+/// cylinder coefficients and correlations.
+fn why_section(r: &Report) -> String {
+    use std::fmt::Write;
+    let ev = &r.evaluation;
+    let mut s = String::new();
     let _ = writeln!(s, "\n## Why the cylinders differ\n\nDominant response {:.0} Hz. Nearest system modes, with each cylinder's largest normalised radial coefficient at its analysis points and the correlation of those with the per-cylinder peak:\n", ev.dominant_hz);
     let _ = writeln!(s, "| mode [Hz] | coefficients (cylinders {:?}) | Pearson r | Spearman rho |\n|---|---|---|---|", ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>());
     for m in &ev.nearest_modes {
@@ -198,6 +229,13 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
             m.spearman.map(|v| format!("{v:.2}")).unwrap_or("-".into())
         );
     }
+    s
+}
+
+/// "What-if": the clearance and pin-offset sweeps with their changes and located maxima.
+fn what_if_section(r: &Report) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
     let _ = writeln!(s, "\n## What-if\n\nEach row's change of the engine's largest mean peak against the scene's own run, with the standard error of the difference (the two runs' cycle statistics combined); lower / higher when the change exceeds twice it, else not distinguishable.\n\n| clearance [um] | largest peak negative [m/s^2] | change against the scene [m/s^2] | largest slap force [kN] |\n|---|---|---|---|");
     for p in &r.clearance_sweep {
         let _ = writeln!(
@@ -236,26 +274,6 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
         r.pin_offset_range_mm,
         &r.pin_offset_maximum,
     );
-    let _ = writeln!(s, "\n## Speed against error\n\nAgainst a converged reference (a step 64 times finer, uniform, all modes): the mode cut-off on one cylinder's window from rest (330-420 deg, largest error over its points), the step on the six firing slaps of cycle 3 from identical states (largest error over the cylinders' worst points).\n\n| setting | modes | error | wall time [ms] |\n|---|---|---|---|");
-    for x in &r.tradeoff {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.2e} | {:.1} |",
-            x.setting,
-            x.modes,
-            x.error,
-            x.seconds * 1e3
-        );
-    }
-    let _ = writeln!(s, "\n## Figures\n");
-    for f in &r.files {
-        let name = Path::new(f)
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let _ = writeln!(s, "![{name}]({name})");
-    }
-    let _ = writeln!(s, "\nReproduce: `linercav report {} --out {}` (solver: {} steps, {} Newton iterations, {} rejected, energy balance {:.1e}, cycle change {:.1e}).", scene.display(), out.display(), r.simulate.stats.steps, r.simulate.stats.newton_iterations, r.simulate.stats.rejected_steps, r.simulate.stats.energy_error, r.simulate.stats.cycle_change);
     s
 }
 
