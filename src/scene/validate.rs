@@ -496,6 +496,63 @@ pub(super) fn validate_simulation(
     }))
 }
 
+/// The skirt of `[piston]`: its shape (slices, clearance, barrel, ovality), the thermal
+/// expansion of piston and liner at their temperatures, and the contact stiffness.
+fn validate_skirt(
+    c: &Checker<'_>,
+    p: &raw::RawPiston,
+    engine: &Engine,
+    skirt_length: f64,
+    top_above_pin: f64,
+) -> Result<spec::SkirtSpec, SceneError> {
+    let th = &p.thermal;
+    let temp = |key: &str, v: f64| -> Result<f64, SceneError> {
+        if v.is_finite() && (-50.0..=400.0).contains(&v) {
+            Ok(v)
+        } else {
+            Err(c.err(
+                key,
+                format!("must be a temperature in [-50, 400] deg C, got {}", num(v)),
+            ))
+        }
+    };
+    let expansion = |key: &str, v: f64| -> Result<f64, SceneError> {
+        if v.is_finite() && (0.0..1e-4).contains(&v) {
+            Ok(v)
+        } else {
+            Err(c.err(key, format!("must be in [0, 1e-4] 1/K, got {}", num(v))))
+        }
+    };
+    Ok(spec::SkirtSpec {
+        bore: engine.bore,
+        length: skirt_length,
+        top_above_pin,
+        slices: p.slices,
+        clearance: c.nonneg("piston.clearance_um", p.clearance_um)? * 1e-6,
+        barrel: c.nonneg("piston.barrel_um", p.barrel_um)? * 1e-6,
+        barrel_max_below_pin: c
+            .finite("piston.barrel_max_below_pin_mm", p.barrel_max_below_pin_mm)?
+            * 1e-3,
+        ovality: c.nonneg("piston.ovality_um", p.ovality_um)? * 1e-6,
+        piston_expansion: expansion(
+            "piston.thermal.piston_expansion_per_k",
+            th.piston_expansion_per_k,
+        )?,
+        skirt_top_temp_c: temp("piston.thermal.skirt_top_temp_c", th.skirt_top_temp_c)?,
+        skirt_bottom_temp_c: temp("piston.thermal.skirt_bottom_temp_c", th.skirt_bottom_temp_c)?,
+        liner_expansion: expansion(
+            "piston.thermal.liner_expansion_per_k",
+            th.liner_expansion_per_k,
+        )?,
+        liner_temp_c: temp("piston.thermal.liner_temp_c", th.liner_temp_c)?,
+        reference_temp_c: temp("piston.thermal.reference_temp_c", th.reference_temp_c)?,
+        stiffness: c.positive(
+            "piston.contact_stiffness_n_per_m",
+            p.contact_stiffness_n_per_m,
+        )?,
+    })
+}
+
 /// `[piston]`: masses, geometry (the pin inside the liner at TDC, the offset within the rod's
 /// reach), skirt profile, slices and thermal state.
 pub(super) fn validate_piston(
@@ -541,52 +598,7 @@ pub(super) fn validate_piston(
             format!("must lie in [10, {MAX_SLICES}], got {}", p.slices),
         ));
     }
-    let th = &p.thermal;
-    let temp = |key: &str, v: f64| -> Result<f64, SceneError> {
-        if v.is_finite() && (-50.0..=400.0).contains(&v) {
-            Ok(v)
-        } else {
-            Err(c.err(
-                key,
-                format!("must be a temperature in [-50, 400] deg C, got {}", num(v)),
-            ))
-        }
-    };
-    let expansion = |key: &str, v: f64| -> Result<f64, SceneError> {
-        if v.is_finite() && (0.0..1e-4).contains(&v) {
-            Ok(v)
-        } else {
-            Err(c.err(key, format!("must be in [0, 1e-4] 1/K, got {}", num(v))))
-        }
-    };
-    let skirt = spec::SkirtSpec {
-        bore: engine.bore,
-        length: skirt_length,
-        top_above_pin,
-        slices: p.slices,
-        clearance: c.nonneg("piston.clearance_um", p.clearance_um)? * 1e-6,
-        barrel: c.nonneg("piston.barrel_um", p.barrel_um)? * 1e-6,
-        barrel_max_below_pin: c
-            .finite("piston.barrel_max_below_pin_mm", p.barrel_max_below_pin_mm)?
-            * 1e-3,
-        ovality: c.nonneg("piston.ovality_um", p.ovality_um)? * 1e-6,
-        piston_expansion: expansion(
-            "piston.thermal.piston_expansion_per_k",
-            th.piston_expansion_per_k,
-        )?,
-        skirt_top_temp_c: temp("piston.thermal.skirt_top_temp_c", th.skirt_top_temp_c)?,
-        skirt_bottom_temp_c: temp("piston.thermal.skirt_bottom_temp_c", th.skirt_bottom_temp_c)?,
-        liner_expansion: expansion(
-            "piston.thermal.liner_expansion_per_k",
-            th.liner_expansion_per_k,
-        )?,
-        liner_temp_c: temp("piston.thermal.liner_temp_c", th.liner_temp_c)?,
-        reference_temp_c: temp("piston.thermal.reference_temp_c", th.reference_temp_c)?,
-        stiffness: c.positive(
-            "piston.contact_stiffness_n_per_m",
-            p.contact_stiffness_n_per_m,
-        )?,
-    };
+    let skirt = validate_skirt(c, p, engine, skirt_length, top_above_pin)?;
     let piston = PistonSpec {
         mass,
         pin_mass: c.nonneg("piston.pin_mass_kg", p.pin_mass_kg)?,
