@@ -8,6 +8,18 @@ use common::linercav;
 
 const SCENE: &str = "tests/fixtures/engine_small.toml";
 
+/// The verdict a change `d` with standard error `s` must carry (`Change::of`: two standard
+/// errors, two-sided).
+fn change_verdict(d: f64, s: f64) -> &'static str {
+    if d < -2.0 * s {
+        "lower"
+    } else if d > 2.0 * s {
+        "higher"
+    } else {
+        "not distinguishable"
+    }
+}
+
 fn is_png(p: &Path) -> bool {
     std::fs::read(p)
         .map(|b| b.len() > 1000 && &b[1..4] == b"PNG")
@@ -405,14 +417,7 @@ fn changes_against_the_base(one_cycle: bool) {
         let s: f64 = r[change_se].parse().unwrap();
         let own: f64 = r[se].parse().unwrap();
         assert!(s >= own - 1e-3, "{r:?}");
-        let expected = if d < -2.0 * s {
-            "lower"
-        } else if d > 2.0 * s {
-            "higher"
-        } else {
-            "not distinguishable"
-        };
-        assert_eq!(r[verdict], expected, "{r:?}");
+        assert_eq!(r[verdict], change_verdict(d, s), "{r:?}");
     }
 }
 
@@ -471,14 +476,7 @@ fn contract_sweep_refine_places_its_runs_and_locates_the_maxima() {
                     assert_eq!(ch["verdict"], "unknown (one cycle)", "{ch}");
                     continue;
                 };
-                let expected = if d < -2.0 * s {
-                    "lower"
-                } else if d > 2.0 * s {
-                    "higher"
-                } else {
-                    "not distinguishable"
-                };
-                assert_eq!(ch["verdict"], expected, "{ch}");
+                assert_eq!(ch["verdict"], change_verdict(d, s), "{ch}");
             }
         }
     }

@@ -95,20 +95,15 @@ impl PeakEstimate {
     }
 }
 
-/// The terms of D = m_a - m_b's uncertainty, (s, e), u_D^2 = s^2 + e^2. With the whole-run
+/// The terms of D = m_a - m_b's uncertainty, (s, e, u(e)), u_D^2 = s^2 + e^2. With the whole-run
 /// check D is taken at half the step, its step error there e = dD = (m_a - h_a) - (m_b - h_b)
 /// (first-order convergence: the error at h/2 equals the change from h to h/2; a step error
 /// common to both cylinders cancels), and s^2 = SEh_a^2 + SEh_b^2 + u(e)^2 with u(e)^2 =
 /// SE_a^2 + SEh_a^2 + SE_b^2 + SEh_b^2 the scatter of that estimate (the uncorrected bias and
 /// its uncertainty root-sum-squared). Without the check: the run's D, s^2 = SE_a^2 + SE_b^2,
-/// e^2 = E_a^2 + E_b^2 of the firing-slap estimates. Pooling realisations shrinks s, not e.
-pub fn pair_terms(a: &PeakEstimate, b: &PeakEstimate) -> (f64, f64) {
-    let (s, e, _) = pair_terms_with_scatter(a, b);
-    (s, e)
-}
-
-/// [`pair_terms`] and u(e).
-fn pair_terms_with_scatter(a: &PeakEstimate, b: &PeakEstimate) -> (f64, f64, f64) {
+/// e^2 = E_a^2 + E_b^2 of the firing-slap estimates and u(e) = 0. Pooling realisations
+/// shrinks s, not e.
+pub fn pair_terms(a: &PeakEstimate, b: &PeakEstimate) -> (f64, f64, f64) {
     match (a.half, b.half) {
         (Some((ha, sa)), Some((hb, sb))) => {
             let e = (a.mean - ha) - (b.mean - hb);
@@ -140,7 +135,7 @@ pub fn decide(ranked: &[(usize, PeakEstimate)], resolution: f64) -> Vec<Decision
         .map(|w| {
             let ((ca, a), (cb, b)) = (&w[0], &w[1]);
             let d = a.best().0 - b.best().0;
-            let (s, e, ue) = pair_terms_with_scatter(a, b);
+            let (s, e, ue) = pair_terms(a, b);
             Decision {
                 upper: *ca,
                 lower: *cb,
@@ -293,7 +288,7 @@ mod tests {
             slap_error,
         };
         let (a, b) = (est(100.0, 3.0, None, 0.0), est(89.0, 4.0, None, 0.0));
-        assert_eq!(pair_terms(&a, &b), (5.0, 0.0));
+        assert_eq!(pair_terms(&a, &b), (5.0, 0.0, 0.0));
         let d = decide(&[(2, a), (5, b)], 1.0);
         assert_eq!(
             (d[0].upper, d[0].lower, d[0].verdict),
@@ -303,7 +298,7 @@ mod tests {
             est(100.0, 3.0, Some((99.0, 1.0)), 7.0),
             est(90.0, 4.0, Some((90.0, 2.0)), 7.0),
         );
-        let (s, e) = pair_terms(&a, &b);
+        let (s, e, _) = pair_terms(&a, &b);
         assert!((s - 35.0f64.sqrt()).abs() < 1e-12 && (e - 1.0).abs() < 1e-12);
         let d = decide(&[(1, a), (3, b)], 1.0)[0];
         assert_eq!((d.difference, d.verdict), (9.0, Verdict::Undecided));
