@@ -21,6 +21,7 @@
 //! The quasi-static side force pressing the liner toward thrust is C_z tan(beta).
 
 pub mod kinematics;
+pub mod lubrication;
 pub mod pressure;
 pub mod setup;
 pub mod skirt;

@@ -21,7 +21,7 @@
 //! F is convex, piecewise linear in p: exact Newton pieces.
 
 /// Sample angles of the contact arc [rad].
-const PSI_DEG: [f64; 7] = [-45.0, -30.0, -15.0, 0.0, 15.0, 30.0, 45.0];
+pub const PSI_DEG: [f64; 7] = [-45.0, -30.0, -15.0, 0.0, 15.0, 30.0, 45.0];
 
 /// Piecewise-linear elastic contact law of one slice: F(p) = sum_j k_j max(0, c_j p - o_j) c_j.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,0 +1,571 @@
+//! The oil film on the skirt: squeeze and sliding pressure from the Reynolds equation, viscosity
+//! from the film temperature (Vogel), asperity contact (Greenwood-Tripp) where the film is thin.
+//!
+//! **Film thickness.** Skirt slice i (centre x_i below the skirt top, height dx) at angle psi_j
+//! from the thrust line (the contact law's samples, [`SAMPLE_DEG`], each standing for an arc
+//! R dpsi of the skirt) is apart from the liner by
+//!
+//!   h_ij = o_ij - cos(psi_j) p_i,   o_ij = g_i (1 - cos psi_j) + (w / 2) sin^2 psi_j,
+//!
+//! p_i the slice's penetration at the thrust line (negative while apart; the liner's
+//! displacement included), g_i its hot gap, w the ovality (as in [`super::skirt`]).
+//!
+//! **Reynolds, short-bearing form.** Along each sample line the pressure obeys the axial
+//! Reynolds equation (circumferential pressure flow neglected: the skirt's 65 mm against its
+//! arc),
+//!
+//!   d/dx (h^3 / (12 mu) dp/dx) = dh/dt + (U / 2) dh/dx,   p = 0 at the skirt's top and bottom,
+//!
+//! x downward along the skirt, U = z' the liner's velocity relative to the skirt along x (z'
+//! the piston's upward axial velocity), dh/dt = -cos(psi_j) p'_i the squeeze. Cavitation is
+//! half-Sommerfeld: the solved pressure is clipped at zero. Partial flooding: a point whose gap
+//! is larger than the oil supply on the liner (`supply`) is not wetted (p = 0 there), so the
+//! film engages as the skirt closes to within the supply.
+//!
+//! Discretisation: the slice centres are the nodes; the three-point form
+//!   [G_r (P_r - P_i) - G_l (P_i - P_l)] = m_i S_i,  G = h_f^3 / (12 mu_f d),  m_i = (d_l + d_r) / 2,
+//! (d the node distances, the skirt edges half a slice from the end nodes, h_f the mean of the
+//! face's nodes) is exact for a quadratic pressure, and each slice integrates the local
+//! quadratic through its node and neighbours (exact for a parabolic pressure too), so a uniform
+//! strip's squeeze force -mu L^3 h' / h^3 per unit width is reproduced to roundoff. A slice's
+//! force toward the liner's normal (the thrust line) is
+//!
+//!   F_i = R dpsi sum_j cos(psi_j) int_slice p_j(x) dx.
+//!
+//! **Viscosity (Vogel).** mu(T) = a exp(b / (T + c)), T in deg C, at the film temperature, the
+//! mean of the skirt's temperature at the slice and the liner's bore temperature.
+//!
+//! **Asperity contact (Greenwood-Tripp, `mixed`).** Where the film is thin the roughness peaks
+//! touch: p_c = K E' F_5/2(h / sigma), K = (16 sqrt(2) pi / 15) (eta beta sigma)^2 sqrt(sigma /
+//! beta), with F_n(lambda) = 1 / sqrt(2 pi) int_lambda^inf (s - lambda)^n exp(-s^2 / 2) ds, sigma
+//! the composite roughness, eta beta sigma the roughness parameter, sigma / beta the asperity
+//! slope parameter and 1 / E' = (1 - nu_1^2) / E_1 + (1 - nu_2^2) / E_2. The skirt is rigid in the
+//! film (no elastohydrodynamics): where the gap closes (p_i > 0) the dry penalty law acts as well.
+
+use nalgebra::DMatrix;
+use std::sync::OnceLock;
+
+pub use super::skirt::PSI_DEG as SAMPLE_DEG;
+
+/// Which film model runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Lubrication {
+    /// No film: the dry penalty contact only (the reference study's model).
+    Dry,
+    /// Hydrodynamic squeeze and sliding film.
+    Squeeze,
+    /// The film plus Greenwood-Tripp asperity contact.
+    Mixed,
+}
+
+impl Lubrication {
+    pub fn name(self) -> &'static str {
+        match self {
+            Lubrication::Dry => "dry",
+            Lubrication::Squeeze => "squeeze",
+            Lubrication::Mixed => "mixed",
+        }
+    }
+}
+
+/// Vogel viscosity mu(T) = a exp(b / (T + c)), T in deg C.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vogel {
+    /// a \[Pa s\].
+    pub a: f64,
+    /// b and c \[deg C\].
+    pub b: f64,
+    pub c: f64,
+}
+
+impl Vogel {
+    /// Dynamic viscosity \[Pa s\] at `t_c` \[deg C\].
+    pub fn at(&self, t_c: f64) -> f64 {
+        self.a * (self.b / (t_c + self.c)).exp()
+    }
+}
+
+/// Greenwood-Tripp asperity contact: p_c = K E' F_5/2(h / sigma).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GreenwoodTripp {
+    /// Composite roughness sigma \[m\].
+    pub sigma: f64,
+    /// K E' \[Pa\].
+    pub k_e: f64,
+}
+
+impl GreenwoodTripp {
+    /// From sigma \[m\], the roughness parameter eta beta sigma, the slope parameter sigma / beta
+    /// and the composite modulus E' \[Pa\].
+    pub fn new(sigma: f64, eta_beta_sigma: f64, sigma_over_beta: f64, modulus: f64) -> Self {
+        let k = 16.0 * 2f64.sqrt() * std::f64::consts::PI / 15.0
+            * eta_beta_sigma.powi(2)
+            * sigma_over_beta.sqrt();
+        Self {
+            sigma,
+            k_e: k * modulus,
+        }
+    }
+
+    /// Asperity pressure p_c \[Pa\] and its derivative dp_c/dh [Pa/m] at gap `h` \[m\]:
+    /// dF_5/2/dlambda = -(5/2) F_3/2.
+    pub fn pressure(&self, h: f64) -> (f64, f64) {
+        let l = h / self.sigma;
+        let t = gt_table();
+        (
+            self.k_e * t.value(l, 2),
+            -2.5 * self.k_e * t.value(l, 1) / self.sigma,
+        )
+    }
+}
+
+/// F_n(lambda) = 1 / sqrt(2 pi) int_lambda^inf (s - lambda)^n exp(-s^2 / 2) ds of order
+/// n = k - 1/2 (k = 1, 2, 3: F_1/2, F_3/2, F_5/2), by quadrature: with s = lambda + t^2 the
+/// integrand 2 t^(2k) exp(-(lambda + t^2)^2 / 2) is smooth; composite Simpson with 1000
+/// intervals on t in [0, T], lambda + T^2 = 12 (the tail is below 1e-31).
+pub fn gt_integral(k: usize, lambda: f64) -> f64 {
+    let top = (12.0 - lambda).max(0.0).sqrt();
+    if top == 0.0 {
+        return 0.0;
+    }
+    let m = 1000;
+    let dt = top / m as f64;
+    let f = |t: f64| 2.0 * t.powi(2 * k as i32) * (-(lambda + t * t).powi(2) / 2.0).exp();
+    let mut s = f(0.0) + f(top);
+    for i in 1..m {
+        let w = if i % 2 == 1 { 4.0 } else { 2.0 };
+        s += w * f(i as f64 * dt);
+    }
+    s * dt / 3.0 / (2.0 * std::f64::consts::PI).sqrt()
+}
+
+/// F_1/2, F_3/2, F_5/2 tabulated on lambda in [-4, 8] (step 0.01), interpolated by cubic
+/// Hermite with the exact slopes dF_n/dlambda = -n F_(n-1) (F_3/2 and F_5/2 only are
+/// interpolated; F_1/2 gives F_3/2's slope).
+struct GtTable {
+    lo: f64,
+    step: f64,
+    f: [Vec<f64>; 3],
+}
+
+fn gt_table() -> &'static GtTable {
+    static TABLE: OnceLock<GtTable> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let (lo, hi, step): (f64, f64, f64) = (-4.0, 8.0, 0.01);
+        let n = ((hi - lo) / step).round() as usize + 1;
+        let f = [1, 2, 3].map(|k| {
+            (0..n)
+                .map(|i| gt_integral(k, lo + i as f64 * step))
+                .collect::<Vec<f64>>()
+        });
+        GtTable { lo, step, f }
+    })
+}
+
+impl GtTable {
+    /// F_(k+1/2) for `k` = 1 (F_3/2) or 2 (F_5/2) at `l`: 0 beyond the table's top, the
+    /// lowest tabulated value below its bottom.
+    fn value(&self, l: f64, k: usize) -> f64 {
+        let y = &self.f[k];
+        let n = y.len();
+        let x = (l - self.lo) / self.step;
+        if x >= (n - 1) as f64 {
+            return 0.0;
+        }
+        let x = x.max(0.0);
+        let i = (x.floor() as usize).min(n - 2);
+        let t = x - i as f64;
+        // dF_n/dl = -n F_(n-1), in table units
+        let order = k as f64 + 0.5;
+        let slope = |j: usize| -order * self.f[k - 1][j] * self.step;
+        let (y0, y1, m0, m1) = (y[i], y[i + 1], slope(i), slope(i + 1));
+        let t2 = t * t;
+        let t3 = t2 * t;
+        (2.0 * t3 - 3.0 * t2 + 1.0) * y0
+            + (t3 - 2.0 * t2 + t) * m0
+            + (-2.0 * t3 + 3.0 * t2) * y1
+            + (t3 - t2) * m1
+    }
+}
+
+/// A rigid film along one line: nodes at `x` (ascending) between edges `left` and `right`
+/// (p = 0 there), with gap `h`, viscosity `mu` and a wetted flag per node; its pressure solves
+/// the three-point Reynolds form of the module docs for the source S = dh/dt + (U/2) dh/dx.
+pub struct Line<'a> {
+    pub x: &'a [f64],
+    pub left: f64,
+    pub right: f64,
+    pub h: &'a [f64],
+    pub mu: &'a [f64],
+    pub wet: &'a [bool],
+}
+
+/// The line's tridiagonal system: lower/diagonal/upper and the node weights m_i.
+struct Tri {
+    lower: Vec<f64>,
+    diag: Vec<f64>,
+    upper: Vec<f64>,
+    m: Vec<f64>,
+    /// Face conductances G (n + 1: left edge, between nodes, right edge) and their distances.
+    g: Vec<f64>,
+    d: Vec<f64>,
+}
+
+impl Line<'_> {
+    fn n(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Distance from node i to its left (k = i) or right (k = i + 1) face's other end.
+    fn distances(&self) -> Vec<f64> {
+        let n = self.n();
+        (0..=n)
+            .map(|k| {
+                let a = if k == 0 { self.left } else { self.x[k - 1] };
+                let b = if k == n { self.right } else { self.x[k] };
+                b - a
+            })
+            .collect()
+    }
+
+    /// Face k's film thickness and viscosity (a face to an edge or a dry node takes the node's).
+    fn face(&self, k: usize) -> (f64, f64) {
+        let n = self.n();
+        let l = (k > 0 && self.wet[k - 1]).then(|| k - 1);
+        let r = (k < n && self.wet[k]).then_some(k);
+        match (l, r) {
+            (Some(a), Some(b)) => (
+                0.5 * (self.h[a] + self.h[b]),
+                0.5 * (self.mu[a] + self.mu[b]),
+            ),
+            (Some(a), None) | (None, Some(a)) => (self.h[a], self.mu[a]),
+            (None, None) => (0.0, 1.0),
+        }
+    }
+
+    fn system(&self) -> Tri {
+        let n = self.n();
+        let d = self.distances();
+        let g: Vec<f64> = (0..=n)
+            .map(|k| {
+                let (h, mu) = self.face(k);
+                h.powi(3) / (12.0 * mu * d[k])
+            })
+            .collect();
+        let mut t = Tri {
+            lower: vec![0.0; n],
+            diag: vec![0.0; n],
+            upper: vec![0.0; n],
+            m: vec![0.0; n],
+            g,
+            d,
+        };
+        for i in 0..n {
+            if !self.wet[i] {
+                t.diag[i] = 1.0;
+                continue;
+            }
+            t.m[i] = 0.5 * (t.d[i] + t.d[i + 1]);
+            t.diag[i] = -(t.g[i] + t.g[i + 1]);
+            if i > 0 && self.wet[i - 1] {
+                t.lower[i] = t.g[i];
+            }
+            if i + 1 < n && self.wet[i + 1] {
+                t.upper[i] = t.g[i + 1];
+            }
+        }
+        t
+    }
+
+    /// Axial slope dh/dx at every node by the three-point form (one-sided at the ends), as
+    /// weights on the node gaps: slope_i = sum_k w_ik h_k (at most three k).
+    pub fn slope_weights(x: &[f64]) -> Vec<[(usize, f64); 3]> {
+        let n = x.len();
+        (0..n)
+            .map(|i| {
+                if n < 2 {
+                    return [(i, 0.0); 3];
+                }
+                if i == 0 || i == n - 1 {
+                    let (a, b) = if i == 0 { (0, 1) } else { (n - 2, n - 1) };
+                    let w = 1.0 / (x[b] - x[a]);
+                    return [(a, -w), (b, w), (i, 0.0)];
+                }
+                let (dl, dr) = (x[i] - x[i - 1], x[i + 1] - x[i]);
+                [
+                    (i - 1, -dr / (dl * (dl + dr))),
+                    (i, (dr - dl) / (dl * dr)),
+                    (i + 1, dl / (dr * (dl + dr))),
+                ]
+            })
+            .collect()
+    }
+
+    /// Pressure at the nodes for the source `s` (before the clip at zero).
+    pub fn pressure(&self, s: &[f64]) -> Vec<f64> {
+        let t = self.system();
+        let rhs: Vec<f64> = (0..self.n()).map(|i| t.m[i] * s[i]).collect();
+        thomas(&t, &rhs)
+    }
+
+    /// The force on each node's slice of the clipped pressure `p`: the integral over the
+    /// slice [e_i, e_(i+1)] (edges half-way between nodes, the line's ends outside) of the
+    /// quadratic through the node and its neighbours (the edges at p = 0).
+    pub fn integrate(&self, p: &[f64]) -> Vec<f64> {
+        let n = self.n();
+        let d = self.distances();
+        (0..n)
+            .map(|i| {
+                let el = if i == 0 {
+                    self.left
+                } else {
+                    0.5 * (self.x[i - 1] + self.x[i])
+                };
+                let er = if i == n - 1 {
+                    self.right
+                } else {
+                    0.5 * (self.x[i] + self.x[i + 1])
+                };
+                let pl = if i == 0 { 0.0 } else { p[i - 1] };
+                let pr = if i == n - 1 { 0.0 } else { p[i + 1] };
+                let (dl, dr) = (d[i], d[i + 1]);
+                let q2 = 2.0 * ((pr - p[i]) / dr - (p[i] - pl) / dl) / (dl + dr);
+                let q1 = (pr - p[i]) / dr - 0.5 * q2 * dr;
+                let (a, b) = (el - self.x[i], er - self.x[i]);
+                p[i] * (b - a) + q1 * (b * b - a * a) / 2.0 + q2 * (b.powi(3) - a.powi(3)) / 6.0
+            })
+            .collect()
+    }
+}
+
+/// Solves the tridiagonal system (Thomas; the system is diagonally dominant).
+fn thomas(t: &Tri, rhs: &[f64]) -> Vec<f64> {
+    let n = rhs.len();
+    let mut c = vec![0.0; n];
+    let mut y = vec![0.0; n];
+    let mut prev_c = 0.0;
+    let mut prev_y = 0.0;
+    for i in 0..n {
+        let den = t.diag[i] - t.lower[i] * prev_c;
+        c[i] = t.upper[i] / den;
+        y[i] = (rhs[i] - t.lower[i] * prev_y) / den;
+        prev_c = c[i];
+        prev_y = y[i];
+    }
+    for i in (0..n.saturating_sub(1)).rev() {
+        y[i] -= c[i] * y[i + 1];
+    }
+    y
+}
+
+/// The film of one piston's skirt (built once), SI.
+#[derive(Clone, Debug)]
+pub struct Film {
+    pub model: Lubrication,
+    /// Slice centres below the skirt top \[m\] and the skirt length \[m\].
+    pub x: Vec<f64>,
+    pub length: f64,
+    /// Per slice: hot gap \[m\] and film viscosity \[Pa s\].
+    pub gaps: Vec<f64>,
+    pub mu: Vec<f64>,
+    /// Ovality \[m\], arc per sample R dpsi \[m\], oil supply on the liner \[m\].
+    pub ovality: f64,
+    pub arc: f64,
+    pub supply: f64,
+    /// Smallest gap the Reynolds term sees \[m\] (below it the penalty law carries the load).
+    pub floor: f64,
+    pub asperity: Option<GreenwoodTripp>,
+}
+
+/// The film forces of one skirt side and their derivatives (n x n, over the side's slices).
+#[derive(Clone, Debug)]
+pub struct SideFilm {
+    pub force: Vec<f64>,
+    /// dF_i / dp_k and dF_i / dp'_k.
+    pub d_pen: DMatrix<f64>,
+    pub d_rate: DMatrix<f64>,
+    /// Whether any point of the side is wetted or touched by asperities.
+    pub engaged: bool,
+}
+
+impl Film {
+    /// Film forces on the consecutive slices `first..first + pen.len()` of one side at
+    /// penetrations `pen` \[m\] and rates `rate` [m/s], the piston's upward velocity `dz` [m/s].
+    pub fn side(&self, first: usize, pen: &[f64], rate: &[f64], dz: f64) -> SideFilm {
+        let n = pen.len();
+        let x = &self.x[first..first + n];
+        let dx = self.slice_height();
+        let (left, right) = (x[0] - 0.5 * dx, x[n - 1] + 0.5 * dx);
+        let slope = Line::slope_weights(x);
+        let mut out = SideFilm {
+            force: vec![0.0; n],
+            d_pen: DMatrix::zeros(n, n),
+            d_rate: DMatrix::zeros(n, n),
+            engaged: false,
+        };
+        for deg in SAMPLE_DEG.iter() {
+            let (s, c) = deg.to_radians().sin_cos();
+            let geo: Vec<f64> = (0..n)
+                .map(|i| self.gaps[first + i] * (1.0 - c) + 0.5 * self.ovality * s * s - c * pen[i])
+                .collect();
+            if let Some(gt) = &self.asperity {
+                out.engaged |= self.asperity_sample(gt, (c, &geo), &mut out);
+            }
+            let wet: Vec<bool> = geo.iter().map(|&h| h <= self.supply).collect();
+            if !wet.iter().any(|&w| w) {
+                continue;
+            }
+            out.engaged = true;
+            let h: Vec<f64> = geo.iter().map(|&g| g.max(self.floor)).collect();
+            let dh: Vec<f64> = geo
+                .iter()
+                .map(|&g| if g > self.floor { -c } else { 0.0 })
+                .collect();
+            let line = Line {
+                x,
+                left,
+                right,
+                h: &h,
+                mu: &self.mu[first..first + n],
+                wet: &wet,
+            };
+            let src: Vec<f64> = (0..n)
+                .map(|i| {
+                    let sl: f64 = slope[i].iter().map(|&(k, w)| w * h[k]).sum();
+                    if wet[i] {
+                        -c * rate[i] + 0.5 * dz * sl
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            self.add_sample(&line, (c, &src, &dh), (&slope, dz), &mut out);
+        }
+        out
+    }
+
+    /// Adds one sample line's clipped pressure force and its derivatives to `out`.
+    fn add_sample(
+        &self,
+        line: &Line<'_>,
+        (c, src, dh): (f64, &[f64], &[f64]),
+        (slope, dz): (&[[(usize, f64); 3]], f64),
+        out: &mut SideFilm,
+    ) {
+        let n = src.len();
+        let t = line.system();
+        let rhs: Vec<f64> = (0..n).map(|i| t.m[i] * src[i]).collect();
+        let p = thomas(&t, &rhs);
+        let keep: Vec<f64> = p.iter().map(|&v| if v > 0.0 { 1.0 } else { 0.0 }).collect();
+        let clip: Vec<f64> = p.iter().map(|&v| v.max(0.0)).collect();
+        let w = self.arc * c;
+        for (i, f) in line.integrate(&clip).iter().enumerate() {
+            out.force[i] += w * f;
+        }
+        // derivatives: dP = A^-1 (m dS - dA P), clipped, integrated
+        let column = |k: usize, ds: Vec<f64>, da: Vec<f64>, target: &mut DMatrix<f64>| {
+            let r: Vec<f64> = (0..n).map(|i| t.m[i] * ds[i] - da[i]).collect();
+            let dp: Vec<f64> = thomas(&t, &r)
+                .iter()
+                .zip(&keep)
+                .map(|(a, b)| a * b)
+                .collect();
+            for (i, f) in line.integrate(&dp).iter().enumerate() {
+                target[(i, k)] += w * f;
+            }
+        };
+        for k in 0..n {
+            if line.wet[k] {
+                let mut ds = vec![0.0; n];
+                ds[k] = -c;
+                column(k, ds, vec![0.0; n], &mut out.d_rate);
+            }
+            if dh[k] == 0.0 {
+                continue;
+            }
+            // the gap h_k moves the slopes of its neighbours and the conductances of its faces
+            let mut ds = vec![0.0; n];
+            for (i, row) in slope.iter().enumerate() {
+                for &(kk, wgt) in row {
+                    if kk == k && line.wet[i] {
+                        ds[i] += 0.5 * dz * wgt * dh[k];
+                    }
+                }
+            }
+            let mut da = vec![0.0; n];
+            // a dry node's gap enters no conductance (its faces take the wet node's)
+            let faces = if line.wet[k] {
+                vec![k, k + 1]
+            } else {
+                Vec::new()
+            };
+            for face in faces {
+                let (hf, _) = line.face(face);
+                let both = face > 0 && face < n && line.wet[face - 1] && line.wet[face];
+                let dhf = if both { 0.5 } else { 1.0 } * dh[k];
+                let dg = 3.0 * t.g[face] / hf * dhf;
+                // row equations: G_r (P_r - P_i) - G_l (P_i - P_l)
+                let (a, b) = (face.checked_sub(1), (face < n).then_some(face));
+                let pa = a.map_or(0.0, |i| if line.wet[i] { p[i] } else { 0.0 });
+                let pb = b.map_or(0.0, |i| if line.wet[i] { p[i] } else { 0.0 });
+                if let Some(i) = a.filter(|&i| line.wet[i]) {
+                    da[i] += dg * (pb - pa);
+                }
+                if let Some(i) = b.filter(|&i| line.wet[i]) {
+                    da[i] -= dg * (pb - pa);
+                }
+            }
+            column(k, ds, da, &mut out.d_pen);
+        }
+    }
+
+    /// Adds one sample line's asperity forces (midpoint per slice) and their derivatives;
+    /// returns whether any asperity carries load.
+    fn asperity_sample(
+        &self,
+        gt: &GreenwoodTripp,
+        (c, geo): (f64, &[f64]),
+        out: &mut SideFilm,
+    ) -> bool {
+        let n = geo.len();
+        let mut any = false;
+        for i in 0..n {
+            let (pc, dpc) = gt.pressure(geo[i]);
+            if pc == 0.0 {
+                continue;
+            }
+            any = true;
+            let w = self.arc * c * self.slice_height();
+            out.force[i] += w * pc;
+            out.d_pen[(i, i)] += w * dpc * (-c);
+        }
+        any
+    }
+
+    /// Height of one slice \[m\].
+    fn slice_height(&self) -> f64 {
+        self.length / self.x.len() as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thomas_solves_a_small_system() {
+        let t = Tri {
+            lower: vec![0.0, 1.0, 1.0],
+            diag: vec![-2.0, -2.0, -2.0],
+            upper: vec![1.0, 1.0, 0.0],
+            m: vec![1.0; 3],
+            g: vec![],
+            d: vec![],
+        };
+        let x = thomas(&t, &[-1.0, 0.0, -1.0]);
+        for v in x {
+            assert!((v - 1.0).abs() < 1e-14);
+        }
+    }
+}
