@@ -232,7 +232,7 @@ fn verification_hht_bodies_exchange_momentum_with_the_structure_exactly() {
         let mut touched = false;
         for _ in 0..400 {
             let slice = head_on(&law, c, prev);
-            let r = contact::step(&[body], &[slice], &mut wall, dt, scheme, 50).unwrap();
+            let r = contact::step(&[body], &[slice], &[], &mut wall, dt, scheme, 50).unwrap();
             body = r.bodies[0];
             prev = r.penetrations[0];
             touched |= r.forces[0] > 0.0;
@@ -299,11 +299,12 @@ fn impact(
         let r = match modal.as_mut() {
             Some((st, _)) => {
                 st.integrator.predict(dt);
-                contact::step(&[body], std::slice::from_ref(&slice), st, dt, scheme, 50)
+                contact::step(&[body], std::slice::from_ref(&slice), &[], st, dt, scheme, 50)
             }
             None => contact::step(
                 &[body],
                 std::slice::from_ref(&slice),
+                &[],
                 &mut wall,
                 dt,
                 scheme,
@@ -317,6 +318,7 @@ fn impact(
             damper: r.damper[0],
             clamped: r.clamped[0],
             onset: false,
+            film: 0.0,
         }];
         let di = contact::onset_impulses(&[prev], &mut after, &[c], dt, scheme);
         let after = after[0];

@@ -339,6 +339,19 @@ impl Line<'_> {
     }
 }
 
+/// Pressure scale of the cavitation's smoothing \[Pa\] (0.1 bar).
+pub const CAVITATION_SCALE: f64 = 1e4;
+
+/// Half-Sommerfeld cavitation, smoothed: p+ = (p + sqrt(p^2 + e^2)) / 2 with e =
+/// [`CAVITATION_SCALE`] (p+ -> max(p, 0) away from zero; a sub-ambient film keeps a pressure
+/// of e^2 / (4 |p|), the clip's kink would make the step's Newton iteration swing between a
+/// cavitated and a loaded film), and dp+/dp.
+pub fn cavitation(p: f64) -> (f64, f64) {
+    let e = CAVITATION_SCALE;
+    let r = p.hypot(e);
+    (0.5 * (p + r), 0.5 * (1.0 + p / r))
+}
+
 /// Solves the tridiagonal system (Thomas; the system is diagonally dominant).
 fn thomas(t: &Tri, rhs: &[f64]) -> Vec<f64> {
     let n = rhs.len();
@@ -389,7 +402,39 @@ pub struct SideFilm {
     pub engaged: bool,
 }
 
+/// Gaps below this are held at it in the Reynolds term \[m\]: the film's squeeze damping
+/// stays finite when the surfaces meet, where the penalty law takes the load.
+pub const FILM_FLOOR: f64 = 3e-6;
+
 impl Film {
+    /// The film of `skirt` (built from `spec`) with the oil `oil`: slice positions, the Vogel
+    /// viscosity at each slice's film temperature (the mean of the skirt's there and the
+    /// liner's), the arc R dpsi of each contact sample.
+    pub fn new(skirt: &super::skirt::Skirt, spec: &super::skirt::SkirtSpec, oil: &crate::scene::spec::OilSpec) -> Self {
+        let x: Vec<f64> = skirt.heights.iter().map(|h| spec.top_above_pin - h).collect();
+        let mu = x
+            .iter()
+            .map(|xi| {
+                let frac = xi / spec.length;
+                let t = spec.skirt_top_temp_c + (spec.skirt_bottom_temp_c - spec.skirt_top_temp_c) * frac;
+                oil.vogel.at(0.5 * (t + spec.liner_temp_c))
+            })
+            .collect();
+        let dpsi = (SAMPLE_DEG[1] - SAMPLE_DEG[0]).to_radians();
+        Self {
+            model: oil.model,
+            x,
+            length: spec.length,
+            gaps: skirt.gaps.clone(),
+            mu,
+            ovality: spec.ovality,
+            arc: 0.5 * spec.bore * dpsi,
+            supply: oil.supply,
+            floor: FILM_FLOOR,
+            asperity: oil.asperity,
+        }
+    }
+
     /// Film forces on the consecutive slices `first..first + pen.len()` of one side at
     /// penetrations `pen` \[m\] and rates `rate` [m/s], the piston's upward velocity `dz` [m/s].
     pub fn side(&self, first: usize, pen: &[f64], rate: &[f64], dz: f64) -> SideFilm {
@@ -412,8 +457,8 @@ impl Film {
             if let Some(gt) = &self.asperity {
                 out.engaged |= self.asperity_sample(gt, (c, &geo), &mut out);
             }
-            let wet: Vec<bool> = geo.iter().map(|&h| h <= self.supply).collect();
-            if !wet.iter().any(|&w| w) {
+            let wt: Vec<(f64, f64)> = geo.iter().map(|&h| self.wetting(h)).collect();
+            if wt.iter().all(|w| w.0 == 0.0) {
                 continue;
             }
             out.engaged = true;
@@ -422,6 +467,7 @@ impl Film {
                 .iter()
                 .map(|&g| if g > self.floor { -c } else { 0.0 })
                 .collect();
+            let wet = vec![true; n];
             let line = Line {
                 x,
                 left,
@@ -430,93 +476,99 @@ impl Film {
                 mu: &self.mu[first..first + n],
                 wet: &wet,
             };
-            let src: Vec<f64> = (0..n)
+            let raw: Vec<f64> = (0..n)
                 .map(|i| {
                     let sl: f64 = slope[i].iter().map(|&(k, w)| w * h[k]).sum();
-                    if wet[i] {
-                        -c * rate[i] + 0.5 * dz * sl
-                    } else {
-                        0.0
-                    }
+                    -c * rate[i] + 0.5 * dz * sl
                 })
                 .collect();
-            self.add_sample(&line, (c, &src, &dh), (&slope, dz), &mut out);
+            self.add_sample(&line, (c, &raw, &wt, &dh), (&slope, dz), &mut out);
         }
         out
     }
 
-    /// Adds one sample line's clipped pressure force and its derivatives to `out`.
+    /// The wetted fraction w of a point with gap `h` and dw/dh: 1 up to the oil supply, a C1
+    /// ramp 1 - (3 t^2 - 2 t^3), t = (h - supply) / (supply / 2), down to 0 at 1.5 times the
+    /// supply (the film force stays continuous as the skirt closes in, so the step's Newton
+    /// iteration has a solution to find).
+    pub fn wetting(&self, h: f64) -> (f64, f64) {
+        let band = 0.5 * self.supply;
+        let t = (h - self.supply) / band;
+        if t <= 0.0 {
+            (1.0, 0.0)
+        } else if t >= 1.0 {
+            (0.0, 0.0)
+        } else {
+            (1.0 - t * t * (3.0 - 2.0 * t), -6.0 * t * (1.0 - t) / band)
+        }
+    }
+
+    /// Adds one sample line's clipped pressure force and its derivatives to `out`: the source
+    /// S_i = w_i raw_i (w the wetted fraction, raw = dh/dt + (U/2) dh/dx), the pressure
+    /// A P = m S, and dP = A^-1 (m dS - dA P) for every penetration and rate.
     fn add_sample(
         &self,
         line: &Line<'_>,
-        (c, src, dh): (f64, &[f64], &[f64]),
+        (c, raw, wt, dh): (f64, &[f64], &[(f64, f64)], &[f64]),
         (slope, dz): (&[[(usize, f64); 3]], f64),
         out: &mut SideFilm,
     ) {
-        let n = src.len();
+        let n = raw.len();
         let t = line.system();
-        let rhs: Vec<f64> = (0..n).map(|i| t.m[i] * src[i]).collect();
+        let rhs: Vec<f64> = (0..n).map(|i| t.m[i] * wt[i].0 * raw[i]).collect();
         let p = thomas(&t, &rhs);
-        let keep: Vec<f64> = p.iter().map(|&v| if v > 0.0 { 1.0 } else { 0.0 }).collect();
-        let clip: Vec<f64> = p.iter().map(|&v| v.max(0.0)).collect();
+        let (clip, keep): (Vec<f64>, Vec<f64>) = p.iter().map(|&v| cavitation(v)).unzip();
         let w = self.arc * c;
         for (i, f) in line.integrate(&clip).iter().enumerate() {
             out.force[i] += w * f;
         }
-        // derivatives: dP = A^-1 (m dS - dA P), clipped, integrated
         let column = |k: usize, ds: Vec<f64>, da: Vec<f64>, target: &mut DMatrix<f64>| {
             let r: Vec<f64> = (0..n).map(|i| t.m[i] * ds[i] - da[i]).collect();
-            let dp: Vec<f64> = thomas(&t, &r)
-                .iter()
-                .zip(&keep)
-                .map(|(a, b)| a * b)
-                .collect();
+            let dp: Vec<f64> = thomas(&t, &r).iter().zip(&keep).map(|(a, b)| a * b).collect();
             for (i, f) in line.integrate(&dp).iter().enumerate() {
                 target[(i, k)] += w * f;
             }
         };
         for k in 0..n {
-            if line.wet[k] {
+            if wt[k].0 > 0.0 {
                 let mut ds = vec![0.0; n];
-                ds[k] = -c;
+                ds[k] = -c * wt[k].0;
                 column(k, ds, vec![0.0; n], &mut out.d_rate);
             }
-            if dh[k] == 0.0 {
-                continue;
-            }
-            // the gap h_k moves the slopes of its neighbours and the conductances of its faces
+            // p_k moves the wetted fraction at k (dgeo/dp = -c), the slopes of the
+            // neighbours and the conductances of k's faces (through the floored gap)
             let mut ds = vec![0.0; n];
-            for (i, row) in slope.iter().enumerate() {
-                for &(kk, wgt) in row {
-                    if kk == k && line.wet[i] {
-                        ds[i] += 0.5 * dz * wgt * dh[k];
+            ds[k] += wt[k].1 * (-c) * raw[k];
+            if dh[k] != 0.0 {
+                for (i, row) in slope.iter().enumerate() {
+                    for &(kk, wgt) in row {
+                        if kk == k {
+                            ds[i] += wt[i].0 * 0.5 * dz * wgt * dh[k];
+                        }
                     }
                 }
             }
             let mut da = vec![0.0; n];
-            // a dry node's gap enters no conductance (its faces take the wet node's)
-            let faces = if line.wet[k] {
-                vec![k, k + 1]
-            } else {
-                Vec::new()
-            };
-            for face in faces {
-                let (hf, _) = line.face(face);
-                let both = face > 0 && face < n && line.wet[face - 1] && line.wet[face];
-                let dhf = if both { 0.5 } else { 1.0 } * dh[k];
-                let dg = 3.0 * t.g[face] / hf * dhf;
-                // row equations: G_r (P_r - P_i) - G_l (P_i - P_l)
-                let (a, b) = (face.checked_sub(1), (face < n).then_some(face));
-                let pa = a.map_or(0.0, |i| if line.wet[i] { p[i] } else { 0.0 });
-                let pb = b.map_or(0.0, |i| if line.wet[i] { p[i] } else { 0.0 });
-                if let Some(i) = a.filter(|&i| line.wet[i]) {
-                    da[i] += dg * (pb - pa);
-                }
-                if let Some(i) = b.filter(|&i| line.wet[i]) {
-                    da[i] -= dg * (pb - pa);
+            if dh[k] != 0.0 {
+                for face in [k, k + 1] {
+                    let (hf, _) = line.face(face);
+                    let both = face > 0 && face < n;
+                    let dhf = if both { 0.5 } else { 1.0 } * dh[k];
+                    let dg = 3.0 * t.g[face] / hf * dhf;
+                    // rows: G_r (P_r - P_i) - G_l (P_i - P_l), P = 0 beyond the ends
+                    let pa = face.checked_sub(1).map_or(0.0, |i| p[i]);
+                    let pb = if face < n { p[face] } else { 0.0 };
+                    if face > 0 {
+                        da[face - 1] += dg * (pb - pa);
+                    }
+                    if face < n {
+                        da[face] -= dg * (pb - pa);
+                    }
                 }
             }
-            column(k, ds, da, &mut out.d_pen);
+            if ds.iter().chain(&da).any(|&v| v != 0.0) {
+                column(k, ds, da, &mut out.d_pen);
+            }
         }
     }
 

@@ -55,6 +55,8 @@ pub struct Piston {
     pub contact_damping: f64,
     /// Coulomb friction coefficient of the skirt.
     pub friction: f64,
+    /// The skirt's oil film (`None`: dry).
+    pub film: Option<lubrication::Film>,
 }
 
 /// Loads on the secondary motion at one instant.
@@ -69,6 +71,8 @@ pub struct PistonLoads {
     /// tan(beta) and the sign of the piston's axial velocity.
     pub tan_beta: f64,
     pub axial_sign: f64,
+    /// The piston's axial velocity z' [m/s] (+ up, toward the liner's top).
+    pub axial_velocity: f64,
     /// Gas pressure \[Pa\].
     pub pressure: f64,
 }
@@ -96,6 +100,7 @@ impl Piston {
             pin_depth: self.pin_depth_at_tdc + (self.kinematics.z_top() - k.z),
             tan_beta: k.tan_beta,
             axial_sign: if k.dz >= 0.0 { 1.0 } else { -1.0 },
+            axial_velocity: k.dz,
             pressure: p,
         }
     }

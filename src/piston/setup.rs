@@ -2,6 +2,7 @@
 //! (a measured curve or the scene's Wiebe heat release), the skirt and its contact laws.
 
 use super::kinematics::CrankSlider;
+use super::lubrication;
 use super::pressure::{PressureCurve, PressureError};
 use super::skirt::Skirt;
 use super::Piston;
@@ -92,6 +93,10 @@ pub fn piston_of(scene: &Scene) -> Result<Piston, PistonSetupError> {
         cg_lateral: p.cg_lateral,
         pin_offset: p.pin_offset,
         pin_depth_at_tdc: p.crown_depth_at_tdc + p.compression_height,
+        film: p
+            .oil
+            .as_ref()
+            .map(|oil| lubrication::Film::new(&skirt, &p.skirt, oil)),
         skirt,
         contact_damping: p.contact_damping,
         friction: p.friction,

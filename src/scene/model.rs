@@ -124,6 +124,8 @@ pub struct PistonSpec {
     pub skirt: spec::SkirtSpec,
     pub contact_damping: f64,
     pub friction: f64,
+    /// The oil film; `None` for a dry skirt.
+    pub oil: Option<spec::OilSpec>,
 }
 
 /// Operating point besides the speed, SI.

@@ -165,6 +165,17 @@ pub struct SkirtSpec {
     pub stiffness: f64,
 }
 
+/// The skirt's oil film, SI (see [`crate::scene::raw::RawOil`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OilSpec {
+    pub model: crate::piston::lubrication::Lubrication,
+    /// Oil on the liner \[m\].
+    pub supply: f64,
+    pub vogel: crate::piston::lubrication::Vogel,
+    /// Greenwood-Tripp asperity contact (`mixed`).
+    pub asperity: Option<crate::piston::lubrication::GreenwoodTripp>,
+}
+
 /// Parameters of the built-in Wiebe curve at full load (SI, angles in degrees).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Wiebe {

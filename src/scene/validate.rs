@@ -615,6 +615,7 @@ pub(super) fn validate_piston(
             p.contact_damping_n_s_per_m,
         )?,
         friction: c.nonneg("piston.friction", p.friction)?,
+        oil: validate_oil(c, p)?,
     };
     let offset = (piston.pin_offset - piston.crank_offset).abs();
     if offset + engine.stroke / 2.0 >= engine.rod_length {
@@ -624,6 +625,63 @@ pub(super) fn validate_piston(
         ));
     }
     Ok(piston)
+}
+
+/// `piston.lubrication` and `[piston.oil]`: the film's data, SI; `None` for a dry skirt.
+fn validate_oil(
+    c: &Checker<'_>,
+    p: &raw::RawPiston,
+) -> Result<Option<spec::OilSpec>, SceneError> {
+    use crate::piston::lubrication::{GreenwoodTripp, Lubrication, Vogel};
+    let model = match p.lubrication {
+        raw::RawLubrication::Dry => return Ok(None),
+        raw::RawLubrication::Squeeze => Lubrication::Squeeze,
+        raw::RawLubrication::Mixed => Lubrication::Mixed,
+    };
+    let o = &p.oil;
+    let supply = c.positive("piston.oil.supply_um", o.supply_um)?;
+    if supply > 1000.0 {
+        return Err(c.err(
+            "piston.oil.supply_um",
+            format!("must lie in (0, 1000] um, got {}", num(supply)),
+        ));
+    }
+    let vogel = Vogel {
+        a: c.positive("piston.oil.vogel_a_mpa_s", o.vogel_a_mpa_s)? * 1e-3,
+        b: c.positive("piston.oil.vogel_b_c", o.vogel_b_c)?,
+        c: c.finite("piston.oil.vogel_c_c", o.vogel_c_c)?,
+    };
+    // the film is no colder than the coolest surface it touches
+    let th = &p.thermal;
+    let coldest = th
+        .skirt_bottom_temp_c
+        .min(th.skirt_top_temp_c)
+        .min(th.liner_temp_c);
+    if coldest + vogel.c <= 0.0 {
+        return Err(c.err(
+            "piston.oil.vogel_c_c",
+            format!(
+                "T + c must be positive at the film's temperatures (down to {} deg C)",
+                num(coldest)
+            ),
+        ));
+    }
+    let asperity = if model == Lubrication::Mixed {
+        Some(GreenwoodTripp::new(
+            c.positive("piston.oil.roughness_um", o.roughness_um)? * 1e-6,
+            c.positive("piston.oil.eta_beta_sigma", o.eta_beta_sigma)?,
+            c.positive("piston.oil.sigma_over_beta", o.sigma_over_beta)?,
+            c.positive("piston.oil.asperity_modulus_gpa", o.asperity_modulus_gpa)? * 1e9,
+        ))
+    } else {
+        None
+    };
+    Ok(Some(spec::OilSpec {
+        model,
+        supply: supply * 1e-6,
+        vogel,
+        asperity,
+    }))
 }
 
 /// `[operating]`: load, combustion model (Wiebe) or measured pressure curve.

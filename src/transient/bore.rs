@@ -2,7 +2,7 @@
 //! step, the piston at rest, and the residual response at the analysis points. Shared by the
 //! engine cycle and the windows.
 
-use super::contact::{Body, Location, Slice};
+use super::contact::{Body, FilmGroup, Location, Slice};
 use crate::linalg::dense::{row, Dense};
 use crate::piston::Piston;
 
@@ -77,6 +77,37 @@ pub(crate) fn push_slices<'p>(
             }
         }
     }
+}
+
+/// The oil films of a step's slices: one group per piston side, its slices in skirt order
+/// (`meta`: body, thrust side, skirt slice, height of each slice, as [`push_slices`] gives
+/// them); `axial(b)` is body b's axial velocity [m/s]. None for a dry skirt.
+pub(crate) fn film_groups<'p>(
+    piston: &'p Piston,
+    meta: &[(usize, bool, usize, f64)],
+    axial: &dyn Fn(usize) -> f64,
+) -> Vec<FilmGroup<'p>> {
+    let Some(film) = piston.film.as_ref() else {
+        return Vec::new();
+    };
+    let mut out: Vec<FilmGroup<'p>> = Vec::new();
+    for (k, &(b, side, i, _)) in meta.iter().enumerate() {
+        let same = out.last().is_some_and(|g| {
+            let &(gb, gs, gi, _) = &meta[*g.slices.last().expect("a group has a slice")];
+            gb == b && gs == side && gi + 1 == i
+        });
+        if same {
+            out.last_mut().expect("checked").slices.push(k);
+        } else {
+            out.push(FilmGroup {
+                slices: vec![k],
+                first: i,
+                film,
+                axial_velocity: axial(b),
+            });
+        }
+    }
+    out
 }
 
 /// The piston at rest, centred, at its own crank angle `deg`: acceleration from the loads.

@@ -34,6 +34,7 @@
 //! ([`Body::applied`]) on its right-hand side; alpha = 0 is Newmark exactly.
 
 use super::scheme::Scheme;
+use crate::piston::lubrication::{Film, SideFilm};
 use nalgebra::{DMatrix, DVector};
 
 /// Where a slice touches the structure: up to two structure contact DOFs with weights
@@ -87,6 +88,108 @@ pub struct Slice<'a> {
     pub prev_penetration: f64,
 }
 
+/// One skirt side's oil film in a step ([`crate::piston::lubrication`]): its slice forces are
+/// added to the slices' contact forces, F_i = F_dry,i + F_film,i(p, p'), the film's a smooth
+/// function of all the side's penetrations and rates, linearised at each Newton iterate:
+///   F_film ~ F0 + K (p - p0) + C (p' - p0'),  K = dF/dp, C = dF/dp'
+/// (the whole side enters the step's active set while the film is engaged).
+#[derive(Clone, Debug)]
+pub struct FilmGroup<'a> {
+    /// The side's slices: indices into the step's slices, consecutive skirt slices from
+    /// skirt slice `first` (top to bottom).
+    pub slices: Vec<usize>,
+    pub first: usize,
+    pub film: &'a Film,
+    /// The piston's axial velocity z' [m/s] (+ up).
+    pub axial_velocity: f64,
+}
+
+/// A film's linearisation at (p0, p0') of its slices.
+struct FilmLin {
+    p0: Vec<f64>,
+    r0: Vec<f64>,
+    side: SideFilm,
+    /// Newton's step fraction toward the next iterate and the miss of the last iteration
+    /// (see [`FilmLin::damped`]).
+    lambda: f64,
+    miss: f64,
+}
+
+impl FilmLin {
+    fn at(g: &FilmGroup<'_>, pen: &[f64], rates: &[f64]) -> Self {
+        let p0: Vec<f64> = g.slices.iter().map(|&i| pen[i]).collect();
+        let r0: Vec<f64> = g.slices.iter().map(|&i| rates[i]).collect();
+        let side = g.film.side(g.first, &p0, &r0, g.axial_velocity);
+        Self {
+            p0,
+            r0,
+            side,
+            lambda: 1.0,
+            miss: f64::INFINITY,
+        }
+    }
+
+    /// The largest miss of the linearised forces at the new iterate against the film's.
+    fn miss_at(&self, g: &FilmGroup<'_>, new: &FilmLin, (pen, rates): (&[f64], &[f64])) -> f64 {
+        (0..g.slices.len())
+            .map(|a| (self.predict(g, a, pen, rates) - new.side.force[a]).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// Newton's damping on the film: the next linearisation point moves from this one toward
+    /// the new iterate (`pen`, `rates`) by a fraction lambda <= 1:
+    /// - lambda is halved (down to 1/16) whenever the miss grew since the last iteration (a
+    ///   full Newton step can swing between a cavitated and a loaded film), and doubled back
+    ///   (up to 1) when it fell;
+    /// - lambda keeps every slice's thrust-line gap h = max(-p, 0) at least half of what it
+    ///   was (the force grows as 1/h^3: a full step onto a nearly closed gap relinearises
+    ///   where the law is steepest).
+    ///
+    /// Returns the next linearisation.
+    fn next(&self, g: &FilmGroup<'_>, (pen, rates): (&[f64], &[f64]), miss: f64) -> FilmLin {
+        let mut lambda = if miss >= self.miss {
+            (0.5 * self.lambda).max(1.0 / 16.0)
+        } else {
+            (1.5 * self.lambda).min(1.0)
+        };
+        for (k, &i) in g.slices.iter().enumerate() {
+            let (h0, h1) = ((-self.p0[k]).max(0.0), (-pen[i]).max(0.0));
+            if h1 < 0.5 * h0 {
+                lambda = lambda.min(0.5 * h0 / (h0 - h1));
+            }
+        }
+        let mut out = if lambda >= 1.0 || !self.side.engaged {
+            FilmLin::at(g, pen, rates)
+        } else {
+            let mut p = pen.to_vec();
+            let mut r = rates.to_vec();
+            for (k, &i) in g.slices.iter().enumerate() {
+                p[i] = self.p0[k] + lambda * (pen[i] - self.p0[k]);
+                r[i] = self.r0[k] + lambda * (rates[i] - self.r0[k]);
+            }
+            FilmLin::at(g, &p, &r)
+        };
+        out.lambda = lambda.min(1.0);
+        out.miss = miss;
+        out
+    }
+
+    /// The linearised force of the group's slice `a` at penetrations `pen` and rates `rates`.
+    fn predict(&self, g: &FilmGroup<'_>, a: usize, pen: &[f64], rates: &[f64]) -> f64 {
+        let mut f = self.side.force[a];
+        for (k, &i) in g.slices.iter().enumerate() {
+            f += self.side.d_pen[(a, k)] * (pen[i] - self.p0[k])
+                + self.side.d_rate[(a, k)] * (rates[i] - self.r0[k]);
+        }
+        f
+    }
+}
+
+/// Newton has converged on a film when its linearised forces miss the film's forces at the
+/// new iterate by less than this \[N\] plus [`FILM_RELATIVE`] of the side's largest force.
+const FILM_ABSOLUTE: f64 = 1e-3;
+const FILM_RELATIVE: f64 = 1e-7;
+
 /// A body's Newmark state and this step's loads.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Body {
@@ -114,6 +217,8 @@ pub struct StepResult {
     pub damper: Vec<f64>,
     /// Slices whose damped force was clamped at zero (it would have pulled).
     pub clamped: Vec<bool>,
+    /// The oil film's part of every slice force \[N\] (0 for a dry skirt).
+    pub film: Vec<f64>,
     pub iterations: usize,
 }
 
@@ -127,6 +232,7 @@ impl StepResult {
                 damper: self.damper[k],
                 clamped: self.clamped[k],
                 onset: false,
+                film: self.film[k],
             })
             .collect()
     }
@@ -143,6 +249,8 @@ pub struct SliceState {
     pub clamped: bool,
     /// The contact began in the step that ended here (the damper was lagged).
     pub onset: bool,
+    /// The oil film's part of the slice force \[N\].
+    pub film: f64,
 }
 
 impl SliceState {
@@ -153,7 +261,13 @@ impl SliceState {
         damper: 0.0,
         clamped: false,
         onset: false,
+        film: 0.0,
     };
+
+    /// Whether the slice carries force from the liner: it penetrates, or its film is engaged.
+    pub fn engaged(&self) -> bool {
+        self.penetration > 0.0 || self.film > 0.0
+    }
 }
 
 /// Damper impulses that the average-acceleration steps miss at a contact onset, one per
@@ -234,12 +348,15 @@ pub enum StepFailure {
 ///
 /// A piecewise-linear Newton on the slices' law pieces: each iteration solves the step's
 /// linear problem for the active set (`Step::solve_active`), then moves every slice to the
-/// piece its new penetration lies on (`Step::next_pieces`); it has converged when no slice
-/// changes. After a third of `max_iterations` only the most violated slice changes per
-/// iteration (guards against cycling).
+/// piece its new penetration lies on (`Step::next_pieces`) and relinearises the oil films
+/// (`films`, empty for a dry skirt) at the new penetrations and rates; it has converged when
+/// no slice changes and every film's linearisation holds at the new iterate. After a third
+/// of `max_iterations` only the most violated slice changes per iteration (guards against
+/// cycling).
 pub fn step(
     bodies: &[Body],
     slices: &[Slice<'_>],
+    films: &[FilmGroup<'_>],
     structure: &mut dyn Structure,
     dt: f64,
     scheme: Scheme,
@@ -248,7 +365,13 @@ pub fn step(
     let st = Step::new(bodies, slices, dt, scheme);
     let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
     structure.prepare(&locs);
-    let mut pred = Predictions::new(slices, &*structure);
+    let mut in_film = vec![false; slices.len()];
+    for g in films {
+        for &i in &g.slices {
+            in_film[i] = true;
+        }
+    }
+    let mut pred = Predictions::new(slices, &*structure, &in_film);
     // penetration of each slice without new contact forces: first guess of the pieces
     let mut pen: Vec<f64> = (0..slices.len())
         .map(|i| pred.penetration(i, st.qh[slices[i].body], 0.0, &*structure))
@@ -268,19 +391,37 @@ pub fn step(
             }
         })
         .collect();
+    // the films start linearised at the predictor
+    let mut lins: Vec<FilmLin> = if films.is_empty() {
+        Vec::new()
+    } else {
+        let rates = st.film_rates(&in_film, None, &vec![0.0; slices.len()], &pred);
+        films.iter().map(|g| FilmLin::at(g, &pen, &rates)).collect()
+    };
     let mut g_cache: Option<(Vec<usize>, DMatrix<f64>, DMatrix<f64>)> = None;
     for it in 1..=max_iterations {
-        // a slice carries force when it penetrates and its damped force is not clamped
-        let active: Vec<usize> = (0..slices.len())
-            .filter(|&i| pieces[i].mask != 0 && !pieces[i].clamped)
-            .collect();
+        // a slice carries force when it penetrates and its damped force is not clamped, or
+        // when its side's film is engaged
+        let mut carries: Vec<bool> = pieces.iter().map(|p| p.mask != 0 && !p.clamped).collect();
+        for (g, lin) in films.iter().zip(&lins) {
+            if lin.side.engaged {
+                for &i in &g.slices {
+                    carries[i] = true;
+                }
+            }
+        }
+        let active: Vec<usize> = (0..slices.len()).filter(|&i| carries[i]).collect();
         // compliance of the active set (reused while the set is unchanged)
         if g_cache.as_ref().is_none_or(|(a, _, _)| *a != active) {
             let (g, gv) = structure.compliance(&active);
             g_cache = Some((active.clone(), g, gv));
         }
         let (_, g, gv) = g_cache.as_ref().expect("set above");
-        let (q, fa) = st.solve_active(&active, &pieces, g, gv, &pred)?;
+        let film = Films {
+            groups: films,
+            lins: &lins,
+        };
+        let (q, fa) = st.solve_active(&active, &pieces, (g, gv), &pred, &film)?;
         let mut forces = vec![0.0; slices.len()];
         for (r, &i) in active.iter().enumerate() {
             forces[i] = fa[r];
@@ -304,8 +445,37 @@ pub fn step(
             &*structure,
             (&mut pen, &mut rates),
         );
-        if changes.is_empty() {
-            return Ok(st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it));
+        let film_settled = if films.is_empty() {
+            true
+        } else {
+            let frates = st.film_rates(&in_film, Some(&q), &vel, &pred);
+            let mut settled = true;
+            let next: Vec<FilmLin> = films
+                .iter()
+                .zip(&lins)
+                .map(|(g, old)| {
+                    let new = FilmLin::at(g, &pen, &frates);
+                    let miss = old.miss_at(g, &new, (&pen, &frates));
+                    let ok = film_settled(old, &new, miss);
+                    settled &= ok;
+                    if ok {
+                        new
+                    } else {
+                        old.next(g, (&pen, &frates), miss)
+                    }
+                })
+                .collect();
+            lins = next;
+            settled
+        };
+        if changes.is_empty() && film_settled {
+            let mut res = st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it);
+            for (g, lin) in films.iter().zip(&lins) {
+                for (a, &i) in g.slices.iter().enumerate() {
+                    res.film[i] = lin.side.force[a];
+                }
+            }
+            return Ok(res);
         }
         if it <= max_iterations / 3 {
             for (i, next) in changes {
@@ -323,6 +493,19 @@ pub fn step(
     Err(StepFailure::NoConvergence {
         iterations: max_iterations,
     })
+}
+
+/// Whether a film's linearisation `old` predicted its forces at the new iterate (`new`) within
+/// the tolerance (`miss` the largest difference), its engagement unchanged.
+fn film_settled(old: &FilmLin, new: &FilmLin, miss: f64) -> bool {
+    let scale = new.side.force.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
+    old.side.engaged == new.side.engaged && miss <= FILM_ABSOLUTE + FILM_RELATIVE * scale
+}
+
+/// The step's films and their current linearisations.
+struct Films<'g, 'a> {
+    groups: &'g [FilmGroup<'a>],
+    lins: &'g [FilmLin],
 }
 
 /// A slice's place on its law during the Newton iterations: the elastic piece (mask), whether
@@ -351,14 +534,15 @@ struct Predictions<'s, 'a> {
 }
 
 impl<'s, 'a> Predictions<'s, 'a> {
-    fn new(slices: &'s [Slice<'a>], structure: &dyn Structure) -> Self {
+    /// `exact`: slices that need their exact prediction whatever their bound (a film's).
+    fn new(slices: &'s [Slice<'a>], structure: &dyn Structure, exact: &[bool]) -> Self {
         let bounds = slices
             .iter()
             .enumerate()
             .map(|(i, s)| {
                 let touching =
                     s.prev_penetration > 0.0 || s.law.piece(s.prev_penetration).mask != 0;
-                if touching {
+                if touching || exact[i] {
                     None
                 } else {
                     structure.predicted_bound(i)
@@ -458,9 +642,9 @@ impl<'s, 'a> Step<'s, 'a> {
         &self,
         active: &[usize],
         pieces: &[Piece],
-        g: &DMatrix<f64>,
-        gv: &DMatrix<f64>,
+        (g, gv): (&DMatrix<f64>, &DMatrix<f64>),
         pred: &Predictions<'_, '_>,
+        films: &Films<'_, '_>,
     ) -> Result<(DVector<f64>, Vec<f64>), StepFailure> {
         let (slices, kappa) = (self.slices, self.kappa);
         let na = active.len();
@@ -470,6 +654,10 @@ impl<'s, 'a> Step<'s, 'a> {
         let mut av = vec![0.0; na];
         let mut cd = vec![0.0; na];
         for (r, &i) in active.iter().enumerate() {
+            // a slice carried by its film alone has no dry part
+            if pieces[i].mask == 0 || pieces[i].clamped {
+                continue;
+            }
             let s = &slices[i];
             let piece = s.law.piece_of(pieces[i].mask);
             kt[r] = piece.kt;
@@ -492,6 +680,9 @@ impl<'s, 'a> Step<'s, 'a> {
             rhs[(r, 1 + 2 * b)] = f * s.row[0];
             rhs[(r, 2 + 2 * b)] = f * s.row[1];
         }
+        if !films.groups.is_empty() {
+            self.add_films(active, (g, gv), pred, films, (&mut w, &mut rhs));
+        }
         let sol = if na > 0 {
             w.lu().solve(&rhs).ok_or(StepFailure::Singular)?
         } else {
@@ -503,6 +694,76 @@ impl<'s, 'a> Step<'s, 'a> {
             .map(|r| sol[(r, 0)] + (0..nq).map(|c| sol[(r, 1 + c)] * q[c]).sum::<f64>())
             .collect();
         Ok((q, fa))
+    }
+
+    /// Adds the engaged films' linearised forces to the step's rows: for slice i of a film
+    /// and every slice k of its side, with K = dF/dp, C = dF/dp' at (p0, p0'),
+    ///   W_i. += K_ik G_k. + C_ik G_v,k.,
+    ///   r0_i += F0_i - K_ik (p0_k + g_k + u~_k) + C_ik (s_k . v~ - kappa s_k . q~ - u'~_k - p0'_k),
+    ///   (rhs_q)_i += (K_ik + kappa C_ik) s_k   (on body b(k)'s columns).
+    fn add_films(
+        &self,
+        active: &[usize],
+        (g, gv): (&DMatrix<f64>, &DMatrix<f64>),
+        pred: &Predictions<'_, '_>,
+        films: &Films<'_, '_>,
+        (w, rhs): (&mut DMatrix<f64>, &mut DMatrix<f64>),
+    ) {
+        let kappa = self.kappa;
+        let na = active.len();
+        let pos = |i: usize| active.binary_search(&i).ok();
+        for (grp, lin) in films.groups.iter().zip(films.lins) {
+            if !lin.side.engaged {
+                continue;
+            }
+            for (a, &i) in grp.slices.iter().enumerate() {
+                let r = pos(i).expect("an engaged film's slices are active");
+                rhs[(r, 0)] += lin.side.force[a];
+                for (k, &c) in grp.slices.iter().enumerate() {
+                    let (kk, cc) = (lin.side.d_pen[(a, k)], lin.side.d_rate[(a, k)]);
+                    if kk == 0.0 && cc == 0.0 {
+                        continue;
+                    }
+                    let rc = pos(c).expect("an engaged film's slices are active");
+                    for col in 0..na {
+                        w[(r, col)] += kk * g[(rc, col)] + cc * gv[(rc, col)];
+                    }
+                    let s = &self.slices[c];
+                    let b = s.body;
+                    let (u, du) = pred.exact(c);
+                    rhs[(r, 0)] += -kk * (lin.p0[k] + s.gap + u)
+                        + cc * (dot2(s.row, self.vh[b]) - kappa * dot2(s.row, self.qh[b]) - du - lin.r0[k]);
+                    let f = kk + kappa * cc;
+                    rhs[(r, 1 + 2 * b)] += f * s.row[0];
+                    rhs[(r, 2 + 2 * b)] += f * s.row[1];
+                }
+            }
+        }
+    }
+
+    /// The penetration rate p' = s . q' - u'~ - G_v F of every film slice (0 elsewhere), at
+    /// the body coordinates `q` (`None`: the predictor, with q' = v~) and the structure's
+    /// velocity response `vel` to the step's forces.
+    fn film_rates(
+        &self,
+        in_film: &[bool],
+        q: Option<&DVector<f64>>,
+        vel: &[f64],
+        pred: &Predictions<'_, '_>,
+    ) -> Vec<f64> {
+        (0..self.slices.len())
+            .map(|i| {
+                if !in_film[i] {
+                    return 0.0;
+                }
+                let s = &self.slices[i];
+                let v = match q {
+                    Some(q) => self.body_velocity(q, s.body),
+                    None => self.vh[s.body],
+                };
+                dot2(s.row, v) - pred.exact(i).1 - vel[i]
+            })
+            .collect()
     }
 
     /// The bodies' coordinates with the active slice forces F_A = sol0 + sol_q q eliminated.
@@ -651,6 +912,7 @@ impl<'s, 'a> Step<'s, 'a> {
             rates,
             damper,
             clamped: pieces.iter().map(|st| st.clamped).collect(),
+            film: vec![0.0; self.slices.len()],
             iterations,
         }
     }

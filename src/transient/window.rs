@@ -9,7 +9,9 @@
 //! that takes impulses: the ROM does, the full-order model does not, so ROM-against-full
 //! comparisons run both without it.
 
-use super::bore::{body_at_rest, push_slices, residual_displacement, BoreLines, PistonInBore};
+use super::bore::{
+    body_at_rest, film_groups, push_slices, residual_displacement, BoreLines, PistonInBore,
+};
 use super::contact::{self, dot, Body, Location, Structure};
 use super::error::TransientError;
 use super::modal::ModalStructure;
@@ -124,6 +126,7 @@ pub fn run(
         let res = contact::step(
             &[body],
             &slices,
+            &film_groups(piston, &meta, &|_| loads.axial_velocity),
             liner,
             dt,
             window.scheme,

@@ -22,7 +22,9 @@
 //! fraction of the scale for HHT-alpha, which balances a different energy) stops the run (a
 //! numerical instability).
 
-use super::bore::{body_at_rest, push_slices, residual_displacement, BoreLines, PistonInBore};
+use super::bore::{
+    body_at_rest, film_groups, push_slices, residual_displacement, BoreLines, PistonInBore,
+};
 use super::contact::{self, Body, Location, Slice, SliceState, StepFailure};
 use super::error::TransientError;
 use super::modal::ModalStructure;
@@ -306,12 +308,14 @@ impl<'a> EngineRun<'a> {
         let pen_index = |b: usize, side: bool, i: usize| (2 * b + usize::from(!side)) * ns + i;
         let mut bodies = Vec::with_capacity(self.cyls.len());
         let mut side_forces = Vec::with_capacity(self.cyls.len());
+        let mut axial = Vec::with_capacity(self.cyls.len());
         for (b, cyl) in self.cyls.iter().enumerate() {
             let loads = piston.loads(theta - cyl.phase);
             let mut body = cyl.body;
             body.force = loads.force;
             bodies.push(body);
             side_forces.push(loads.side_force);
+            axial.push(loads.axial_velocity);
             let bore = BoreLines {
                 thrust_z: &cyl.rom.thrust_z,
                 antithrust_z: &cyl.rom.antithrust_z,
@@ -335,16 +339,19 @@ impl<'a> EngineRun<'a> {
             Coupling::Monolithic => contact::step(
                 &bodies,
                 &slices,
+                &film_groups(piston, &meta, &|b| axial[b]),
                 &mut self.structure,
                 dt,
                 s,
                 self.settings.max_newton,
             )
             .map_err(Failure::Step)?,
-            Coupling::PerCylinder => self.contact_per_cylinder(&bodies, &slices, &meta, dt)?,
+            Coupling::PerCylinder => {
+                self.contact_per_cylinder(&bodies, &slices, (&meta, &axial), dt)?
+            }
         };
         self.check_step(&res, &meta)?;
-        if self.settings.slap_substeps > 1 && self.side_onset(&meta, &res.penetrations) {
+        if self.settings.slap_substeps > 1 && self.side_onset(&meta, &res) {
             if stop_at_onset {
                 return Ok(false);
             }
@@ -605,10 +612,11 @@ impl<'a> EngineRun<'a> {
         &mut self,
         bodies: &[Body],
         slices: &[Slice<'_>],
-        meta: &[(usize, bool, usize, f64)],
+        (meta, axial): (&[(usize, bool, usize, f64)], &[f64]),
         dt: f64,
     ) -> Result<contact::StepResult, Failure> {
         let mut out = contact::StepResult {
+            film: vec![0.0; slices.len()],
             bodies: bodies.to_vec(),
             forces: vec![0.0; slices.len()],
             penetrations: vec![0.0; slices.len()],
@@ -671,9 +679,12 @@ impl<'a> EngineRun<'a> {
                     sl
                 })
                 .collect();
+            let sub_meta: Vec<_> = idx.iter().map(|&k| meta[k]).collect();
+            let films = film_groups(self.setup.piston, &sub_meta, &|_| axial[b]);
             let r = contact::step(
                 &bodies[b..b + 1],
                 &sub,
+                &films,
                 &mut self.structure,
                 dt,
                 self.settings.scheme,
@@ -687,22 +698,24 @@ impl<'a> EngineRun<'a> {
                 out.rates[k] = r.rates[j];
                 out.damper[k] = r.damper[j];
                 out.clamped[k] = r.clamped[j];
+                out.film[k] = r.film[j];
             }
             out.iterations = out.iterations.max(r.iterations);
         }
         Ok(out)
     }
 
-    /// Whether a cylinder side touches the liner after the step (`penetrations` per slice of
-    /// `meta`: cylinder index, thrust side, slice) with none of its slices touching before.
-    fn side_onset(&self, meta: &[(usize, bool, usize, f64)], penetrations: &[f64]) -> bool {
+    /// Whether a cylinder side touches the liner after the step (the step's slices per
+    /// `meta`: cylinder index, thrust side, slice) with none of its slices touching before; a
+    /// slice touches when it penetrates or its oil film is engaged.
+    fn side_onset(&self, meta: &[(usize, bool, usize, f64)], res: &contact::StepResult) -> bool {
         let ns = self.setup.piston.skirt.heights.len();
         let mut before = vec![false; 2 * self.cyls.len()];
         let mut after = vec![false; 2 * self.cyls.len()];
-        for (&(b, side, i, _), &p) in meta.iter().zip(penetrations) {
+        for (k_slice, &(b, side, i, _)) in meta.iter().enumerate() {
             let k = 2 * b + usize::from(!side);
-            before[k] |= self.prev_state[k * ns + i].penetration > 0.0;
-            after[k] |= p > 0.0;
+            before[k] |= self.prev_state[k * ns + i].engaged();
+            after[k] |= res.penetrations[k_slice] > 0.0 || res.film[k_slice] > 0.0;
         }
         before.iter().zip(&after).any(|(&b, &a)| a && !b)
     }
