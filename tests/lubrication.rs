@@ -2,7 +2,9 @@
 //! squeeze film of a rigid strip, a cylinder approaching a plane, the Greenwood-Tripp integral;
 //! and of its derivatives against finite differences.
 
-use linercav::piston::lubrication::{gt_integral, Film, GreenwoodTripp, Line, Lubrication, Vogel};
+use linercav::piston::lubrication::{
+    gt_integral, Film, GreenwoodTripp, Line, Lubrication, Vogel, CAVITATION_SCALE,
+};
 
 /// Cell-centred nodes of `n` slices on [0, len].
 fn nodes(n: usize, len: f64) -> Vec<f64> {
@@ -208,7 +210,7 @@ fn verification_film_tangent_matches_finite_differences() {
 
 /// Verification of the sliding term's sign: the liner sliding into a gap that narrows along
 /// its motion (U > 0, dh/dx < 0) builds pressure; the opposite sliding does not (the film is
-/// clipped at zero: half-Sommerfeld); no squeeze, no sliding, no force.
+/// cavitated: half-Sommerfeld, smoothed over 0.1 bar); no squeeze, no sliding, no force.
 #[test]
 fn verification_sliding_wedge_builds_pressure_only_when_converging() {
     let mut f = film(Lubrication::Squeeze);
@@ -221,6 +223,9 @@ fn verification_sliding_wedge_builds_pressure_only_when_converging() {
     let still = f.side(0, &pen, &rest, 0.0).force.iter().sum::<f64>();
     println!("wedge: converging {converging:.3e} N, diverging {diverging:.3e} N");
     assert!(converging > 0.0);
-    assert!(diverging.abs() < 1e-9 * converging);
+    // the smoothed cavitation holds a film at most e/2 below ambient over the wetted area
+    let area = 7.0 * f.arc * f.length;
+    assert!(diverging <= 0.0 && diverging >= -0.5 * CAVITATION_SCALE * area);
+    assert!(diverging.abs() < 1e-4 * converging);
     assert_eq!(still, 0.0);
 }

@@ -339,13 +339,98 @@ impl Line<'_> {
     }
 }
 
+impl Line<'_> {
+    /// The weights of [`Line::integrate`]: slice i's force is
+    /// q_i0 p_(i-1) + q_i1 p_i + q_i2 p_(i+1) (p = 0 beyond the ends).
+    fn integration_weights(&self) -> Vec<[f64; 3]> {
+        let n = self.n();
+        let d = self.distances();
+        (0..n)
+            .map(|i| {
+                let el = if i == 0 { self.left } else { 0.5 * (self.x[i - 1] + self.x[i]) };
+                let er = if i == n - 1 { self.right } else { 0.5 * (self.x[i] + self.x[i + 1]) };
+                let (dl, dr) = (d[i], d[i + 1]);
+                let (a, b) = (el - self.x[i], er - self.x[i]);
+                let f = |pl: f64, p: f64, pr: f64| {
+                    let q2 = 2.0 * ((pr - p) / dr - (p - pl) / dl) / (dl + dr);
+                    let q1 = (pr - p) / dr - 0.5 * q2 * dr;
+                    p * (b - a) + q1 * (b * b - a * a) / 2.0 + q2 * (b.powi(3) - a.powi(3)) / 6.0
+                };
+                [f(1.0, 0.0, 0.0), f(0.0, 1.0, 0.0), f(0.0, 0.0, 1.0)]
+            })
+            .collect()
+    }
+}
+
+/// Applies integration weights `q` to `v`.
+fn integrate_with<'a>(q: &'a [[f64; 3]], v: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
+    let n = v.len();
+    (0..n).map(move |i| {
+        let l = if i > 0 { v[i - 1] } else { 0.0 };
+        let r = if i + 1 < n { v[i + 1] } else { 0.0 };
+        q[i][0] * l + q[i][1] * v[i] + q[i][2] * r
+    })
+}
+
+/// A tridiagonal system factored once (Thomas), solved for several right-hand sides.
+struct Factored {
+    lower: Vec<f64>,
+    den: Vec<f64>,
+    c: Vec<f64>,
+}
+
+impl Factored {
+    fn new(t: &Tri) -> Self {
+        let n = t.diag.len();
+        let mut den = vec![0.0; n];
+        let mut c = vec![0.0; n];
+        let mut prev = 0.0;
+        for i in 0..n {
+            den[i] = t.diag[i] - t.lower[i] * prev;
+            c[i] = t.upper[i] / den[i];
+            prev = c[i];
+        }
+        Self {
+            lower: t.lower.clone(),
+            den,
+            c,
+        }
+    }
+
+    fn solve(&self, rhs: &[f64]) -> Vec<f64> {
+        let n = rhs.len();
+        let mut y = vec![0.0; n];
+        let mut prev = 0.0;
+        for i in 0..n {
+            y[i] = (rhs[i] - self.lower[i] * prev) / self.den[i];
+            prev = y[i];
+        }
+        for i in (0..n.saturating_sub(1)).rev() {
+            y[i] -= self.c[i] * y[i + 1];
+        }
+        y
+    }
+
+    /// The columns of A^-1.
+    fn inverse_columns(&self) -> Vec<Vec<f64>> {
+        let n = self.den.len();
+        (0..n)
+            .map(|k| {
+                let mut e = vec![0.0; n];
+                e[k] = 1.0;
+                self.solve(&e)
+            })
+            .collect()
+    }
+}
+
 /// Pressure scale of the cavitation's smoothing \[Pa\] (0.1 bar).
 pub const CAVITATION_SCALE: f64 = 1e4;
 
-/// Half-Sommerfeld cavitation, smoothed: p+ = (p + sqrt(p^2 + e^2)) / 2 with e =
-/// [`CAVITATION_SCALE`] (p+ -> max(p, 0) away from zero; a sub-ambient film keeps a pressure
-/// of e^2 / (4 |p|), the clip's kink would make the step's Newton iteration swing between a
-/// cavitated and a loaded film), and dp+/dp.
+/// Half-Sommerfeld cavitation, smoothed: p+ = (p + sqrt(p^2 + e^2) - e) / 2 with e =
+/// [`CAVITATION_SCALE`], and dp+/dp. p+ = 0 at p = 0 and tends to max(p, 0) away from it; a
+/// cavitated film holds at most e/2 below ambient (the cavitation pressure). The clip's kink
+/// would make the step's Newton iteration swing between a cavitated and a loaded film.
 pub fn cavitation(p: f64) -> (f64, f64) {
     let e = CAVITATION_SCALE;
     let r = p.hypot(e);
@@ -370,6 +455,13 @@ fn thomas(t: &Tri, rhs: &[f64]) -> Vec<f64> {
         y[i] -= c[i] * y[i + 1];
     }
     y
+}
+
+/// Which derivatives a film evaluation forms.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Derivatives {
+    Rates,
+    All,
 }
 
 /// The film of one piston's skirt (built once), SI.
@@ -438,6 +530,23 @@ impl Film {
     /// Film forces on the consecutive slices `first..first + pen.len()` of one side at
     /// penetrations `pen` \[m\] and rates `rate` [m/s], the piston's upward velocity `dz` [m/s].
     pub fn side(&self, first: usize, pen: &[f64], rate: &[f64], dz: f64) -> SideFilm {
+        self.side_with(first, pen, rate, dz, Derivatives::All)
+    }
+
+    /// The side's film forces and their derivatives by the rates; of dF/dp only the asperity
+    /// contact's (diagonal) part.
+    pub fn side_rates(&self, first: usize, pen: &[f64], rate: &[f64], dz: f64) -> SideFilm {
+        self.side_with(first, pen, rate, dz, Derivatives::Rates)
+    }
+
+    fn side_with(
+        &self,
+        first: usize,
+        pen: &[f64],
+        rate: &[f64],
+        dz: f64,
+        derivatives: Derivatives,
+    ) -> SideFilm {
         let n = pen.len();
         let x = &self.x[first..first + n];
         let dx = self.slice_height();
@@ -482,7 +591,7 @@ impl Film {
                     -c * rate[i] + 0.5 * dz * sl
                 })
                 .collect();
-            self.add_sample(&line, (c, &raw, &wt, &dh), (&slope, dz), &mut out);
+            self.add_sample(&line, (c, &raw, &wt, &dh), (&slope, dz), &mut out, derivatives);
         }
         out
     }
@@ -503,73 +612,103 @@ impl Film {
         }
     }
 
-    /// Adds one sample line's clipped pressure force and its derivatives to `out`: the source
-    /// S_i = w_i raw_i (w the wetted fraction, raw = dh/dt + (U/2) dh/dx), the pressure
-    /// A P = m S, and dP = A^-1 (m dS - dA P) for every penetration and rate.
+    /// Adds one sample line's cavitated pressure force and (with `derivatives`) its
+    /// derivatives to `out`: the source S_i = w_i raw_i (w the wetted fraction, raw = dh/dt +
+    /// (U/2) dh/dx), the pressure A P = m S, and dP = A^-1 (m dS - dA P) for every penetration
+    /// and rate, as combinations of the columns of A^-1 (dS and dA P of one penetration touch
+    /// three nodes at most).
     fn add_sample(
         &self,
         line: &Line<'_>,
         (c, raw, wt, dh): (f64, &[f64], &[(f64, f64)], &[f64]),
         (slope, dz): (&[[(usize, f64); 3]], f64),
         out: &mut SideFilm,
+        derivatives: Derivatives,
     ) {
         let n = raw.len();
         let t = line.system();
+        let lu = Factored::new(&t);
+        let q = line.integration_weights();
         let rhs: Vec<f64> = (0..n).map(|i| t.m[i] * wt[i].0 * raw[i]).collect();
-        let p = thomas(&t, &rhs);
+        let p = lu.solve(&rhs);
         let (clip, keep): (Vec<f64>, Vec<f64>) = p.iter().map(|&v| cavitation(v)).unzip();
         let w = self.arc * c;
-        for (i, f) in line.integrate(&clip).iter().enumerate() {
+        for (i, f) in integrate_with(&q, &clip).enumerate() {
             out.force[i] += w * f;
         }
-        let column = |k: usize, ds: Vec<f64>, da: Vec<f64>, target: &mut DMatrix<f64>| {
-            let r: Vec<f64> = (0..n).map(|i| t.m[i] * ds[i] - da[i]).collect();
-            let dp: Vec<f64> = thomas(&t, &r).iter().zip(&keep).map(|(a, b)| a * b).collect();
-            for (i, f) in line.integrate(&dp).iter().enumerate() {
+        let inv = lu.inverse_columns();
+        let mut dp = vec![0.0; n];
+        // target[:, k] += w Q diag(keep) sum_j inv_j r_j over the sparse r
+        let mut column = |k: usize, r: &[(usize, f64)], target: &mut DMatrix<f64>| {
+            dp.iter_mut().for_each(|v| *v = 0.0);
+            for &(j, rj) in r {
+                if rj != 0.0 {
+                    for (v, a) in dp.iter_mut().zip(&inv[j]) {
+                        *v += a * rj;
+                    }
+                }
+            }
+            for (v, kp) in dp.iter_mut().zip(&keep) {
+                *v *= kp;
+            }
+            for (i, f) in integrate_with(&q, &dp).enumerate() {
                 target[(i, k)] += w * f;
             }
         };
         for k in 0..n {
             if wt[k].0 > 0.0 {
-                let mut ds = vec![0.0; n];
-                ds[k] = -c * wt[k].0;
-                column(k, ds, vec![0.0; n], &mut out.d_rate);
+                column(k, &[(k, t.m[k] * (-c) * wt[k].0)], &mut out.d_rate);
             }
-            // p_k moves the wetted fraction at k (dgeo/dp = -c), the slopes of the
-            // neighbours and the conductances of k's faces (through the floored gap)
-            let mut ds = vec![0.0; n];
-            ds[k] += wt[k].1 * (-c) * raw[k];
-            if dh[k] != 0.0 {
-                for (i, row) in slope.iter().enumerate() {
-                    for &(kk, wgt) in row {
-                        if kk == k {
-                            ds[i] += wt[i].0 * 0.5 * dz * wgt * dh[k];
-                        }
-                    }
-                }
-            }
-            let mut da = vec![0.0; n];
-            if dh[k] != 0.0 {
-                for face in [k, k + 1] {
-                    let (hf, _) = line.face(face);
-                    let both = face > 0 && face < n;
-                    let dhf = if both { 0.5 } else { 1.0 } * dh[k];
-                    let dg = 3.0 * t.g[face] / hf * dhf;
-                    // rows: G_r (P_r - P_i) - G_l (P_i - P_l), P = 0 beyond the ends
-                    let pa = face.checked_sub(1).map_or(0.0, |i| p[i]);
-                    let pb = if face < n { p[face] } else { 0.0 };
-                    if face > 0 {
-                        da[face - 1] += dg * (pb - pa);
-                    }
-                    if face < n {
-                        da[face] -= dg * (pb - pa);
-                    }
-                }
-            }
-            if ds.iter().chain(&da).any(|&v| v != 0.0) {
-                column(k, ds, da, &mut out.d_pen);
+            if derivatives == Derivatives::All {
+                let r = self.pen_rhs(k, line, (&t, &p), (c, raw, wt, dh), (slope, dz));
+                column(k, &r, &mut out.d_pen);
             }
         }
+    }
+
+    /// m dS - dA P of penetration k (nodes k-1, k, k+1): p_k moves the wetted fraction at k
+    /// (dgeo/dp = -c), the slopes of the neighbours and the conductances of k's faces
+    /// (through the floored gap).
+    fn pen_rhs(
+        &self,
+        k: usize,
+        line: &Line<'_>,
+        (t, p): (&Tri, &[f64]),
+        (c, raw, wt, dh): (f64, &[f64], &[(f64, f64)], &[f64]),
+        (slope, dz): (&[[(usize, f64); 3]], f64),
+    ) -> Vec<(usize, f64)> {
+        let n = raw.len();
+        let lo = k.saturating_sub(1);
+        let hi = (k + 1).min(n - 1);
+        let mut r: Vec<(usize, f64)> = (lo..=hi).map(|i| (i, 0.0)).collect();
+        let at = |i: usize| i - lo;
+        r[at(k)].1 += t.m[k] * wt[k].1 * (-c) * raw[k];
+        if dh[k] == 0.0 {
+            return r;
+        }
+        for i in lo..=hi {
+            for &(kk, wgt) in &slope[i] {
+                if kk == k {
+                    r[at(i)].1 += t.m[i] * wt[i].0 * 0.5 * dz * wgt * dh[k];
+                }
+            }
+        }
+        for face in [k, k + 1] {
+            let (hf, _) = line.face(face);
+            let both = face > 0 && face < n;
+            let dhf = if both { 0.5 } else { 1.0 } * dh[k];
+            let dg = 3.0 * t.g[face] / hf * dhf;
+            // rows: G_r (P_r - P_i) - G_l (P_i - P_l), P = 0 beyond the ends
+            let pa = face.checked_sub(1).map_or(0.0, |i| p[i]);
+            let pb = if face < n { p[face] } else { 0.0 };
+            if face > 0 {
+                r[at(face - 1)].1 -= dg * (pb - pa);
+            }
+            if face < n {
+                r[at(face)].1 += dg * (pb - pa);
+            }
+        }
+        r
     }
 
     /// Adds one sample line's asperity forces (midpoint per slice) and their derivatives;

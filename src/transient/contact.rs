@@ -34,7 +34,7 @@
 //! ([`Body::applied`]) on its right-hand side; alpha = 0 is Newmark exactly.
 
 use super::scheme::Scheme;
-use crate::piston::lubrication::{Film, SideFilm};
+use crate::piston::lubrication::Film;
 use nalgebra::{DMatrix, DVector};
 
 /// Where a slice touches the structure: up to two structure contact DOFs with weights
@@ -88,107 +88,62 @@ pub struct Slice<'a> {
     pub prev_penetration: f64,
 }
 
-/// One skirt side's oil film in a step ([`crate::piston::lubrication`]): its slice forces are
-/// added to the slices' contact forces, F_i = F_dry,i + F_film,i(p, p'), the film's a smooth
-/// function of all the side's penetrations and rates, linearised at each Newton iterate:
-///   F_film ~ F0 + K (p - p0) + C (p' - p0'),  K = dF/dp, C = dF/dp'
-/// (the whole side enters the step's active set while the film is engaged).
+/// One skirt side's oil film in a step ([`crate::piston::lubrication`]): its slices (indices
+/// into the step's slices, consecutive skirt slices from skirt slice `first`, top to bottom),
+/// the film and the piston's axial velocity z' [m/s] (+ up).
 #[derive(Clone, Debug)]
 pub struct FilmGroup<'a> {
-    /// The side's slices: indices into the step's slices, consecutive skirt slices from
-    /// skirt slice `first` (top to bottom).
     pub slices: Vec<usize>,
     pub first: usize,
     pub film: &'a Film,
-    /// The piston's axial velocity z' [m/s] (+ up).
     pub axial_velocity: f64,
 }
 
-/// A film's linearisation at (p0, p0') of its slices.
-struct FilmLin {
+/// One engaged film side during a step: the film evaluated at the step's predictor (p0, p0')
+/// and linearised there,
+///   F_f,i = F0_i + sum_k C_ik (p'_k - p0'_k) + k_i (p_i - p0_i),
+/// C = dF/dp' the side's squeeze matrix (implicit: the stiff part), k_i the asperity contact's
+/// stiffness; the Reynolds term's dependence on the gap is taken at the predictor.
+struct FilmBlock {
+    slices: Vec<usize>,
+    f0: Vec<f64>,
     p0: Vec<f64>,
     r0: Vec<f64>,
-    side: SideFilm,
-    /// Newton's step fraction toward the next iterate and the miss of the last iteration
-    /// (see [`FilmLin::damped`]).
-    lambda: f64,
-    miss: f64,
+    c: DMatrix<f64>,
+    k: Vec<f64>,
 }
 
-impl FilmLin {
-    fn at(g: &FilmGroup<'_>, pen: &[f64], rates: &[f64]) -> Self {
-        let p0: Vec<f64> = g.slices.iter().map(|&i| pen[i]).collect();
-        let r0: Vec<f64> = g.slices.iter().map(|&i| rates[i]).collect();
-        let side = g.film.side(g.first, &p0, &r0, g.axial_velocity);
-        Self {
-            p0,
-            r0,
-            side,
-            lambda: 1.0,
-            miss: f64::INFINITY,
-        }
+impl FilmBlock {
+    /// The engaged films of `films` at the predictor's penetrations and rates.
+    fn at_predictor(films: &[FilmGroup<'_>], (pen, rates): (&[f64], &[f64])) -> Vec<Self> {
+        films
+            .iter()
+            .filter_map(|g| {
+                let p0: Vec<f64> = g.slices.iter().map(|&i| pen[i]).collect();
+                let r0: Vec<f64> = g.slices.iter().map(|&i| rates[i]).collect();
+                let side = g.film.side_rates(g.first, &p0, &r0, g.axial_velocity);
+                side.engaged.then(|| FilmBlock {
+                    slices: g.slices.clone(),
+                    f0: side.force.clone(),
+                    k: (0..p0.len()).map(|a| side.d_pen[(a, a)].max(0.0)).collect(),
+                    p0,
+                    r0,
+                    c: side.d_rate,
+                })
+            })
+            .collect()
     }
 
-    /// The largest miss of the linearised forces at the new iterate against the film's.
-    fn miss_at(&self, g: &FilmGroup<'_>, new: &FilmLin, (pen, rates): (&[f64], &[f64])) -> f64 {
-        (0..g.slices.len())
-            .map(|a| (self.predict(g, a, pen, rates) - new.side.force[a]).abs())
-            .fold(0.0, f64::max)
-    }
-
-    /// Newton's damping on the film: the next linearisation point moves from this one toward
-    /// the new iterate (`pen`, `rates`) by a fraction lambda <= 1:
-    /// - lambda is halved (down to 1/16) whenever the miss grew since the last iteration (a
-    ///   full Newton step can swing between a cavitated and a loaded film), and doubled back
-    ///   (up to 1) when it fell;
-    /// - lambda keeps every slice's thrust-line gap h = max(-p, 0) at least half of what it
-    ///   was (the force grows as 1/h^3: a full step onto a nearly closed gap relinearises
-    ///   where the law is steepest).
-    ///
-    /// Returns the next linearisation.
-    fn next(&self, g: &FilmGroup<'_>, (pen, rates): (&[f64], &[f64]), miss: f64) -> FilmLin {
-        let mut lambda = if miss >= self.miss {
-            (0.5 * self.lambda).max(1.0 / 16.0)
-        } else {
-            (1.5 * self.lambda).min(1.0)
-        };
-        for (k, &i) in g.slices.iter().enumerate() {
-            let (h0, h1) = ((-self.p0[k]).max(0.0), (-pen[i]).max(0.0));
-            if h1 < 0.5 * h0 {
-                lambda = lambda.min(0.5 * h0 / (h0 - h1));
-            }
-        }
-        let mut out = if lambda >= 1.0 || !self.side.engaged {
-            FilmLin::at(g, pen, rates)
-        } else {
-            let mut p = pen.to_vec();
-            let mut r = rates.to_vec();
-            for (k, &i) in g.slices.iter().enumerate() {
-                p[i] = self.p0[k] + lambda * (pen[i] - self.p0[k]);
-                r[i] = self.r0[k] + lambda * (rates[i] - self.r0[k]);
-            }
-            FilmLin::at(g, &p, &r)
-        };
-        out.lambda = lambda.min(1.0);
-        out.miss = miss;
-        out
-    }
-
-    /// The linearised force of the group's slice `a` at penetrations `pen` and rates `rates`.
-    fn predict(&self, g: &FilmGroup<'_>, a: usize, pen: &[f64], rates: &[f64]) -> f64 {
-        let mut f = self.side.force[a];
-        for (k, &i) in g.slices.iter().enumerate() {
-            f += self.side.d_pen[(a, k)] * (pen[i] - self.p0[k])
-                + self.side.d_rate[(a, k)] * (rates[i] - self.r0[k]);
+    /// The film force of the block's slice `a` at penetrations `pen` and rates `rates`.
+    fn force(&self, a: usize, pen: &[f64], rates: &[f64]) -> f64 {
+        let i = self.slices[a];
+        let mut f = self.f0[a] + self.k[a] * (pen[i] - self.p0[a]);
+        for (k, &j) in self.slices.iter().enumerate() {
+            f += self.c[(a, k)] * (rates[j] - self.r0[k]);
         }
         f
     }
 }
-
-/// Newton has converged on a film when its linearised forces miss the film's forces at the
-/// new iterate by less than this \[N\] plus [`FILM_RELATIVE`] of the side's largest force.
-const FILM_ABSOLUTE: f64 = 1e-3;
-const FILM_RELATIVE: f64 = 1e-7;
 
 /// A body's Newmark state and this step's loads.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -264,7 +219,7 @@ impl SliceState {
         film: 0.0,
     };
 
-    /// Whether the slice carries force from the liner: it penetrates, or its film is engaged.
+    /// Whether the slice carries force from the liner: it penetrates, or its film pushes.
     pub fn engaged(&self) -> bool {
         self.penetration > 0.0 || self.film > 0.0
     }
@@ -348,11 +303,14 @@ pub enum StepFailure {
 ///
 /// A piecewise-linear Newton on the slices' law pieces: each iteration solves the step's
 /// linear problem for the active set (`Step::solve_active`), then moves every slice to the
-/// piece its new penetration lies on (`Step::next_pieces`) and relinearises the oil films
-/// (`films`, empty for a dry skirt) at the new penetrations and rates; it has converged when
-/// no slice changes and every film's linearisation holds at the new iterate. After a third
-/// of `max_iterations` only the most violated slice changes per iteration (guards against
-/// cycling).
+/// piece its new penetration lies on (`Step::next_pieces`); it has converged when no slice
+/// changes. After a third of `max_iterations` only the most violated slice changes per
+/// iteration (guards against cycling).
+///
+/// The oil films (`films`, empty for a dry skirt) add F_f = a + k p + c p' to their slices,
+/// linearised once at the step's predictor ([`film_pieces`]): the squeeze acts implicitly
+/// (a damper per slice, the stiff part), its coefficients follow the gap at the predictor; a
+/// slice whose total force would pull is clamped like a dry damper.
 pub fn step(
     bodies: &[Body],
     slices: &[Slice<'_>],
@@ -362,7 +320,7 @@ pub fn step(
     scheme: Scheme,
     max_iterations: usize,
 ) -> Result<StepResult, StepFailure> {
-    let st = Step::new(bodies, slices, dt, scheme);
+    let mut st = Step::new(bodies, slices, dt, scheme);
     let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
     structure.prepare(&locs);
     let mut in_film = vec![false; slices.len()];
@@ -376,6 +334,23 @@ pub fn step(
     let mut pen: Vec<f64> = (0..slices.len())
         .map(|i| pred.penetration(i, st.qh[slices[i].body], 0.0, &*structure))
         .collect();
+    if !films.is_empty() {
+        let rates: Vec<f64> = (0..slices.len())
+            .map(|i| {
+                if in_film[i] {
+                    dot2(slices[i].row, st.vh[slices[i].body]) - pred.exact(i).1
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        st.blocks = FilmBlock::at_predictor(films, (&pen, &rates));
+        for b in &st.blocks {
+            for &i in &b.slices {
+                st.in_film[i] = true;
+            }
+        }
+    }
     let mut pieces: Vec<Piece> = slices
         .iter()
         .zip(&pen)
@@ -388,40 +363,24 @@ pub fn step(
                 mask,
                 damped: s.prev_penetration > 0.0 && s.damping != 0.0,
                 clamped: false,
+                film_off: false,
             }
         })
         .collect();
-    // the films start linearised at the predictor
-    let mut lins: Vec<FilmLin> = if films.is_empty() {
-        Vec::new()
-    } else {
-        let rates = st.film_rates(&in_film, None, &vec![0.0; slices.len()], &pred);
-        films.iter().map(|g| FilmLin::at(g, &pen, &rates)).collect()
-    };
     let mut g_cache: Option<(Vec<usize>, DMatrix<f64>, DMatrix<f64>)> = None;
     for it in 1..=max_iterations {
-        // a slice carries force when it penetrates and its damped force is not clamped, or
-        // when its side's film is engaged
-        let mut carries: Vec<bool> = pieces.iter().map(|p| p.mask != 0 && !p.clamped).collect();
-        for (g, lin) in films.iter().zip(&lins) {
-            if lin.side.engaged {
-                for &i in &g.slices {
-                    carries[i] = true;
-                }
-            }
-        }
-        let active: Vec<usize> = (0..slices.len()).filter(|&i| carries[i]).collect();
+        // a slice carries force when it penetrates or has a film, and its damped force is not
+        // clamped
+        let active: Vec<usize> = (0..slices.len())
+            .filter(|&i| (pieces[i].mask != 0 && !pieces[i].clamped) || st.in_film[i])
+            .collect();
         // compliance of the active set (reused while the set is unchanged)
         if g_cache.as_ref().is_none_or(|(a, _, _)| *a != active) {
             let (g, gv) = structure.compliance(&active);
             g_cache = Some((active.clone(), g, gv));
         }
         let (_, g, gv) = g_cache.as_ref().expect("set above");
-        let film = Films {
-            groups: films,
-            lins: &lins,
-        };
-        let (q, fa) = st.solve_active(&active, &pieces, (g, gv), &pred, &film)?;
+        let (q, fa) = st.solve_active(&active, &pieces, g, gv, &pred)?;
         let mut forces = vec![0.0; slices.len()];
         for (r, &i) in active.iter().enumerate() {
             forces[i] = fa[r];
@@ -445,37 +404,8 @@ pub fn step(
             &*structure,
             (&mut pen, &mut rates),
         );
-        let film_settled = if films.is_empty() {
-            true
-        } else {
-            let frates = st.film_rates(&in_film, Some(&q), &vel, &pred);
-            let mut settled = true;
-            let next: Vec<FilmLin> = films
-                .iter()
-                .zip(&lins)
-                .map(|(g, old)| {
-                    let new = FilmLin::at(g, &pen, &frates);
-                    let miss = old.miss_at(g, &new, (&pen, &frates));
-                    let ok = film_settled(old, &new, miss);
-                    settled &= ok;
-                    if ok {
-                        new
-                    } else {
-                        old.next(g, (&pen, &frates), miss)
-                    }
-                })
-                .collect();
-            lins = next;
-            settled
-        };
-        if changes.is_empty() && film_settled {
-            let mut res = st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it);
-            for (g, lin) in films.iter().zip(&lins) {
-                for (a, &i) in g.slices.iter().enumerate() {
-                    res.film[i] = lin.side.force[a];
-                }
-            }
-            return Ok(res);
+        if changes.is_empty() {
+            return Ok(st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it));
         }
         if it <= max_iterations / 3 {
             for (i, next) in changes {
@@ -495,19 +425,6 @@ pub fn step(
     })
 }
 
-/// Whether a film's linearisation `old` predicted its forces at the new iterate (`new`) within
-/// the tolerance (`miss` the largest difference), its engagement unchanged.
-fn film_settled(old: &FilmLin, new: &FilmLin, miss: f64) -> bool {
-    let scale = new.side.force.iter().fold(0.0_f64, |m, f| m.max(f.abs()));
-    old.side.engaged == new.side.engaged && miss <= FILM_ABSOLUTE + FILM_RELATIVE * scale
-}
-
-/// The step's films and their current linearisations.
-struct Films<'g, 'a> {
-    groups: &'g [FilmGroup<'a>],
-    lins: &'g [FilmLin],
-}
-
 /// A slice's place on its law during the Newton iterations: the elastic piece (mask), whether
 /// the damper acts this step (penetrating at the last step), whether the damped force is
 /// clamped at zero.
@@ -516,6 +433,8 @@ struct Piece {
     mask: u8,
     damped: bool,
     clamped: bool,
+    /// The film's force would pull: it is off for this step's solution.
+    film_off: bool,
 }
 
 /// The slices whose piece changes in an iteration, with their next piece, and the most
@@ -599,6 +518,9 @@ struct Step<'s, 'a> {
     /// kappa = gamma / (beta dt) (velocity per displacement), 1 / (beta dt^2).
     kappa: f64,
     c_acc: f64,
+    /// The engaged films of this step and whether each slice belongs to one.
+    blocks: Vec<FilmBlock>,
+    in_film: Vec<bool>,
 }
 
 fn dot2(r: [f64; 2], q: [f64; 2]) -> f64 {
@@ -631,6 +553,8 @@ impl<'s, 'a> Step<'s, 'a> {
             vh,
             kappa: gamma / (beta * dt),
             c_acc: 1.0 / (beta * dt * dt),
+            blocks: Vec::new(),
+            in_film: vec![false; slices.len()],
         }
     }
 
@@ -642,9 +566,9 @@ impl<'s, 'a> Step<'s, 'a> {
         &self,
         active: &[usize],
         pieces: &[Piece],
-        (g, gv): (&DMatrix<f64>, &DMatrix<f64>),
+        g: &DMatrix<f64>,
+        gv: &DMatrix<f64>,
         pred: &Predictions<'_, '_>,
-        films: &Films<'_, '_>,
     ) -> Result<(DVector<f64>, Vec<f64>), StepFailure> {
         let (slices, kappa) = (self.slices, self.kappa);
         let na = active.len();
@@ -654,15 +578,13 @@ impl<'s, 'a> Step<'s, 'a> {
         let mut av = vec![0.0; na];
         let mut cd = vec![0.0; na];
         for (r, &i) in active.iter().enumerate() {
-            // a slice carried by its film alone has no dry part
-            if pieces[i].mask == 0 || pieces[i].clamped {
-                continue;
-            }
             let s = &slices[i];
-            let piece = s.law.piece_of(pieces[i].mask);
-            kt[r] = piece.kt;
-            av[r] = piece.a;
-            cd[r] = if pieces[i].damped { s.damping } else { 0.0 };
+            if pieces[i].mask != 0 && !pieces[i].clamped {
+                let piece = s.law.piece_of(pieces[i].mask);
+                kt[r] = piece.kt;
+                av[r] = piece.a;
+                cd[r] = if pieces[i].damped { s.damping } else { 0.0 };
+            }
         }
         // W and right-hand sides [r0 | (Kt + kappa Cd) S]
         let mut w = DMatrix::<f64>::identity(na, na);
@@ -680,8 +602,8 @@ impl<'s, 'a> Step<'s, 'a> {
             rhs[(r, 1 + 2 * b)] = f * s.row[0];
             rhs[(r, 2 + 2 * b)] = f * s.row[1];
         }
-        if !films.groups.is_empty() {
-            self.add_films(active, (g, gv), pred, films, (&mut w, &mut rhs));
+        if !self.blocks.is_empty() {
+            self.add_films(active, pieces, (g, gv), pred, (&mut w, &mut rhs));
         }
         let sol = if na > 0 {
             w.lu().solve(&rhs).ok_or(StepFailure::Singular)?
@@ -696,74 +618,66 @@ impl<'s, 'a> Step<'s, 'a> {
         Ok((q, fa))
     }
 
-    /// Adds the engaged films' linearised forces to the step's rows: for slice i of a film
-    /// and every slice k of its side, with K = dF/dp, C = dF/dp' at (p0, p0'),
-    ///   W_i. += K_ik G_k. + C_ik G_v,k.,
-    ///   r0_i += F0_i - K_ik (p0_k + g_k + u~_k) + C_ik (s_k . v~ - kappa s_k . q~ - u'~_k - p0'_k),
-    ///   (rhs_q)_i += (K_ik + kappa C_ik) s_k   (on body b(k)'s columns).
+    /// Adds the engaged films' forces to the rows of their slices (those whose film is on):
+    /// for slice i of a block and every slice k of it, with p_k = s_k . q - g_k - u~_k - (G F)_k
+    /// and p'_k = s_k . (v~ + kappa (q - q~)) - u'~_k - (G_v F)_k,
+    ///   W_i. += C_ik G_v,k. (+ k_i G_i.),
+    ///   r0_i += F0_i - C_ik p0'_k + C_ik (s_k . v~ - kappa s_k . q~ - u'~_k) + k_i (-p0_i - g_i - u~_i),
+    ///   (rhs_q)_i += kappa C_ik s_k (+ k_i s_i).
     fn add_films(
         &self,
         active: &[usize],
+        pieces: &[Piece],
         (g, gv): (&DMatrix<f64>, &DMatrix<f64>),
         pred: &Predictions<'_, '_>,
-        films: &Films<'_, '_>,
         (w, rhs): (&mut DMatrix<f64>, &mut DMatrix<f64>),
     ) {
         let kappa = self.kappa;
         let na = active.len();
-        let pos = |i: usize| active.binary_search(&i).ok();
-        for (grp, lin) in films.groups.iter().zip(films.lins) {
-            if !lin.side.engaged {
-                continue;
-            }
-            for (a, &i) in grp.slices.iter().enumerate() {
-                let r = pos(i).expect("an engaged film's slices are active");
-                rhs[(r, 0)] += lin.side.force[a];
-                for (k, &c) in grp.slices.iter().enumerate() {
-                    let (kk, cc) = (lin.side.d_pen[(a, k)], lin.side.d_rate[(a, k)]);
-                    if kk == 0.0 && cc == 0.0 {
-                        continue;
-                    }
-                    let rc = pos(c).expect("an engaged film's slices are active");
+        let pos = |i: usize| active.binary_search(&i).expect("a film's slices are active");
+        for blk in &self.blocks {
+            for (a, &i) in blk.slices.iter().enumerate() {
+                if pieces[i].film_off {
+                    continue;
+                }
+                let r = pos(i);
+                rhs[(r, 0)] += blk.f0[a];
+                let mut term = |c: usize, kk: f64, cc: f64, shift: f64| {
+                    let rc = pos(c);
                     for col in 0..na {
                         w[(r, col)] += kk * g[(rc, col)] + cc * gv[(rc, col)];
                     }
                     let s = &self.slices[c];
                     let b = s.body;
                     let (u, du) = pred.exact(c);
-                    rhs[(r, 0)] += -kk * (lin.p0[k] + s.gap + u)
-                        + cc * (dot2(s.row, self.vh[b]) - kappa * dot2(s.row, self.qh[b]) - du - lin.r0[k]);
+                    rhs[(r, 0)] += -kk * (s.gap + u) - shift
+                        + cc * (dot2(s.row, self.vh[b]) - kappa * dot2(s.row, self.qh[b]) - du);
                     let f = kk + kappa * cc;
                     rhs[(r, 1 + 2 * b)] += f * s.row[0];
                     rhs[(r, 2 + 2 * b)] += f * s.row[1];
+                };
+                for (k, &c) in blk.slices.iter().enumerate() {
+                    let cc = blk.c[(a, k)];
+                    if cc != 0.0 {
+                        term(c, 0.0, cc, cc * blk.r0[k]);
+                    }
+                }
+                if blk.k[a] != 0.0 {
+                    term(i, blk.k[a], 0.0, blk.k[a] * blk.p0[a]);
                 }
             }
         }
     }
 
-    /// The penetration rate p' = s . q' - u'~ - G_v F of every film slice (0 elsewhere), at
-    /// the body coordinates `q` (`None`: the predictor, with q' = v~) and the structure's
-    /// velocity response `vel` to the step's forces.
-    fn film_rates(
-        &self,
-        in_film: &[bool],
-        q: Option<&DVector<f64>>,
-        vel: &[f64],
-        pred: &Predictions<'_, '_>,
-    ) -> Vec<f64> {
-        (0..self.slices.len())
-            .map(|i| {
-                if !in_film[i] {
-                    return 0.0;
-                }
-                let s = &self.slices[i];
-                let v = match q {
-                    Some(q) => self.body_velocity(q, s.body),
-                    None => self.vh[s.body],
-                };
-                dot2(s.row, v) - pred.exact(i).1 - vel[i]
-            })
-            .collect()
+    /// The film force of every slice at penetrations `pen` and rates `rates` (0 off a film).
+    fn film_forces(&self, pen: &[f64], rates: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; self.slices.len()];
+        for blk in &self.blocks {
+            for (a, &i) in blk.slices.iter().enumerate() {
+                out[i] = blk.force(a, pen, rates);
+            }
+        }
+        out
     }
 
     /// The bodies' coordinates with the active slice forces F_A = sol0 + sol_q q eliminated.
@@ -821,14 +735,13 @@ impl<'s, 'a> Step<'s, 'a> {
         structure: &dyn Structure,
         (pen, rates): (&mut [f64], &mut [f64]),
     ) -> PieceChanges {
-        let mut worst: Option<(usize, f64)> = None;
-        let mut changes: Vec<(usize, Piece)> = Vec::new();
+        let mut next: Vec<Piece> = pieces.to_vec();
         for (i, s) in self.slices.iter().enumerate() {
             let qb = [q[2 * s.body], q[2 * s.body + 1]];
             pen[i] = pred.penetration(i, qb, extra[i], structure);
             let mask = s.law.piece(pen[i]).mask;
-            let mut next = Piece { mask, ..pieces[i] };
-            if mask != 0 {
+            next[i].mask = mask;
+            if mask != 0 || self.in_film[i] {
                 let du = pred.exact(i).1 + vel[i];
                 rates[i] = dot2(s.row, self.body_velocity(q, s.body)) - du;
             }
@@ -836,28 +749,44 @@ impl<'s, 'a> Step<'s, 'a> {
                 // a slice that parts loses its damper for the rest of the step: the law
                 // jumps at p = 0 when the damper pushes (F(0+) = c_d p' > 0), and the step must
                 // stay solvable; what the damper misses is restored by [`onset_impulses`]
-                next.clamped = false;
-                next.damped = false;
+                next[i].clamped = false;
+                next[i].damped = false;
             } else if pieces[i].damped {
                 // the damped force F_e(p) + c_d p' decides the clamp
                 let f = s.law.force(pen[i]) + s.damping * rates[i];
-                next.clamped = f < 0.0;
+                next[i].clamped = f < 0.0;
             }
-            if next.mask != pieces[i].mask
-                || next.clamped != pieces[i].clamped
-                || next.damped != pieces[i].damped
+        }
+        // a film that would pull is off (cavitation holds no more than its smoothing)
+        let film = self.film_forces(pen, rates);
+        for blk in &self.blocks {
+            for &i in &blk.slices {
+                next[i].film_off = film[i] < 0.0;
+            }
+        }
+        let mut worst: Option<(usize, f64)> = None;
+        let mut changes: Vec<(usize, Piece)> = Vec::new();
+        for (i, s) in self.slices.iter().enumerate() {
+            let (a, b) = (pieces[i], next[i]);
+            if a.mask == b.mask
+                && a.clamped == b.clamped
+                && a.damped == b.damped
+                && a.film_off == b.film_off
             {
-                // violation as a penetration: the clamp's force over the piece's stiffness
-                let v = if next.clamped != pieces[i].clamped {
-                    let f = s.law.force(pen[i]) + s.damping * rates[i];
-                    f.abs() / s.law.piece(pen[i]).kt.max(1.0)
-                } else {
-                    pen[i].abs()
-                };
-                changes.push((i, next));
-                if worst.is_none_or(|(_, w)| v > w) {
-                    worst = Some((i, v));
-                }
+                continue;
+            }
+            // violation as a penetration: the clamp's force over the piece's stiffness
+            let v = if b.clamped != a.clamped {
+                let f = s.law.force(pen[i]) + s.damping * rates[i];
+                f.abs() / s.law.piece(pen[i]).kt.max(1.0)
+            } else if b.film_off != a.film_off {
+                film[i].abs() * self.dt * self.dt / self.bodies[s.body].mass[0][0]
+            } else {
+                pen[i].abs()
+            };
+            changes.push((i, b));
+            if worst.is_none_or(|(_, w)| v > w) {
+                worst = Some((i, v));
             }
         }
         (changes, worst)
@@ -905,6 +834,12 @@ impl<'s, 'a> Step<'s, 'a> {
                 }
             })
             .collect();
+        let film: Vec<f64> = self
+            .film_forces(&pen, &rates)
+            .iter()
+            .zip(pieces)
+            .map(|(&f, p)| if p.film_off { 0.0 } else { f })
+            .collect();
         StepResult {
             bodies: out,
             forces,
@@ -912,7 +847,7 @@ impl<'s, 'a> Step<'s, 'a> {
             rates,
             damper,
             clamped: pieces.iter().map(|st| st.clamped).collect(),
-            film: vec![0.0; self.slices.len()],
+            film,
             iterations,
         }
     }
