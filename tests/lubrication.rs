@@ -229,3 +229,81 @@ fn verification_sliding_wedge_builds_pressure_only_when_converging() {
     assert!(diverging.abs() < 1e-4 * converging);
     assert_eq!(still, 0.0);
 }
+
+mod common;
+use common::{json, linercav_output as linercav};
+
+/// `simulate` on the small test engine with the given lubrication, cycles cut to 4 (fast).
+fn small_run(model: &str, cache: &str) -> serde_json::Value {
+    let set = format!("piston.lubrication={model}");
+    let out = linercav(&[
+        "simulate",
+        "tests/fixtures/engine_small.toml",
+        "--set",
+        &set,
+        "--set",
+        "transient.cycles=4",
+        "--set",
+        "transient.averaged_cycles=3",
+        "--cache-dir",
+        cache,
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{model}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    json(&out)
+}
+
+/// Contract (issue 39): `simulate --json` names the lubrication model that ran, a lubricated
+/// run changes the slap forces, and its experimental status is a warning.
+#[test]
+fn contract_simulate_names_the_lubrication_and_the_film_changes_the_slap() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = format!("{}", dir.path().display());
+    let dry = small_run("dry", &cache);
+    let wet = small_run("squeeze", &cache);
+    assert_eq!(dry["lubrication"], "dry");
+    assert_eq!(wet["lubrication"], "squeeze");
+    let slap = |v: &serde_json::Value| -> Vec<f64> {
+        v["cylinders"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["peak_slap_force_n"].as_f64().unwrap())
+            .collect()
+    };
+    let (a, b) = (slap(&dry), slap(&wet));
+    println!("slap force dry {a:?}, squeeze {b:?}");
+    assert!(a.iter().zip(&b).any(|(x, y)| (x - y).abs() > 1e-3 * x));
+    let warned = |v: &serde_json::Value| {
+        v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("piston.lubrication"))
+    };
+    assert!(warned(&wet) && !warned(&dry));
+}
+
+/// Contract (refusal): bad film input names its key and exits 2 before any work.
+#[test]
+fn contract_bad_oil_input_names_the_key() {
+    for (set, key) in [
+        ("piston.lubrication=wet", "lubrication"),
+        ("piston.oil.supply_um=0", "piston.oil.supply_um"),
+        ("piston.oil.vogel_c_c=-200", "piston.oil.vogel_c_c"),
+        ("piston.oil.roughness_um=-1", "piston.oil.roughness_um"),
+    ] {
+        let mut args = vec!["simulate", "tests/fixtures/engine_small.toml", "--set", set];
+        if !set.starts_with("piston.lubrication") {
+            args.extend(["--set", "piston.lubrication=mixed"]);
+        }
+        let out = linercav(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{set}: {err}");
+        assert!(err.contains(key), "{set}: {err}");
+    }
+}

@@ -299,7 +299,15 @@ fn impact(
         let r = match modal.as_mut() {
             Some((st, _)) => {
                 st.integrator.predict(dt);
-                contact::step(&[body], std::slice::from_ref(&slice), &[], st, dt, scheme, 50)
+                contact::step(
+                    &[body],
+                    std::slice::from_ref(&slice),
+                    &[],
+                    st,
+                    dt,
+                    scheme,
+                    50,
+                )
             }
             None => contact::step(
                 &[body],

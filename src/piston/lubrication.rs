@@ -347,8 +347,16 @@ impl Line<'_> {
         let d = self.distances();
         (0..n)
             .map(|i| {
-                let el = if i == 0 { self.left } else { 0.5 * (self.x[i - 1] + self.x[i]) };
-                let er = if i == n - 1 { self.right } else { 0.5 * (self.x[i] + self.x[i + 1]) };
+                let el = if i == 0 {
+                    self.left
+                } else {
+                    0.5 * (self.x[i - 1] + self.x[i])
+                };
+                let er = if i == n - 1 {
+                    self.right
+                } else {
+                    0.5 * (self.x[i] + self.x[i + 1])
+                };
                 let (dl, dr) = (d[i], d[i + 1]);
                 let (a, b) = (el - self.x[i], er - self.x[i]);
                 let f = |pl: f64, p: f64, pr: f64| {
@@ -434,7 +442,7 @@ pub const CAVITATION_SCALE: f64 = 1e4;
 pub fn cavitation(p: f64) -> (f64, f64) {
     let e = CAVITATION_SCALE;
     let r = p.hypot(e);
-    (0.5 * (p + r), 0.5 * (1.0 + p / r))
+    (0.5 * (p + r - e), 0.5 * (1.0 + p / r))
 }
 
 /// Solves the tridiagonal system (Thomas; the system is diagonally dominant).
@@ -455,6 +463,17 @@ fn thomas(t: &Tri, rhs: &[f64]) -> Vec<f64> {
         y[i] -= c[i] * y[i + 1];
     }
     y
+}
+
+/// One sample line's data for the pressure and its derivatives: cos psi, the unweighted source
+/// dh/dt + (U/2) dh/dx, the wetted fraction and its slope (w, dw/dh), and dh/dp (0 where the
+/// gap is floored) per node.
+#[derive(Clone, Copy)]
+struct Sample<'a> {
+    c: f64,
+    raw: &'a [f64],
+    wt: &'a [(f64, f64)],
+    dh: &'a [f64],
 }
 
 /// Which derivatives a film evaluation forms.
@@ -502,13 +521,22 @@ impl Film {
     /// The film of `skirt` (built from `spec`) with the oil `oil`: slice positions, the Vogel
     /// viscosity at each slice's film temperature (the mean of the skirt's there and the
     /// liner's), the arc R dpsi of each contact sample.
-    pub fn new(skirt: &super::skirt::Skirt, spec: &super::skirt::SkirtSpec, oil: &crate::scene::spec::OilSpec) -> Self {
-        let x: Vec<f64> = skirt.heights.iter().map(|h| spec.top_above_pin - h).collect();
+    pub fn new(
+        skirt: &super::skirt::Skirt,
+        spec: &super::skirt::SkirtSpec,
+        oil: &crate::scene::spec::OilSpec,
+    ) -> Self {
+        let x: Vec<f64> = skirt
+            .heights
+            .iter()
+            .map(|h| spec.top_above_pin - h)
+            .collect();
         let mu = x
             .iter()
             .map(|xi| {
                 let frac = xi / spec.length;
-                let t = spec.skirt_top_temp_c + (spec.skirt_bottom_temp_c - spec.skirt_top_temp_c) * frac;
+                let t = spec.skirt_top_temp_c
+                    + (spec.skirt_bottom_temp_c - spec.skirt_top_temp_c) * frac;
                 oil.vogel.at(0.5 * (t + spec.liner_temp_c))
             })
             .collect();
@@ -591,7 +619,13 @@ impl Film {
                     -c * rate[i] + 0.5 * dz * sl
                 })
                 .collect();
-            self.add_sample(&line, (c, &raw, &wt, &dh), (&slope, dz), &mut out, derivatives);
+            let sample = Sample {
+                c,
+                raw: &raw,
+                wt: &wt,
+                dh: &dh,
+            };
+            self.add_sample(&line, &sample, (&slope, dz), &mut out, derivatives);
         }
         out
     }
@@ -620,11 +654,12 @@ impl Film {
     fn add_sample(
         &self,
         line: &Line<'_>,
-        (c, raw, wt, dh): (f64, &[f64], &[(f64, f64)], &[f64]),
+        sample: &Sample<'_>,
         (slope, dz): (&[[(usize, f64); 3]], f64),
         out: &mut SideFilm,
         derivatives: Derivatives,
     ) {
+        let Sample { c, raw, wt, .. } = *sample;
         let n = raw.len();
         let t = line.system();
         let lu = Factored::new(&t);
@@ -660,7 +695,7 @@ impl Film {
                 column(k, &[(k, t.m[k] * (-c) * wt[k].0)], &mut out.d_rate);
             }
             if derivatives == Derivatives::All {
-                let r = self.pen_rhs(k, line, (&t, &p), (c, raw, wt, dh), (slope, dz));
+                let r = self.pen_rhs(k, line, (&t, &p), sample, (slope, dz));
                 column(k, &r, &mut out.d_pen);
             }
         }
@@ -674,9 +709,10 @@ impl Film {
         k: usize,
         line: &Line<'_>,
         (t, p): (&Tri, &[f64]),
-        (c, raw, wt, dh): (f64, &[f64], &[(f64, f64)], &[f64]),
+        sample: &Sample<'_>,
         (slope, dz): (&[[(usize, f64); 3]], f64),
     ) -> Vec<(usize, f64)> {
+        let Sample { c, raw, wt, dh } = *sample;
         let n = raw.len();
         let lo = k.saturating_sub(1);
         let hi = (k + 1).min(n - 1);

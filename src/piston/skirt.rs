@@ -20,7 +20,7 @@
 //!   F(p) = k / sum_j cos^2 psi_j * sum_j cos psi_j max(0, p cos psi_j - o_j)  (+ c_d dp/dt if p > 0).
 //! F is convex, piecewise linear in p: exact Newton pieces.
 
-/// Sample angles of the contact arc [rad].
+/// Sample angles of the contact arc \[deg\].
 pub const PSI_DEG: [f64; 7] = [-45.0, -30.0, -15.0, 0.0, 15.0, 30.0, 45.0];
 
 /// Piecewise-linear elastic contact law of one slice: F(p) = sum_j k_j max(0, c_j p - o_j) c_j.

@@ -166,6 +166,9 @@ pub struct SimulateReport {
     pub ranking: Option<crate::analysis::ranking::DecidedRanking>,
     /// Physically doubtful scene values (also printed on stderr).
     pub warnings: Vec<String>,
+    /// The skirt's lubrication model that ran: "dry", "squeeze" or "mixed"
+    /// (`piston.lubrication`).
+    pub lubrication: crate::piston::lubrication::Lubrication,
 }
 
 impl SimulateReport {
@@ -197,6 +200,10 @@ impl SimulateReport {
                 ))
                 .collect(),
             hot_clearance_um: piston.skirt.hot_clearance() * 1e6,
+            lubrication: piston
+                .film
+                .as_ref()
+                .map_or(crate::piston::lubrication::Lubrication::Dry, |f| f.model),
             peak_pressure_bar: pp / 1e5,
             peak_pressure_deg: pdeg,
             time_series_csv: None,
@@ -331,12 +338,13 @@ impl SimulateReport {
 
     pub fn to_text(&self) -> String {
         let mut s = format!(
-            "{} at {:.0} rpm: peak pressure {:.1} bar at {:.1} deg, hot clearance {:.1} um\n",
+            "{} at {:.0} rpm: peak pressure {:.1} bar at {:.1} deg, hot clearance {:.1} um, skirt {}\n",
             self.scene,
             self.speed_rpm,
             self.peak_pressure_bar,
             self.peak_pressure_deg,
-            self.hot_clearance_um
+            self.hot_clearance_um,
+            self.lubrication.name()
         );
         s += &self.peaks_text();
         let st = &self.stats;

@@ -471,6 +471,7 @@ pub struct RawPiston {
     /// The skirt's oil film: "dry" (default: the penalty contact alone, the reference study's
     /// model), "squeeze" (the Reynolds squeeze and sliding film, half-Sommerfeld) or "mixed"
     /// (the film plus Greenwood-Tripp asperity contact). The film's data: `[piston.oil]`.
+    /// The lubricated transient is experimental (docs/validation.md).
     #[serde(default)]
     pub lubrication: RawLubrication,
     /// Oil film data (used when `lubrication` is not "dry"; every key has a default).
@@ -490,7 +491,7 @@ pub enum RawLubrication {
 }
 
 /// The skirt's oil film (`[piston.oil]`), defaults of a heavy-duty diesel with a 15W-40 class
-/// oil [assumption].
+/// oil \[assumption\].
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawOil {

@@ -628,10 +628,7 @@ pub(super) fn validate_piston(
 }
 
 /// `piston.lubrication` and `[piston.oil]`: the film's data, SI; `None` for a dry skirt.
-fn validate_oil(
-    c: &Checker<'_>,
-    p: &raw::RawPiston,
-) -> Result<Option<spec::OilSpec>, SceneError> {
+fn validate_oil(c: &Checker<'_>, p: &raw::RawPiston) -> Result<Option<spec::OilSpec>, SceneError> {
     use crate::piston::lubrication::{GreenwoodTripp, Lubrication, Vogel};
     let model = match p.lubrication {
         raw::RawLubrication::Dry => return Ok(None),

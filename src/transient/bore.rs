@@ -103,7 +103,7 @@ pub(crate) fn film_groups<'p>(
                 slices: vec![k],
                 first: i,
                 film,
-                axial_velocity: if std::env::var("LC_NOSLIDE").is_ok() { 0.0 } else { axial(b) },
+                axial_velocity: axial(b),
             });
         }
     }

@@ -307,10 +307,12 @@ pub enum StepFailure {
 /// changes. After a third of `max_iterations` only the most violated slice changes per
 /// iteration (guards against cycling).
 ///
-/// The oil films (`films`, empty for a dry skirt) add F_f = a + k p + c p' to their slices,
-/// linearised once at the step's predictor ([`film_pieces`]): the squeeze acts implicitly
-/// (a damper per slice, the stiff part), its coefficients follow the gap at the predictor; a
-/// slice whose total force would pull is clamped like a dry damper.
+/// The oil films (`films`, empty for a dry skirt) add their forces to their slices, each
+/// side's film evaluated at the step's predictor and linearised there (`FilmBlock`):
+/// F_f,i = F0_i + sum_k C_ik (p'_k - p0'_k) + k_i (p_i - p0_i). The squeeze matrix C acts
+/// implicitly (the stiff part, coupling the side's slices), the Reynolds term's dependence on
+/// the gap is taken at the predictor, k_i is the asperity contact's stiffness; a slice whose
+/// film force would pull has its film off (late in the iteration, an off film stays off).
 pub fn step(
     bodies: &[Body],
     slices: &[Slice<'_>],
@@ -399,7 +401,7 @@ pub fn step(
         let (changes, worst) = st.next_pieces(
             &q,
             (&extra, &vel),
-            &pieces,
+            (&pieces, it > max_iterations / 3),
             &mut pred,
             &*structure,
             (&mut pen, &mut rates),
@@ -634,7 +636,11 @@ impl<'s, 'a> Step<'s, 'a> {
     ) {
         let kappa = self.kappa;
         let na = active.len();
-        let pos = |i: usize| active.binary_search(&i).expect("a film's slices are active");
+        let pos = |i: usize| {
+            active
+                .binary_search(&i)
+                .expect("a film's slices are active")
+        };
         for blk in &self.blocks {
             for (a, &i) in blk.slices.iter().enumerate() {
                 if pieces[i].film_off {
@@ -730,7 +736,7 @@ impl<'s, 'a> Step<'s, 'a> {
         &self,
         q: &DVector<f64>,
         (extra, vel): (&[f64], &[f64]),
-        pieces: &[Piece],
+        (pieces, late): (&[Piece], bool),
         pred: &mut Predictions<'_, '_>,
         structure: &dyn Structure,
         (pen, rates): (&mut [f64], &mut [f64]),
@@ -757,11 +763,12 @@ impl<'s, 'a> Step<'s, 'a> {
                 next[i].clamped = f < 0.0;
             }
         }
-        // a film that would pull is off (cavitation holds no more than its smoothing)
+        // a film that would pull is off (cavitation holds no more than its smoothing); late
+        // in the iteration a film that is off stays off (guards against cycling)
         let film = self.film_forces(pen, rates);
         for blk in &self.blocks {
             for &i in &blk.slices {
-                next[i].film_off = film[i] < 0.0;
+                next[i].film_off = film[i] < 0.0 || (late && pieces[i].film_off);
             }
         }
         let mut worst: Option<(usize, f64)> = None;

@@ -27,7 +27,7 @@ pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
         max_newton: 50,
         modes_below_hz: t.mode_cutoff_hz,
         static_correction: true,
-        coupling: if std::env::var("LC_MONO").is_ok() { Coupling::Monolithic } else { Coupling::PerCylinder },
+        coupling: Coupling::PerCylinder,
         output_band_hz: Some(band_hz),
         bound_predictions: true,
         step_error: true,

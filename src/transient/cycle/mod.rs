@@ -56,6 +56,9 @@ pub use surface::SurfacePeaks;
 use surface::SurfaceRecord;
 pub use tolerance::run_with_tolerance;
 
+/// A step's slice as the records see it: cylinder index, thrust side, skirt slice, height.
+type SliceMeta = (usize, bool, usize, f64);
+
 /// A piston slice's fixed data: which side, and its bore line.
 #[derive(Clone)]
 struct Cyl<'a> {
@@ -612,7 +615,7 @@ impl<'a> EngineRun<'a> {
         &mut self,
         bodies: &[Body],
         slices: &[Slice<'_>],
-        (meta, axial): (&[(usize, bool, usize, f64)], &[f64]),
+        (meta, axial): (&[SliceMeta], &[f64]),
         dt: f64,
     ) -> Result<contact::StepResult, Failure> {
         let mut out = contact::StepResult {
