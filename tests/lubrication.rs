@@ -210,7 +210,8 @@ fn verification_film_tangent_matches_finite_differences() {
 
 /// Verification of the sliding term's sign: the liner sliding into a gap that narrows along
 /// its motion (U > 0, dh/dx < 0) builds pressure; the opposite sliding does not (the film is
-/// cavitated: half-Sommerfeld, smoothed over 0.1 bar); no squeeze, no sliding, no force.
+/// cavitated: half-Sommerfeld, smoothed over 0.1 bar); with no squeeze and no sliding only the
+/// smoothing's e/2 remains.
 #[test]
 fn verification_sliding_wedge_builds_pressure_only_when_converging() {
     let mut f = film(Lubrication::Squeeze);
@@ -223,11 +224,14 @@ fn verification_sliding_wedge_builds_pressure_only_when_converging() {
     let still = f.side(0, &pen, &rest, 0.0).force.iter().sum::<f64>();
     println!("wedge: converging {converging:.3e} N, diverging {diverging:.3e} N");
     assert!(converging > 0.0);
-    // the smoothed cavitation holds a film at most e/2 below ambient over the wetted area
+    // the smoothed cavitation keeps at most e/2 over the wetted area
     let area = 7.0 * f.arc * f.length;
-    assert!(diverging <= 0.0 && diverging >= -0.5 * CAVITATION_SCALE * area);
-    assert!(diverging.abs() < 1e-4 * converging);
-    assert_eq!(still, 0.0);
+    assert!(diverging >= 0.0 && diverging <= 0.5 * CAVITATION_SCALE * area);
+    assert!(diverging < 1e-4 * converging);
+    assert!(
+        still >= 0.0 && still <= 0.5 * CAVITATION_SCALE * area,
+        "{still}"
+    );
 }
 
 mod common;

@@ -156,7 +156,7 @@ fn piston(
     }
     if let Some(oil) = &sim.piston.oil {
         warnings.push(format!(
-            "piston.lubrication = \"{}\" is experimental: the film is linearised once per step, and on the default engine its slap forces spike (means of 20-200 kN with standard errors of 25-50 %, against 6-8 kN dry) and a run costs 13-35 times the dry one (docs/validation.md); compare peak accelerations, not slap forces",
+            "piston.lubrication = \"{}\" is experimental: the film is linearised once per step, and on the default engine its slap forces spike (means of 20-200 kN with standard errors of 25-50 %, against 6-8 kN dry) a run costs 13-35 times the dry one and may stop with a deep penetration (docs/validation.md); compare peak accelerations, not slap forces",
             oil.model.name()
         ));
     }
