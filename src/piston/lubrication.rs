@@ -47,27 +47,7 @@ use std::sync::OnceLock;
 
 pub use super::skirt::PSI_DEG as SAMPLE_DEG;
 
-/// Which film model runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Lubrication {
-    /// No film: the dry penalty contact only (the reference study's model).
-    Dry,
-    /// Hydrodynamic squeeze and sliding film.
-    Squeeze,
-    /// The film plus Greenwood-Tripp asperity contact.
-    Mixed,
-}
-
-impl Lubrication {
-    pub fn name(self) -> &'static str {
-        match self {
-            Lubrication::Dry => "dry",
-            Lubrication::Squeeze => "squeeze",
-            Lubrication::Mixed => "mixed",
-        }
-    }
-}
+pub use crate::scene::spec::{Lubrication, OilSpec};
 
 /// Vogel viscosity mu(T) = a exp(b / (T + c)), T in deg C.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -540,7 +520,8 @@ impl Film {
                 let frac = xi / spec.length;
                 let t = spec.skirt_top_temp_c
                     + (spec.skirt_bottom_temp_c - spec.skirt_top_temp_c) * frac;
-                oil.vogel.at(0.5 * (t + spec.liner_temp_c))
+                let [a, b, c] = oil.vogel;
+                Vogel { a, b, c }.at(0.5 * (t + spec.liner_temp_c))
             })
             .collect();
         let dpsi = (SAMPLE_DEG[1] - SAMPLE_DEG[0]).to_radians();
@@ -554,7 +535,9 @@ impl Film {
             arc: 0.5 * spec.bore * dpsi,
             supply: oil.supply,
             floor: FILM_FLOOR,
-            asperity: oil.asperity,
+            asperity: oil.asperity.map(|g| {
+                GreenwoodTripp::new(g.sigma, g.eta_beta_sigma, g.sigma_over_beta, g.modulus)
+            }),
         }
     }
 

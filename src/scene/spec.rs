@@ -165,15 +165,48 @@ pub struct SkirtSpec {
     pub stiffness: f64,
 }
 
+/// Which skirt film model runs (`piston.lubrication`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Lubrication {
+    /// No film: the dry penalty contact only (the reference study's model).
+    Dry,
+    /// Hydrodynamic squeeze and sliding film.
+    Squeeze,
+    /// The film plus Greenwood-Tripp asperity contact.
+    Mixed,
+}
+
+impl Lubrication {
+    pub fn name(self) -> &'static str {
+        match self {
+            Lubrication::Dry => "dry",
+            Lubrication::Squeeze => "squeeze",
+            Lubrication::Mixed => "mixed",
+        }
+    }
+}
+
+/// Greenwood-Tripp's inputs, SI: composite roughness sigma \[m\], eta beta sigma, sigma / beta,
+/// composite modulus E' \[Pa\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AsperitySpec {
+    pub sigma: f64,
+    pub eta_beta_sigma: f64,
+    pub sigma_over_beta: f64,
+    pub modulus: f64,
+}
+
 /// The skirt's oil film, SI (see [`crate::scene::raw::RawOil`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct OilSpec {
-    pub model: crate::piston::lubrication::Lubrication,
+    pub model: Lubrication,
     /// Oil on the liner \[m\].
     pub supply: f64,
-    pub vogel: crate::piston::lubrication::Vogel,
+    /// Vogel's mu = a exp(b / (T + c)): a \[Pa s\], b and c \[deg C\].
+    pub vogel: [f64; 3],
     /// Greenwood-Tripp asperity contact (`mixed`).
-    pub asperity: Option<crate::piston::lubrication::GreenwoodTripp>,
+    pub asperity: Option<AsperitySpec>,
 }
 
 /// Parameters of the built-in Wiebe curve at full load (SI, angles in degrees).

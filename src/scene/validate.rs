@@ -629,7 +629,7 @@ pub(super) fn validate_piston(
 
 /// `piston.lubrication` and `[piston.oil]`: the film's data, SI; `None` for a dry skirt.
 fn validate_oil(c: &Checker<'_>, p: &raw::RawPiston) -> Result<Option<spec::OilSpec>, SceneError> {
-    use crate::piston::lubrication::{GreenwoodTripp, Lubrication, Vogel};
+    use spec::Lubrication;
     let model = match p.lubrication {
         raw::RawLubrication::Dry => return Ok(None),
         raw::RawLubrication::Squeeze => Lubrication::Squeeze,
@@ -643,18 +643,18 @@ fn validate_oil(c: &Checker<'_>, p: &raw::RawPiston) -> Result<Option<spec::OilS
             format!("must lie in (0, 1000] um, got {}", num(supply)),
         ));
     }
-    let vogel = Vogel {
-        a: c.positive("piston.oil.vogel_a_mpa_s", o.vogel_a_mpa_s)? * 1e-3,
-        b: c.positive("piston.oil.vogel_b_c", o.vogel_b_c)?,
-        c: c.finite("piston.oil.vogel_c_c", o.vogel_c_c)?,
-    };
+    let vogel = [
+        c.positive("piston.oil.vogel_a_mpa_s", o.vogel_a_mpa_s)? * 1e-3,
+        c.positive("piston.oil.vogel_b_c", o.vogel_b_c)?,
+        c.finite("piston.oil.vogel_c_c", o.vogel_c_c)?,
+    ];
     // the film is no colder than the coolest surface it touches
     let th = &p.thermal;
     let coldest = th
         .skirt_bottom_temp_c
         .min(th.skirt_top_temp_c)
         .min(th.liner_temp_c);
-    if coldest + vogel.c <= 0.0 {
+    if coldest + vogel[2] <= 0.0 {
         return Err(c.err(
             "piston.oil.vogel_c_c",
             format!(
@@ -664,12 +664,12 @@ fn validate_oil(c: &Checker<'_>, p: &raw::RawPiston) -> Result<Option<spec::OilS
         ));
     }
     let asperity = if model == Lubrication::Mixed {
-        Some(GreenwoodTripp::new(
-            c.positive("piston.oil.roughness_um", o.roughness_um)? * 1e-6,
-            c.positive("piston.oil.eta_beta_sigma", o.eta_beta_sigma)?,
-            c.positive("piston.oil.sigma_over_beta", o.sigma_over_beta)?,
-            c.positive("piston.oil.asperity_modulus_gpa", o.asperity_modulus_gpa)? * 1e9,
-        ))
+        Some(spec::AsperitySpec {
+            sigma: c.positive("piston.oil.roughness_um", o.roughness_um)? * 1e-6,
+            eta_beta_sigma: c.positive("piston.oil.eta_beta_sigma", o.eta_beta_sigma)?,
+            sigma_over_beta: c.positive("piston.oil.sigma_over_beta", o.sigma_over_beta)?,
+            modulus: c.positive("piston.oil.asperity_modulus_gpa", o.asperity_modulus_gpa)? * 1e9,
+        })
     } else {
         None
     };
