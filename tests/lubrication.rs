@@ -15,14 +15,12 @@ fn nodes(n: usize, len: f64) -> Vec<f64> {
 fn squeeze_force(x: &[f64], (left, right): (f64, f64), h: &[f64], mu: f64, hdot: f64) -> f64 {
     let n = x.len();
     let mus = vec![mu; n];
-    let wet = vec![true; n];
     let line = Line {
         x,
         left,
         right,
         h,
         mu: &mus,
-        wet: &wet,
     };
     let p: Vec<f64> = line
         .pressure(&vec![hdot; n])

@@ -170,15 +170,15 @@ impl GtTable {
 }
 
 /// A rigid film along one line: nodes at `x` (ascending) between edges `left` and `right`
-/// (p = 0 there), with gap `h`, viscosity `mu` and a wetted flag per node; its pressure solves
-/// the three-point Reynolds form of the module docs for the source S = dh/dt + (U/2) dh/dx.
+/// (p = 0 there), with gap `h` and viscosity `mu` per node; its pressure solves the three-point
+/// Reynolds form of the module docs for the source S = dh/dt + (U/2) dh/dx (a partly wetted
+/// film weights the source, [`Film::wetting`]).
 pub struct Line<'a> {
     pub x: &'a [f64],
     pub left: f64,
     pub right: f64,
     pub h: &'a [f64],
     pub mu: &'a [f64],
-    pub wet: &'a [bool],
 }
 
 /// The line's tridiagonal system: lower/diagonal/upper and the node weights m_i.
@@ -209,18 +209,17 @@ impl Line<'_> {
             .collect()
     }
 
-    /// Face k's film thickness and viscosity (a face to an edge or a dry node takes the node's).
+    /// Face k's film thickness and viscosity: the mean of its nodes' (a face to an edge takes
+    /// its node's).
     fn face(&self, k: usize) -> (f64, f64) {
         let n = self.n();
-        let l = (k > 0 && self.wet[k - 1]).then(|| k - 1);
-        let r = (k < n && self.wet[k]).then_some(k);
-        match (l, r) {
+        match (k.checked_sub(1), (k < n).then_some(k)) {
             (Some(a), Some(b)) => (
                 0.5 * (self.h[a] + self.h[b]),
                 0.5 * (self.mu[a] + self.mu[b]),
             ),
             (Some(a), None) | (None, Some(a)) => (self.h[a], self.mu[a]),
-            (None, None) => (0.0, 1.0),
+            (None, None) => unreachable!("a line has a node"),
         }
     }
 
@@ -242,16 +241,12 @@ impl Line<'_> {
             d,
         };
         for i in 0..n {
-            if !self.wet[i] {
-                t.diag[i] = 1.0;
-                continue;
-            }
             t.m[i] = 0.5 * (t.d[i] + t.d[i + 1]);
             t.diag[i] = -(t.g[i] + t.g[i + 1]);
-            if i > 0 && self.wet[i - 1] {
+            if i > 0 {
                 t.lower[i] = t.g[i];
             }
-            if i + 1 < n && self.wet[i + 1] {
+            if i + 1 < n {
                 t.upper[i] = t.g[i + 1];
             }
         }
@@ -286,40 +281,16 @@ impl Line<'_> {
     pub fn pressure(&self, s: &[f64]) -> Vec<f64> {
         let t = self.system();
         let rhs: Vec<f64> = (0..self.n()).map(|i| t.m[i] * s[i]).collect();
-        thomas(&t, &rhs)
+        Factored::new(&t).solve(&rhs)
     }
 
     /// The force on each node's slice of the clipped pressure `p`: the integral over the
     /// slice [e_i, e_(i+1)] (edges half-way between nodes, the line's ends outside) of the
     /// quadratic through the node and its neighbours (the edges at p = 0).
     pub fn integrate(&self, p: &[f64]) -> Vec<f64> {
-        let n = self.n();
-        let d = self.distances();
-        (0..n)
-            .map(|i| {
-                let el = if i == 0 {
-                    self.left
-                } else {
-                    0.5 * (self.x[i - 1] + self.x[i])
-                };
-                let er = if i == n - 1 {
-                    self.right
-                } else {
-                    0.5 * (self.x[i] + self.x[i + 1])
-                };
-                let pl = if i == 0 { 0.0 } else { p[i - 1] };
-                let pr = if i == n - 1 { 0.0 } else { p[i + 1] };
-                let (dl, dr) = (d[i], d[i + 1]);
-                let q2 = 2.0 * ((pr - p[i]) / dr - (p[i] - pl) / dl) / (dl + dr);
-                let q1 = (pr - p[i]) / dr - 0.5 * q2 * dr;
-                let (a, b) = (el - self.x[i], er - self.x[i]);
-                p[i] * (b - a) + q1 * (b * b - a * a) / 2.0 + q2 * (b.powi(3) - a.powi(3)) / 6.0
-            })
-            .collect()
+        integrate_with(&self.integration_weights(), p).collect()
     }
-}
 
-impl Line<'_> {
     /// The weights of [`Line::integrate`]: slice i's force is
     /// q_i0 p_(i-1) + q_i1 p_i + q_i2 p_(i+1) (p = 0 beyond the ends).
     fn integration_weights(&self) -> Vec<[f64; 3]> {
@@ -360,7 +331,8 @@ fn integrate_with<'a>(q: &'a [[f64; 3]], v: &'a [f64]) -> impl Iterator<Item = f
     })
 }
 
-/// A tridiagonal system factored once (Thomas), solved for several right-hand sides.
+/// A tridiagonal system factored once (Thomas; the system is diagonally dominant), solved for
+/// several right-hand sides.
 struct Factored {
     lower: Vec<f64>,
     den: Vec<f64>,
@@ -426,26 +398,6 @@ pub fn cavitation(p: f64) -> (f64, f64) {
     let e = CAVITATION_SCALE;
     let r = p.hypot(e);
     (0.5 * (p + r), 0.5 * (1.0 + p / r))
-}
-
-/// Solves the tridiagonal system (Thomas; the system is diagonally dominant).
-fn thomas(t: &Tri, rhs: &[f64]) -> Vec<f64> {
-    let n = rhs.len();
-    let mut c = vec![0.0; n];
-    let mut y = vec![0.0; n];
-    let mut prev_c = 0.0;
-    let mut prev_y = 0.0;
-    for i in 0..n {
-        let den = t.diag[i] - t.lower[i] * prev_c;
-        c[i] = t.upper[i] / den;
-        y[i] = (rhs[i] - t.lower[i] * prev_y) / den;
-        prev_c = c[i];
-        prev_y = y[i];
-    }
-    for i in (0..n.saturating_sub(1)).rev() {
-        y[i] -= c[i] * y[i + 1];
-    }
-    y
 }
 
 /// One sample line's data for the pressure and its derivatives: cos psi, the unweighted source
@@ -590,14 +542,12 @@ impl Film {
                 .iter()
                 .map(|&g| if g > self.floor { -c } else { 0.0 })
                 .collect();
-            let wet = vec![true; n];
             let line = Line {
                 x,
                 left,
                 right,
                 h: &h,
                 mu: &self.mu[first..first + n],
-                wet: &wet,
             };
             let raw: Vec<f64> = (0..n)
                 .map(|i| {
@@ -767,7 +717,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn thomas_solves_a_small_system() {
+    fn verification_factored_thomas_solves_a_small_system() {
         let t = Tri {
             lower: vec![0.0, 1.0, 1.0],
             diag: vec![-2.0, -2.0, -2.0],
@@ -776,7 +726,7 @@ mod tests {
             g: vec![],
             d: vec![],
         };
-        let x = thomas(&t, &[-1.0, 0.0, -1.0]);
+        let x = Factored::new(&t).solve(&[-1.0, 0.0, -1.0]);
         for v in x {
             assert!((v - 1.0).abs() < 1e-14);
         }
