@@ -299,6 +299,64 @@ pub enum StepFailure {
     Singular,
 }
 
+/// Marks the slices of the film groups `films` among `n` slices.
+fn film_slices(films: &[FilmGroup<'_>], n: usize) -> Vec<bool> {
+    let mut in_film = vec![false; n];
+    for g in films {
+        for &i in &g.slices {
+            in_film[i] = true;
+        }
+    }
+    in_film
+}
+
+/// Linearises every engaged film side at the step's predictor (gaps `pen`, approach rates
+/// p' = row . v~ - u~') into the step's [`FilmBlock`]s and marks their slices.
+fn link_films(
+    st: &mut Step<'_, '_>,
+    films: &[FilmGroup<'_>],
+    in_film: &[bool],
+    pen: &[f64],
+    pred: &mut Predictions<'_, '_>,
+) {
+    let rates: Vec<f64> = (0..st.slices.len())
+        .map(|i| {
+            let s = &st.slices[i];
+            if in_film[i] {
+                dot2(s.row, st.vh[s.body]) - pred.exact(i).1
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    st.blocks = FilmBlock::at_predictor(films, (pen, &rates));
+    for b in &st.blocks {
+        for &i in &b.slices {
+            st.in_film[i] = true;
+        }
+    }
+}
+
+/// The Newton iteration's first pieces: the previous step's piece of each slice (usually
+/// still right in sustained contact), or for a slice apart before, the piece of its
+/// predicted penetration `pen`; the damper acts where the slice penetrated before.
+fn initial_pieces(slices: &[Slice<'_>], pen: &[f64]) -> Vec<Piece> {
+    slices
+        .iter()
+        .zip(pen)
+        .map(|(s, &p)| {
+            let prev = s.law.piece(s.prev_penetration).mask;
+            let mask = if prev != 0 { prev } else { s.law.piece(p).mask };
+            Piece {
+                mask,
+                damped: s.prev_penetration > 0.0 && s.damping != 0.0,
+                clamped: false,
+                film_off: false,
+            }
+        })
+        .collect()
+}
+
 /// Solves one step of size `dt` with the structure's `scheme` (Newmark beta, gamma; HHT alpha).
 ///
 /// A piecewise-linear Newton on the slices' law pieces: each iteration solves the step's
@@ -325,50 +383,16 @@ pub fn step(
     let mut st = Step::new(bodies, slices, dt, scheme);
     let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
     structure.prepare(&locs);
-    let mut in_film = vec![false; slices.len()];
-    for g in films {
-        for &i in &g.slices {
-            in_film[i] = true;
-        }
-    }
+    let in_film = film_slices(films, slices.len());
     let mut pred = Predictions::new(slices, &*structure, &in_film);
     // penetration of each slice without new contact forces: first guess of the pieces
     let mut pen: Vec<f64> = (0..slices.len())
         .map(|i| pred.penetration(i, st.qh[slices[i].body], 0.0, &*structure))
         .collect();
     if !films.is_empty() {
-        let rates: Vec<f64> = (0..slices.len())
-            .map(|i| {
-                if in_film[i] {
-                    dot2(slices[i].row, st.vh[slices[i].body]) - pred.exact(i).1
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        st.blocks = FilmBlock::at_predictor(films, (&pen, &rates));
-        for b in &st.blocks {
-            for &i in &b.slices {
-                st.in_film[i] = true;
-            }
-        }
+        link_films(&mut st, films, &in_film, &pen, &mut pred);
     }
-    let mut pieces: Vec<Piece> = slices
-        .iter()
-        .zip(&pen)
-        .map(|(s, &p)| {
-            // start from the previous step's piece (usually still right in sustained
-            // contact); a slice the predictor finds penetrating starts in contact
-            let prev = s.law.piece(s.prev_penetration).mask;
-            let mask = if prev != 0 { prev } else { s.law.piece(p).mask };
-            Piece {
-                mask,
-                damped: s.prev_penetration > 0.0 && s.damping != 0.0,
-                clamped: false,
-                film_off: false,
-            }
-        })
-        .collect();
+    let mut pieces = initial_pieces(slices, &pen);
     let mut g_cache: Option<(Vec<usize>, DMatrix<f64>, DMatrix<f64>)> = None;
     for it in 1..=max_iterations {
         // a slice carries force when it penetrates or has a film, and its damped force is not

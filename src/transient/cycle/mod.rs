@@ -101,6 +101,28 @@ pub struct EngineRun<'a> {
     impulse_acc: Vec<(f64, f64)>,
 }
 
+/// One step's loads and skirt slices ([`EngineRun::step_loads`]).
+struct StepLoads<'a> {
+    /// The pistons with this step's gas and inertia forces.
+    bodies: Vec<Body>,
+    slices: Vec<Slice<'a>>,
+    meta: Vec<SliceMeta>,
+    /// Quasi-static side force [N] and axial velocity [m/s] per cylinder.
+    side_forces: Vec<f64>,
+    axial: Vec<f64>,
+}
+
+/// What [`EngineRun::run`] gathers over the averaged cycles: their peaks and cycle numbers,
+/// the summed power spectra per cylinder and point, the last cycle's peaks (for the
+/// cycle-to-cycle change) and its series.
+struct Averaged {
+    prev_peaks: Option<CyclePeaks>,
+    kept: Vec<CyclePeaks>,
+    kept_cycles: Vec<usize>,
+    power: Vec<Vec<PowerSum>>,
+    last_series: Option<Series>,
+}
+
 /// Modes kept and the contact-DOF rows/flexibility/preload of the ROM.
 fn contact_data(rom: &EngineRom, nm: usize) -> (Dense, Vec<f64>) {
     let ndof = rom.residual_flexibility.nrows();
@@ -303,40 +325,15 @@ impl<'a> EngineRun<'a> {
         let theta = self.angle_at(t1);
         self.structure.integrator.predict(dt);
         let piston = self.setup.piston;
-        let skirt = &piston.skirt;
-        let mut slices: Vec<Slice<'_>> =
-            Vec::with_capacity(self.cyls.len() * 2 * skirt.heights.len());
-        let mut meta: Vec<(usize, bool, usize, f64)> = Vec::new();
-        let ns = skirt.heights.len();
+        let ns = piston.skirt.heights.len();
         let pen_index = |b: usize, side: bool, i: usize| (2 * b + usize::from(!side)) * ns + i;
-        let mut bodies = Vec::with_capacity(self.cyls.len());
-        let mut side_forces = Vec::with_capacity(self.cyls.len());
-        let mut axial = Vec::with_capacity(self.cyls.len());
-        for (b, cyl) in self.cyls.iter().enumerate() {
-            let loads = piston.loads(theta - cyl.phase);
-            let mut body = cyl.body;
-            body.force = loads.force;
-            bodies.push(body);
-            side_forces.push(loads.side_force);
-            axial.push(loads.axial_velocity);
-            let bore = BoreLines {
-                thrust_z: &cyl.rom.thrust_z,
-                antithrust_z: &cyl.rom.antithrust_z,
-                first: cyl.rom.contact_offset,
-            };
-            push_slices(
-                &PistonInBore {
-                    piston,
-                    loads: &loads,
-                    liner_top: self.setup.liner_top,
-                    bore: &bore,
-                    body: b,
-                },
-                &|side, i| self.prev_state[pen_index(b, side, i)].penetration,
-                &mut slices,
-                &mut meta,
-            );
-        }
+        let StepLoads {
+            bodies,
+            slices,
+            meta,
+            side_forces,
+            axial,
+        } = self.step_loads(theta);
         let s = self.settings.scheme;
         let res = match self.settings.coupling {
             Coupling::Monolithic => contact::step(
@@ -408,6 +405,51 @@ impl<'a> EngineRun<'a> {
         self.stats.newton_iterations += res.iterations;
         self.stats.max_newton_per_step = self.stats.max_newton_per_step.max(res.iterations);
         Ok(true)
+    }
+
+    /// The pistons' loads at crank angle `theta` \[deg\] (each cylinder at its own phase) and
+    /// the skirt slices they put on the bore lines ([`push_slices`]), with the slices' last
+    /// penetrations (the damper's onset rule).
+    fn step_loads(&self, theta: f64) -> StepLoads<'a> {
+        let piston = self.setup.piston;
+        let ns = piston.skirt.heights.len();
+        let nc = self.cyls.len();
+        let mut out = StepLoads {
+            bodies: Vec::with_capacity(nc),
+            slices: Vec::with_capacity(nc * 2 * ns),
+            meta: Vec::new(),
+            side_forces: Vec::with_capacity(nc),
+            axial: Vec::with_capacity(nc),
+        };
+        for (b, cyl) in self.cyls.iter().enumerate() {
+            let loads = piston.loads(theta - cyl.phase);
+            let mut body = cyl.body;
+            body.force = loads.force;
+            out.bodies.push(body);
+            out.side_forces.push(loads.side_force);
+            out.axial.push(loads.axial_velocity);
+            let bore = BoreLines {
+                thrust_z: &cyl.rom.thrust_z,
+                antithrust_z: &cyl.rom.antithrust_z,
+                first: cyl.rom.contact_offset,
+            };
+            let prev = |side: bool, i: usize| {
+                self.prev_state[(2 * b + usize::from(!side)) * ns + i].penetration
+            };
+            push_slices(
+                &PistonInBore {
+                    piston,
+                    loads: &loads,
+                    liner_top: self.setup.liner_top,
+                    bore: &bore,
+                    body: b,
+                },
+                &prev,
+                &mut out.slices,
+                &mut out.meta,
+            );
+        }
+        out
     }
 
     /// The step's checks: no slice deeper than `max_penetration` (named with its cylinder,
@@ -814,11 +856,13 @@ impl<'a> EngineRun<'a> {
             )?),
             false => None,
         };
-        let mut prev_peaks: Option<CyclePeaks> = None;
-        let mut kept: Vec<CyclePeaks> = Vec::with_capacity(averaged);
-        let mut kept_cycles: Vec<usize> = Vec::with_capacity(averaged);
-        let mut power: Vec<Vec<PowerSum>> = vec![Vec::new(); self.cyls.len()];
-        let mut last_series: Option<Series> = None;
+        let mut acc = Averaged {
+            prev_peaks: None,
+            kept: Vec::with_capacity(averaged),
+            kept_cycles: Vec::with_capacity(averaged),
+            power: vec![Vec::new(); self.cyls.len()],
+            last_series: None,
+        };
         let mut building: Option<Series> = None;
         let mut pending: Option<(usize, Series)> = None;
         let (starts, window_steps) = self.step_error_plan(cycles, spc, margin);
@@ -861,56 +905,49 @@ impl<'a> EngineRun<'a> {
             let (k, mut series) = pending.take().expect("ready");
             record.outputs(&self, &mut series, k, k + 1 == cycles, (spc, margin, dt));
             let peaks = self.peaks(&series, k);
-            if let Some(prev) = &prev_peaks {
+            if let Some(prev) = &acc.prev_peaks {
                 self.stats.cycle_change = largest_change(&peaks, prev);
             }
             if k + averaged >= cycles {
                 if let Some(s) = surface.as_mut() {
                     s.map_cycle(k, (spc, margin));
                 }
-                kept.push(peaks.clone());
-                kept_cycles.push(k);
-                self.add_spectra(&series, dt, &mut power);
+                acc.kept.push(peaks.clone());
+                acc.kept_cycles.push(k);
+                self.add_spectra(&series, dt, &mut acc.power);
             }
-            prev_peaks = Some(peaks);
-            last_series = Some(series);
+            acc.prev_peaks = Some(peaks);
+            acc.last_series = Some(series);
         }
+        let step_error = self.step_errors(snapshots, window_steps, dt)?;
+        self.conclude(acc, step_error, surface)
+    }
+
+    /// The run's result from the averaged cycles: energy balance, spectra, mean peaks with
+    /// their standard errors ([`standard_errors`]), slap events and the half-step estimate.
+    fn conclude(
+        mut self,
+        acc: Averaged,
+        step_error: Vec<StepError>,
+        surface: Option<SurfaceRecord>,
+    ) -> Result<CycleResult, TransientError> {
         let (err, scale) = self.energy_balance();
         self.stats.energy_error = if scale > 0.0 { err / scale } else { 0.0 };
-        self.stats.cycles_run = cycles;
-        self.stats.cycles_averaged = kept.len();
-        let mut series = last_series.expect("at least one cycle");
-        for (cs, sums) in series.cylinders.iter_mut().zip(&power) {
+        self.stats.cycles_run = self.settings.cycles.max(1);
+        self.stats.cycles_averaged = acc.kept.len();
+        let mut series = acc.last_series.expect("at least one cycle");
+        for (cs, sums) in series.cylinders.iter_mut().zip(&acc.power) {
             cs.spectra = sums.iter().filter_map(PowerSum::average).collect();
         }
-        let mut peaks = average_peaks(&kept);
-        self.stats.autocorrelation_cycles = standard_errors(&kept, &mut peaks);
+        let mut peaks = average_peaks(&acc.kept);
+        self.stats.autocorrelation_cycles = standard_errors(&acc.kept, &mut peaks);
         self.events.close();
-        self.attach_events(&kept, &kept_cycles, &mut peaks);
+        self.attach_events(&acc.kept, &acc.kept_cycles, &mut peaks);
         let CyclePeaks {
             cylinders: peaks,
             negative: peak_negative,
             positive: peak_positive,
         } = peaks;
-        // the windows are independent runs from their own states: on every core
-        let step_error = snapshots
-            .into_par_iter()
-            .map(|(c, snap)| {
-                let half = snap.clone();
-                let (peak_h, peak_half_h) = rayon::join(
-                    move || snap.window_peaks(c, window_steps, dt),
-                    move || half.window_peaks(c, 2 * window_steps, 0.5 * dt),
-                );
-                Ok(StepError {
-                    cylinder: self.cyls[c].rom.cylinder,
-                    peak_h: peak_h?,
-                    peak_half_h: peak_half_h?,
-                })
-            })
-            .collect::<Vec<Result<StepError, TransientError>>>()
-            .into_iter()
-            // the first failing window in time order, as a serial run would report it
-            .collect::<Result<Vec<StepError>, TransientError>>()?;
         self.stats.step_error_estimate = mean_step_error(&step_error);
         let surface = match surface {
             Some(s) => s.finish(&self)?,
@@ -925,6 +962,36 @@ impl<'a> EngineRun<'a> {
             step_error,
             surface,
         })
+    }
+
+    /// The half-step estimate's windows: each snapshot's window run at h and h/2
+    /// ([`EngineRun::window_peaks`]). The windows are independent runs from their own states,
+    /// so they run on every core; the first failing window in time order is reported, as a
+    /// serial run would.
+    fn step_errors(
+        &self,
+        snapshots: Vec<(usize, EngineRun<'a>)>,
+        window_steps: usize,
+        dt: f64,
+    ) -> Result<Vec<StepError>, TransientError> {
+        let ids: Vec<usize> = self.cyls.iter().map(|c| c.rom.cylinder).collect();
+        snapshots
+            .into_par_iter()
+            .map(|(c, snap)| {
+                let half = snap.clone();
+                let (peak_h, peak_half_h) = rayon::join(
+                    move || snap.window_peaks(c, window_steps, dt),
+                    move || half.window_peaks(c, 2 * window_steps, 0.5 * dt),
+                );
+                Ok(StepError {
+                    cylinder: ids[c],
+                    peak_h: peak_h?,
+                    peak_half_h: peak_half_h?,
+                })
+            })
+            .collect::<Vec<Result<StepError, TransientError>>>()
+            .into_iter()
+            .collect()
     }
 
     /// Advances to time `target` and checks the energy balance (growth beyond the scheme's
