@@ -359,6 +359,78 @@ pub struct RomWindow {
     pub modes: usize,
 }
 
+/// Cylinder index `idx`'s liner from the ROM with its first `nm` system modes (Rayleigh
+/// damping `rayleigh`): the dropped modes join the static correction,
+/// R += phi phi^T / omega^2 (contact x contact and points x contact), as the cycle does for
+/// `mode_cutoff_hz`. Also returns the preload displacement at the contact DOFs.
+fn truncated_liner(
+    rom: &EngineRom,
+    idx: usize,
+    nm: usize,
+    (ra, rb): (f64, f64),
+    scheme: Scheme,
+) -> (ModalLiner, Vec<f64>) {
+    let crom = &rom.cylinders[idx];
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let all = rom.frequencies_hz.len();
+    let w: Vec<f64> = rom.frequencies_hz[..nm]
+        .iter()
+        .map(|f| two_pi * f)
+        .collect();
+    let zeta: Vec<f64> = w.iter().map(|w| ra / (2.0 * w) + rb * w / 2.0).collect();
+    let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
+    let nc = nt + na;
+    let mut data = Vec::with_capacity(nc * nm);
+    for i in 0..nt {
+        data.extend_from_slice(&row(&crom.thrust_modes, i)[..nm]);
+    }
+    for i in 0..na {
+        data.extend_from_slice(&row(&crom.antithrust_modes, i)[..nm]);
+    }
+    let rows = from_rows(nc, nm, data);
+    let r = &rom.residual_flexibility;
+    let off = crom.contact_offset;
+    let mut rflex = Dense::from_shape_fn((nc, nc), |(a, b)| r[[off + a, off + b]]);
+    let np = crom.point_modes.nrows();
+    let points = Dense::from_shape_fn((np, nm), |(i, j)| crom.point_modes[[i, j]]);
+    let mut point_residual = crom.point_residual.clone();
+    // dropped modes join the static correction: R += phi phi^T / w^2 (contact x contact and
+    // points x contact), as the cycle does for `mode_cutoff_hz`
+    let contact_row = |i: usize, j: usize| {
+        if i < nt {
+            crom.thrust_modes[[i, j]]
+        } else {
+            crom.antithrust_modes[[i - nt, j]]
+        }
+    };
+    for j in nm..all {
+        let w2 = (two_pi * rom.frequencies_hz[j]).powi(2);
+        for a in 0..nc {
+            let ra_ = contact_row(a, j) / w2;
+            for b in 0..nc {
+                rflex[[a, b]] += ra_ * contact_row(b, j);
+            }
+            for p in 0..np {
+                point_residual[[p, a]] += crom.point_modes[[p, j]] * ra_;
+            }
+        }
+    }
+    let rom_preload: Vec<f64> = crom
+        .preload_thrust
+        .iter()
+        .chain(&crom.preload_antithrust)
+        .copied()
+        .collect();
+    let mut integrator = ModalIntegrator::new(&w, &zeta, scheme);
+    integrator.dynamic_modes = rom.info.system_modes.min(w.len());
+    let modal = ModalLiner {
+        structure: ModalStructure::new(integrator, rows, rflex, rom_preload.clone()),
+        points,
+        point_residual: Some(point_residual),
+    };
+    (modal, rom_preload)
+}
+
 /// Runs the ROM alone on the window with the scene's scheme (HHT-alpha included): system modes
 /// up to `keep_below_hz` (all when None; the dropped ones join the static correction) at
 /// `step_deg` (the scene's when None).
@@ -428,61 +500,7 @@ pub fn rom_window(
             .max(1),
         None => all,
     };
-    let w: Vec<f64> = rom.frequencies_hz[..nm]
-        .iter()
-        .map(|f| two_pi * f)
-        .collect();
-    let zeta: Vec<f64> = w.iter().map(|w| ra / (2.0 * w) + rb * w / 2.0).collect();
-    let (nt, na) = (crom.thrust_z.len(), crom.antithrust_z.len());
-    let nc = nt + na;
-    let mut data = Vec::with_capacity(nc * nm);
-    for i in 0..nt {
-        data.extend_from_slice(&row(&crom.thrust_modes, i)[..nm]);
-    }
-    for i in 0..na {
-        data.extend_from_slice(&row(&crom.antithrust_modes, i)[..nm]);
-    }
-    let rows = from_rows(nc, nm, data);
-    let r = &rom.residual_flexibility;
-    let off = crom.contact_offset;
-    let mut rflex = Dense::from_shape_fn((nc, nc), |(a, b)| r[[off + a, off + b]]);
-    let np = crom.point_modes.nrows();
-    let points = Dense::from_shape_fn((np, nm), |(i, j)| crom.point_modes[[i, j]]);
-    let mut point_residual = crom.point_residual.clone();
-    // dropped modes join the static correction: R += phi phi^T / w^2 (contact x contact and
-    // points x contact), as the cycle does for `mode_cutoff_hz`
-    let contact_row = |i: usize, j: usize| {
-        if i < nt {
-            crom.thrust_modes[[i, j]]
-        } else {
-            crom.antithrust_modes[[i - nt, j]]
-        }
-    };
-    for j in nm..all {
-        let w2 = (two_pi * rom.frequencies_hz[j]).powi(2);
-        for a in 0..nc {
-            let ra_ = contact_row(a, j) / w2;
-            for b in 0..nc {
-                rflex[[a, b]] += ra_ * contact_row(b, j);
-            }
-            for p in 0..np {
-                point_residual[[p, a]] += crom.point_modes[[p, j]] * ra_;
-            }
-        }
-    }
-    let rom_preload: Vec<f64> = crom
-        .preload_thrust
-        .iter()
-        .chain(&crom.preload_antithrust)
-        .copied()
-        .collect();
-    let mut integrator = ModalIntegrator::new(&w, &zeta, scheme);
-    integrator.dynamic_modes = rom.info.system_modes.min(w.len());
-    let mut modal = ModalLiner {
-        structure: ModalStructure::new(integrator, rows, rflex, rom_preload.clone()),
-        points,
-        point_residual: Some(point_residual),
-    };
+    let (mut modal, rom_preload) = truncated_liner(rom, idx, nm, (ra, rb), scheme);
     let res = window::run(&win, piston, &mut modal).map_err(|e| fail(e, "ROM"))?;
     Ok(RomWindow {
         cylinder,
