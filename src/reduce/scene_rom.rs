@@ -195,6 +195,58 @@ fn part_mesh(
     Ok((mesh, m, note))
 }
 
+/// The engine's meshes checked and compacted ([`check_and_compact`]), each liner
+/// surface-mass set a boundary surface, the engine model a mesh file makes within the
+/// limits (a file is sized only once read), and every fixed crankcase set present.
+fn check_engine_meshes(
+    scene: &Scene,
+    cc: &crate::scene::Crankcase,
+    (lm, cm): (&mut Mesh, &mut Mesh),
+    (lfile, cfile): (Option<&Path>, Option<&Path>),
+) -> Result<()> {
+    check_and_compact(lm).map_err(|source| SceneRomError::Mesh {
+        file: lfile.map(|p| p.display().to_string()),
+        source,
+    })?;
+    for sm in liner_surface_mass(scene) {
+        if let Err(e) = crate::fem::surface::boundary_faces(lm, &sm.set) {
+            return Err(SceneRomError::WetSurface {
+                path: scene.path.clone(),
+                set: sm.set.clone(),
+                file: lfile.map(|p| p.display().to_string()),
+                msg: e.to_string(),
+            });
+        }
+    }
+    check_and_compact(cm).map_err(|source| SceneRomError::Mesh {
+        file: cfile.map(|p| p.display().to_string()),
+        source,
+    })?;
+    // a mesh from a file is sized only once read: the engine model it makes is checked now
+    if lfile.is_some() || cfile.is_some() {
+        let cylinders = axis_x(scene).len();
+        let est = budget::rom_split(
+            3.0 * cm.nodes.len() as f64,
+            3.0 * lm.nodes.len() as f64,
+            (cylinders * budget::interface_columns(scene.rom.harmonics)) as f64,
+            cylinders,
+            scene.rom.crankcase_components,
+            scene.rom.cut_shapes,
+        );
+        Limits::of(scene).check(scene, &est)?;
+    }
+    for name in &cc.fix {
+        if cm.node_set(name).is_none() {
+            return Err(SceneRomError::UnknownFixSet {
+                path: scene.path.clone(),
+                name: name.clone(),
+                have: cm.set_names().iter().map(|s| s.to_string()).collect(),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Loads and checks the liner and crankcase meshes of a scene: files read in their units,
 /// materials resolved, both put into their frames with every set (found from the geometry where
 /// a deck does not name it; box sets of the scene added), then checked.
@@ -264,46 +316,7 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
         f.sets.extend(boxes);
         f.materials = vec![lnote, cnote];
     }
-    check_and_compact(&mut lm).map_err(|source| SceneRomError::Mesh {
-        file: lfile.map(|p| p.display().to_string()),
-        source,
-    })?;
-    for sm in liner_surface_mass(scene) {
-        if let Err(e) = crate::fem::surface::boundary_faces(&lm, &sm.set) {
-            return Err(SceneRomError::WetSurface {
-                path: scene.path.clone(),
-                set: sm.set.clone(),
-                file: lfile.map(|p| p.display().to_string()),
-                msg: e.to_string(),
-            });
-        }
-    }
-    check_and_compact(&mut cm).map_err(|source| SceneRomError::Mesh {
-        file: cfile.map(|p| p.display().to_string()),
-        source,
-    })?;
-    // a mesh from a file is sized only once read: the engine model it makes is checked now
-    if imported {
-        let cylinders = axis_x.len();
-        let est = budget::rom_split(
-            3.0 * cm.nodes.len() as f64,
-            3.0 * lm.nodes.len() as f64,
-            (cylinders * budget::interface_columns(scene.rom.harmonics)) as f64,
-            cylinders,
-            scene.rom.crankcase_components,
-            scene.rom.cut_shapes,
-        );
-        Limits::of(scene).check(scene, &est)?;
-    }
-    for name in &cc.fix {
-        if cm.node_set(name).is_none() {
-            return Err(SceneRomError::UnknownFixSet {
-                path: scene.path.clone(),
-                name: name.clone(),
-                have: cm.set_names().iter().map(|s| s.to_string()).collect(),
-            });
-        }
-    }
+    check_engine_meshes(scene, cc, (&mut lm, &mut cm), (lfile, cfile))?;
     let shape = found
         .as_ref()
         .and_then(|f| f.liner)

@@ -204,6 +204,44 @@ fn full_preload(sys: &FullSystem, inp: &RomInputs<'_>, contact: &[Row]) -> Resul
         .collect())
 }
 
+/// The full-order and ROM windows side by side: per point the peak negative acceleration
+/// (filtered at `band`) with its crank angle and relative error |P_rom - P_full| / |P_full|,
+/// and the contact force's largest difference relative to the full model's largest force.
+fn compare_windows(
+    full_res: &WindowResult,
+    rom_res: &WindowResult,
+    dt: f64,
+    band: f64,
+) -> (Vec<PointComparison>, f64) {
+    let peak = |res: &WindowResult, p: usize| peak_negative(res, p, dt, band);
+    let cmp = (0..full_res.acceleration.nrows())
+        .map(|p| {
+            let (pf, af) = peak(full_res, p);
+            let (pr, ar) = peak(rom_res, p);
+            PointComparison {
+                point: p + 1,
+                peak_negative_full_m_s2: pf,
+                peak_negative_rom_m_s2: pr,
+                crank_angle_full_deg: af,
+                crank_angle_rom_deg: ar,
+                relative_error: (pr - pf).abs() / pf.abs().max(1e-30),
+            }
+        })
+        .collect();
+    let fmax = full_res
+        .contact_force_n
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let contact_force_error = full_res
+        .contact_force_n
+        .iter()
+        .zip(&rom_res.contact_force_n)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+        / fmax.max(1e-30);
+    (cmp, contact_force_error)
+}
+
 /// Runs the comparison on the scene's meshes.
 pub fn compare(
     scene: &Scene,
@@ -273,31 +311,7 @@ pub fn compare(
     let full_res = window::run(&win, piston, &mut full).map_err(|e| fail(e, "full-order"))?;
     let full_seconds = t_full.elapsed().as_secs_f64();
     // --- compare
-    let peak = |res: &WindowResult, p: usize| peak_negative(res, p, dt, band);
-    let mut cmp = Vec::new();
-    for p in 0..full_res.acceleration.nrows() {
-        let (pf, af) = peak(&full_res, p);
-        let (pr, ar) = peak(&rom_res, p);
-        cmp.push(PointComparison {
-            point: p + 1,
-            peak_negative_full_m_s2: pf,
-            peak_negative_rom_m_s2: pr,
-            crank_angle_full_deg: af,
-            crank_angle_rom_deg: ar,
-            relative_error: (pr - pf).abs() / pf.abs().max(1e-30),
-        });
-    }
-    let fmax = full_res
-        .contact_force_n
-        .iter()
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    let contact_force_error = full_res
-        .contact_force_n
-        .iter()
-        .zip(&rom_res.contact_force_n)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max)
-        / fmax.max(1e-30);
+    let (cmp, contact_force_error) = compare_windows(&full_res, &rom_res, dt, band);
     Ok(FullOrderReport {
         cylinder,
         window_start_deg: win.start_deg,
@@ -310,7 +324,10 @@ pub fn compare(
         rom_modes: nm,
         rayleigh_a: ra,
         rayleigh_b: rb,
-        rom_error_peak_negative: cmp.iter().map(|c| c.relative_error).fold(0.0, f64::max),
+        rom_error_peak_negative: cmp
+            .iter()
+            .map(|c: &PointComparison| c.relative_error)
+            .fold(0.0, f64::max),
         points: cmp,
         contact_force_error,
         preload_error,
