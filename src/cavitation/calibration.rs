@@ -250,6 +250,53 @@ pub fn find_events(d: &RigData, quiet: f64) -> (Vec<(usize, usize)>, f64, f64) {
     (out, sigma, level)
 }
 
+/// One event's peaks over samples `lo..=hi`: the largest positive and negative acceleration
+/// and pressure, and its cavitation number Ca = (p_min - p_v) / (rho a_neg gap).
+fn measure_event(d: &RigData, (lo, hi): (usize, usize), c: &Coolant, gap: f64) -> Event {
+    let w = lo..=hi;
+    let amax = d.acceleration[w.clone()]
+        .iter()
+        .fold(f64::MIN, |m, &x| m.max(x));
+    let amin = d.acceleration[w.clone()]
+        .iter()
+        .fold(f64::MAX, |m, &x| m.min(x));
+    let pmax = d.pressure[w.clone()]
+        .iter()
+        .fold(f64::MIN, |m, &x| m.max(x));
+    let pmin = d.pressure[w].iter().fold(f64::MAX, |m, &x| m.min(x));
+    let aneg = (-amin).max(0.0);
+    Event {
+        start_s: d.time[lo],
+        end_s: d.time[hi],
+        peak_positive_m_s2: amax.max(0.0),
+        peak_negative_m_s2: aneg,
+        peak_pressure_kpa: pmax / 1e3,
+        min_pressure_kpa: pmin / 1e3,
+        ca: (pmin - c.vapour_pressure_pa) / (c.density_kg_m3 * aneg * gap),
+    }
+}
+
+/// The least-squares slope through the origin of the pressure rise against the positive
+/// acceleration peak, k_p = sum x y / sum x^2 (y = p_max - p_static), and its R^2
+/// (1 when the rises do not vary); None without a positive peak.
+fn fit_k_p(events: &[Event], static_pa: f64) -> Option<(f64, f64)> {
+    let y = |e: &Event| e.peak_pressure_kpa * 1e3 - static_pa;
+    let sxy: f64 = events.iter().map(|e| e.peak_positive_m_s2 * y(e)).sum();
+    let sxx: f64 = events.iter().map(|e| e.peak_positive_m_s2.powi(2)).sum();
+    if sxx <= 0.0 {
+        return None;
+    }
+    let k_p = sxy / sxx;
+    let mean_y = events.iter().map(y).sum::<f64>() / events.len() as f64;
+    let ss_res: f64 = events
+        .iter()
+        .map(|e| (y(e) - k_p * e.peak_positive_m_s2).powi(2))
+        .sum();
+    let ss_tot: f64 = events.iter().map(|e| (y(e) - mean_y).powi(2)).sum();
+    let r2 = if ss_tot > 0.0 { 1.0 - ss_res / ss_tot } else { 1.0 };
+    Some((k_p, r2))
+}
+
 /// Runs the calibration (module doc) on `d`; `file` names the data in errors.
 pub fn calibrate(file: &str, d: &RigData, s: &Settings) -> Result<Calibration, CalibrationError> {
     let err = |msg: String| CalibrationError::Data {
@@ -265,29 +312,7 @@ pub fn calibrate(file: &str, d: &RigData, s: &Settings) -> Result<Calibration, C
     let c = &s.coolant;
     let mut events: Vec<Event> = ranges
         .iter()
-        .map(|&(lo, hi)| {
-            let w = lo..=hi;
-            let amax = d.acceleration[w.clone()]
-                .iter()
-                .fold(f64::MIN, |m, &x| m.max(x));
-            let amin = d.acceleration[w.clone()]
-                .iter()
-                .fold(f64::MAX, |m, &x| m.min(x));
-            let pmax = d.pressure[w.clone()]
-                .iter()
-                .fold(f64::MIN, |m, &x| m.max(x));
-            let pmin = d.pressure[w].iter().fold(f64::MAX, |m, &x| m.min(x));
-            let aneg = (-amin).max(0.0);
-            Event {
-                start_s: d.time[lo],
-                end_s: d.time[hi],
-                peak_positive_m_s2: amax.max(0.0),
-                peak_negative_m_s2: aneg,
-                peak_pressure_kpa: pmax / 1e3,
-                min_pressure_kpa: pmin / 1e3,
-                ca: (pmin - c.vapour_pressure_pa) / (c.density_kg_m3 * aneg * s.gap),
-            }
-        })
+        .map(|&r| measure_event(d, r, c, s.gap))
         .collect();
     // drop events without a negative swing (a one-sided spike has no Ca)
     events.retain(|e| e.peak_negative_m_s2 > level);
@@ -297,27 +322,9 @@ pub fn calibrate(file: &str, d: &RigData, s: &Settings) -> Result<Calibration, C
             events.len()
         )));
     }
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for e in &events {
-        let x = e.peak_positive_m_s2;
-        sxy += x * (e.peak_pressure_kpa * 1e3 - c.static_pa);
-        sxx += x * x;
-    }
-    if sxx <= 0.0 {
+    let Some((k_p, fit_r2)) = fit_k_p(&events, c.static_pa) else {
         return Err(err("no positive acceleration peaks to fit k_p".into()));
-    }
-    let k_p = sxy / sxx;
-    let mean_y = events
-        .iter()
-        .map(|e| e.peak_pressure_kpa * 1e3 - c.static_pa)
-        .sum::<f64>()
-        / events.len() as f64;
-    let (mut ss_res, mut ss_tot) = (0.0, 0.0);
-    for e in &events {
-        let y = e.peak_pressure_kpa * 1e3 - c.static_pa;
-        ss_res += (y - k_p * e.peak_positive_m_s2).powi(2);
-        ss_tot += (y - mean_y).powi(2);
-    }
+    };
     let cav: Vec<f64> = events
         .iter()
         .filter(|e| e.ca < 1.0)
@@ -355,11 +362,7 @@ pub fn calibrate(file: &str, d: &RigData, s: &Settings) -> Result<Calibration, C
         k_p_pa_per_m_s2: k_p,
         events: events.len(),
         cavitating_events: cav.len(),
-        fit_r2: if ss_tot > 0.0 {
-            1.0 - ss_res / ss_tot
-        } else {
-            1.0
-        },
+        fit_r2,
         noise_m_s2: sigma,
         detection_m_s2: level,
         transition_band_observed: overlap,
