@@ -124,6 +124,38 @@ pub fn peak_velocity(a: &[f64], dt: f64) -> f64 {
     v.iter().fold(0.0f64, |m, x| m.max((x - mean).abs()))
 }
 
+/// The three system modes up to 1.5 x `band_hz` nearest in frequency to `dominant_hz`, each
+/// with its per-cylinder coefficient (the largest |phi| over the cylinder's points) and the
+/// Pearson and Spearman correlations of those coefficients with the cylinders' peaks `per_cyl`.
+fn modes_near(rom: &EngineRom, dominant_hz: f64, band_hz: f64, per_cyl: &[f64]) -> Vec<ModeLink> {
+    let modes = rom.shapes();
+    let mut order: Vec<usize> = (0..modes.len())
+        .filter(|&j| rom.frequencies_hz[j] <= band_hz * 1.5)
+        .collect();
+    order.sort_by(|&a, &b| {
+        (modes[a].frequency_hz - dominant_hz)
+            .abs()
+            .total_cmp(&(modes[b].frequency_hz - dominant_hz).abs())
+    });
+    order
+        .iter()
+        .take(3)
+        .map(|&j| {
+            let coef: Vec<f64> = modes[j]
+                .coefficients
+                .iter()
+                .map(|row| row.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+                .collect();
+            ModeLink {
+                frequency_hz: modes[j].frequency_hz,
+                pearson: pearson(&coef, per_cyl),
+                spearman: spearman(&coef, per_cyl),
+                cylinder_coefficients: coef,
+            }
+        })
+        .collect()
+}
+
 /// Evaluates `res` (from `rom`) with the scene's cavitation data.
 pub fn evaluate(
     res: &CycleResult,
@@ -193,32 +225,7 @@ pub fn evaluate(
     ranking.sort_by(|a, b| b.peak_negative_m_s2.total_cmp(&a.peak_negative_m_s2));
     let ranking: Vec<usize> = ranking.iter().map(|c| c.cylinder).collect();
     let per_cyl: Vec<f64> = cylinders.iter().map(|c| c.peak_negative_m_s2).collect();
-    let modes = rom.shapes();
-    let mut order: Vec<usize> = (0..modes.len())
-        .filter(|&j| rom.frequencies_hz[j] <= band_hz * 1.5)
-        .collect();
-    order.sort_by(|&a, &b| {
-        (modes[a].frequency_hz - best.0)
-            .abs()
-            .total_cmp(&(modes[b].frequency_hz - best.0).abs())
-    });
-    let nearest_modes = order
-        .iter()
-        .take(3)
-        .map(|&j| {
-            let coef: Vec<f64> = modes[j]
-                .coefficients
-                .iter()
-                .map(|row| row.iter().fold(0.0f64, |m, v| m.max(v.abs())))
-                .collect();
-            ModeLink {
-                frequency_hz: modes[j].frequency_hz,
-                pearson: pearson(&coef, &per_cyl),
-                spearman: spearman(&coef, &per_cyl),
-                cylinder_coefficients: coef,
-            }
-        })
-        .collect();
+    let nearest_modes = modes_near(rom, best.0, band_hz, &per_cyl);
     let np = cylinders.first().map(|c| c.points.len()).unwrap_or(0);
     let mut count = vec![0usize; np];
     for c in &cylinders {
