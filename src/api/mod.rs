@@ -520,6 +520,56 @@ impl ReportSweep {
     }
 }
 
+/// Each report job's overrides and its label (the scene's path for the scene itself).
+fn job_labels(scene: &Scene, jobs: &[Swept]) -> (Vec<Vec<String>>, Vec<String>) {
+    let extra: Vec<Vec<String>> = jobs.iter().map(|j| j.sets()).collect();
+    let labels = extra
+        .iter()
+        .map(|e| match e.is_empty() {
+            true => scene.path.display().to_string(),
+            false => e.join(" "),
+        })
+        .collect();
+    (extra, labels)
+}
+
+/// Adds a finished run to its sweep (clearance: 0, pin offset: 1).
+fn add_run(sweeps: &mut [ReportSweep; 2], job: &Swept, r: &CycleResult) {
+    match *job {
+        Swept::Clearance(v) => sweeps[0].add(v, r),
+        Swept::PinOffset(v) => sweeps[1].add(v, r),
+        Swept::Scene => {}
+    }
+}
+
+/// The sweeps' further runs, placed adaptively ([`ReportSweep::next`]) one per sweep at a
+/// time on the variants' ROMs, until neither sweep asks for another.
+fn place_sweep_runs(
+    mut variants: Variants,
+    sweeps: &mut [ReportSweep; 2],
+    scene: &Scene,
+    (path, sets): (&Path, &[String]),
+    cache: &CacheOptions,
+) -> Result<Variants> {
+    loop {
+        let batch: Vec<Swept> = [
+            sweeps[0].next().map(Swept::Clearance),
+            sweeps[1].next().map(Swept::PinOffset),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        if batch.is_empty() {
+            return Ok(variants);
+        }
+        let (extra, names) = job_labels(scene, &batch);
+        variants = variants.then(path, sets, &extra, cache, &|_| {})?;
+        for (job, (r, _)) in batch.iter().zip(variants.run(&names, false, || {})?) {
+            add_run(sweeps, job, &r);
+        }
+    }
+}
+
 /// Runs the report's transients of `scene` (loaded from `path` with `sets`): the scene and the
 /// first points of its clearance sweep over [`CLEARANCE_RANGE_UM`] and pin-offset sweep over
 /// [`PIN_OFFSET_RANGE_MM`] (the ends and the middle; the scene's own values not run twice) in
@@ -553,19 +603,8 @@ pub fn report_runs(
             .into_iter()
             .map(Swept::PinOffset),
     );
-    let labels = |jobs: &[Swept]| -> (Vec<Vec<String>>, Vec<String>) {
-        let extra: Vec<Vec<String>> = jobs.iter().map(|j| j.sets()).collect();
-        let labels = extra
-            .iter()
-            .map(|e| match e.is_empty() {
-                true => scene.path.display().to_string(),
-                false => e.join(" "),
-            })
-            .collect();
-        (extra, labels)
-    };
     phase("engine ROM");
-    let (extra, names) = labels(&jobs);
+    let (extra, names) = job_labels(scene, &jobs);
     let mut variants = Variants::prepare(path, sets, &extra, cache, phase)?;
     let scene_rom = variants.rom_of[0];
     maps::check_maps(scene, &variants.roms[scene_rom].rom)?;
@@ -579,32 +618,11 @@ pub fn report_runs(
         ReportSweep::new(CLEARANCE_RANGE_UM, cur_c, &base),
         ReportSweep::new(PIN_OFFSET_RANGE_MM, cur_o, &base),
     ];
-    let add = |sweeps: &mut [ReportSweep; 2], job: &Swept, r: &CycleResult| match *job {
-        Swept::Clearance(v) => sweeps[0].add(v, r),
-        Swept::PinOffset(v) => sweeps[1].add(v, r),
-        Swept::Scene => {}
-    };
     for (job, r) in jobs.iter().skip(1).zip(results) {
-        add(&mut sweeps, job, &r);
+        add_run(&mut sweeps, job, &r);
     }
     phase("sweeps: runs placed where the maxima can lie");
-    loop {
-        let batch: Vec<Swept> = [
-            sweeps[0].next().map(Swept::Clearance),
-            sweeps[1].next().map(Swept::PinOffset),
-        ]
-        .into_iter()
-        .flatten()
-        .collect();
-        if batch.is_empty() {
-            break;
-        }
-        let (extra, names) = labels(&batch);
-        variants = variants.then(path, sets, &extra, cache, &|_| {})?;
-        for (job, (r, _)) in batch.iter().zip(variants.run(&names, false, || {})?) {
-            add(&mut sweeps, job, &r);
-        }
-    }
+    variants = place_sweep_runs(variants, &mut sweeps, scene, (path, sets), cache)?;
     let [clearance, pin_offset] = sweeps;
     let (clearance, clearance_maximum) = clearance.finish();
     let (pin_offset, pin_offset_maximum) = pin_offset.finish();
