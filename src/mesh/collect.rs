@@ -141,6 +141,60 @@ impl Collected {
         )
     }
 
+    /// The file's node sets and element sets on `mesh` (`index`, `element_index`: mesh index
+    /// of each node and solid element id); an element set without a node set of its name
+    /// also gives its elements' nodes as one.
+    fn assign_sets(
+        &self,
+        mesh: &mut Mesh,
+        index: &HashMap<i64, usize>,
+        element_index: &HashMap<i64, usize>,
+    ) -> Result<(), MshError> {
+        let at = |loc: Loc, msg: String| self.err_at(loc, msg);
+        let node = |id: i64, loc: Loc, what: &str| {
+            index.get(&id).copied().ok_or_else(|| {
+                at(
+                    loc,
+                    format!("{what} refers to node {id}, which is not defined"),
+                )
+            })
+        };
+        for (name, (ids, line)) in &self.node_sets {
+            let set: BTreeSet<usize> = ids
+                .iter()
+                .map(|&n| node(n, *line, &format!("node set '{name}'")))
+                .collect::<Result<_, _>>()?;
+            mesh.node_sets
+                .insert(name.clone(), set.into_iter().collect());
+        }
+        for (name, (ids, line)) in &self.element_sets {
+            let mut elements = Vec::with_capacity(ids.len());
+            for e in ids {
+                let Some(&g) = element_index.get(e) else {
+                    return Err(at(
+                        *line,
+                        format!("element set '{name}' refers to element {e}, which is not a solid element of the file"),
+                    ));
+                };
+                elements.push(g);
+            }
+            elements.sort_unstable();
+            elements.dedup();
+            if !mesh.node_sets.contains_key(name) {
+                let nodes: BTreeSet<usize> = mesh
+                    .elements()
+                    .enumerate()
+                    .filter(|(g, _)| elements.binary_search(g).is_ok())
+                    .flat_map(|(_, (_, c))| c.iter().copied())
+                    .collect();
+                mesh.node_sets
+                    .insert(name.clone(), nodes.into_iter().collect());
+            }
+            mesh.element_sets.insert(name.clone(), elements);
+        }
+        Ok(())
+    }
+
     /// The mesh: nodes in deck order, elements grouped by kind (in deck order within a kind),
     /// node sets as given, element sets as element indices, and each element set also as the
     /// node set of its elements' nodes unless a node set has its name.
@@ -214,39 +268,7 @@ impl Collected {
             ..Default::default()
         };
         self.assign_materials(&mut mesh, &element_index)?;
-        for (name, (ids, line)) in &self.node_sets {
-            let set: BTreeSet<usize> = ids
-                .iter()
-                .map(|&n| node(n, *line, &format!("node set '{name}'")))
-                .collect::<Result<_, _>>()?;
-            mesh.node_sets
-                .insert(name.clone(), set.into_iter().collect());
-        }
-        for (name, (ids, line)) in &self.element_sets {
-            let mut elements = Vec::with_capacity(ids.len());
-            for e in ids {
-                let Some(&g) = element_index.get(e) else {
-                    return Err(at(
-                        *line,
-                        format!("element set '{name}' refers to element {e}, which is not a solid element of the file"),
-                    ));
-                };
-                elements.push(g);
-            }
-            elements.sort_unstable();
-            elements.dedup();
-            if !mesh.node_sets.contains_key(name) {
-                let nodes: BTreeSet<usize> = mesh
-                    .elements()
-                    .enumerate()
-                    .filter(|(g, _)| elements.binary_search(g).is_ok())
-                    .flat_map(|(_, (_, c))| c.iter().copied())
-                    .collect();
-                mesh.node_sets
-                    .insert(name.clone(), nodes.into_iter().collect());
-            }
-            mesh.element_sets.insert(name.clone(), elements);
-        }
+        self.assign_sets(&mut mesh, &index, &element_index)?;
         Ok(mesh)
     }
 
