@@ -236,6 +236,31 @@ fn taken_output(dir: &Path, outputs: &[&str]) -> Option<PathBuf> {
     })
 }
 
+/// Checks, before any work, that output directory `dir` is a directory (or missing) and
+/// holds no directory or other non-file under a name the command writes (`outputs`: names,
+/// or patterns with one `*`), so such a clash stops the command at once, not after its runs.
+pub fn check_output_names(dir: &Path, outputs: &[&str]) -> Result<(), WriteError> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(WriteError {
+            path: dir.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                "exists and is not a directory",
+            ),
+        });
+    }
+    match taken_output(dir, outputs) {
+        Some(taken) => Err(WriteError {
+            path: taken,
+            source: std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                "exists and is not a file, and the command writes an output of that name: remove or rename it",
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Output directories made for a command (the missing ones of a path): removed again, when
 /// still empty, if the command fails (dropped without [`NewDirs::keep`]) or is stopped by a
 /// signal, so a failed run leaves no empty directory behind. Only empty directories are ever
@@ -316,21 +341,7 @@ impl OutputDir {
             path: target.to_path_buf(),
             source,
         };
-        if target.exists() && !target.is_dir() {
-            return Err(fail(std::io::Error::new(
-                std::io::ErrorKind::AlreadyExists,
-                "exists and is not a directory",
-            )));
-        }
-        if let Some(taken) = taken_output(target, outputs) {
-            return Err(WriteError {
-                path: taken,
-                source: std::io::Error::new(
-                    std::io::ErrorKind::AlreadyExists,
-                    "exists and is not a file, and the command writes an output of that name: remove or rename it",
-                ),
-            });
-        }
+        check_output_names(target, outputs)?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),

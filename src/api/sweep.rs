@@ -79,6 +79,47 @@ pub const OUTPUTS: &[&str] = &[
     "probabilities.csv",
 ];
 
+/// The file name of shard `s`'s part.
+fn part_name(s: Shard) -> String {
+    format!("part-{:05}-of-{:05}.json", s.index, s.count)
+}
+
+/// Writes shard `s`'s part (its runs, the design and the scene's digest, with the runs'
+/// BLAKE3 over them so that `sweep-merge` finds an edited part) to `path`, atomically.
+fn write_part(
+    path: &Path,
+    report: &SweepReport,
+    (req, s, scene_text): (&SweepRequest, Shard, &[u8]),
+    started: Instant,
+) -> Result<()> {
+    let part = Part {
+        format: PART_FORMAT.into(),
+        tool: tool_version(),
+        scene: report.scene.clone(),
+        scene_blake3: blake3::hash(scene_text).to_hex().to_string(),
+        sets: req.sets.clone(),
+        design: report.design.clone(),
+        shard: s,
+        roms: report.roms.clone(),
+        seconds: started.elapsed().as_secs_f64(),
+        runs: report
+            .lines
+            .iter()
+            .cloned()
+            .zip(report.runs.iter().cloned())
+            .map(|(line, run)| PartRun { line, run })
+            .collect(),
+        runs_blake3: String::new(),
+    };
+    let part = Part {
+        runs_blake3: runs_digest(&part.runs),
+        ..part
+    };
+    let text = serde_json::to_string(&part).expect("serialisable");
+    write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+    Ok(())
+}
+
 /// Runs the sweep, or its shard.
 pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     if let Some(spec) = &req.refine {
@@ -121,7 +162,8 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     // any run); a whole sweep's output directory is staged and renamed into place
     let (stage, part_dir) = match (&req.out, shard) {
         (Some(o), None) => (Some(OutputDir::create(o, OUTPUTS)?), None),
-        (Some(o), Some(_)) => {
+        (Some(o), Some(s)) => {
+            crate::files::check_output_names(o, &[&part_name(s)])?;
             // made now, removed again (when still empty) if this shard fails or is stopped
             let made = crate::files::NewDirs::create(o)?;
             crate::files::check_writable(o)?;
@@ -146,32 +188,8 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         files: vec![],
     };
     if let (Some(s), Some(dir)) = (shard, &req.out) {
-        let path = dir.join(format!("part-{:05}-of-{:05}.json", s.index, s.count));
-        let part = Part {
-            format: PART_FORMAT.into(),
-            tool: tool_version(),
-            scene: report.scene.clone(),
-            scene_blake3: blake3::hash(&scene_text).to_hex().to_string(),
-            sets: req.sets.clone(),
-            design: report.design.clone(),
-            shard: s,
-            roms: report.roms.clone(),
-            seconds: started.elapsed().as_secs_f64(),
-            runs: report
-                .lines
-                .iter()
-                .cloned()
-                .zip(report.runs.iter().cloned())
-                .map(|(line, run)| PartRun { line, run })
-                .collect(),
-            runs_blake3: String::new(),
-        };
-        let part = Part {
-            runs_blake3: runs_digest(&part.runs),
-            ..part
-        };
-        let text = serde_json::to_string(&part).expect("serialisable");
-        write_atomic(&path, |w| w.write_all(text.as_bytes()))?;
+        let path = dir.join(part_name(s));
+        write_part(&path, &report, (req, s, &scene_text), started)?;
         if let Some(made) = part_dir {
             made.keep();
         }
