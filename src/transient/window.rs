@@ -81,6 +81,30 @@ pub struct WindowResult {
     pub seconds: f64,
 }
 
+/// The damper impulses the step missed at contact onsets ([`contact::onset_impulses`];
+/// marks the onsets in `after`), given to piston and liner as in the engine cycle when the
+/// window corrects onsets and the liner takes them; returns the piston after them.
+fn onset_kicks(
+    window: &Window,
+    liner: &mut dyn Liner,
+    (slices, locs): (&[contact::Slice<'_>], &[Location]),
+    (before, after): (&[contact::SliceState], &mut [contact::SliceState]),
+    dt: f64,
+    b: Body,
+) -> Body {
+    let damping: Vec<f64> = slices.iter().map(|s| s.damping).collect();
+    let impulses = contact::onset_impulses(before, after, &damping, dt, window.scheme);
+    if window.onset_correction
+        && impulses.iter().any(|&d| d != 0.0)
+        && liner.impulse(locs, &impulses)
+    {
+        let mut kicked = [b];
+        contact::kick_bodies(&mut kicked, slices, &impulses);
+        return kicked[0];
+    }
+    b
+}
+
 /// Integrates the window with fixed steps.
 pub fn run(
     window: &Window,
@@ -133,7 +157,7 @@ pub fn run(
             window.max_newton,
         )
         .map_err(|f| step_failure(f, deg, time_s))?;
-        let mut b = checked_body(window, &res, &meta, deg, time_s)?;
+        let b = checked_body(window, &res, &meta, deg, time_s)?;
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
         liner.commit(&locs, &res.forces);
         for (p, r) in liner
@@ -150,16 +174,7 @@ pub fn run(
             .map(|&(_, side, i, _)| prev[usize::from(!side) * ns + i])
             .collect();
         let mut after = res.slice_states();
-        let damping: Vec<f64> = slices.iter().map(|s| s.damping).collect();
-        let impulses = contact::onset_impulses(&before, &mut after, &damping, dt, window.scheme);
-        if window.onset_correction
-            && impulses.iter().any(|&d| d != 0.0)
-            && liner.impulse(&locs, &impulses)
-        {
-            let mut kicked = [b];
-            contact::kick_bodies(&mut kicked, &slices, &impulses);
-            b = kicked[0];
-        }
+        let b = onset_kicks(window, liner, (&slices, &locs), (&before, &mut after), dt, b);
         body = b;
         prev.fill(contact::SliceState::APART);
         let mut net = 0.0;
