@@ -293,7 +293,11 @@ fn fit_k_p(events: &[Event], static_pa: f64) -> Option<(f64, f64)> {
         .map(|e| (y(e) - k_p * e.peak_positive_m_s2).powi(2))
         .sum();
     let ss_tot: f64 = events.iter().map(|e| (y(e) - mean_y).powi(2)).sum();
-    let r2 = if ss_tot > 0.0 { 1.0 - ss_res / ss_tot } else { 1.0 };
+    let r2 = if ss_tot > 0.0 {
+        1.0 - ss_res / ss_tot
+    } else {
+        1.0
+    };
     Some((k_p, r2))
 }
 

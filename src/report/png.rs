@@ -231,6 +231,34 @@ pub struct BarData<'a> {
     pub errors: &'a [Vec<f64>],
 }
 
+/// The whiskers of bar k in every group (bar width `w`): value +- error as a vertical line
+/// with short caps, clipped at zero; none where the error `err(g, k)` is missing, NaN or
+/// not positive.
+fn whisker_paths(
+    groups: &[Vec<f64>],
+    err: &dyn Fn(usize, usize) -> Option<f64>,
+    k: usize,
+    w: f64,
+) -> Vec<Vec<(f64, f64)>> {
+    let mut paths = Vec::new();
+    for (g, v) in groups.iter().enumerate() {
+        let (Some(&val), Some(e)) = (v.get(k), err(g, k)) else {
+            continue;
+        };
+        if e.is_nan() || e <= 0.0 {
+            continue;
+        }
+        let xm = g as f64 + 0.1 + k as f64 * w + w * 0.45;
+        let cap = w * 0.2;
+        let lo = (val - e).max(0.0);
+        let hi = val + e;
+        paths.push(vec![(xm, lo), (xm, hi)]);
+        paths.push(vec![(xm - cap, lo), (xm + cap, lo)]);
+        paths.push(vec![(xm - cap, hi), (xm + cap, hi)]);
+    }
+    paths
+}
+
 /// A bar chart of labelled groups: `groups[g][k]` is bar k of group g (e.g. cylinders x
 /// points), with optional horizontal rules (thresholds).
 pub fn bars(
@@ -291,28 +319,12 @@ pub fn bars(
                 .legend(move |(a, b)| Rectangle::new([(a, b - 5), (a + 12, b + 5)], c.filled()));
         }
         // whiskers: value +- error, a vertical line with short caps
-        for (g, v) in groups.iter().enumerate() {
-            let (Some(&val), Some(e)) = (v.get(k), err(g, k)) else {
-                continue;
-            };
-            if e.is_nan() || e <= 0.0 {
-                continue;
-            }
-            let xm = g as f64 + 0.1 + k as f64 * w + w * 0.45;
-            let cap = w * 0.2;
-            let lo = (val - e).max(0.0);
-            let hi = val + e;
-            let black = BLACK.stroke_width(1);
-            chart.draw_series(
-                [
-                    vec![(xm, lo), (xm, hi)],
-                    vec![(xm - cap, lo), (xm + cap, lo)],
-                    vec![(xm - cap, hi), (xm + cap, hi)],
-                ]
+        let black = BLACK.stroke_width(1);
+        chart.draw_series(
+            whisker_paths(groups, &err, k, w)
                 .into_iter()
                 .map(|pts| PathElement::new(pts, black)),
-            )?;
-        }
+        )?;
     }
     for r in rules {
         let c = color(r.color);

@@ -174,7 +174,14 @@ pub fn run(
             .map(|&(_, side, i, _)| prev[usize::from(!side) * ns + i])
             .collect();
         let mut after = res.slice_states();
-        let b = onset_kicks(window, liner, (&slices, &locs), (&before, &mut after), dt, b);
+        let b = onset_kicks(
+            window,
+            liner,
+            (&slices, &locs),
+            (&before, &mut after),
+            dt,
+            b,
+        );
         body = b;
         prev.fill(contact::SliceState::APART);
         let mut net = 0.0;
