@@ -130,8 +130,31 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
     c.into_mesh()
 }
 
-/// A message about a card, or its field (0-based data field `k`).
-type R<T> = Result<T, String>;
+/// A message about a card, or its field (0-based data field `k`); the reader adds the file,
+/// line and card name ([`read`]).
+#[derive(Debug, Clone, PartialEq)]
+struct CardError(String);
+
+impl std::fmt::Display for CardError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl From<String> for CardError {
+    fn from(msg: String) -> Self {
+        CardError(msg)
+    }
+}
+
+impl From<&str> for CardError {
+    fn from(msg: &str) -> Self {
+        CardError(msg.to_string())
+    }
+}
+
+/// A card's result.
+type R<T> = Result<T, CardError>;
 
 /// One card: its name (upper case, without `*`), data fields and where it starts.
 struct Card {
@@ -163,12 +186,12 @@ impl Card {
         }
         f.parse::<i64>()
             .map(Some)
-            .map_err(|_| format!("{} ({what}) is '{f}', expected an integer", field_no(k)))
+            .map_err(|_| format!("{} ({what}) is '{f}', expected an integer", field_no(k)).into())
     }
     /// An integer field that must be given.
     fn int(&self, k: usize, what: &str) -> R<i64> {
         self.opt_int(k, what)?
-            .ok_or_else(|| format!("{} ({what}) is blank, expected an integer", field_no(k)))
+            .ok_or_else(|| format!("{} ({what}) is blank, expected an integer", field_no(k)).into())
     }
     /// An id: a positive integer.
     fn id(&self, k: usize, what: &str) -> R<i64> {
@@ -177,7 +200,8 @@ impl Card {
             return Err(format!(
                 "{} ({what}) is {v}, expected a positive integer",
                 field_no(k)
-            ));
+            )
+            .into());
         }
         Ok(v)
     }
@@ -187,9 +211,9 @@ impl Card {
         if f.is_empty() {
             return Ok(None);
         }
-        real(f)
-            .map(Some)
-            .ok_or_else(|| format!("{} ({what}) is '{f}', expected a real number", field_no(k)))
+        real(f).map(Some).ok_or_else(|| {
+            format!("{} ({what}) is '{f}', expected a real number", field_no(k)).into()
+        })
     }
 }
 
@@ -732,7 +756,7 @@ fn param(card: &Card) -> R<()> {
             if v != 1.0 {
                 return Err(format!(
                     "WTMASS is {v}: linercav does not scale masses; expected RHO in consistent units and WTMASS 1 (or no WTMASS)"
-                ));
+                ).into());
             }
         }
     }
@@ -747,7 +771,8 @@ fn system_field(card: &Card, k: usize, what: &str, min: i64) -> R<Option<i64>> {
             "{} ({what}) is {v}, expected blank, {} or a coordinate system id",
             field_no(k),
             if min == 0 { "0" } else { "0, -1" }
-        ));
+        )
+        .into());
     }
     Ok(v)
 }
@@ -755,7 +780,7 @@ fn system_field(card: &Card, k: usize, what: &str, min: i64) -> R<Option<i64>> {
 /// GRID: ID, CP, X1-X3 (blank: 0.0), CD; the position is converted once all systems are known.
 fn grid(card: &Card, m: &mut Model) -> R<()> {
     let id = card.int(0, "node id")?;
-    let node = |e: String| format!("node {id}: {e}");
+    let node = |e: CardError| CardError(format!("node {id}: {e}"));
     let cp = system_field(card, 1, "CP, the system of the position", 0).map_err(node)?;
     let cd = system_field(card, 5, "CD, the displacement system", -1).map_err(node)?;
     let mut x = [0.0; 3];
@@ -779,7 +804,8 @@ fn grdset(card: &Card, m: &mut Model, c: &Collected) -> R<()> {
         return Err(format!(
             "a second GRDSET (the first is at {}): expected at most one",
             place(c, loc)
-        ));
+        )
+        .into());
     }
     let cp = system_field(card, 1, "CP", 0)?;
     let cd = system_field(card, 5, "CD", -1)?;
@@ -796,7 +822,8 @@ fn element(card: &Card, m: &mut Model, c: &mut Collected) -> R<()> {
     if let Some(p) = pid.filter(|&p| p <= 0) {
         return Err(format!(
             "element {eid}: field 3 (property id) is {p}, expected a positive integer or blank"
-        ));
+        )
+        .into());
     }
     let ids: Vec<i64> = card
         .fields
@@ -817,7 +844,8 @@ fn element(card: &Card, m: &mut Model, c: &mut Collected) -> R<()> {
             return Err(format!(
                 "element {eid} has {k} nodes; {n} is read with {}",
                 if n == "CTETRA" { "4 or 10" } else { "8 or 20" }
-            ))
+            )
+            .into())
         }
     };
     let ids = match kind {
@@ -865,7 +893,7 @@ fn set1(card: &Card, m: &mut Model) -> R<()> {
             if b < a || n > m.limit || m.set_ids.saturating_add(n) > 4 * m.limit {
                 return Err(format!(
                     "set {sid}: {a} THRU {b} is not a range of this deck's node ids (or the sets hold more than 4 ids per byte of the deck)"
-                ));
+                ).into());
             }
             m.set_ids += n;
             entry.0.extend(a..=b);
@@ -895,14 +923,12 @@ fn mat1_constants(card: &Card) -> R<(f64, f64)> {
         }
     };
     if !(young.is_finite() && young > 0.0) {
-        return Err(format!(
-            "Young's modulus is {young}{how}, expected a positive number"
-        ));
+        return Err(format!("Young's modulus is {young}{how}, expected a positive number").into());
     }
     if !(poisson.is_finite() && poisson > -1.0 && poisson < 0.5) {
-        return Err(format!(
-            "Poisson's ratio is {poisson}{how}, expected a number in (-1, 0.5)"
-        ));
+        return Err(
+            format!("Poisson's ratio is {poisson}{how}, expected a number in (-1, 0.5)").into(),
+        );
     }
     Ok((young, poisson))
 }
@@ -914,16 +940,18 @@ fn mat1(card: &Card, m: &mut Model, c: &Collected) -> R<()> {
         return Err(format!(
             "material {mid} is defined twice (first at {})",
             place(c, *loc)
-        ));
+        )
+        .into());
     }
-    let mat = |e: String| format!("material {mid}: {e}");
+    let mat = |e: CardError| CardError(format!("material {mid}: {e}"));
     let (young, poisson) = mat1_constants(card).map_err(mat)?;
     let density = match card.opt_real(4, "RHO").map_err(mat)? {
         Some(r) if r > 0.0 => r,
         Some(r) => {
             return Err(mat(format!(
                 "RHO (field 6) is {r}, expected a positive density"
-            )))
+            )
+            .into()))
         }
         None => {
             return Err(mat(
@@ -947,7 +975,8 @@ fn psolid(card: &Card, m: &mut Model, c: &Collected) -> R<()> {
         return Err(format!(
             "property {pid} is defined twice (first at {})",
             place(c, *loc)
-        ));
+        )
+        .into());
     }
     let mid = card
         .id(1, "material id")
@@ -957,7 +986,7 @@ fn psolid(card: &Card, m: &mut Model, c: &Collected) -> R<()> {
         return Err(format!(
             "property {pid}: field 8 (FCTN) is '{}': expected blank or SMECH (structural solids; fluid elements are not read)",
             clip(&fctn)
-        ));
+        ).into());
     }
     m.psolid.insert(pid, (mid, card.loc));
     Ok(())
@@ -975,14 +1004,16 @@ fn cord2(card: &Card, m: &mut Model, c: &Collected) -> R<()> {
         return Err(format!(
             "coordinate system {cid} is defined twice (first at {})",
             place(c, s.loc)
-        ));
+        )
+        .into());
     }
-    let sys = |e: String| format!("system {cid}: {e}");
+    let sys = |e: CardError| CardError(format!("system {cid}: {e}"));
     let rid = card.opt_int(1, "RID, the reference system").map_err(sys)?;
     if let Some(r) = rid.filter(|&r| r < 0) {
         return Err(sys(format!(
             "field 3 (RID) is {r}, expected blank, 0 or a coordinate system id"
-        )));
+        )
+        .into()));
     }
     if card.fields.iter().skip(8).all(|f| f.trim().is_empty()) {
         return Err(sys(
@@ -1045,7 +1076,7 @@ fn resolve_systems(
                 },
             };
             let pts = s.points.map(|p| parent.to_basic(p));
-            let f = Frame::through(s.kind, pts).map_err(|e| at(id, s, e))?;
+            let f = Frame::through(s.kind, pts).map_err(|e| at(id, s, e.0))?;
             done.insert(id, f);
         }
     }
@@ -1101,7 +1132,7 @@ fn materials(
         let name = hm
             .get(&mid)
             .cloned()
-            .unwrap_or_else(|| format!("MAT1 {mid}"));
+            .unwrap_or_else(|| format!("MAT1 {mid}").into());
         if let Some(other) = taken.insert(name.clone(), mid) {
             return Err(c.err_at(loc, format!(
                 "MAT1: material {mid} is named '{name}', as material {other} is: expected distinct names ($HMNAME MAT comments)"

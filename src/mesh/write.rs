@@ -91,7 +91,7 @@ pub fn write_mesh(path: &Path, mesh: &Mesh, opts: &WriteOptions) -> Result<(), W
             "unknown mesh format: expected .msh (Gmsh MSH 4.1), .bdf or .nas (Nastran bulk data) or .inp (Abaqus input)".into(),
         ));
     };
-    check_finite(mesh, opts).map_err(fail)?;
+    check_finite(mesh, opts).map_err(|e| fail(e.to_string()))?;
     match format {
         DeckFormat::Msh => {
             let m = msh_mesh(mesh, opts);
@@ -110,14 +110,24 @@ fn invalid(msg: String) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidInput, msg)
 }
 
+/// A value no deck format can hold.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+enum NonFinite {
+    /// A node (1-based) with a non-finite coordinate.
+    #[error("node {0} has a non-finite coordinate")]
+    Node(usize),
+    #[error("a material constant is not a finite number")]
+    Material,
+}
+
 /// Refuses a non-finite coordinate or material constant (it has no form in any deck).
-fn check_finite(mesh: &Mesh, opts: &WriteOptions) -> Result<(), String> {
+fn check_finite(mesh: &Mesh, opts: &WriteOptions) -> Result<(), NonFinite> {
     if let Some(i) = mesh
         .nodes
         .iter()
         .position(|x| !x.iter().all(|v| v.is_finite()))
     {
-        return Err(format!("node {} has a non-finite coordinate", i + 1));
+        return Err(NonFinite::Node(i + 1));
     }
     let given = opts.material.iter();
     let deck = mesh.materials.iter().map(|m| &m.elastic);
@@ -126,7 +136,7 @@ fn check_finite(mesh: &Mesh, opts: &WriteOptions) -> Result<(), String> {
             .iter()
             .all(|v| v.is_finite())
         {
-            return Err("a material constant is not a finite number".into());
+            return Err(NonFinite::Material);
         }
     }
     Ok(())

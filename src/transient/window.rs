@@ -160,12 +160,9 @@ pub fn run(
         let b = checked_body(window, &res, &meta, deg, time_s)?;
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
         liner.commit(&locs, &res.forces);
-        for (p, r) in liner
-            .point_residual(&locs, &res.forces)
-            .into_iter()
-            .enumerate()
-        {
-            residual.resize(npoints, Vec::new());
+        let point_residual = liner.point_residual(&locs, &res.forces);
+        residual.resize(point_residual.len().max(residual.len()), Vec::new());
+        for (p, r) in point_residual.into_iter().enumerate() {
             residual[p].push(r);
         }
         // the damper impulse missed at onsets, as in the engine cycle

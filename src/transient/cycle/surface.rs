@@ -310,11 +310,14 @@ impl Mapper {
             }
             let mut p = match self.projectors[c].take() {
                 Some(p) => p,
-                None => Projector::new(surface, x.as_ref(), None).map_err(|m| fail(&m))?,
+                None => {
+                    Projector::new(surface, x.as_ref(), None).map_err(|e| fail(&evd_failed(e)))?
+                }
             };
             let (peaks, exact) = p.peaks(x.as_ref());
             if exact > REWEIGHT_ABOVE {
-                p = Projector::new(surface, x.as_ref(), Some(&p.weight)).map_err(|m| fail(&m))?;
+                p = Projector::new(surface, x.as_ref(), Some(&p.weight))
+                    .map_err(|e| fail(&evd_failed(e)))?;
             }
             self.projectors[c] = Some(p);
             for (series, v) in self.peaks[c].iter_mut().zip(peaks) {
@@ -374,6 +377,11 @@ struct Projector {
     norm: Vec<f64>,
 }
 
+/// The message of a failed eigen-decomposition of the weighted surface rows.
+fn evd_failed(e: faer::linalg::evd::EvdError) -> String {
+    format!("the eigen-decomposition of the weighted rows failed: {e:?}")
+}
+
 impl Projector {
     /// The brackets for the surface rows, each coordinate weighted by its RMS over `x`
     /// (coordinates x samples) or `previous`, whichever is larger, but at least 1e-3 of the
@@ -383,7 +391,7 @@ impl Projector {
         surface: &SurfaceRows,
         x: MatRef<'_, f64>,
         previous: Option<&[f64]>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, faer::linalg::evd::EvdError> {
         let (nc, ns) = (surface.residual.ncols(), surface.nodes.len());
         let nm = x.nrows() - nc;
         let rows_t = Mat::from_fn(nm + nc, ns, |j, n| {
@@ -417,9 +425,7 @@ impl Projector {
             1.0,
             Par::Seq,
         );
-        let evd = gram
-            .self_adjoint_eigen(faer::Side::Lower)
-            .map_err(|e| format!("the eigen-decomposition of the weighted rows failed: {e:?}"))?;
+        let evd = gram.self_adjoint_eigen(faer::Side::Lower)?;
         let s = evd.S().column_vector();
         let last = s.nrows() - 1;
         let q = (0..=last)
