@@ -154,25 +154,36 @@ fn read_mesh(
     }
 }
 
+/// Sizes a generated liner's modal solve before the mesh is made (`liner.mesh.radial =
+/// 100000` ran for minutes at 6-12 GB, and aborted under an address-space cap).
+fn check_generated(
+    sc: &Scene,
+    source: &MeshSource,
+    limits: &crate::scene::budget::Limits,
+) -> Result<()> {
+    if let MeshSource::Liner { geometry, meshing } = source {
+        let dofs = crate::scene::budget::liner_dofs(geometry, meshing);
+        let mut est = crate::scene::budget::fe_model(dofs.min(1e18) as usize, "the modal solve");
+        est.keys = "liner.mesh (radial, radial_flange, circumferential, axial_size_mm)";
+        limits.check(sc, &est)?;
+    }
+    Ok(())
+}
+
 /// Resolves a [`ModelInput`] to a checked mesh and material. `extra_fix` adds sets to fix.
 pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart> {
+    // a scene's own limits (`limits.max_memory_gb`), the machine's for a bare mesh
+    let mut limits = crate::scene::budget::Limits::machine();
     let (mesh, file, material, material_source, mut fix, label, shift_hz, guard_modes) = match input
     {
         ModelInput::Scene { scene, part, sets } => {
             let sc = load_scene(scene, sets)?;
+            limits = crate::scene::budget::Limits::of(&sc);
             let p = sc.part(part).ok_or_else(|| Error::Argument {
                 flag: format!("{}: part '{part}'", scene.display()),
                 msg: format!("unknown; the scene has: {}", PARTS.join(", ")),
             })?;
-            // a generated mesh is sized before it is made (`liner.mesh.radial = 100000` ran
-            // for minutes at 6-12 GB, and aborted under an address-space cap)
-            if let MeshSource::Liner { geometry, meshing } = &p.source {
-                let dofs = crate::scene::budget::liner_dofs(geometry, meshing);
-                let mut est =
-                    crate::scene::budget::fe_model(dofs.min(1e18) as usize, "the modal solve");
-                est.keys = "liner.mesh (radial, radial_flange, circumferential, axial_size_mm)";
-                crate::scene::budget::Limits::of(&sc).check(&sc, &est)?;
-            }
+            check_generated(&sc, &p.source, &limits)?;
             let (mut mesh, file, material, src) = read_mesh(
                 &p.source,
                 p.mesh_unit,
@@ -234,7 +245,7 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
     // estimated on the nodes the elements use (unused GRIDs inflated it: 3M of them, 355 GB)
     if let Some(f) = &file {
         let est = crate::scene::budget::fe_model(3 * mesh.nodes.len(), "the modal solve");
-        crate::scene::budget::Limits::machine().check_at(std::path::Path::new(f), &est)?;
+        limits.check_at(std::path::Path::new(f), &est)?;
     }
     for name in &fix {
         if mesh.node_set(name).is_none() {

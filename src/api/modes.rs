@@ -285,6 +285,16 @@ pub fn run_assembly(
         });
     }
     if full {
+        // the whole engine's FE model is sized before it is made (per_sector = 2000 aborted in
+        // an allocation after 22 s under a 6 GB cap)
+        if let Some(dofs) = crate::scene::budget::engine_dofs(scene) {
+            let mut est = crate::scene::budget::fe_model(
+                dofs.min(1e18) as usize,
+                "the full engine's modal solve",
+            );
+            est.keys = "liner.mesh.* / crankcase.mesh.* (element counts and sizes)";
+            crate::scene::budget::Limits::of(scene).check(scene, &est)?;
+        }
         let r = super::full_modes::run(scene, count, vtu_path)?;
         return Ok(AssemblyReport {
             frequencies_hz: r.frequencies_hz,

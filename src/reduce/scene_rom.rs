@@ -252,6 +252,11 @@ fn check_engine_meshes(
 /// a deck does not name it; box sets of the scene added), then checked.
 pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
     let cc = crankcase_of(scene)?;
+    // generated meshes are sized before they are made (`export-mesh` of a liner with
+    // `radial = 100000` ran on at many GB)
+    if let Some(est) = budget::meshes(scene) {
+        Limits::of(scene).check(scene, &est)?;
+    }
     let lfile = match &scene.liner.source {
         MeshSource::File(p) => Some(p.as_path()),
         MeshSource::Liner { .. } => None,

@@ -50,16 +50,20 @@ pub struct Limits {
     pub seconds: f64,
     /// Whether the memory limit was given in the scene (else it is the machine's).
     pub memory_from_scene: bool,
+    /// What bounds the machine's memory ([`crate::machine::available_memory_from`]).
+    pub memory_bound: &'static str,
 }
 
 impl Limits {
     /// The machine's limits without a scene (a bare `--mesh`): 80 % of the available memory,
     /// 24 h.
     pub fn machine() -> Self {
+        let (bytes, bound) = crate::machine::available_memory_from();
         Self {
-            memory: 0.8 * crate::machine::available_memory() as f64,
+            memory: 0.8 * bytes as f64,
             seconds: 24.0 * 3600.0,
             memory_from_scene: false,
+            memory_bound: bound,
         }
     }
 
@@ -71,6 +75,7 @@ impl Limits {
             memory: l.max_memory_gb.map_or(m.memory, |gb| gb * 1e9),
             seconds: l.max_hours.map_or(m.seconds, |h| h * 3600.0),
             memory_from_scene: l.max_memory_gb.is_some(),
+            memory_bound: m.memory_bound,
         }
     }
 
@@ -90,7 +95,8 @@ impl Limits {
                     format!("limits.max_memory_gb allows {}", gb(self.memory))
                 } else {
                     format!(
-                        "the machine has {} available (80 % of it is the limit)",
+                        "{} leaves {} available (80 % of it is the limit)",
+                        self.memory_bound,
                         gb(self.memory / 0.8)
                     )
                 },
@@ -193,6 +199,26 @@ pub fn fe_model(dofs: usize, what: &'static str) -> Estimate {
         keys: "the mesh (a coarser one)",
         detail: format!("{} DOFs", num(dofs as f64)),
     }
+}
+
+/// Memory of the generated meshes per node \[bytes\]: coordinates, connectivity, sets and the
+/// compaction's maps (`linercav export-mesh models/engine.toml --part crankcase`: 43 MB peak
+/// with 117k nodes in all, 87 MB with 248k at `crankcase.mesh.per_sector = 24`, i.e. about
+/// 340 bytes per node), rounded up.
+const MESH_BYTES_PER_NODE: f64 = 400.0;
+
+/// Generating a scene's meshes (`None` when a mesh comes from a file: the file's own counts are
+/// checked once read): memory from the estimated nodes ([`engine_dofs`] / 3), time at 2 us per
+/// node (the same measurement).
+pub fn meshes(scene: &Scene) -> Option<Estimate> {
+    let nodes = engine_dofs(scene)? / 3.0;
+    Some(Estimate {
+        what: "generating the meshes",
+        memory: MESH_BYTES_PER_NODE * nodes,
+        seconds: 2e-6 * nodes,
+        keys: "liner.mesh.* / crankcase.mesh.* (element counts and sizes)",
+        detail: format!("{} nodes", num(nodes)),
+    })
 }
 
 /// Factor entries of the default crankcase's interior (75,810 DOFs, hex20, METIS order):
