@@ -43,6 +43,37 @@ pub struct PressureCurve {
     pa: Vec<f64>,
 }
 
+/// Largest relative difference between a table's first row and a closing row 720 deg later
+/// that is taken as the same point of the periodic cycle (a measured cycle's ends differ by
+/// the cycle-to-cycle scatter, well under this).
+const CLOSING_ROW_TOLERANCE: f64 = 0.01;
+
+/// Drops a closing row: a table whose last row lies 720 deg after its first gives one crank
+/// angle of the periodic cycle twice. Within [`CLOSING_ROW_TOLERANCE`] of the first row's
+/// pressure it is dropped; otherwise the table is refused, naming both pressures.
+fn close_cycle(path: &Path, angles: &mut Vec<f64>, pa: &mut Vec<f64>) -> Result<(), PressureError> {
+    let n = angles.len();
+    if n < 3 || angles[n - 1] - angles[0] != 720.0 {
+        return Ok(());
+    }
+    let (p0, p1) = (pa[0], pa[n - 1]);
+    if (p1 - p0).abs() > CLOSING_ROW_TOLERANCE * p0 {
+        return Err(PressureError::Table {
+            path: path.into(),
+            msg: format!(
+                "the rows at {} and {} deg are the same point of the periodic cycle but give {} and {} bar: drop the last row, or make them agree",
+                crate::text::num(angles[0]),
+                crate::text::num(angles[n - 1]),
+                crate::text::num(p0 / 1e5),
+                crate::text::num(p1 / 1e5)
+            ),
+        });
+    }
+    angles.pop();
+    pa.pop();
+    Ok(())
+}
+
 impl PressureCurve {
     /// Reads `crank_angle_deg,pressure_bar` (header line required; angles strictly increasing
     /// within [0, 720], spanning less than 720 deg; pressures finite and positive).
@@ -130,6 +161,7 @@ impl PressureCurve {
             angles_deg.push(a);
             pa.push(p * 1e5);
         }
+        close_cycle(path, &mut angles_deg, &mut pa)?;
         if angles_deg.len() < 2 || angles_deg[angles_deg.len() - 1] - angles_deg[0] >= 720.0 {
             return Err(PressureError::Table {
                 path: path.into(),
@@ -357,5 +389,25 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("line 1"), "{e}");
+    }
+
+    /// Regression (issue 40): a closed-cycle table, its 720 deg row repeating the 0 deg one, was
+    /// refused ("needs at least two rows spanning less than 720 deg") though it is legal; it
+    /// now reads as the same table without the closing row, and closing rows that disagree
+    /// are refused with both pressures named.
+    #[test]
+    fn regression_a_closing_row_at_720_deg_is_the_first_row_again() {
+        let p = Path::new("p.csv");
+        let f = |t: f64| 1.0 + 100.0 * (1.0 - (t - 360.0).abs() / 180.0).max(0.0);
+        let open: String = (0..24)
+            .map(|k| format!("{},{}\n", 30 * k, f(30.0 * k as f64)))
+            .collect();
+        let parse = |rows: &str| {
+            PressureCurve::parse(p, &format!("crank_angle_deg,pressure_bar\n{rows}"))
+        };
+        let closed = parse(&format!("{open}720,{}\n", f(0.0))).unwrap();
+        assert_eq!(closed, parse(&open).unwrap());
+        let e = parse(&format!("{open}720,5\n")).unwrap_err().to_string();
+        assert!(e.contains("0 and 720 deg") && e.contains("5 bar"), "{e}");
     }
 }
