@@ -346,7 +346,12 @@ pub(super) fn validate_rom(
         crankcase_components: r.crankcase_components,
         cut_shapes: r.cut_shapes,
         cylinders,
-        cache_dir: base.join(&r.cache_dir),
+        cache_dir: base.join(path_value(
+            c,
+            "rom.cache_dir",
+            &r.cache_dir,
+            "the default .linercav-cache",
+        )?),
     };
     Ok(rom)
 }
@@ -388,6 +393,12 @@ pub(super) fn validate_cavitation(
                 "give either a calibration file or k_p_pa_per_m_s2/onset_m_s2/high_risk_m_s2, not both",
             ));
         }
+        let f = path_value(
+            c,
+            "cavitation.calibration_file",
+            f,
+            "thresholds from k_p_pa_per_m_s2, onset_m_s2 and high_risk_m_s2",
+        )?;
         calibration_thresholds(c, &base.join(f))?
     } else {
         if let Some(k) = r.k_p_pa_per_m_s2 {
@@ -734,7 +745,12 @@ pub(super) fn validate_operating(
     let operating = Operating {
         load: o.load,
         pressure: match &o.pressure_file {
-            Some(f) => PressureSource::File(base.join(f)),
+            Some(f) => PressureSource::File(base.join(path_value(
+                c,
+                "operating.pressure_file",
+                f,
+                "the built-in Wiebe curve",
+            )?)),
             None => PressureSource::Wiebe(wiebe),
         },
         crankcase_pa: c.positive("operating.crankcase_pressure_bar", o.crankcase_pressure_bar)?
@@ -810,7 +826,7 @@ pub(super) fn validate_transient(
         averaged_cycles: t.averaged_cycles.min(t.cycles),
         adaptive: t.adaptive,
         damping_ratio: t.damping_ratio,
-        max_penetration: c.positive("transient.max_penetration_um", t.max_penetration_um)? * 1e-6,
+        max_penetration: max_penetration(c, t.max_penetration_um)?,
         mode_cutoff_hz: match t.mode_cutoff_hz {
             Some(f) => Some(c.positive("transient.mode_cutoff_hz", f)?),
             None => None,
@@ -1008,13 +1024,45 @@ pub(super) fn box_sets(
     Ok(out)
 }
 
+/// The smallest `transient.max_penetration_um` accepted \[um\]: the penalty contact carries
+/// its load through penetrations of a few um, so a limit far below stops every run at its
+/// first contact (1e-9 um gave exit 1 with "the contact stiffness is too low").
+const MIN_PENETRATION_LIMIT_UM: f64 = 0.1;
+
+/// `transient.max_penetration_um` in metres, at least [`MIN_PENETRATION_LIMIT_UM`].
+fn max_penetration(c: &Checker<'_>, um: f64) -> Result<f64, SceneError> {
+    let key = "transient.max_penetration_um";
+    if um.is_finite() && um < MIN_PENETRATION_LIMIT_UM {
+        return Err(c.err(
+            key,
+            format!(
+                "must be at least {MIN_PENETRATION_LIMIT_UM} um (the contact carries its load through penetrations of a few um), got {}",
+                num(um)
+            ),
+        ));
+    }
+    Ok(c.positive(key, um)? * 1e-6)
+}
+
 /// A mesh file name: not blank (an empty one joined the scene's directory: "cannot read mesh
 /// file small/").
 pub(super) fn mesh_file<'f>(c: &Checker<'_>, key: &str, f: &'f str) -> Result<&'f str, SceneError> {
+    path_value(c, key, f, "the parametric mesh")
+}
+
+/// A path key's value: not blank (an empty one names the scene's own directory, and reading
+/// it failed as "small/: not a regular file", or the ROM cache went into the scene's
+/// directory); `default` says what leaving the key out gives.
+pub(super) fn path_value<'f>(
+    c: &Checker<'_>,
+    key: &str,
+    f: &'f str,
+    default: &str,
+) -> Result<&'f str, SceneError> {
     if f.trim().is_empty() {
         return Err(c.err(
             key,
-            "is empty: give the mesh file's path (relative to the scene file), or leave the key out for the parametric mesh",
+            format!("is empty: give a path (relative to the scene file), or leave the key out for {default}"),
         ));
     }
     Ok(f)
