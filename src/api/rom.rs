@@ -201,8 +201,8 @@ impl ShapesReport {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "mode-shape coefficients (radial, thrust side; rows: cylinders {:?}; columns: points top to bottom)",
-            self.cylinders
+            "mode-shape coefficients (radial, thrust side; rows: cylinders {}; columns: points top to bottom)",
+            crate::text::joined(&self.cylinders, ", ")
         );
         for m in &self.modes {
             let _ = writeln!(s, "{:9.1} Hz", m.frequency_hz);

@@ -426,11 +426,11 @@ impl SweepReport {
     pub fn to_text(&self) -> String {
         use std::fmt::Write;
         let mut s = format!(
-            "{} runs of {} in {:.1} s (ROM: {:?}){}\n",
+            "{} runs of {} in {:.1} s (ROM: {}){}\n",
             self.lines.len(),
             self.scene,
             self.seconds,
-            self.roms,
+            self.roms.join(", "),
             self.shard
                 .map(|s| format!(
                     ", shard {}/{} of {} runs",

@@ -272,15 +272,23 @@ impl Evaluation {
         }
         let _ = writeln!(
             s,
-            "  ranking (peak negative): {:?}; most active point: {}; dominant response {:.0} Hz",
-            self.ranking, self.most_active_point, self.dominant_hz
+            "  ranking (peak negative): {}; most active point: {}; dominant response {:.0} Hz",
+            crate::text::joined(&self.ranking, " > "),
+            self.most_active_point,
+            self.dominant_hz
         );
         for m in &self.nearest_modes {
             let _ = writeln!(
                 s,
-                "  mode {:.0} Hz: cylinder coefficients {:?}, correlation with the per-cylinder peak: pearson {}, spearman {}",
+                "  mode {:.0} Hz: cylinder coefficients {}, correlation with the per-cylinder peak: pearson {}, spearman {}",
                 m.frequency_hz,
-                m.cylinder_coefficients.iter().map(|v| (v * 100.0).round() / 100.0).collect::<Vec<_>>(),
+                crate::text::joined(
+                    &m.cylinder_coefficients
+                        .iter()
+                        .map(|v| format!("{v:.2}"))
+                        .collect::<Vec<_>>(),
+                    ", "
+                ),
                 m.pearson.map(|v| format!("{v:.2}")).unwrap_or("-".into()),
                 m.spearman.map(|v| format!("{v:.2}")).unwrap_or("-".into()),
             );

@@ -402,9 +402,8 @@ mod tests {
         let open: String = (0..24)
             .map(|k| format!("{},{}\n", 30 * k, f(30.0 * k as f64)))
             .collect();
-        let parse = |rows: &str| {
-            PressureCurve::parse(p, &format!("crank_angle_deg,pressure_bar\n{rows}"))
-        };
+        let parse =
+            |rows: &str| PressureCurve::parse(p, &format!("crank_angle_deg,pressure_bar\n{rows}"));
         let closed = parse(&format!("{open}720,{}\n", f(0.0))).unwrap();
         assert_eq!(closed, parse(&open).unwrap());
         let e = parse(&format!("{open}720,5\n")).unwrap_err().to_string();

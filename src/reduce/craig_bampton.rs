@@ -842,7 +842,7 @@ fn log_conditioning(part: &str, k: &Mat<f64>, m: &Mat<f64>) {
     let em = ms
         .self_adjoint_eigenvalues(faer::Side::Lower)
         .unwrap_or_default();
-    log::info!(
+    log::debug!(
         "[{part}] scaled K_r eigenvalues {:?} .. {:?}; M_r {:?} .. {:?}",
         &ek[..ek.len().min(8)],
         ek.last(),

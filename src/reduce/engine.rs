@@ -162,7 +162,7 @@ pub fn system_modes_by(
             y[(i, j)] *= d[i];
         }
     }
-    log::info!(
+    log::debug!(
         "system: n = {n}, lowest eigenvalues {:?}",
         &lambdas[..lambdas.len().min(4)]
     );

@@ -499,10 +499,10 @@ fn prepare(
         cut_psi.push(psi);
     }
     log::info!(
-        "[{part}] {} components, cut DOFs {:?}, cut shapes {:?} ({:.2} s)",
+        "[{part}] {} components, cut DOFs {}, cut shapes {} ({:.2} s)",
         comps.len(),
-        cuts.iter().map(|c| 3 * c.len()).collect::<Vec<_>>(),
-        cut_psi.iter().map(|m| m.ncols()).collect::<Vec<_>>(),
+        crate::text::joined(&cuts.iter().map(|c| 3 * c.len()).collect::<Vec<_>>(), ", "),
+        crate::text::joined(&cut_psi.iter().map(|m| m.ncols()).collect::<Vec<_>>(), ", "),
         t0.elapsed().as_secs_f64()
     );
     let cparts = component_parts(p, &comps, &cut_psi)?;
