@@ -653,6 +653,11 @@ fn modes_command(
     };
     let report = modes::run(&req, started)?;
     print_report(json, &report, || report.to_text());
+    // warnings go to standard error, as every command's do (the text and the JSON are the
+    // result; the JSON also lists them)
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
     linercav::eigen::certify::verdict(
         report.sturm.as_ref(),
         report.max_residual,

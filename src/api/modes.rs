@@ -198,9 +198,6 @@ impl ModesReport {
             self.solves, self.mass_products, self.ncv, self.factor_nnz, self.seconds,
             self.timings.assembly, self.timings.ordering, self.timings.factorisation, self.timings.eigen, self.timings.certification
         );
-        for w in &self.warnings {
-            s += &format!("warning: {w}\n");
-        }
         s
     }
 }
