@@ -115,7 +115,20 @@ fn system_memory() -> u64 {
 
 #[cfg(test)]
 mod tests {
-    use super::cgroup_available;
+    use super::{address_space_left, cgroup_available, ADDRESS_SPACE_HEADROOM};
+
+    /// Regression (issue 40): under a 700 MB address-space cap an estimate of 0.32 GB was
+    /// let through against the bare cap and the run aborted in an allocation; the cap now
+    /// leaves the headroom out, and no cap leaves everything.
+    #[test]
+    fn regression_an_address_space_cap_keeps_its_headroom() {
+        assert_eq!(address_space_left(u64::MAX), u64::MAX);
+        assert_eq!(
+            address_space_left(700_000_000),
+            700_000_000 - ADDRESS_SPACE_HEADROOM
+        );
+        assert_eq!(address_space_left(ADDRESS_SPACE_HEADROOM / 2), 0);
+    }
     use std::collections::HashMap;
 
     fn reader(files: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {

@@ -99,23 +99,107 @@ fn regression_a_huge_sampled_value_reaches_the_key_check() {
     assert!(!err.contains("invalid type"), "{err}");
 }
 
-/// Regression: `max_penetration_um = 1e-9` failed with "0.0 um > 0.0 um".
+/// Regression: `max_penetration_um = 1e-9` failed with "0.0 um > 0.0 um", then (with its
+/// digits) as a numerical failure (exit 1) with a hint on the contact stiffness. A limit far
+/// below the contact's penetrations is now refused up front, naming the key (exit 2); a
+/// small legal one still stops the run with its digits.
 #[test]
 fn regression_a_tiny_penetration_limit_is_printed_with_its_digits() {
     let (_cache, dir) = small_rom_cache();
+    let args = |v: &str| {
+        [
+            "simulate".to_string(),
+            SMALL.into(),
+            "--cache-dir".into(),
+            dir.clone(),
+            "--set".into(),
+            format!("transient.max_penetration_um={v}"),
+        ]
+    };
+    let a = args("1e-9");
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    let err = refused(&a, 2, "transient.max_penetration_um");
+    assert!(err.contains("at least 0.1 um"), "{err}");
+    let a = args("0.1");
+    let a: Vec<&str> = a.iter().map(String::as_str).collect();
+    let err = refused(&a, 1, "deep penetration");
+    assert!(err.contains("> 0.1 um"), "{err}");
+}
+
+/// Regression: an empty `operating.pressure_file` or `cavitation.calibration_file` failed as
+/// "small/: cannot read the pressure file: not a regular file", and an empty `rom.cache_dir`
+/// put the ROM cache into the scene's own directory without a word. Each is refused naming
+/// its key.
+#[test]
+fn regression_empty_path_keys_are_refused_naming_the_key() {
+    for key in [
+        "operating.pressure_file",
+        "cavitation.calibration_file",
+        "rom.cache_dir",
+    ] {
+        let set = format!("{key}=\"\"");
+        let err = refused(&["simulate", SMALL, "--set", &set], 2, key);
+        assert!(err.contains("is empty"), "{key}: {err}");
+    }
+}
+
+/// Regression: `modes --assembly --full` with `crankcase.mesh.per_sector = 2000` built the
+/// engine's FE model with no estimate (exit 134 in an allocation after 22 s under a 6 GB
+/// cap), and `export-mesh` of a liner with `radial = 100000` ran on at many GB; both are
+/// now sized first and refused (exit 2) naming the estimate and the keys.
+#[test]
+fn regression_the_full_engine_and_exported_meshes_are_sized_before_they_are_made() {
+    let out = tempfile::tempdir().unwrap();
+    let msh = out.path().join("liner.msh");
+    for args in [
+        vec![
+            "modes",
+            SMALL,
+            "--assembly",
+            "--full",
+            "--count",
+            "5",
+            "--set",
+            "crankcase.mesh.per_sector=2000",
+        ],
+        vec![
+            "export-mesh",
+            SMALL,
+            "--part",
+            "liner",
+            "--out",
+            msh.to_str().unwrap(),
+            "--set",
+            "liner.mesh.radial=100000",
+        ],
+    ] {
+        let err = refused(&args, 2, "needs about");
+        assert!(err.contains(".mesh"), "{args:?}: {err}");
+    }
+    assert!(!msh.exists());
+}
+
+/// Regression: `modes SCENE --part liner` with the liner from a mesh file ignored the scene's
+/// `limits.max_memory_gb` (the machine's limit was checked); the scene's own limit now holds.
+#[test]
+fn regression_a_scene_mesh_file_is_held_to_the_scene_limits() {
     let err = refused(
         &[
-            "simulate",
+            "modes",
             SMALL,
-            "--cache-dir",
-            &dir,
+            "--part",
+            "liner",
+            "--count",
+            "5",
             "--set",
-            "transient.max_penetration_um=1e-9",
+            "liner.mesh_file=liner_hex20.msh",
+            "--set",
+            "limits.max_memory_gb=1e-9",
         ],
-        1,
-        "deep penetration",
+        2,
+        "limits.max_memory_gb allows",
     );
-    assert!(err.contains("> 1e-9 um"), "{err}");
+    assert!(err.contains("liner_hex20.msh"), "{err}");
 }
 
 /// Regression: a report into a directory holding `summary.md/` (a directory) ran to the end
@@ -147,6 +231,26 @@ fn regression_an_output_name_taken_by_a_directory_is_found_before_any_work() {
             "{cmd}: work started before the refusal"
         );
     }
+    // a shard's part name taken by a directory: refused before its runs (it was found only
+    // after them, as "Is a directory (os error 21)")
+    std::fs::create_dir(out.path().join("part-00001-of-00002.json")).unwrap();
+    refused(
+        &[
+            "sweep",
+            SMALL,
+            "--vary",
+            "piston.clearance_um=60,100",
+            "--shard",
+            "1/2",
+            "--cache-dir",
+            cache.path().to_str().unwrap(),
+            "--out",
+            out.path().to_str().unwrap(),
+        ],
+        2,
+        "part-00001-of-00002.json",
+    );
+    assert_eq!(std::fs::read_dir(cache.path()).unwrap().count(), 0);
 }
 
 /// Regression: a shard run that failed, or was stopped by SIGTERM, left its (new) part
@@ -176,7 +280,7 @@ fn regression_a_failed_or_stopped_shard_leaves_no_empty_part_directory() {
         a
     };
     // a numerical failure in the run (exit 1)
-    let a = args(&["--set", "transient.max_penetration_um=1e-9"]);
+    let a = args(&["--set", "transient.max_penetration_um=0.1"]);
     let a: Vec<&str> = a.iter().map(String::as_str).collect();
     refused(&a, 1, "deep penetration");
     assert!(!root.path().join("new").exists(), "a directory left");
