@@ -145,7 +145,7 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     };
     let mut s = format!("# linercav report: {}\n\n{} at {:.0} rpm; peak cylinder pressure {:.1} bar at {:.1} deg; hot clearance {:.1} um; {coolant}.\n\n", r.title, r.scene, r.speed_rpm, r.simulate.peak_pressure_bar, r.simulate.peak_pressure_deg, r.simulate.hot_clearance_um);
     let _ = writeln!(s, "## Verdict\n");
-    let _ = writeln!(s, "Acceleration criterion ({}): onset {:.0} m/s^2, high risk {:.0} m/s^2 (k_p {:.1} Pa per m/s^2). Cylinders from the highest to the lowest peak negative acceleration: {:?}. The most active point along the liner: {} (of {}, top to bottom).\n", ev.threshold_source, t.onset_m_s2, t.high_risk_m_s2, t.k_p_pa_per_m_s2, ev.ranking, ev.most_active_point, ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0));
+    let _ = writeln!(s, "Acceleration criterion ({}): onset {:.0} m/s^2, high risk {:.0} m/s^2 (k_p {:.1} Pa per m/s^2). Cylinders from the highest to the lowest peak negative acceleration: {}. The most active point along the liner: {} (of {}, top to bottom).\n", ev.threshold_source, t.onset_m_s2, t.high_risk_m_s2, t.k_p_pa_per_m_s2, crate::text::joined(&ev.ranking, ", "), ev.most_active_point, ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0));
     let n_avg = r.simulate.stats.cycles_averaged;
     if n_avg > 1 {
         let st = &r.simulate.stats;
@@ -214,7 +214,7 @@ fn why_section(r: &Report) -> String {
     let ev = &r.evaluation;
     let mut s = String::new();
     let _ = writeln!(s, "\n## Why the cylinders differ\n\nDominant response {:.0} Hz. Nearest system modes, with each cylinder's largest normalised radial coefficient at its analysis points and the correlation of those with the per-cylinder peak:\n", ev.dominant_hz);
-    let _ = writeln!(s, "| mode [Hz] | coefficients (cylinders {:?}) | Pearson r | Spearman rho |\n|---|---|---|---|", ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>());
+    let _ = writeln!(s, "| mode [Hz] | coefficients (cylinders {}) | Pearson r | Spearman rho |\n|---|---|---|---|", crate::text::joined(&ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>(), ", "));
     for m in &ev.nearest_modes {
         let _ = writeln!(
             s,
