@@ -40,6 +40,16 @@ pub fn field_count_message(found: usize, header: usize) -> String {
     format!("{found} fields, the header has {header}{hint}")
 }
 
+/// The items' Display forms joined by `sep` (`[2, 5, 4]` with ", " reads "2, 5, 4"): lists in
+/// user-facing text, never Rust's debug form.
+pub fn joined<T: std::fmt::Display>(items: &[T], sep: &str) -> String {
+    items
+        .iter()
+        .map(|x| x.to_string())
+        .collect::<Vec<_>>()
+        .join(sep)
+}
+
 #[cfg(test)]
 mod tests {
     use super::num;
@@ -59,14 +69,4 @@ mod tests {
         assert_eq!(num(f64::NAN), "NaN");
         assert_eq!(num(1.5e-7), "1.5e-7");
     }
-}
-
-/// The items' Display forms joined by `sep` (`[2, 5, 4]` with ", " reads "2, 5, 4"): lists in
-/// user-facing text, never Rust's debug form.
-pub fn joined<T: std::fmt::Display>(items: &[T], sep: &str) -> String {
-    items
-        .iter()
-        .map(|x| x.to_string())
-        .collect::<Vec<_>>()
-        .join(sep)
 }

@@ -1132,7 +1132,7 @@ fn materials(
         let name = hm
             .get(&mid)
             .cloned()
-            .unwrap_or_else(|| format!("MAT1 {mid}").into());
+            .unwrap_or_else(|| format!("MAT1 {mid}"));
         if let Some(other) = taken.insert(name.clone(), mid) {
             return Err(c.err_at(loc, format!(
                 "MAT1: material {mid} is named '{name}', as material {other} is: expected distinct names ($HMNAME MAT comments)"

@@ -214,7 +214,14 @@ fn why_section(r: &Report) -> String {
     let ev = &r.evaluation;
     let mut s = String::new();
     let _ = writeln!(s, "\n## Why the cylinders differ\n\nDominant response {:.0} Hz. Nearest system modes, with each cylinder's largest normalised radial coefficient at its analysis points and the correlation of those with the per-cylinder peak:\n", ev.dominant_hz);
-    let _ = writeln!(s, "| mode [Hz] | coefficients (cylinders {}) | Pearson r | Spearman rho |\n|---|---|---|---|", crate::text::joined(&ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>(), ", "));
+    let _ = writeln!(
+        s,
+        "| mode [Hz] | coefficients (cylinders {}) | Pearson r | Spearman rho |\n|---|---|---|---|",
+        crate::text::joined(
+            &ev.cylinders.iter().map(|c| c.cylinder).collect::<Vec<_>>(),
+            ", "
+        )
+    );
     for m in &ev.nearest_modes {
         let _ = writeln!(
             s,
