@@ -654,7 +654,8 @@ pub struct RawTransient {
     pub adaptive: bool,
     /// Modal damping ratio of the engine's system modes, in [0, 1).
     pub damping_ratio: f64,
-    /// Largest acceptable skirt penetration \[um\]; deeper stops the run.
+    /// Largest acceptable skirt penetration \[um\], at least 0.1 (the contact carries its load
+    /// through penetrations of a few um); deeper stops the run.
     pub max_penetration_um: f64,
     /// Integrate system modes up to this frequency \[Hz\] only; the static part of the modes
     /// above joins the residual flexibility. Default: every mode of the ROM (up to the
