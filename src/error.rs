@@ -4,7 +4,7 @@
 use crate::fem::model::ModelError;
 use crate::files::WriteError;
 use crate::mesh::checks::MeshError;
-use crate::mesh::collect::MshError;
+use crate::mesh::collect::DeckError;
 use crate::scene::SceneError;
 
 #[derive(Debug, thiserror::Error)]
@@ -12,7 +12,7 @@ pub enum Error {
     #[error(transparent)]
     Scene(#[from] SceneError),
     #[error(transparent)]
-    Msh(#[from] MshError),
+    Msh(#[from] DeckError),
     #[error("{}: {source}", file.as_deref().unwrap_or("mesh"))]
     Mesh {
         file: Option<String>,

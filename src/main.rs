@@ -6,7 +6,7 @@ mod cli;
 use clap::{Args, Parser, Subcommand};
 use linercav::api::{cavitation, export, modes, rom, simulate, sweep, ModelInput};
 use linercav::error::Error;
-use linercav::fem::material::Elastic;
+use linercav::scene::spec::Elastic;
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -2,11 +2,11 @@
 //! closed-form answers: the mass a rigid motion sees, and the ovalling frequency of a ring
 //! carrying a radial mass (ring theory).
 
-use linercav::fem::material::Elastic;
 use linercav::fem::model::FeModel;
-use linercav::fem::shape::ElementKind;
 use linercav::fem::surface::SurfaceMass;
 use linercav::mesh::liner::{generate, LinerGeometry, LinerMeshing};
+use linercav::scene::spec::Elastic;
+use linercav::scene::spec::ElementKind;
 use linercav::scene::{MeshSource, Scene};
 use std::f64::consts::PI;
 use std::path::Path;

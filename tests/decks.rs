@@ -304,7 +304,7 @@ fn verification_modes_of_an_mm_deck_with_its_own_material() {
 /// The first `n` frequencies [Hz] of a cantilevered box mesh.
 fn cantilever_frequencies(
     mesh: Mesh,
-    fallback: &linercav::fem::material::Elastic,
+    fallback: &linercav::scene::spec::Elastic,
     n: usize,
 ) -> Vec<f64> {
     let mut model =
@@ -321,8 +321,8 @@ fn cantilever_frequencies(
 /// for a body of one material); halves A and B lie strictly between the two.
 #[test]
 fn verification_deck_materials_are_assembled_per_element() {
-    use linercav::fem::material::Elastic;
     use linercav::mesh::{DeckMaterial, NO_MATERIAL};
+    use linercav::scene::spec::Elastic;
     let a = Elastic {
         young: 110e9,
         poisson: 0.28,
@@ -333,7 +333,7 @@ fn verification_deck_materials_are_assembled_per_element() {
         ..a
     };
     let base = common::box_mesh(
-        linercav::fem::shape::ElementKind::Hex8,
+        linercav::scene::spec::ElementKind::Hex8,
         [8, 2, 2],
         [0.4, 0.05, 0.05],
         0.0,

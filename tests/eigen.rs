@@ -3,9 +3,9 @@
 
 mod common;
 use common::{box_mesh, dense_eigenvalues};
-use linercav::fem::material::Elastic;
 use linercav::fem::model::FeModel;
-use linercav::fem::shape::ElementKind;
+use linercav::scene::spec::Elastic;
+use linercav::scene::spec::ElementKind;
 
 const STEEL: Elastic = Elastic {
     young: 210e9,

@@ -6,8 +6,8 @@ use common::{box_mesh, KINDS};
 use linercav::fem::assembly::Assembler;
 use linercav::fem::dofs::DofMap;
 use linercav::fem::element::{stiffness_mass, volume};
-use linercav::fem::material::Elastic;
-use linercav::fem::shape::ElementKind;
+use linercav::scene::spec::Elastic;
+use linercav::scene::spec::ElementKind;
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 

@@ -1,10 +1,10 @@
 //! Liner verification: convergence of the ovalling frequencies of a liner-like ring with the
 //! observed rate, and the default liner mesh against a converged reference.
 
-use linercav::fem::material::Elastic;
 use linercav::fem::model::FeModel;
-use linercav::fem::shape::ElementKind;
 use linercav::mesh::liner::{generate, LinerGeometry, LinerMeshing};
+use linercav::scene::spec::Elastic;
+use linercav::scene::spec::ElementKind;
 use linercav::scene::{MeshSource, Scene};
 use std::path::Path;
 

@@ -87,7 +87,7 @@ fn verification_reused_liner_reduction_equals_reducing_a_placed_copy() {
     };
     fn part<'a>(
         mesh: &'a linercav::mesh::Mesh,
-        material: &'a linercav::fem::material::Elastic,
+        material: &'a linercav::scene::spec::Elastic,
         interfaces: &'a [InterfaceBlock],
     ) -> Part<'a> {
         Part {

@@ -38,7 +38,6 @@ use crate::analysis::refine::{initial, located, next_unsampled, Maximum, Sample}
 pub use crate::cavitation::evaluate::{evaluate, Evaluation};
 pub use crate::error::{Error, Result};
 use crate::fem::element::check_mesh as check_and_compact;
-use crate::fem::material::Elastic;
 use crate::mesh::checks::CheckReport;
 use crate::mesh::{liner, Mesh};
 pub use crate::piston::setup::{piston_of, simulation};
@@ -48,6 +47,7 @@ use crate::reduce::scene_rom::key_description;
 pub use crate::reduce::scene_rom::{build_rom, get_rom, CacheOptions, LoadedRom};
 pub use crate::report::figures::SweepPoint;
 pub use crate::report::records::{CylinderReport, PointPeaks, SimulateReport};
+use crate::scene::spec::Elastic;
 pub use crate::scene::Scene;
 use crate::scene::{MeshSource, PARTS};
 pub use crate::transient::cycle::{CycleResult, CycleSettings};

@@ -330,9 +330,9 @@ fn sturm_check(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::material::Elastic;
     use crate::fem::model::FeModel;
     use crate::mesh::lattice::Lattice;
+    use crate::scene::spec::Elastic;
 
     /// The recovery itself: a first solve that misses mode 3 (its pair removed from a correct
     /// solve, as a Lanczos run that never saw it would return) is caught by the Sturm count and
@@ -349,7 +349,7 @@ mod tests {
             active: &active,
             coord: &coord,
         };
-        let mut mesh = lat.generate(crate::fem::shape::ElementKind::Hex8).mesh;
+        let mut mesh = lat.generate(crate::scene::spec::ElementKind::Hex8).mesh;
         let x0: Vec<usize> = (0..mesh.nodes.len())
             .filter(|&i| mesh.nodes[i][0] == 0.0)
             .collect();

@@ -6,9 +6,9 @@
 
 use super::dofs::{DofMap, FIXED};
 use super::element::{stiffness_mass, ElementError};
-use super::material::Elastic;
 use crate::linalg::sparse::{Pattern, StiffnessMass};
 use crate::mesh::Mesh;
+use crate::scene::spec::Elastic;
 use rayon::prelude::*;
 
 /// An element whose matrices could not be formed.
@@ -138,7 +138,7 @@ impl Assembler {
         let nnz = self.pattern.nnz();
         let mut k = vec![0.0; nnz];
         let mut m = vec![0.0; nnz];
-        let elems: Vec<(crate::fem::shape::ElementKind, &[usize])> = mesh.elements().collect();
+        let elems: Vec<(crate::scene::spec::ElementKind, &[usize])> = mesh.elements().collect();
         const CHUNK: usize = 512;
         for (c, chunk) in elems
             .chunks(CHUNK * rayon::current_num_threads().max(1))

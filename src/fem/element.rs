@@ -13,9 +13,9 @@
 //!   K = K_uu - K_ua K_aa^{-1} K_au.
 //! That removes the shear locking of the plain trilinear brick in bending.
 
-use super::material::Elastic;
 use super::quadrature::{hex_rule, tet_rule, tet_rule4, QuadPoint};
-use super::shape::ElementKind;
+use crate::scene::spec::Elastic;
+use crate::scene::spec::ElementKind;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use std::sync::OnceLock;
 

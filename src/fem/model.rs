@@ -3,12 +3,12 @@
 
 use super::assembly::{Assembler, AssemblyError};
 use super::dofs::{DofMap, UnknownSet, FIXED};
-use super::material::Elastic;
 use super::surface::{self, SurfaceMass};
 use crate::linalg::factor::{Analysis, FactorError};
 use crate::linalg::ordering;
 use crate::linalg::sparse::StiffnessMass;
 use crate::mesh::Mesh;
+use crate::scene::spec::Elastic;
 use std::time::Instant;
 
 /// Failures while building or solving a model.

@@ -11,8 +11,8 @@
 //!   corner N = (1+xi xi_a)(1+eta eta_a)(1+zeta zeta_a)(xi xi_a + eta eta_a + zeta zeta_a - 2)/8,
 //!   mid-edge (xi_a = 0) N = (1 - xi^2)(1 + eta eta_a)(1 + zeta zeta_a)/4, likewise per axis.
 
-pub use crate::mesh::element::ElementKind;
 use crate::mesh::element::{HEX_CORNERS, TET10_EDGES};
+use crate::scene::spec::ElementKind;
 
 impl ElementKind {
     /// Shape functions `n[a]` and reference derivatives `dn[a][k] = dN_a / dxi_k` at `xi`.

@@ -17,8 +17,8 @@
 //! x_s = J xi_s, J = dx/dxi of the element.
 
 use super::quadrature::gauss_legendre;
-use super::shape::ElementKind;
 use crate::mesh::Mesh;
+use crate::scene::spec::ElementKind;
 use std::collections::HashMap;
 
 /// A normal mass per unit area on the boundary faces of a node set.

@@ -62,10 +62,12 @@
 //! `*INSTANCE` block, `*PART` without `*ASSEMBLY`, ids <= 0, sets of sets, and an assembly
 //! with more nodes, elements and set members than its files have bytes.
 
-use super::collect::{read_mesh_text, reorder, Collected, Loc, MshError, HEX20_ABAQUS, TET10_DECK};
-use super::element::ElementKind;
+use super::collect::{
+    read_mesh_text, reorder, Collected, DeckError, Loc, HEX20_ABAQUS, TET10_DECK,
+};
 use super::Mesh;
 use crate::scene::spec::Elastic;
+use crate::scene::spec::ElementKind;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -74,14 +76,14 @@ const EXPECTED: &str = "expected an Abaqus input file (ASCII)";
 const MAX_DEPTH: usize = 32;
 
 /// Reads an input file from disk.
-pub fn read(path: &Path) -> Result<Mesh, MshError> {
+pub fn read(path: &Path) -> Result<Mesh, DeckError> {
     let text = read_mesh_text(path, EXPECTED)?;
     parse(path, &text)
 }
 
 /// Parses an input file whose text is `text`; `path` names it in messages and is the base of
 /// relative `*INCLUDE` paths.
-pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
+pub fn parse(path: &Path, text: &str) -> Result<Mesh, DeckError> {
     let mut r = Reader::new(path, text.len());
     r.lines(0, text)?;
     r.finish()
@@ -457,9 +459,9 @@ impl Reader {
     }
 
     /// An error at `loc`.
-    fn err(&self, loc: Loc, msg: String) -> MshError {
+    fn err(&self, loc: Loc, msg: String) -> DeckError {
         let path = self.files.get(loc.file).or(self.files.first());
-        MshError {
+        DeckError {
             path: path.cloned().unwrap_or_default(),
             line: loc.line,
             msg,
@@ -475,7 +477,7 @@ impl Reader {
     }
 
     /// Reads the lines of file `file` (index into `files`).
-    fn lines(&mut self, file: usize, text: &str) -> Result<(), MshError> {
+    fn lines(&mut self, file: usize, text: &str) -> Result<(), DeckError> {
         for (i, raw) in text.lines().enumerate() {
             let loc = Loc { file, line: i + 1 };
             let l = raw.trim();
@@ -492,7 +494,7 @@ impl Reader {
 
     /// Reads file `input` (relative to the directory of the file of `loc`) in place of the
     /// keyword at `loc`: `*INCLUDE` and `INPUT=` of data keywords.
-    fn include(&mut self, input: &str, loc: Loc) -> Result<(), MshError> {
+    fn include(&mut self, input: &str, loc: Loc) -> Result<(), DeckError> {
         let input = input.trim().trim_matches('"');
         if input.is_empty() {
             return Err(self.err(loc, "*INCLUDE without INPUT= (the file to read)".into()));
@@ -547,7 +549,7 @@ impl Reader {
     }
 
     /// A keyword line: refuses a keyword inside an element's node list, then dispatches.
-    fn keyword(&mut self, k: &Keyword, loc: Loc) -> Result<(), MshError> {
+    fn keyword(&mut self, k: &Keyword, loc: Loc) -> Result<(), DeckError> {
         if k.name == "INCLUDE" {
             return self.include(k.get("INPUT").unwrap_or(""), loc);
         }
@@ -580,7 +582,7 @@ impl Reader {
     }
 
     /// `*PART`, `*END PART`, `*ASSEMBLY`, `*END ASSEMBLY`.
-    fn structure(&mut self, k: &Keyword, loc: Loc) -> Result<(), MshError> {
+    fn structure(&mut self, k: &Keyword, loc: Loc) -> Result<(), DeckError> {
         let fail = |r: &Self, what: &str| Err(r.err(loc, format!("*{}: {what}", k.name)));
         self.system = None;
         match (k.name.as_str(), self.at) {
@@ -625,7 +627,7 @@ impl Reader {
     }
 
     /// `*INSTANCE, NAME=, PART=` (its data lines follow) and `*END INSTANCE`.
-    fn instance(&mut self, k: &Keyword, loc: Loc) -> Result<(), MshError> {
+    fn instance(&mut self, k: &Keyword, loc: Loc) -> Result<(), DeckError> {
         let fail = |r: &Self, what: &str| Err(r.err(loc, format!("*{}: {what}", k.name)));
         if k.name == "END INSTANCE" {
             if !matches!(self.at, Where::Instance(_)) {
@@ -663,7 +665,7 @@ impl Reader {
     }
 
     /// `*NODE`, `*ELEMENT` and `*SYSTEM`.
-    fn mesh_keyword(&mut self, k: &Keyword, loc: Loc) -> Result<(), MshError> {
+    fn mesh_keyword(&mut self, k: &Keyword, loc: Loc) -> Result<(), DeckError> {
         let fail = |r: &Self, what: String| Err(r.err(loc, format!("*{}: {what}", k.name)));
         if let Where::Instance(i) = self.at {
             let msg = format!(
@@ -711,7 +713,7 @@ impl Reader {
     }
 
     /// `*NSET, NSET=` and `*ELSET, ELSET=` (`GENERATE`, `INSTANCE=` at the assembly level).
-    fn set_keyword(&mut self, k: &Keyword, loc: Loc) -> Result<(), MshError> {
+    fn set_keyword(&mut self, k: &Keyword, loc: Loc) -> Result<(), DeckError> {
         let nodes = k.name == "NSET";
         let Some(name) = k.get(&k.name).filter(|n| !n.is_empty()) else {
             let msg = format!("*{0} without {0}= (the set's name)", k.name);
@@ -738,7 +740,7 @@ impl Reader {
     }
 
     /// `*MATERIAL`, `*ELASTIC`, `*DENSITY` and `*SOLID SECTION`.
-    fn material_keyword(&mut self, k: &Keyword, loc: Loc) -> Result<(), MshError> {
+    fn material_keyword(&mut self, k: &Keyword, loc: Loc) -> Result<(), DeckError> {
         let fail = |r: &Self, what: String| Err(r.err(loc, format!("*{}: {what}", k.name)));
         match k.name.as_str() {
             "MATERIAL" => {
@@ -786,7 +788,7 @@ impl Reader {
     }
 
     /// `*SOLID SECTION, ELSET=, MATERIAL=` (resolved at the end).
-    fn section(&mut self, k: &Keyword, loc: Loc) -> Result<(), MshError> {
+    fn section(&mut self, k: &Keyword, loc: Loc) -> Result<(), DeckError> {
         let fail = |r: &Self, what: &str| Err(r.err(loc, format!("*SOLID SECTION: {what}")));
         if matches!(self.at, Where::Instance(_)) {
             return fail(self, "inside *INSTANCE (give the section in the part)");
@@ -810,7 +812,7 @@ impl Reader {
     }
 
     /// A data line of the current block.
-    fn data(&mut self, l: &str, loc: Loc) -> Result<(), MshError> {
+    fn data(&mut self, l: &str, loc: Loc) -> Result<(), DeckError> {
         let mut block = std::mem::replace(&mut self.block, Block::Skip);
         let f: Vec<&str> = l
             .split(',')
@@ -875,7 +877,7 @@ impl Reader {
     }
 
     /// The finite numbers of data fields `f` (of keyword `kw`, line `l`).
-    fn reals(&self, f: &[&str], kw: &str, l: &str, loc: Loc) -> Result<Vec<f64>, MshError> {
+    fn reals(&self, f: &[&str], kw: &str, l: &str, loc: Loc) -> Result<Vec<f64>, DeckError> {
         f.iter()
             .map(|w| w.parse::<f64>().ok().filter(|v| v.is_finite()))
             .collect::<Option<Vec<f64>>>()
@@ -895,7 +897,7 @@ impl Reader {
         f: &[&str],
         l: &str,
         loc: Loc,
-    ) -> Result<(), MshError> {
+    ) -> Result<(), DeckError> {
         let fail = |r: &Self, m: String| Err(r.err(loc, format!("*NODE: {m}")));
         if f.len() < 4 {
             return fail(self, format!("expected 'id, x, y, z', found '{l}'"));
@@ -945,7 +947,7 @@ impl Reader {
         elset: Option<&str>,
         f: &[&str],
         loc: Loc,
-    ) -> Result<(), MshError> {
+    ) -> Result<(), DeckError> {
         let (first, mut got) = self.pending.take().unwrap_or((loc, Vec::new()));
         for w in f {
             let Ok(v) = w.parse::<i64>() else {
@@ -992,7 +994,7 @@ impl Reader {
     }
 
     /// Data line `n` of an `*INSTANCE`: 1 the translation, 2 the rotation.
-    fn placement(&mut self, n: usize, f: &[&str], l: &str, loc: Loc) -> Result<(), MshError> {
+    fn placement(&mut self, n: usize, f: &[&str], l: &str, loc: Loc) -> Result<(), DeckError> {
         let Where::Instance(i) = self.at else {
             return Ok(());
         };
@@ -1032,7 +1034,7 @@ impl Reader {
     }
 
     /// A `*SYSTEM` data line: `a[, b]` on the first, `c` on the second.
-    fn system_line(&mut self, f: &[&str], l: &str, loc: Loc) -> Result<(), MshError> {
+    fn system_line(&mut self, f: &[&str], l: &str, loc: Loc) -> Result<(), DeckError> {
         let v = self.reals(f, "SYSTEM", l, loc)?;
         if !matches!(
             (self.system_values.len(), v.len()),
@@ -1060,7 +1062,7 @@ impl Reader {
         f: &[&str],
         l: &str,
         loc: Loc,
-    ) -> Result<(), MshError> {
+    ) -> Result<(), DeckError> {
         let (kw, form) = if density {
             ("DENSITY", "rho")
         } else {
@@ -1091,7 +1093,7 @@ impl Reader {
 
     /// Refuses a file that ends inside an element's node list, a part or an instance, and
     /// parts without an assembly.
-    fn check_closed(&self) -> Result<(), MshError> {
+    fn check_closed(&self) -> Result<(), DeckError> {
         if let Some((first, _)) = &self.pending {
             return Err(self.err(*first, "the file ends inside an element's node list".into()));
         }
@@ -1124,7 +1126,7 @@ impl Reader {
 
     /// The collected deck: the model scope as written, each instance with fresh ids, the
     /// assembly's sets of instances, the plain names of single-instance sets, the sections.
-    fn finish(mut self) -> Result<Mesh, MshError> {
+    fn finish(mut self) -> Result<Mesh, DeckError> {
         self.check_closed()?;
         let mut c = Collected::new(&self.files[0]);
         c.files = self.files.clone();
@@ -1174,7 +1176,7 @@ impl Reader {
         c: &mut Collected,
         carriers: &mut [BTreeMap<String, Vec<String>>; 2],
         mut next: [i64; 2],
-    ) -> Result<Vec<Ids>, MshError> {
+    ) -> Result<Vec<Ids>, DeckError> {
         let mut all = Vec::with_capacity(self.instances.len());
         let mut made = 0usize;
         for inst in &self.instances {
@@ -1220,7 +1222,7 @@ impl Reader {
         inst: &Instance,
         part: &Part,
         next: &mut [i64; 2],
-    ) -> Result<Ids, MshError> {
+    ) -> Result<Ids, DeckError> {
         let mut ids = Ids::default();
         let overflow = || self.err(inst.loc, format!("*INSTANCE '{}': ids overflow", inst.name));
         for &(id, x, loc) in &part.scope.nodes {
@@ -1266,7 +1268,7 @@ impl Reader {
         part: &Part,
         ids: &Ids,
         carriers: &mut [BTreeMap<String, Vec<String>>; 2],
-    ) -> Result<(), MshError> {
+    ) -> Result<(), DeckError> {
         let s = &part.scope;
         for (nodes, sets, map) in [
             (true, &s.node_sets, &ids.nodes),
@@ -1293,7 +1295,7 @@ impl Reader {
     }
 
     /// The assembly's `*NSET`/`*ELSET, INSTANCE=` sets, by the instances' id maps `maps`.
-    fn bound_sets(&self, c: &mut Collected, maps: &[Ids]) -> Result<(), MshError> {
+    fn bound_sets(&self, c: &mut Collected, maps: &[Ids]) -> Result<(), DeckError> {
         for b in &self.bound {
             let kind = if b.nodes { "node" } else { "element" };
             let found = self
@@ -1332,7 +1334,7 @@ impl Reader {
         loc: Loc,
         what: &str,
         kind: &str,
-    ) -> Result<Vec<i64>, MshError> {
+    ) -> Result<Vec<i64>, DeckError> {
         list.iter()
             .map(|id| {
                 map.get(id).copied().ok_or_else(|| {
@@ -1347,7 +1349,7 @@ impl Reader {
 
     /// Gives the material of section `sec` to `elements` (deck ids): the material must be
     /// defined with `*ELASTIC` and `*DENSITY`, and no element may have two sections.
-    fn assign(&self, c: &mut Collected, elements: &[i64], sec: &Section) -> Result<(), MshError> {
+    fn assign(&self, c: &mut Collected, elements: &[i64], sec: &Section) -> Result<(), DeckError> {
         let fail = |m: String| Err(self.err(sec.loc, format!("*SOLID SECTION: {m}")));
         let key = sec.material.to_ascii_uppercase();
         let Some(m) = self.materials.get(&key) else {
@@ -1480,8 +1482,8 @@ fn set_ids(
     generate: bool,
     l: &str,
     bytes: usize,
-    at: &dyn Fn(String) -> MshError,
-) -> Result<Vec<i64>, MshError> {
+    at: &dyn Fn(String) -> DeckError,
+) -> Result<Vec<i64>, DeckError> {
     let mut ids = Vec::new();
     if generate {
         let range = || at(format!("expected 'first, last[, step]', found '{l}'"));

@@ -2,8 +2,8 @@
 //! nodes are errors; unused nodes are removed with a warning (they would make K and M
 //! singular); disconnected pieces are reported as a warning (each adds six rigid-body modes).
 
-use super::element::ElementKind;
 use super::Mesh;
+use crate::scene::spec::ElementKind;
 
 /// A mesh defect that makes the model unusable.
 #[derive(Debug, thiserror::Error)]

@@ -2,13 +2,13 @@
 //! and element ids, and its assembly into a [`Mesh`] (ids to indices, element node order to
 //! ours, sets to node and element sets).
 
-use super::element::ElementKind;
 use super::{DeckMaterial, ElementBlock, Mesh, NO_MATERIAL};
+use crate::scene::spec::ElementKind;
 
 /// Why a mesh file could not be read: the file, the line and what was expected.
 #[derive(Debug, thiserror::Error)]
 #[error("{}{}: {msg}", path.display(), if *line > 0 { format!(":{line}") } else { String::new() })]
-pub struct MshError {
+pub struct DeckError {
     pub path: PathBuf,
     pub line: usize,
     pub msg: String,
@@ -103,7 +103,7 @@ pub(crate) const HEX20_NASTRAN: [(usize, usize); 12] = [
 
 /// The text of mesh file `path` (a regular file of at most [`LIMIT_MESH`] bytes); a byte that
 /// is not text is reported with its line and `expected` (what the reader takes).
-pub(crate) fn read_mesh_text(path: &Path, expected: &str) -> Result<String, MshError> {
+pub(crate) fn read_mesh_text(path: &Path, expected: &str) -> Result<String, DeckError> {
     read_text(path, LIMIT_MESH).map_err(|e| {
         let (line, msg) = match e {
             ReadError::NotText { line, byte } => {
@@ -115,8 +115,8 @@ pub(crate) fn read_mesh_text(path: &Path, expected: &str) -> Result<String, MshE
     })
 }
 
-fn err(path: &Path, line: usize, msg: String) -> MshError {
-    MshError {
+fn err(path: &Path, line: usize, msg: String) -> DeckError {
+    DeckError {
         path: path.to_path_buf(),
         line,
         msg,
@@ -133,7 +133,7 @@ impl Collected {
     }
 
     /// An error at `loc`.
-    pub fn err_at(&self, loc: Loc, msg: String) -> MshError {
+    pub fn err_at(&self, loc: Loc, msg: String) -> DeckError {
         err(
             &self.files[loc.file.min(self.files.len() - 1)],
             loc.line,
@@ -149,7 +149,7 @@ impl Collected {
         mesh: &mut Mesh,
         index: &HashMap<i64, usize>,
         element_index: &HashMap<i64, usize>,
-    ) -> Result<(), MshError> {
+    ) -> Result<(), DeckError> {
         let at = |loc: Loc, msg: String| self.err_at(loc, msg);
         let node = |id: i64, loc: Loc, what: &str| {
             index.get(&id).copied().ok_or_else(|| {
@@ -198,7 +198,7 @@ impl Collected {
     /// The mesh: nodes in deck order, elements grouped by kind (in deck order within a kind),
     /// node sets as given, element sets as element indices, and each element set also as the
     /// node set of its elements' nodes unless a node set has its name.
-    pub fn into_mesh(self) -> Result<Mesh, MshError> {
+    pub fn into_mesh(self) -> Result<Mesh, DeckError> {
         if self.files.is_empty() {
             return Err(err(Path::new("?"), 0, "no file was read".into()));
         }
@@ -278,7 +278,7 @@ impl Collected {
         &self,
         mesh: &mut Mesh,
         element_index: &HashMap<i64, usize>,
-    ) -> Result<(), MshError> {
+    ) -> Result<(), DeckError> {
         if self.materials.is_empty() && self.element_material.is_empty() {
             return Ok(());
         }

@@ -11,8 +11,7 @@
 //!   (1,5) (2,3) (2,6) (3,7) (4,5) (4,7) (5,6) (6,7);
 //!   corner N = (1+xi xi_a)(1+eta eta_a)(1+zeta zeta_a)(xi xi_a + eta eta_a + zeta zeta_a - 2)/8,
 //!   mid-edge (xi_a = 0) N = (1 - xi^2)(1 + eta eta_a)(1 + zeta zeta_a)/4, likewise per axis.
-
-pub use crate::scene::spec::ElementKind;
+use crate::scene::spec::ElementKind;
 
 pub(crate) const TET10_EDGES: [(usize, usize); 6] =
     [(0, 1), (1, 2), (2, 0), (3, 0), (3, 2), (3, 1)];

@@ -7,9 +7,9 @@
 //! when unnamed; volume groups also become element sets. Unknown sections are skipped.
 //! Binary files and older format versions are refused with a message saying what to do.
 
-use super::collect::MshError;
-use super::element::ElementKind;
+use super::collect::DeckError;
 use super::{ElementBlock, Mesh};
+use crate::scene::spec::ElementKind;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
 
@@ -44,14 +44,14 @@ struct Lines<'a> {
 }
 
 impl<'a> Lines<'a> {
-    fn err(&self, msg: impl Into<String>) -> MshError {
-        MshError {
+    fn err(&self, msg: impl Into<String>) -> DeckError {
+        DeckError {
             path: self.path.to_path_buf(),
             line: self.line,
             msg: msg.into(),
         }
     }
-    fn next_line(&mut self) -> Result<&'a str, MshError> {
+    fn next_line(&mut self) -> Result<&'a str, DeckError> {
         for (i, l) in self.it.by_ref() {
             self.line = i + 1;
             let t = l.trim();
@@ -61,7 +61,7 @@ impl<'a> Lines<'a> {
         }
         Err(self.err("unexpected end of file"))
     }
-    fn numbers<T: std::str::FromStr>(&mut self, what: &str) -> Result<Vec<T>, MshError> {
+    fn numbers<T: std::str::FromStr>(&mut self, what: &str) -> Result<Vec<T>, DeckError> {
         let l = self.next_line()?;
         l.split_whitespace()
             .map(|w| {
@@ -76,7 +76,7 @@ impl<'a> Lines<'a> {
     }
     /// Checks a count read from the file against what the rest of the file can hold:
     /// non-negative, and at most the remaining lines divided by the lines each record takes.
-    fn count(&self, value: i64, lines_each: usize, what: &str) -> Result<usize, MshError> {
+    fn count(&self, value: i64, lines_each: usize, what: &str) -> Result<usize, DeckError> {
         if value < 0 {
             return Err(self.err(format!("{what} is {value}, expected a count >= 0")));
         }
@@ -89,7 +89,7 @@ impl<'a> Lines<'a> {
         }
         Ok(value as usize)
     }
-    fn expect(&mut self, tag: &str) -> Result<(), MshError> {
+    fn expect(&mut self, tag: &str) -> Result<(), DeckError> {
         let l = self.next_line()?;
         if l != tag {
             return Err(self.err(format!("expected '{tag}', found '{l}'")));
@@ -98,7 +98,7 @@ impl<'a> Lines<'a> {
     }
 }
 
-fn need<T: Copy>(v: &[T], n: usize, lines: &Lines, what: &str) -> Result<(), MshError> {
+fn need<T: Copy>(v: &[T], n: usize, lines: &Lines, what: &str) -> Result<(), DeckError> {
     if v.len() < n {
         return Err(lines.err(format!("expected {n} numbers ({what}), found {}", v.len())));
     }
@@ -106,7 +106,7 @@ fn need<T: Copy>(v: &[T], n: usize, lines: &Lines, what: &str) -> Result<(), Msh
 }
 
 /// Reads an MSH 4.1 file from disk (a regular file of at most [`crate::files::LIMIT_MESH`] bytes).
-pub fn read(path: &Path) -> Result<Mesh, MshError> {
+pub fn read(path: &Path) -> Result<Mesh, DeckError> {
     let text = super::collect::read_mesh_text(
         path,
         "the reader takes ASCII MSH 4.1 (binary MSH: save as ASCII, Gmsh -format msh41 with Mesh.Binary = 0)",
@@ -140,7 +140,7 @@ struct Block {
 }
 
 /// Parses MSH 4.1 ASCII text; `path` is used in messages only.
-pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
+pub fn parse(path: &Path, text: &str) -> Result<Mesh, DeckError> {
     let mut lines = Lines {
         path,
         it: text.lines().enumerate(),
@@ -170,7 +170,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
             }
         }
     }
-    let whole = |msg: &str| MshError {
+    let whole = |msg: &str| DeckError {
         path: path.to_path_buf(),
         line: 0,
         msg: msg.into(),
@@ -184,7 +184,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
     Ok(assemble(s))
 }
 
-fn read_format(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+fn read_format(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
     let h = lines.next_line()?;
     let f: Vec<&str> = h.split_whitespace().collect();
     if f.len() < 3 {
@@ -205,7 +205,7 @@ fn read_format(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
     Ok(())
 }
 
-fn read_physical_names(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+fn read_physical_names(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
     let n = lines.numbers::<i64>("number of physical names")?;
     need(&n, 1, lines, "count")?;
     for _ in 0..lines.count(n[0], 1, "the number of physical names")? {
@@ -224,7 +224,7 @@ fn read_physical_names(lines: &mut Lines, s: &mut Sections) -> Result<(), MshErr
     lines.expect("$EndPhysicalNames")
 }
 
-fn read_entities(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+fn read_entities(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
     let c = lines.numbers::<i64>("entity counts")?;
     need(&c, 4, lines, "numPoints numCurves numSurfaces numVolumes")?;
     for (dim, &count) in c.iter().take(4).enumerate() {
@@ -249,7 +249,7 @@ fn read_entities(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
     lines.expect("$EndEntities")
 }
 
-fn read_nodes(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+fn read_nodes(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
     let h = lines.numbers::<i64>("'numEntityBlocks numNodes minTag maxTag'")?;
     need(
         &h,
@@ -293,7 +293,7 @@ fn read_nodes(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
     Ok(())
 }
 
-fn read_elements(lines: &mut Lines, s: &mut Sections) -> Result<(), MshError> {
+fn read_elements(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
     let h = lines.numbers::<i64>("'numEntityBlocks numElements minTag maxTag'")?;
     need(
         &h,

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum ImportError {
     #[error(transparent)]
-    Msh(#[from] super::collect::MshError),
+    Msh(#[from] super::collect::DeckError),
     #[error("{}: {msg} (unit from {key})", path.display())]
     Implausible {
         path: PathBuf,

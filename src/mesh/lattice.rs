@@ -8,8 +8,8 @@
 //! Tetrahedral meshes split each cell into the six Kuhn tetrahedra along its main diagonal
 //! (conforming because every cell uses the same diagonal direction).
 
-use super::element::ElementKind;
 use super::{ElementBlock, Mesh};
+use crate::scene::spec::ElementKind;
 use std::collections::HashMap;
 
 /// A doubled-lattice index.

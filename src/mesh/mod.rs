@@ -18,13 +18,13 @@ pub mod merge;
 pub mod nastran;
 pub mod write;
 
+use crate::scene::spec::ElementKind;
 pub use crate::scene::spec::MeshUnit;
-pub use element::ElementKind;
 use std::collections::BTreeMap;
 
 /// Reads a mesh file by its extension: `.msh` (Gmsh MSH 4.1), `.bdf` / `.nas` (Nastran bulk
 /// data), `.inp` (Abaqus input).
-pub fn read(path: &std::path::Path) -> Result<Mesh, collect::MshError> {
+pub fn read(path: &std::path::Path) -> Result<Mesh, collect::DeckError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -33,7 +33,7 @@ pub fn read(path: &std::path::Path) -> Result<Mesh, collect::MshError> {
         Some("msh") => gmsh::read(path),
         Some("bdf") | Some("nas") => nastran::read(path),
         Some("inp") => abaqus::read(path),
-        _ => Err(collect::MshError {
+        _ => Err(collect::DeckError {
             path: path.to_path_buf(),
             line: 0,
             msg: "unknown mesh format: expected .msh (Gmsh MSH 4.1), .bdf or .nas (Nastran bulk data) or .inp (Abaqus input)".into(),

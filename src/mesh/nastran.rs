@@ -67,12 +67,12 @@
 //! a blank PID without PSOLIDs). Coordinates are in the deck's unit (metres unless the scene
 //! says millimetres), material constants in its unit system.
 
-use super::collect::MshError;
+use super::collect::DeckError;
 use super::collect::{read_mesh_text, reorder, Collected, Loc, HEX20_NASTRAN, TET10_DECK};
-use super::element::ElementKind;
 use super::Mesh;
 use crate::files::LIMIT_MESH;
 use crate::scene::spec::Elastic;
+use crate::scene::spec::ElementKind;
 use std::collections::{BTreeMap, HashSet};
 use std::path::{Path, PathBuf};
 
@@ -103,14 +103,14 @@ const IGNORED_CONTROL: &[&str] = &[
 pub const IGNORED: [&[&str]; 3] = [IGNORED_LOADS, IGNORED_CONSTRAINTS, IGNORED_CONTROL];
 
 /// Reads a bulk-data file from disk, with the files it includes.
-pub fn read(path: &Path) -> Result<Mesh, MshError> {
+pub fn read(path: &Path) -> Result<Mesh, DeckError> {
     let text = read_mesh_text(path, "expected Nastran bulk data (ASCII)")?;
     parse(path, &text)
 }
 
 /// Parses bulk data: `text` is the content of `path`, whose directory is where relative
 /// INCLUDEs are looked for (and which messages name).
-pub fn parse(path: &Path, text: &str) -> Result<Mesh, MshError> {
+pub fn parse(path: &Path, text: &str) -> Result<Mesh, DeckError> {
     let mut reader = Reader::new(path, text.len() as u64);
     reader.read(0, text, true)?;
     let mut c = Collected::new(path);
@@ -325,8 +325,8 @@ impl Reader {
         }
     }
 
-    fn err(&self, file: usize, line: usize, msg: String) -> MshError {
-        MshError {
+    fn err(&self, file: usize, line: usize, msg: String) -> DeckError {
+        DeckError {
             path: self.files.get(file).cloned().unwrap_or_default(),
             line,
             msg,
@@ -335,7 +335,7 @@ impl Reader {
 
     /// Reads file number `file` (its `text`): the bulk section only for the main file.
     /// Returns [`Flow::End`] at `ENDDATA`.
-    fn read(&mut self, file: usize, text: &str, main: bool) -> Result<Flow, MshError> {
+    fn read(&mut self, file: usize, text: &str, main: bool) -> Result<Flow, DeckError> {
         let from = if main {
             text.lines().position(is_begin_bulk).map_or(0, |k| k + 1)
         } else {
@@ -400,7 +400,7 @@ impl Reader {
     }
 
     /// A card's line or its continuation.
-    fn line(&mut self, file: usize, line: usize, l: &str) -> Result<(), MshError> {
+    fn line(&mut self, file: usize, line: usize, l: &str) -> Result<(), DeckError> {
         let (first, fields, cont) = split_line(l);
         match (cont, self.cards.last_mut()) {
             (true, Some(card)) if self.open => card.fields.extend(fields),
@@ -424,7 +424,7 @@ impl Reader {
     }
 
     /// Reads the file `name` that file number `file` includes at `line`.
-    fn include(&mut self, file: usize, line: usize, name: &str) -> Result<Flow, MshError> {
+    fn include(&mut self, file: usize, line: usize, name: &str) -> Result<Flow, DeckError> {
         let shown = clip_to(name, 240);
         let at = |s: &Self, msg: String| s.err(file, line, format!("INCLUDE '{shown}': {msg}"));
         let dir = self
@@ -1040,7 +1040,7 @@ fn cord2(card: &Card, m: &mut Model, c: &Collected) -> R<()> {
 fn resolve_systems(
     systems: &BTreeMap<i64, RawSystem>,
     c: &Collected,
-) -> Result<BTreeMap<i64, Frame>, MshError> {
+) -> Result<BTreeMap<i64, Frame>, DeckError> {
     let at = |id: i64, s: &RawSystem, msg: String| {
         c.err_at(s.loc, format!("{}: system {id}: {msg}", s.kind.card()))
     };
@@ -1089,7 +1089,7 @@ fn place_grids(
     m: &Model,
     frames: &BTreeMap<i64, Frame>,
     c: &Collected,
-) -> Result<Vec<(i64, [f64; 3], Loc)>, MshError> {
+) -> Result<Vec<(i64, [f64; 3], Loc)>, DeckError> {
     let (dcp, dcd) = m.grdset.map_or((None, None), |(p, d, _)| (p, d));
     let mut nodes = Vec::with_capacity(m.grids.len());
     for g in &m.grids {
@@ -1125,7 +1125,7 @@ fn materials(
     m: &Model,
     hm: &BTreeMap<i64, String>,
     c: &mut Collected,
-) -> Result<BTreeMap<i64, String>, MshError> {
+) -> Result<BTreeMap<i64, String>, DeckError> {
     let mut names: BTreeMap<i64, String> = BTreeMap::new();
     let mut taken: BTreeMap<String, i64> = BTreeMap::new();
     for (&mid, &(elastic, loc)) in &m.mat1 {
@@ -1146,7 +1146,7 @@ fn materials(
 
 /// Each solid element's material through its PSOLID (when the deck has PSOLIDs: a blank PID
 /// is the element id) and its element set `PID<n>`.
-fn properties(m: &Model, hm: &BTreeMap<i64, String>, c: &mut Collected) -> Result<(), MshError> {
+fn properties(m: &Model, hm: &BTreeMap<i64, String>, c: &mut Collected) -> Result<(), DeckError> {
     let add_set = |c: &mut Collected, pid: i64, p: &ElementProperty| {
         let set = c.element_sets.entry(format!("PID{pid}"));
         set.or_insert((Vec::new(), p.loc)).0.push(p.eid);
@@ -1189,7 +1189,7 @@ fn properties(m: &Model, hm: &BTreeMap<i64, String>, c: &mut Collected) -> Resul
 
 /// Resolves what the cards define into `c`: coordinate systems, nodes, materials and
 /// properties, node sets (named by `$HMSET`, else by id; names must be distinct).
-fn finish(m: Model, r: &Reader, c: &mut Collected) -> Result<(), MshError> {
+fn finish(m: Model, r: &Reader, c: &mut Collected) -> Result<(), DeckError> {
     let frames = resolve_systems(&m.systems, c)?;
     let nodes = place_grids(&m, &frames, c)?;
     c.nodes = nodes;

@@ -20,10 +20,10 @@
 //! Writing is atomic ([`crate::files::write_atomic`]).
 
 use super::collect::{HEX20_ABAQUS, HEX20_NASTRAN, TET10_DECK};
-use super::element::ElementKind;
 use super::{gmsh, Mesh, MeshUnit, NO_MATERIAL};
 use crate::files::{write_atomic, WriteError};
 use crate::scene::spec::Elastic;
+use crate::scene::spec::ElementKind;
 use std::borrow::Cow;
 use std::collections::HashSet;
 use std::io::{self, Write};

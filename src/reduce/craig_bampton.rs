@@ -17,11 +17,11 @@
 use super::interface;
 use crate::eigen::{solve_modes, EigenSettings};
 use crate::fem::dofs::{DofMap, FIXED};
-use crate::fem::material::Elastic;
 use crate::fem::model::{FeModel, ModelError};
 use crate::fem::surface::SurfaceMass;
 use crate::linalg::sparse::{Pattern, SymCsc};
 use crate::mesh::Mesh;
+use crate::scene::spec::Elastic;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;

@@ -56,7 +56,7 @@ struct PartData {
 
 fn prepare(
     mesh: &Mesh,
-    material: &crate::fem::material::Elastic,
+    material: &crate::scene::spec::Elastic,
     surface: &[crate::fem::surface::SurfaceMass],
     fix: &[String],
     blocks: &[super::craig_bampton::InterfaceBlock],

@@ -198,7 +198,7 @@ pub fn key(p: &Part<'_>, settings: &CbSettings) -> String {
 pub fn mesh_key(
     name: &str,
     mesh: &crate::mesh::Mesh,
-    material: &crate::fem::material::Elastic,
+    material: &crate::scene::spec::Elastic,
     fix: &[String],
     extra: &[f64],
 ) -> String {

@@ -10,14 +10,14 @@
 use super::cache::{self, CacheReadError, Lookup};
 use super::rom::{build, EngineRom, RomBuild, RomError, RomInputs, ROM_FORMAT};
 use crate::fem::element::check_mesh as check_and_compact;
-use crate::fem::material::Elastic;
 use crate::fem::surface::SurfaceMass;
 use crate::files::WriteError;
 use crate::mesh::checks::MeshError;
-use crate::mesh::collect::MshError;
+use crate::mesh::collect::DeckError;
 use crate::mesh::find::{self, FoundInterfaces, LinerShape};
 use crate::mesh::{crankcase, import, liner, Mesh, MeshUnit};
 use crate::scene::budget::{self, Limits};
+use crate::scene::spec::Elastic;
 use crate::scene::{CrankcaseSource, MeshSource, Scene, SceneError};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -33,7 +33,7 @@ pub enum SceneRomError {
         source: crate::files::ReadError,
     },
     #[error(transparent)]
-    Msh(#[from] MshError),
+    Msh(#[from] DeckError),
     #[error(transparent)]
     Import(#[from] crate::mesh::import::ImportError),
     #[error("{}: {source}", file.as_deref().unwrap_or("mesh"))]

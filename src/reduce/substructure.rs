@@ -885,7 +885,7 @@ mod tests {
             active: &active,
             coord: &coord,
         };
-        let mesh = lat.generate(crate::fem::shape::ElementKind::Hex8).mesh;
+        let mesh = lat.generate(crate::scene::spec::ElementKind::Hex8).mesh;
         let (comps, cuts) = split_mesh("bar", &mesh, &[0.2]).unwrap();
         assert_eq!(comps.len(), 2);
         assert_eq!(cuts[0].len(), 4);

@@ -3,9 +3,9 @@
 //! with the mid-edge nodes reordered from Gmsh's to VTK's convention.
 
 use crate::fem::dofs::DofMap;
-use crate::fem::shape::ElementKind;
 use crate::files::{write_atomic, WriteError};
 use crate::mesh::{ElementBlock, Mesh};
+use crate::scene::spec::ElementKind;
 use std::io::Write;
 use std::path::Path;
 

@@ -40,9 +40,9 @@ pub fn freqs(v: &serde_json::Value) -> Vec<f64> {
         .collect()
 }
 
-use linercav::fem::shape::ElementKind;
 use linercav::mesh::lattice::Lattice;
 use linercav::mesh::Mesh;
+use linercav::scene::spec::ElementKind;
 
 /// A box [0, lx] x [0, ly] x [0, lz] of n cells per axis, optionally distorted by a smooth map
 /// that keeps the outer faces planar (interior nodes move).

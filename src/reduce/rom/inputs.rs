@@ -1,7 +1,6 @@
 //! What the ROM build reads: its inputs, its errors, the interface fields of both parts, the
 //! preload loads, the liner's contact and point rows, the crankcase's outputs, the components.
 
-use crate::fem::material::Elastic;
 use crate::fem::surface::SurfaceMass;
 use crate::mesh::liner::COOLANT_WETTED;
 use crate::mesh::Mesh;
@@ -9,6 +8,7 @@ use crate::reduce::craig_bampton::{CbSettings, InterfaceBlock, Load, Output, Par
 use crate::reduce::engine;
 use crate::reduce::interface::{self, Direction, InterfaceShape};
 use crate::reduce::part_cache::PartCacheError;
+use crate::scene::spec::Elastic;
 
 /// Everything the build needs, already loaded and checked.
 pub struct RomInputs<'a> {
