@@ -29,19 +29,27 @@ pub fn available_memory_from() -> (u64, &'static str) {
     .expect("three bounds")
 }
 
-/// Address space a cap `limit` leaves for new work \[bytes\]: the limit less
-/// [`ADDRESS_SPACE_HEADROOM`] for what the estimates, calibrated on resident memory, do not
-/// count: the binary's mappings, thread stacks and the allocator's reserved arenas (under a
-/// 700 MB cap an estimate of 0.32 GB against the bare limit aborted in an allocation).
+/// The resident memory a cap `limit` on the address space leaves room for \[bytes\]: the
+/// limit less [`ADDRESS_SPACE_HEADROOM`] (the binary's mappings, thread stacks), divided by
+/// [`VIRTUAL_PER_RESIDENT`], since the estimates are of resident memory and the address space a
+/// run maps is larger (the allocator's reserved arenas, freed memory it keeps mapped). Under a
+/// 700 MB cap an estimate of 0.32 GB against the bare limit aborted in an allocation; under an
+/// 8 GB cap `modes --assembly --full` of the default engine (estimate 5 GB) aborted.
 pub fn address_space_left(limit: u64) -> u64 {
     if limit == u64::MAX {
         return u64::MAX;
     }
-    limit.saturating_sub(ADDRESS_SPACE_HEADROOM)
+    limit.saturating_sub(ADDRESS_SPACE_HEADROOM) / VIRTUAL_PER_RESIDENT
 }
 
 /// Address space kept free under a cap for mappings the estimates do not count \[bytes\].
 pub const ADDRESS_SPACE_HEADROOM: u64 = 512 << 20;
+
+/// Address space mapped per byte resident, rounded up from the largest ratio measured: peak
+/// VmPeak / VmHWM of `modes models/engine.toml --assembly --full` 13.0 / 6.0 GB = 2.17
+/// (0.8 of what is left is the limit, [`crate::scene::budget::Limits`], so 2 with that margin
+/// covers it).
+pub const VIRTUAL_PER_RESIDENT: u64 = 2;
 
 /// What the process's memory cgroup still allows \[bytes\]: limit - usage of its cgroup (v2
 /// `memory.max` - `memory.current`; v1 `memory.limit_in_bytes` - `memory.usage_in_bytes`), as a
@@ -115,17 +123,20 @@ fn system_memory() -> u64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{address_space_left, cgroup_available, ADDRESS_SPACE_HEADROOM};
+    use super::{
+        address_space_left, cgroup_available, ADDRESS_SPACE_HEADROOM, VIRTUAL_PER_RESIDENT,
+    };
 
     /// Regression (issue 40): under a 700 MB address-space cap an estimate of 0.32 GB was
     /// let through against the bare cap and the run aborted in an allocation; the cap now
-    /// leaves the headroom out, and no cap leaves everything.
+    /// leaves the headroom out and counts the address space mapped per resident byte, and no
+    /// cap leaves everything.
     #[test]
     fn regression_an_address_space_cap_keeps_its_headroom() {
         assert_eq!(address_space_left(u64::MAX), u64::MAX);
         assert_eq!(
             address_space_left(700_000_000),
-            700_000_000 - ADDRESS_SPACE_HEADROOM
+            (700_000_000 - ADDRESS_SPACE_HEADROOM) / VIRTUAL_PER_RESIDENT
         );
         assert_eq!(address_space_left(ADDRESS_SPACE_HEADROOM / 2), 0);
     }
