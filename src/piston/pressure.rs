@@ -350,15 +350,23 @@ mod tests {
         assert!((c.at(300.0) / c.at(420.0) - 1.0).abs() < 1e-6);
     }
 
+    /// p = 1 + 100 max(0, 1 - |theta - 360| / 180) bar.
+    fn triangle(t: f64) -> f64 {
+        1.0 + 100.0 * (1.0 - (t - 360.0).abs() / 180.0).max(0.0)
+    }
+
+    /// [`triangle`] every 30 deg over 0-690 deg as CSV rows, linear between samples (its kinks
+    /// at 180, 360 and 540 are samples), so the interpolation is exact.
+    fn triangle_rows() -> String {
+        (0..24)
+            .map(|k| format!("{},{}\n", 30 * k, triangle(30.0 * k as f64)))
+            .collect()
+    }
+
     #[test]
     fn csv_table_interpolates_periodically_and_names_bad_lines() {
         let p = Path::new("p.csv");
-        // every 30 deg of p = 1 + 100 max(0, 1 - |theta - 360| / 180) bar, linear between
-        // samples (its kinks at 180, 360 and 540 are samples), so the interpolation is exact
-        let f = |t: f64| 1.0 + 100.0 * (1.0 - (t - 360.0).abs() / 180.0).max(0.0);
-        let table: String = (0..24)
-            .map(|k| format!("{},{}\n", 30 * k, f(30.0 * k as f64)))
-            .collect();
+        let (f, table) = (triangle, triangle_rows());
         let c = PressureCurve::parse(p, &format!("crank_angle_deg,pressure_bar\n{table}")).unwrap();
         for t in [100.0, 275.0, 372.5, 705.0] {
             assert!((c.at(t) - f(t) * 1e5).abs() < 1e-6, "{t}");
@@ -398,10 +406,7 @@ mod tests {
     #[test]
     fn regression_a_closing_row_at_720_deg_is_the_first_row_again() {
         let p = Path::new("p.csv");
-        let f = |t: f64| 1.0 + 100.0 * (1.0 - (t - 360.0).abs() / 180.0).max(0.0);
-        let open: String = (0..24)
-            .map(|k| format!("{},{}\n", 30 * k, f(30.0 * k as f64)))
-            .collect();
+        let (f, open) = (triangle, triangle_rows());
         let parse =
             |rows: &str| PressureCurve::parse(p, &format!("crank_angle_deg,pressure_bar\n{rows}"));
         let closed = parse(&format!("{open}720,{}\n", f(0.0))).unwrap();
