@@ -1,5 +1,6 @@
 """Side-by-side: `linercav modes` (whole process) against SciPy eigsh's solve alone, on the same
-matrices of a Gmsh-made 10-node-tetrahedron liner-like tube (OD 135, ID 115, L 260 mm).
+matrices of a Gmsh-made 10-node-tetrahedron liner-like tube (OD 135, ID 115, L 260 mm), or of a
+scene's part (--scene models/engine.toml --part liner: the default liner, 72k DOF).
 
 Run through benches/vs_scipy.sh, which makes a private venv with scipy and gmsh.
 Prints the time ratio (machine-independent figure first), the largest relative frequency
@@ -18,11 +19,13 @@ ap.add_argument("--size-mm", type=float, default=5.0, help="Gmsh target element 
 ap.add_argument("--count", type=int, default=24)
 ap.add_argument("--out", default="bench-out")
 ap.add_argument("--bin", default="target/release/linercav")
+ap.add_argument("--scene", help="a part of this scene instead of the tube (e.g. models/engine.toml)")
+ap.add_argument("--part", default="liner", help="the part of --scene")
 a = ap.parse_args()
 os.makedirs(a.out, exist_ok=True)
 msh = os.path.join(a.out, f"tube_tet10_{a.size_mm:g}mm.msh")
 
-if not os.path.exists(msh):
+if not a.scene and not os.path.exists(msh):
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
     outer = gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, 0.26, 0.0675)
@@ -39,15 +42,17 @@ if not os.path.exists(msh):
     gmsh.finalize()
 
 mat = ["--youngs", "140e9", "--poisson", "0.26", "--density", "7200"]
+# the model: the tube's mesh with its material, or a part of a scene
+model = [a.scene, "--part", a.part] if a.scene else ["--mesh", msh, *mat]
 t0 = time.perf_counter()
-run = subprocess.run([a.bin, "modes", "--mesh", msh, *mat, "--count", str(a.count), "--json"],
+run = subprocess.run([a.bin, "modes", *model, "--count", str(a.count), "--json"],
                      capture_output=True, text=True, check=True)
 t_ours = time.perf_counter() - t0
 ours = json.loads(run.stdout)
 rss_ours = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1e6  # GB (ru_maxrss in kB)
 
 mtx = os.path.join(a.out, "mtx")
-subprocess.run([a.bin, "export-matrices", "--mesh", msh, *mat, "--out", mtx], check=True,
+subprocess.run([a.bin, "export-matrices", *model, "--out", mtx], check=True,
                capture_output=True)
 K = scipy.io.mmread(os.path.join(mtx, "K.mtx")).tocsc()
 M = scipy.io.mmread(os.path.join(mtx, "M.mtx")).tocsc()
@@ -64,7 +69,7 @@ rel = np.max(np.abs(f_ours[elastic] - f_scipy[elastic]) / f_scipy[elastic])
 print(f"time ratio linercav (whole process) / SciPy eigsh (solve only): {t_ours / t_scipy:.3f}"
       f"  (speed-up {t_scipy / t_ours:.1f}x)")
 print(f"largest relative difference of elastic frequencies: {rel:.2e}")
-print(f"model: {msh}, {ours['dofs']} DOFs, {a.count} modes, shift {ours['shift_hz']} Hz")
+print(f"model: {' '.join(model[:3]) if a.scene else msh}, {ours['dofs']} DOFs, {a.count} modes, shift {ours['shift_hz']} Hz")
 print(f"linercav: {t_ours:.1f} s wall, peak RSS {rss_ours:.2f} GB, Sturm check ok: {ours['sturm_count_ok']}"
       f", phases {json.dumps(ours['timings'])}")
 print(f"SciPy {scipy.__version__} eigsh: {t_scipy:.1f} s, peak RSS of the Python process {rss_all:.2f} GB")
