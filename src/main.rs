@@ -393,6 +393,8 @@ struct SimulateArgs {
 }
 
 fn run(cli: Cli, started: Instant) -> Result<(), Error> {
+    linercav::scene::overrides::check_repeated(&set_arguments())
+        .map_err(linercav::scene::SceneError::from)?;
     match cli.command {
         Command::Modes {
             model,
@@ -723,6 +725,23 @@ impl log::Log for StderrLog {
         }
     }
     fn flush(&self) {}
+}
+
+/// The values of every `--set` on the command line, in order (`--set K=V` and `--set=K=V`).
+fn set_arguments() -> Vec<String> {
+    // lossy: a path that is not UTF-8 is not a --set value
+    let args: Vec<String> = std::env::args_os()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    let mut out = Vec::new();
+    for (i, a) in args.iter().enumerate() {
+        if a == "--set" {
+            out.extend(args.get(i + 1).cloned());
+        } else if let Some(v) = a.strip_prefix("--set=") {
+            out.push(v.to_string());
+        }
+    }
+    out
 }
 
 fn main() {

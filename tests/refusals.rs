@@ -508,3 +508,20 @@ fn regression_maps_beyond_the_memory_limit_are_refused_before_the_run() {
     assert_eq!(code, 0, "{err}");
     assert!(target.join("liner_maps.vtu").exists() && target.join("liner_maps.png").exists());
 }
+
+/// Regression: `--set K=a --set K=b` kept the last value without a word.
+#[test]
+fn regression_a_key_set_twice_is_refused() {
+    let err = refused(
+        &[
+            "simulate",
+            SMALL,
+            "--set",
+            "piston.clearance_um=80",
+            "--set=piston.clearance_um=120",
+        ],
+        2,
+        "--set 'piston.clearance_um' is given twice ('80', then '120')",
+    );
+    assert!(err.contains("give each key once"), "{err}");
+}

@@ -18,6 +18,33 @@ pub enum OverrideError {
         prefix: String,
         key: String,
     },
+    #[error("--set '{key}' is given twice ('{first}', then '{second}'): give each key once")]
+    Repeated {
+        key: String,
+        first: String,
+        second: String,
+    },
+}
+
+/// Refuses a key given twice among the user's overrides: `--set K=a --set K=b` would keep the
+/// last without a word. Keys compare by their dotted parts, trimmed; an argument without `=`
+/// is left to [`apply`] to refuse.
+pub fn check_repeated(sets: &[String]) -> Result<(), OverrideError> {
+    let mut seen: std::collections::HashMap<String, &str> = std::collections::HashMap::new();
+    for arg in sets {
+        let Some((key, value)) = arg.split_once('=') else {
+            continue;
+        };
+        let key = key.split('.').map(str::trim).collect::<Vec<_>>().join(".");
+        if let Some(first) = seen.insert(key.clone(), value.trim()) {
+            return Err(OverrideError::Repeated {
+                key,
+                first: first.to_string(),
+                second: value.trim().to_string(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Parses the value part of an override.
@@ -67,6 +94,17 @@ pub fn apply(root: &mut Table, arg: &str) -> Result<(), OverrideError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_key_given_twice_is_refused_with_both_values() {
+        let sets = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        assert!(check_repeated(&sets(&["a.b=1", "a.c=1", "b=2"])).is_ok());
+        let e = check_repeated(&sets(&["a.b=1", "x=0", " a . b = 2"])).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "--set 'a.b' is given twice ('1', then '2'): give each key once"
+        );
+    }
 
     #[test]
     fn sets_nested_values_with_toml_types() {
