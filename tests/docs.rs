@@ -78,8 +78,51 @@ fn inner_struct(ty: &str) -> Option<String> {
     Some(name)
 }
 
+/// The `#[default]` variant of each enum of raw.rs, as the scene writes it (lowercase, as
+/// `rename_all = "lowercase"` reads it).
+fn enum_defaults(src: &str) -> BTreeMap<String, String> {
+    let mut out = BTreeMap::new();
+    let mut current: Option<String> = None;
+    let mut marked = false;
+    for line in src.lines().map(str::trim) {
+        if let Some(rest) = line.strip_prefix("pub enum ") {
+            current = rest.split_whitespace().next().map(str::to_string);
+            marked = false;
+        } else if line == "#[default]" {
+            marked = true;
+        } else if marked {
+            if let Some(name) = &current {
+                let variant = line.trim_end_matches(',').to_lowercase();
+                out.insert(name.clone(), variant);
+            }
+            marked = false;
+        }
+    }
+    out
+}
+
+/// A `#[serde(default)]` field's default, from its type: Default's value of a primitive, the
+/// `#[default]` variant of an enum.
+fn type_default(ty: &str, enums: &BTreeMap<String, String>) -> String {
+    match ty {
+        t if t.starts_with("Option") => "none".to_string(),
+        t if t.starts_with("Vec") => "`[]`".to_string(),
+        "String" => "empty".to_string(),
+        "bool" => "`false`".to_string(),
+        "f64" | "f32" | "usize" | "u64" | "u32" | "i64" | "i32" => "`0`".to_string(),
+        t => enums
+            .get(t)
+            .map(|v| format!("`\"{v}\"`"))
+            .unwrap_or_else(|| format!("`{t}::default()`")),
+    }
+}
+
 /// Renders the scene reference: one table per section, in the order of the definition.
-fn render(structs: &BTreeMap<String, Vec<Field>>, defaults: &BTreeMap<String, String>) -> String {
+fn render(
+    structs: &BTreeMap<String, Vec<Field>>,
+    defaults: &BTreeMap<String, String>,
+    enums: &BTreeMap<String, String>,
+) -> String {
     let mut out = String::from(
         "# Scene reference\n\nGenerated from `src/scene/raw.rs` by `tests/docs.rs` \
          (`LINERCAV_UPDATE_DOCS=1 cargo test --release --test docs`); do not edit by hand.\n\n\
@@ -118,7 +161,7 @@ fn render(structs: &BTreeMap<String, Vec<Field>>, defaults: &BTreeMap<String, St
             let default = match &f.default {
                 None if f.ty.starts_with("Option") => "optional".to_string(),
                 None => "*required*".to_string(),
-                Some(d) if d.is_empty() => "empty / 0 / none".to_string(),
+                Some(d) if d.is_empty() => type_default(&f.ty, enums),
                 Some(d) => defaults
                     .get(d)
                     .map(|b| format!("`{b}`"))
@@ -157,7 +200,7 @@ fn verification_scene_reference_is_generated_from_the_code() {
     let src = std::fs::read_to_string("src/scene/raw.rs").unwrap();
     let (structs, defaults) = parse_raw(&src);
     assert!(structs.len() > 10, "parsed {} structs", structs.len());
-    let text = render(&structs, &defaults);
+    let text = render(&structs, &defaults, &enum_defaults(&src));
     for key in [
         "engine.bore_mm",
         "piston.clearance_um",
