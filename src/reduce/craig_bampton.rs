@@ -177,9 +177,15 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
     let full =
         FeModel::build_with(p.mesh.clone(), p.material, p.fix, p.surface).map_err(err_model)?;
     let sets = interior_sets(p)?;
+    let t_inner = Instant::now();
     let inner = full.restrict(&sets).map_err(err_model)?;
     let (na, nb) = (full.n_free(), inner.n_free());
-    tick(&format!("assembled: {na} DOFs, {nb} interior"));
+    tick(&format!(
+        "assembled: {na} DOFs, {nb} interior (assembly {:.2} s, ordering and analysis {:.2} s, interior {:.2} s)",
+        full.timings.assembly,
+        full.timings.ordering,
+        t_inner.elapsed().as_secs_f64()
+    ));
     let llt = inner
         .analysis
         .llt(&inner.km.pattern, &inner.km.k)
