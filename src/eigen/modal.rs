@@ -278,7 +278,7 @@ pub fn placed_shift(
     let mut x = super::dense_lanczos::random_block(n, b, 0x2545_f491_4f6c_dd1d);
     let mut last: Option<f64> = None;
     for pass in 1..=SHIFT_CHECK_PASSES {
-        x = super::subspace::inverse_pass(&mass, llt, &x);
+        x = super::subspace::inverse_pass(&mass, llt, x);
         let theta_max = ritz_values(km, &mass, &x)?[nev - 1];
         log::debug!("shift check pass {pass}: lambda_{nev} <= {theta_max:.4e} (shift {sigma:.4e})");
         if pass == SHIFT_CHECK_PASSES {
@@ -310,11 +310,13 @@ pub const SHIFT_CHECK_MARGIN: f64 = 4.0;
 fn ritz_values(km: &StiffnessMass, mass: &SymCsc, x: &faer::Mat<f64>) -> Option<Vec<f64>> {
     use faer::Mat;
     let (n, b) = (x.nrows(), x.ncols());
-    let (mut kx, mut mx) = (Mat::<f64>::zeros(n, b), Mat::<f64>::zeros(n, b));
-    km.pattern.mul_dense(&km.k, x.as_ref(), kx.as_mut());
-    mass.mul_dense(x.as_ref(), mx.as_mut());
-    let a = x.transpose() * &kx;
-    let bm = x.transpose() * &mx;
+    // one n x b product at a time (the check's memory adds to the factor's)
+    let mut prod = Mat::<f64>::zeros(n, b);
+    km.pattern.mul_dense(&km.k, x.as_ref(), prod.as_mut());
+    let a = x.transpose() * &prod;
+    mass.mul_dense(x.as_ref(), prod.as_mut());
+    let bm = x.transpose() * &prod;
+    drop(prod);
     let c = bm.llt(faer::Side::Lower).ok()?;
     let mut s = a;
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(
