@@ -393,8 +393,6 @@ struct SimulateArgs {
 }
 
 fn run(cli: Cli, started: Instant) -> Result<(), Error> {
-    linercav::scene::overrides::check_repeated(&set_arguments())
-        .map_err(linercav::scene::SceneError::from)?;
     match cli.command {
         Command::Modes {
             model,
@@ -727,6 +725,13 @@ impl log::Log for StderrLog {
     fn flush(&self) {}
 }
 
+/// Refuses a `--set` key given twice on the command line (each would replace the last).
+fn check_sets() -> Result<(), Error> {
+    linercav::scene::overrides::check_repeated(&set_arguments())
+        .map_err(linercav::scene::SceneError::from)?;
+    Ok(())
+}
+
 /// The values of every `--set` on the command line, in order (`--set K=V` and `--set=K=V`).
 fn set_arguments() -> Vec<String> {
     // lossy: a path that is not UTF-8 is not a --set value
@@ -760,7 +765,7 @@ fn main() {
             log::LevelFilter::Warn
         });
     }
-    if let Err(e) = run(cli, started) {
+    if let Err(e) = check_sets().and_then(|()| run(cli, started)) {
         let mut said = e.to_string();
         eprint!("error: {said}");
         let mut source = std::error::Error::source(&e);
