@@ -5,11 +5,5 @@
 # (about 5 min at the default size; --scipy adds SciPy's eigsh under a 20 GB cap, up to 15 min)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
-cargo build --release --quiet
-venv=bench-out/venv
-if [ ! -x "$venv/bin/python" ]; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet scipy numpy gmsh
-fi
+. benches/python_env.sh
 "$venv/bin/python" benches/casting.py "$@"

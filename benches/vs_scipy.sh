@@ -4,12 +4,6 @@
 # (size 5 mm gives ~100k DOF, 4 mm ~190k DOF: the 70k-250k range of the floor.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
-cargo build --release --quiet
-venv=bench-out/venv
-if [ ! -x "$venv/bin/python" ]; then
-  python3 -m venv "$venv"
-  "$venv/bin/pip" install --quiet scipy numpy gmsh
-fi
+. benches/python_env.sh
 export OPENBLAS_NUM_THREADS=1
 "$venv/bin/python" benches/vs_scipy.py "$@"
