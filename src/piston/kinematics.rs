@@ -15,6 +15,8 @@
 //!   s' = r omega cos theta, s'' = -r omega^2 sin theta,
 //!   g' = -s s' / g,  g'' = -(s'^2 + s s'') / g - s^2 s'^2 / g^3,
 //!   z' = -r omega sin theta + g',  z'' = -r omega^2 cos theta + g''.
+//! The rod's angular velocity, in the sense in which its top moves toward thrust:
+//!   beta' = d/dt asin(s / l) = s' / (l cos beta) = s' / g.
 
 /// Crank radius, rod length, lateral offset and speed, SI.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,6 +40,8 @@ pub struct PinMotion {
     pub ddz: f64,
     /// tan of the rod angle: lateral / axial share of the rod force.
     pub tan_beta: f64,
+    /// The rod's angular velocity beta' = s' / g [rad/s] (+: its top turns toward thrust).
+    pub rod_rate: f64,
 }
 
 impl CrankSlider {
@@ -56,6 +60,7 @@ impl CrankSlider {
             dz: -r * w * st + g1,
             ddz: -r * w * w * ct + g2,
             tan_beta: s / g,
+            rod_rate: s1 / g,
         }
     }
 
@@ -86,6 +91,9 @@ mod tests {
             let ddz = (c.z - 2.0 * b.z + a.z) / (h * h) * k.omega * k.omega;
             assert!((dz - b.dz).abs() < 1e-6 * k.radius * k.omega);
             assert!((ddz - b.ddz).abs() < 1e-4 * k.radius * k.omega * k.omega);
+            // beta' against the difference of beta = atan(tan beta)
+            let rate = (c.tan_beta.atan() - a.tan_beta.atan()) / (2.0 * h) * k.omega;
+            assert!((rate - b.rod_rate).abs() < 1e-6 * k.radius / k.rod * k.omega);
         }
         // No offset: top and bottom dead centres at 0 and pi with stroke 2r.
         let k0 = CrankSlider { offset: 0.0, ..k };

@@ -19,6 +19,20 @@
 //! coefficient mu: the friction force -mu F sgn(z') acts on the skirt surface (lever +-R about
 //! the pin) and adds to the rod force.
 //! The quasi-static side force pressing the liner toward thrust is C_z tan(beta).
+//!
+//! Pin friction (optional, `piston.pin_friction`): the pin journal turns in the piston's bosses
+//! and the rod's small end; when the rod turns against the piston (beta' - phi' != 0) the
+//! slipping joint transmits the friction torque
+//!   T = mu_pin r_pin F_pin tanh((beta' - phi') / w_s)
+//! on the tilt (it drags the piston toward the rod's rotation). F_pin is the load of the joint
+//! that slips first: a floating pin (its own inertia negligible) carries the same torque
+//! through both joints, so the smaller capacity decides,
+//!   F_pin = min(|F_boss|, |F_rod|),  F_boss = |(F_g + m_p z'', C_z tan(beta))|,
+//!   F_rod = |C_z| / cos(beta) = |C_z| sqrt(1 + tan^2(beta)),
+//! (the boss carries the gas force and the piston's inertia, the small end also the pin's;
+//! the lateral share is the quasi-static side force). tanh regularises Coulomb's sign over the
+//! slip rate w_s (the journal's boundary-to-hydrodynamic transition); beta' = s' / g from
+//! [`kinematics`].
 
 pub mod kinematics;
 pub mod lubrication;
@@ -57,6 +71,11 @@ pub struct Piston {
     pub friction: f64,
     /// The skirt's oil film (`None`: dry).
     pub film: Option<lubrication::Film>,
+    /// Pin friction coefficient mu_pin (0: none), pin radius r_pin \[m\] and the slip rate w_s
+    /// over which the pin's torque reverses [rad/s].
+    pub pin_friction: f64,
+    pub pin_radius: f64,
+    pub pin_slip_rate: f64,
 }
 
 /// Loads on the secondary motion at one instant.
@@ -75,6 +94,10 @@ pub struct PistonLoads {
     pub axial_velocity: f64,
     /// Gas pressure \[Pa\].
     pub pressure: f64,
+    /// The pin's Coulomb torque mu_pin r_pin F_pin \[N m\] (0 without pin friction) and the
+    /// rod's angular velocity beta' [rad/s] (see the module docs).
+    pub pin_torque: f64,
+    pub rod_rate: f64,
 }
 
 impl Piston {
@@ -102,7 +125,29 @@ impl Piston {
             axial_sign: if k.dz >= 0.0 { 1.0 } else { -1.0 },
             axial_velocity: k.dz,
             pressure: p,
+            pin_torque: self.pin_coulomb_torque(fg, cz, &k),
+            rod_rate: k.rod_rate,
         }
+    }
+
+    /// The pin's Coulomb torque mu_pin r_pin min(|F_boss|, |F_rod|) \[N m\] at gas force `fg`
+    /// and rod push `cz` (module docs).
+    fn pin_coulomb_torque(&self, fg: f64, cz: f64, k: &kinematics::PinMotion) -> f64 {
+        if self.pin_friction == 0.0 {
+            return 0.0;
+        }
+        let boss = (fg + self.mass * k.ddz).hypot(cz * k.tan_beta);
+        let rod = cz.abs() * (1.0 + k.tan_beta * k.tan_beta).sqrt();
+        self.pin_friction * self.pin_radius * boss.min(rod)
+    }
+
+    /// The pin's friction torque on the tilt at tilt rate `phi_rate` [rad/s] under `loads`,
+    /// T = T_m tanh((beta' - phi') / w_s) \[N m\] (module docs).
+    pub fn pin_friction_torque(&self, loads: &PistonLoads, phi_rate: f64) -> f64 {
+        if loads.pin_torque == 0.0 {
+            return 0.0;
+        }
+        loads.pin_torque * ((loads.rod_rate - phi_rate) / self.pin_slip_rate).tanh()
     }
 
     /// Kinematic row s_i (d p_i / d q) of slice `i` on the thrust (`thrust`) or anti-thrust side.

@@ -100,5 +100,8 @@ pub fn piston_of(scene: &Scene) -> Result<Piston, PistonSetupError> {
         skirt,
         contact_damping: p.contact_damping,
         friction: p.friction,
+        pin_friction: p.pin_friction,
+        pin_radius: p.pin_radius,
+        pin_slip_rate: p.pin_slip_rate,
     })
 }

@@ -169,6 +169,8 @@ pub struct SimulateReport {
     /// The skirt's lubrication model that ran: "dry", "squeeze" or "mixed"
     /// (`piston.lubrication`).
     pub lubrication: crate::piston::lubrication::Lubrication,
+    /// The pin journal's friction coefficient that ran (`piston.pin_friction`; 0: none).
+    pub pin_friction: f64,
 }
 
 impl SimulateReport {
@@ -204,6 +206,7 @@ impl SimulateReport {
                 .film
                 .as_ref()
                 .map_or(crate::piston::lubrication::Lubrication::Dry, |f| f.model),
+            pin_friction: piston.pin_friction,
             peak_pressure_bar: pp / 1e5,
             peak_pressure_deg: pdeg,
             time_series_csv: None,
@@ -338,13 +341,18 @@ impl SimulateReport {
 
     pub fn to_text(&self) -> String {
         let mut s = format!(
-            "{} at {:.0} rpm: peak pressure {:.1} bar at {:.1} deg, hot clearance {:.1} um, skirt {}\n",
+            "{} at {:.0} rpm: peak pressure {:.1} bar at {:.1} deg, hot clearance {:.1} um, skirt {}{}\n",
             self.scene,
             self.speed_rpm,
             self.peak_pressure_bar,
             self.peak_pressure_deg,
             self.hot_clearance_um,
-            self.lubrication.name()
+            self.lubrication.name(),
+            if self.pin_friction > 0.0 {
+                format!(", pin friction {}", self.pin_friction)
+            } else {
+                String::new()
+            }
         );
         s += &self.peaks_text();
         let st = &self.stats;

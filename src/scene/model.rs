@@ -124,6 +124,11 @@ pub struct PistonSpec {
     pub skirt: spec::SkirtSpec,
     pub contact_damping: f64,
     pub friction: f64,
+    /// Pin friction coefficient (0: none), pin radius \[m\] and the slip rate of its torque's
+    /// reversal [rad/s].
+    pub pin_friction: f64,
+    pub pin_radius: f64,
+    pub pin_slip_rate: f64,
     /// The oil film; `None` for a dry skirt.
     pub oil: Option<spec::OilSpec>,
 }

@@ -468,6 +468,22 @@ pub struct RawPiston {
     /// Coulomb friction coefficient of the skirt, >= 0 (0: no friction).
     #[serde(default)]
     pub friction: f64,
+    /// Friction coefficient of the pin journal, >= 0 (0: no pin friction, the reference
+    /// study's model; 0.02-0.08 for a lubricated pin \[assumption\]). The joint's torque
+    /// mu r_pin F_pin tanh((beta' - phi') / w_s) drags the piston's tilt toward the rod's
+    /// rotation (docs/physics.md).
+    #[serde(default)]
+    pub pin_friction: f64,
+    /// Pin diameter \[mm\], > 0 and less than the bore; none: 0.4 x bore (heavy-duty diesels
+    /// use 0.38-0.42). Used by `pin_friction` only.
+    #[serde(default)]
+    pub pin_diameter_mm: Option<f64>,
+    /// Slip rate w_s over which the pin's torque reverses [rad/s], > 0: at a relative rate of
+    /// w_s it reaches tanh(1) = 76 % of its Coulomb value (the journal's boundary friction at
+    /// near-zero sliding; the rod turns at up to r omega / l, 64 rad/s on the default engine).
+    /// Default 1.
+    #[serde(default = "default_pin_slip")]
+    pub pin_slip_rad_s: f64,
     /// The skirt's oil film: "dry" (default: the penalty contact alone, the reference study's
     /// model), "squeeze" (the Reynolds squeeze and sliding film, half-Sommerfeld) or "mixed"
     /// (the film plus Greenwood-Tripp asperity contact). The film's data: `[piston.oil]`.
@@ -478,6 +494,10 @@ pub struct RawPiston {
     #[serde(default)]
     pub oil: RawOil,
     pub thermal: RawThermal,
+}
+
+fn default_pin_slip() -> f64 {
+    1.0
 }
 
 /// `piston.lubrication`.

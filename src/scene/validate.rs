@@ -626,6 +626,9 @@ pub(super) fn validate_piston(
             p.contact_damping_n_s_per_m,
         )?,
         friction: c.nonneg("piston.friction", p.friction)?,
+        pin_friction: c.nonneg("piston.pin_friction", p.pin_friction)?,
+        pin_radius: pin_radius(c, p, engine)?,
+        pin_slip_rate: c.positive("piston.pin_slip_rad_s", p.pin_slip_rad_s)?,
         oil: validate_oil(c, p)?,
     };
     let offset = (piston.pin_offset - piston.crank_offset).abs();
@@ -636,6 +639,21 @@ pub(super) fn validate_piston(
         ));
     }
     Ok(piston)
+}
+
+/// `piston.pin_diameter_mm`: the pin's radius \[m\], 0.2 x bore when not given.
+fn pin_radius(c: &Checker<'_>, p: &raw::RawPiston, engine: &Engine) -> Result<f64, SceneError> {
+    let Some(d) = p.pin_diameter_mm else {
+        return Ok(0.2 * engine.bore);
+    };
+    let d = c.positive("piston.pin_diameter_mm", d)? * 1e-3;
+    if d >= engine.bore {
+        return Err(c.err(
+            "piston.pin_diameter_mm",
+            format!("must be less than the bore ({:.1} mm)", engine.bore * 1e3),
+        ));
+    }
+    Ok(d / 2.0)
 }
 
 /// `piston.lubrication` and `[piston.oil]`: the film's data, SI; `None` for a dry skirt.

@@ -2,7 +2,7 @@
 //! step, the piston at rest, and the residual response at the analysis points. Shared by the
 //! engine cycle and the windows.
 
-use super::contact::{Body, FilmGroup, Location, Slice};
+use super::contact::{self, Body, FilmGroup, Location, Slice};
 use crate::linalg::dense::{row, Dense};
 use crate::piston::Piston;
 
@@ -108,6 +108,16 @@ pub(crate) fn film_groups<'p>(
         }
     }
     out
+}
+
+/// The pin's friction torque on the tilt under `loads` ([`contact::TiltFriction`]; zero
+/// without pin friction).
+pub fn tilt_friction(piston: &Piston, loads: &crate::piston::PistonLoads) -> contact::TiltFriction {
+    contact::TiltFriction {
+        max_torque: loads.pin_torque,
+        rod_rate: loads.rod_rate,
+        slip_rate: piston.pin_slip_rate,
+    }
 }
 
 /// The piston at rest, centred, at its own crank angle `deg`: acceleration from the loads.

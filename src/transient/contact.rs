@@ -157,6 +157,38 @@ pub struct Body {
     /// Total generalised force (external and contact) at the body's current time: the
     /// -alpha f_n term of HHT-alpha. Set it to the external force when starting from rest.
     pub applied: [f64; 2],
+    /// The pin's friction torque on the tilt at the new time (none by default).
+    pub tilt_friction: TiltFriction,
+}
+
+/// The pin journal's friction torque on the piston's tilt over one step,
+///   T(phi') = T_m tanh((beta' - phi') / w_s),
+/// T_m = mu_pin r_pin F_pin the Coulomb torque, beta' the rod's angular velocity and w_s the
+/// slip rate over which the torque reverses ([`crate::piston::Piston::pin_friction_torque`]).
+/// The step takes it implicitly, linearised at the predictor's tilt rate phi'~:
+///   T = T(phi'~) + T'(phi'~) (phi'_{n+1} - phi'~),  phi'_{n+1} = phi'~ + kappa (phi - phi~),
+/// so a steep reversal (T_m / w_s large against the tilt inertia / dt) stays stable; the
+/// linearisation's error is O((phi'_{n+1} - phi'~)^2 T'').
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TiltFriction {
+    /// T_m [N m], beta' [rad/s], w_s [rad/s] (> 0 when T_m > 0).
+    pub max_torque: f64,
+    pub rod_rate: f64,
+    pub slip_rate: f64,
+}
+
+impl TiltFriction {
+    /// The torque [N m] at tilt rate `phi_rate` and its derivative dT / d phi' [N m s].
+    pub fn torque(&self, phi_rate: f64) -> (f64, f64) {
+        if self.max_torque == 0.0 {
+            return (0.0, 0.0);
+        }
+        let th = ((self.rod_rate - phi_rate) / self.slip_rate).tanh();
+        (
+            self.max_torque * th,
+            -self.max_torque * (1.0 - th * th) / self.slip_rate,
+        )
+    }
 }
 
 /// Result of one step.
@@ -729,6 +761,11 @@ impl<'s, 'a> Step<'s, 'a> {
                 }
                 bvec[2 * k + i] += (1.0 + alpha) * body.force[i] - alpha * body.applied[i];
             }
+            // the pin's torque, linear in the new tilt: T0 + T' kappa (phi - phi~)
+            let (t0, dt0) = body.tilt_friction.torque(self.vh[k][1]);
+            let r = 2 * k + 1;
+            bvec[r] += (1.0 + alpha) * (t0 - dt0 * self.kappa * self.qh[k][1]);
+            a[(r, r)] -= (1.0 + alpha) * dt0 * self.kappa;
         }
         for (r, &i) in active.iter().enumerate() {
             let s = &self.slices[i];
@@ -847,6 +884,8 @@ impl<'s, 'a> Step<'s, 'a> {
                 b.v[d] = self.vh[k][d] + gamma * self.dt * an;
             }
             b.applied = body.force;
+            let (t0, dt0) = body.tilt_friction.torque(self.vh[k][1]);
+            b.applied[1] += t0 + dt0 * (b.v[1] - self.vh[k][1]);
             out.push(b);
         }
         for (r, &i) in active.iter().enumerate() {

@@ -23,7 +23,8 @@
 //! numerical instability).
 
 use super::bore::{
-    body_at_rest, film_groups, push_slices, residual_displacement, BoreLines, PistonInBore,
+    body_at_rest, film_groups, push_slices, residual_displacement, tilt_friction, BoreLines,
+    PistonInBore,
 };
 use super::contact::{self, Body, Location, Slice, SliceState, StepFailure};
 use super::error::TransientError;

@@ -181,6 +181,7 @@ impl<'a> EngineRun<'a> {
             let loads = piston.loads(theta - cyl.phase);
             let mut body = cyl.body;
             body.force = loads.force;
+            body.tilt_friction = tilt_friction(piston, &loads);
             out.bodies.push(body);
             out.side_forces.push(loads.side_force);
             out.axial.push(loads.axial_velocity);
