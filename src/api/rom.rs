@@ -57,6 +57,9 @@ pub struct RomReport {
     pub left_out: Vec<String>,
     pub cache_file: Option<String>,
     pub first_frequencies_hz: Vec<f64>,
+    /// Every system mode's frequency below half the cut-off \[Hz\] (where the reduction is
+    /// accurate: what two reductions of one engine are compared on).
+    pub frequencies_below_half_cutoff_hz: Vec<f64>,
     /// Interfaces, points and materials found on imported meshes (absent for generated ones).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub interfaces: Option<crate::mesh::find::FoundInterfaces>,
@@ -84,6 +87,13 @@ impl RomReport {
             left_out: i.left_out.clone(),
             cache_file: l.cache_file.as_ref().map(|p| p.display().to_string()),
             first_frequencies_hz: l.rom.frequencies_hz.iter().take(20).copied().collect(),
+            frequencies_below_half_cutoff_hz: l
+                .rom
+                .frequencies_hz
+                .iter()
+                .copied()
+                .filter(|&f| f < 0.5 * i.cutoff_hz)
+                .collect(),
             interfaces: i.interfaces.clone(),
         }
     }
