@@ -7,7 +7,7 @@
 #   3. the eigen-solve of a casting-like tet4 section (about 754k DOF, benches/casting.sh), at the
 #      default shift and a far shift, and SciPy's eigsh on the same matrices under a memory cap;
 #   4. the default liner's 20 modes against SciPy's eigsh solve alone (benches/vs_scipy.sh).
-# Usage: bash benches/production.sh [OUT]   (default benches/production.txt; about 75 min on
+# Usage: bash benches/production.sh [OUT]   (default: production.txt beside this script; about 75 min on
 # 2 cores and 24 GB). The output is written to OUT.tmp and renamed when every part has run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
