@@ -263,6 +263,16 @@ fn small_run_with(set: &str, cache: &str) -> serde_json::Value {
     json(&out)
 }
 
+/// Each cylinder's `peak_slap_force_n` of a `simulate --json` output.
+fn slap_forces(v: &serde_json::Value) -> Vec<f64> {
+    v["cylinders"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["peak_slap_force_n"].as_f64().unwrap())
+        .collect()
+}
+
 /// Contract (issue 39): `simulate --json` names the lubrication model that ran, a lubricated
 /// run changes the slap forces, and its experimental status is a warning.
 #[test]
@@ -273,15 +283,7 @@ fn contract_simulate_names_the_lubrication_and_the_film_changes_the_slap() {
     let wet = small_run("squeeze", &cache);
     assert_eq!(dry["lubrication"], "dry");
     assert_eq!(wet["lubrication"], "squeeze");
-    let slap = |v: &serde_json::Value| -> Vec<f64> {
-        v["cylinders"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|c| c["peak_slap_force_n"].as_f64().unwrap())
-            .collect()
-    };
-    let (a, b) = (slap(&dry), slap(&wet));
+    let (a, b) = (slap_forces(&dry), slap_forces(&wet));
     println!("slap force dry {a:?}, squeeze {b:?}");
     assert!(a.iter().zip(&b).any(|(x, y)| (x - y).abs() > 1e-3 * x));
     let warned = |v: &serde_json::Value| {
@@ -306,15 +308,7 @@ fn contract_simulate_reports_pin_friction_and_it_changes_the_slap() {
     let pin = small_run_with("piston.pin_friction=0.05", &cache);
     assert_eq!(dry["pin_friction"], 0.0);
     assert_eq!(pin["pin_friction"], 0.05);
-    let slap = |v: &serde_json::Value| -> Vec<f64> {
-        v["cylinders"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|c| c["peak_slap_force_n"].as_f64().unwrap())
-            .collect()
-    };
-    let (a, b) = (slap(&dry), slap(&pin));
+    let (a, b) = (slap_forces(&dry), slap_forces(&pin));
     println!("slap force dry {a:?}, pin friction 0.05 {b:?}");
     assert!(a.iter().zip(&b).any(|(x, y)| (x - y).abs() > 1e-3 * x));
 }

@@ -141,15 +141,6 @@ impl Piston {
         self.pin_friction * self.pin_radius * boss.min(rod)
     }
 
-    /// The pin's friction torque on the tilt at tilt rate `phi_rate` [rad/s] under `loads`,
-    /// T = T_m tanh((beta' - phi') / w_s) \[N m\] (module docs).
-    pub fn pin_friction_torque(&self, loads: &PistonLoads, phi_rate: f64) -> f64 {
-        if loads.pin_torque == 0.0 {
-            return 0.0;
-        }
-        loads.pin_torque * ((loads.rod_rate - phi_rate) / self.pin_slip_rate).tanh()
-    }
-
     /// Kinematic row s_i (d p_i / d q) of slice `i` on the thrust (`thrust`) or anti-thrust side.
     pub fn slice_row(&self, i: usize, thrust: bool) -> [f64; 2] {
         let h = self.skirt.heights[i];

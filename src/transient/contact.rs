@@ -164,7 +164,7 @@ pub struct Body {
 /// The pin journal's friction torque on the piston's tilt over one step,
 ///   T(phi') = T_m tanh((beta' - phi') / w_s),
 /// T_m = mu_pin r_pin F_pin the Coulomb torque, beta' the rod's angular velocity and w_s the
-/// slip rate over which the torque reverses ([`crate::piston::Piston::pin_friction_torque`]).
+/// slip rate over which the torque reverses (the [`crate::piston`] module docs).
 /// The step takes it implicitly, linearised at the predictor's tilt rate phi'~:
 ///   T = T(phi'~) + T'(phi'~) (phi'_{n+1} - phi'~),  phi'_{n+1} = phi'~ + kappa (phi - phi~),
 /// so a steep reversal (T_m / w_s large against the tilt inertia / dt) stays stable; the
