@@ -34,7 +34,13 @@ for spec in "4 25 2" "8 25 2" "8 12.5 2" "8 12.5 4" "12 8 4" "20 5 4"; do
   fi
   sets+=(--set rom.crankcase_components=$fits)
   rm -rf "$cache"/*
-  out=$( { /usr/bin/time -f 'TIME %e %M' "$bin" rom models/engine.toml --cache-dir "$cache" "${sets[@]}" --json; } 2>&1 )
+  # a build that stops (the tool refusing it when the machine has less memory free than its
+  # estimate, or any error) is printed with the tool's last message, and the next size runs
+  if ! out=$( { /usr/bin/time -f 'TIME %e %M' "$bin" rom models/engine.toml --cache-dir "$cache" "${sets[@]}" --json; } 2>&1 ); then
+    printf '%-28s %3s %12s %10s  stopped: %s\n' "$label" "$fits" "-" "$gb" \
+      "$(grep -v -e '^TIME' -e '^Command exited' <<<"$out" | tail -1)"
+    continue
+  fi
   dofs=$(sed -n 's/.*"full_dofs": *\([0-9]*\).*/\1/p' <<<"$out" | head -1)
   read -r wall kb < <(sed -n 's/^TIME \([0-9.]*\) \([0-9]*\)/\1 \2/p' <<<"$out")
   t2=$( { /usr/bin/time -f 'TIME %e' "$bin" rom models/engine.toml --cache-dir "$cache" "${sets[@]}" --set liner.material=compacted_graphite_iron >/dev/null; } 2>&1 | sed -n 's/^TIME //p')
