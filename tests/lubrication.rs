@@ -274,7 +274,8 @@ fn slap_forces(v: &serde_json::Value) -> Vec<f64> {
 }
 
 /// Contract (issue 39): `simulate --json` names the lubrication model that ran, a lubricated
-/// run changes the slap forces, and its experimental status is a warning.
+/// run changes the slap forces, its experimental status is a warning, and it reports how well
+/// the steps resolved the film (`stats.film_mismatch`, warned above `FILM_RESOLVED`).
 #[test]
 fn contract_simulate_names_the_lubrication_and_the_film_changes_the_slap() {
     let dir = tempfile::tempdir().unwrap();
@@ -294,6 +295,28 @@ fn contract_simulate_names_the_lubrication_and_the_film_changes_the_slap() {
             .any(|w| w.as_str().unwrap().contains("piston.lubrication"))
     };
     assert!(warned(&wet) && !warned(&dry));
+    // how well the run resolved its film is reported (0 without a film), and a run above the
+    // resolved bound says so in a warning
+    let mismatch = |v: &serde_json::Value| v["stats"]["film_mismatch"].as_f64().unwrap();
+    let unresolved = |v: &serde_json::Value| {
+        v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("oil film is not resolved"))
+    };
+    println!(
+        "film mismatch: dry {}, squeeze {}",
+        mismatch(&dry),
+        mismatch(&wet)
+    );
+    assert_eq!(mismatch(&dry), 0.0);
+    assert!(!unresolved(&dry));
+    assert!(mismatch(&wet) > 0.0);
+    assert_eq!(
+        unresolved(&wet),
+        mismatch(&wet) > linercav::transient::cycle::FILM_RESOLVED
+    );
 }
 
 /// Contract (issue 39, pin friction): `simulate --json` gives the pin friction coefficient

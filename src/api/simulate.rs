@@ -107,6 +107,9 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     settings.surface_maps = false;
     let transient_seconds = t.elapsed().as_secs_f64();
     let mut report = SimulateReport::new(&scene, &piston, &res, loaded.cache, transient_seconds);
+    report
+        .warnings
+        .extend(film_warning(res.stats.film_mismatch));
     let maps = if req.maps {
         super::maps::maps_of(&scene, &res)?
     } else {
@@ -159,6 +162,17 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     }
     report.seconds = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// The warning of a lubricated run whose film the steps did not resolve: its
+/// `stats.film_mismatch` above [`crate::transient::cycle::FILM_RESOLVED`].
+fn film_warning(mismatch: f64) -> Option<String> {
+    let bound = crate::transient::cycle::FILM_RESOLVED;
+    (mismatch > bound).then(|| format!(
+        "the oil film is not resolved: at some step the film force the step linearised differed from the film at the step's end by {:.0} % of the side's film force (stats.film_mismatch; resolved: up to {:.0} %): the lubricated slap forces and peaks are not trustworthy (docs/validation.md)",
+        100.0 * mismatch,
+        100.0 * bound
+    ))
 }
 
 /// The whole-run step check of the run `res` into `report`, and with `rank` the decided

@@ -38,7 +38,16 @@ pub struct Stats {
     /// Per-cylinder coupling: largest difference between the liner displacement a contact
     /// slice used and the one of the completed step \[m\].
     pub coupling_lag_m: f64,
+    /// Lubricated skirt: the largest difference, over the committed steps, between an engaged
+    /// film side's force as the step linearised it and the film evaluated at the step's end,
+    /// relative to the side's film force (`film_mismatch`; 0 for a dry skirt). Above
+    /// [`FILM_RESOLVED`] the run did not resolve its film.
+    pub film_mismatch: f64,
 }
+
+/// The film mismatch (`Stats::film_mismatch`) up to which a lubricated run's film counts as
+/// resolved: a fifth of a side's film force, chosen before any run.
+pub const FILM_RESOLVED: f64 = 0.2;
 
 /// Time series of the last cycle, one row per base step.
 #[derive(Clone, Debug, Default, serde::Serialize)]

@@ -114,6 +114,8 @@ impl<'a> EngineRun<'a> {
             self.substeps_left = self.substep_span(self.base_step);
         }
         // commit
+        let mismatch = film_mismatch(&film_groups(piston, &meta, &|b| axial[b]), &res);
+        self.stats.film_mismatch = self.stats.film_mismatch.max(mismatch);
         let fmin = res.forces.iter().copied().fold(f64::INFINITY, f64::min);
         self.stats.min_slice_force_n = self.stats.min_slice_force_n.min(fmin);
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
@@ -599,4 +601,37 @@ impl Failure {
             },
         }
     }
+}
+
+/// Film forces of a side below this are not compared \[N\] (the cavitation's smoothing keeps
+/// about 34 N on a side at rest).
+const FILM_CHECK_FLOOR_N: f64 = 200.0;
+
+/// How well a step resolved the oil film: each engaged side's film F_end evaluated at the
+/// step's end (the solution's penetrations and rates) against the forces F_used the step used
+/// (`res.film`, the film linearised at the predictor),
+///   m = max over sides of max_i |F_end,i - F_used,i| / max(sum_i F_end,i, sum_i F_used,i),
+/// sides whose film force is below [`FILM_CHECK_FLOOR_N`] left out (0 without a film).
+pub(super) fn film_mismatch(films: &[contact::FilmGroup<'_>], res: &contact::StepResult) -> f64 {
+    let mut worst_side = 0.0f64;
+    for g in films {
+        let pen: Vec<f64> = g.slices.iter().map(|&i| res.penetrations[i]).collect();
+        let rate: Vec<f64> = g.slices.iter().map(|&i| res.rates[i]).collect();
+        let end = g
+            .film
+            .side_rates(g.first, &pen, &rate, g.axial_velocity)
+            .force;
+        let used: Vec<f64> = g.slices.iter().map(|&i| res.film[i]).collect();
+        let total = end.iter().sum::<f64>().max(used.iter().sum::<f64>());
+        if total < FILM_CHECK_FLOOR_N {
+            continue;
+        }
+        let worst = end
+            .iter()
+            .zip(&used)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        worst_side = worst_side.max(worst / total);
+    }
+    worst_side
 }
