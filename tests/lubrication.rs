@@ -263,6 +263,15 @@ fn small_run_with(set: &str, cache: &str) -> serde_json::Value {
     json(&out)
 }
 
+/// Whether a `simulate --json` output has a warning containing `text`.
+fn warns(v: &serde_json::Value, text: &str) -> bool {
+    v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w.as_str().unwrap().contains(text))
+}
+
 /// Each cylinder's `peak_slap_force_n` of a `simulate --json` output.
 fn slap_forces(v: &serde_json::Value) -> Vec<f64> {
     v["cylinders"]
@@ -287,24 +296,12 @@ fn contract_simulate_names_the_lubrication_and_the_film_changes_the_slap() {
     let (a, b) = (slap_forces(&dry), slap_forces(&wet));
     println!("slap force dry {a:?}, squeeze {b:?}");
     assert!(a.iter().zip(&b).any(|(x, y)| (x - y).abs() > 1e-3 * x));
-    let warned = |v: &serde_json::Value| {
-        v["warnings"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|w| w.as_str().unwrap().contains("piston.lubrication"))
-    };
+    let warned = |v: &serde_json::Value| warns(v, "piston.lubrication");
     assert!(warned(&wet) && !warned(&dry));
     // how well the run resolved its film is reported (0 without a film), and a run above the
     // resolved bound says so in a warning
     let mismatch = |v: &serde_json::Value| v["stats"]["film_mismatch"].as_f64().unwrap();
-    let unresolved = |v: &serde_json::Value| {
-        v["warnings"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|w| w.as_str().unwrap().contains("oil film is not resolved"))
-    };
+    let unresolved = |v: &serde_json::Value| warns(v, "oil film is not resolved");
     println!(
         "film mismatch: dry {}, squeeze {}",
         mismatch(&dry),

@@ -91,11 +91,12 @@ impl<'a> EngineRun<'a> {
             axial,
         } = self.step_loads(theta);
         let s = self.settings.scheme;
+        let films = film_groups(piston, &meta, &|b| axial[b]);
         let res = match self.settings.coupling {
             Coupling::Monolithic => contact::step(
                 &bodies,
                 &slices,
-                &film_groups(piston, &meta, &|b| axial[b]),
+                &films,
                 &mut self.structure,
                 dt,
                 s,
@@ -114,8 +115,7 @@ impl<'a> EngineRun<'a> {
             self.substeps_left = self.substep_span(self.base_step);
         }
         // commit
-        let mismatch = film_mismatch(&film_groups(piston, &meta, &|b| axial[b]), &res);
-        self.stats.film_mismatch = self.stats.film_mismatch.max(mismatch);
+        self.stats.film_mismatch = self.stats.film_mismatch.max(film_mismatch(&films, &res));
         let fmin = res.forces.iter().copied().fold(f64::INFINITY, f64::min);
         self.stats.min_slice_force_n = self.stats.min_slice_force_n.min(fmin);
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
