@@ -118,6 +118,7 @@ fn head_on(law: &SliceLaw, damping: f64, prev_penetration: f64) -> Slice<'_> {
             weights: [1.0, 0.0],
         },
         prev_penetration,
+        prev_rate: 0.0,
     }
 }
 

@@ -19,8 +19,13 @@
 //! x downward along the skirt, U = z' the liner's velocity relative to the skirt along x (z'
 //! the piston's upward axial velocity), dh/dt = -cos(psi_j) p'_i the squeeze. Cavitation is
 //! half-Sommerfeld: the solved pressure is clipped at zero. Partial flooding: a point whose gap
-//! is larger than the oil supply on the liner (`supply`) is not wetted (p = 0 there), so the
-//! film engages as the skirt closes to within the supply.
+//! is larger than the oil supply on the liner (`supply`) is not wetted, so the film engages as
+//! the skirt closes to within the supply: with w the wetted fraction ([`Film::wetting`]) the
+//! source is w times the squeeze and sliding terms and the film's pressure is w p+(P) (an
+//! unwetted point holds none; without the factor a line that just wetted jumped to the
+//! cavitation smoothing's rest pressure over its whole length, and the step's Newton
+//! iteration cycled on that jump). Gaps below [`FILM_FLOOR`] enter the Reynolds term as the
+//! floor, through a smooth maximum ([`Film::floored`]).
 //!
 //! Discretisation: the slice centres are the nodes; the three-point form
 //!   [G_r (P_r - P_i) - G_l (P_i - P_l)] = m_i S_i,  G = h_f^3 / (12 mu_f d),  m_i = (d_l + d_r) / 2,
@@ -448,9 +453,13 @@ pub struct SideFilm {
     pub engaged: bool,
 }
 
-/// Gaps below this are held at it in the Reynolds term \[m\]: the film's squeeze damping
-/// stays finite when the surfaces meet, where the penalty law takes the load.
+/// Gaps below this are held at it in the Reynolds term \[m\] (smoothly, [`Film::floored`]): the
+/// film's squeeze damping stays finite when the surfaces meet, where the penalty law takes the
+/// load.
 pub const FILM_FLOOR: f64 = 3e-6;
+
+/// The floor's smoothing width is the floor over this ([`Film::floored`]).
+pub const FLOOR_SMOOTHING: f64 = 3.0;
 
 impl Film {
     /// The film of `skirt` (built from `spec`) with the oil `oil`: slice positions, the Vogel
@@ -537,11 +546,13 @@ impl Film {
                 continue;
             }
             out.engaged = true;
-            let h: Vec<f64> = geo.iter().map(|&g| g.max(self.floor)).collect();
-            let dh: Vec<f64> = geo
+            let (h, dh): (Vec<f64>, Vec<f64>) = geo
                 .iter()
-                .map(|&g| if g > self.floor { -c } else { 0.0 })
-                .collect();
+                .map(|&g| {
+                    let (hf, slope) = self.floored(g);
+                    (hf, -c * slope)
+                })
+                .unzip();
             let line = Line {
                 x,
                 left,
@@ -564,6 +575,21 @@ impl Film {
             self.add_sample(&line, &sample, (&slope, dz), &mut out, derivatives);
         }
         out
+    }
+
+    /// The gap the Reynolds term sees, a smooth maximum of `g` and the floor f,
+    ///   h = f + d ln(1 + exp((g - f) / d)),  d = f / [`FLOOR_SMOOTHING`],
+    /// and dh/dg: h = g to within d e^(-(g - f) / d) above the floor (1e-4 of it 3 um above
+    /// a 3 um floor), h = f + d ln 2 at the floor, and no kink for the step's Newton iteration
+    /// to cycle on.
+    pub fn floored(&self, g: f64) -> (f64, f64) {
+        let d = self.floor / FLOOR_SMOOTHING;
+        let z = (g - self.floor) / d;
+        if z > 40.0 {
+            return (g, 1.0);
+        }
+        let e = z.exp();
+        (self.floor + d * e.ln_1p(), e / (1.0 + e))
     }
 
     /// The wetted fraction w of a point with gap `h` and dw/dh: 1 up to the oil supply, a C1
@@ -602,7 +628,11 @@ impl Film {
         let q = line.integration_weights();
         let rhs: Vec<f64> = (0..n).map(|i| t.m[i] * wt[i].0 * raw[i]).collect();
         let p = lu.solve(&rhs);
-        let (clip, keep): (Vec<f64>, Vec<f64>) = p.iter().map(|&v| cavitation(v)).unzip();
+        // the film's pressure where the point is wetted: w_i p+(P_i) (an unwetted point holds
+        // none, so a line's pressure rises from zero as the skirt closes in)
+        let cav: Vec<(f64, f64)> = p.iter().map(|&v| cavitation(v)).collect();
+        let clip: Vec<f64> = cav.iter().zip(wt).map(|(c, w)| w.0 * c.0).collect();
+        let keep: Vec<f64> = cav.iter().zip(wt).map(|(c, w)| w.0 * c.1).collect();
         let w = self.arc * c;
         for (i, f) in integrate_with(&q, &clip).enumerate() {
             out.force[i] += w * f;
@@ -633,6 +663,14 @@ impl Film {
             if derivatives == Derivatives::All {
                 let r = self.pen_rhs(k, line, (&t, &p), sample, (slope, dz));
                 column(k, &r, &mut out.d_pen);
+                // the wetted fraction's own change at node k: p+(P_k) dw_k/dh (-c)
+                if wt[k].1 != 0.0 {
+                    let mut e = vec![0.0; n];
+                    e[k] = cav[k].0 * wt[k].1 * (-c);
+                    for (i, f) in integrate_with(&q, &e).enumerate() {
+                        out.d_pen[(i, k)] += w * f;
+                    }
+                }
             }
         }
     }

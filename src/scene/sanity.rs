@@ -156,7 +156,7 @@ fn piston(
     }
     if let Some(oil) = &sim.piston.oil {
         warnings.push(format!(
-            "piston.lubrication = \"{}\" is experimental: the film is linearised once per step, and on the default engine its slap forces spike (means of 20-200 kN with standard errors of 25-50 %, against 6-8 kN dry) a run costs 13-35 times the dry one and may stop with a deep penetration (docs/validation.md); compare peak accelerations, not slap forces",
+            "piston.lubrication = \"{}\" is experimental: each step solves the oil film with the structure and converges with the step on the test engine, but a run costs 15-90 times the dry one and on the default engine a squeeze run may stop where a step's film iteration does not converge (docs/validation.md)",
             oil.model.name()
         ));
     }

@@ -43,7 +43,7 @@ pub(crate) struct PistonInBore<'a, 'p> {
 /// z = liner_top - pin_depth + h_i outside the bore line's node range has no liner to touch.
 pub(crate) fn push_slices<'p>(
     at: &PistonInBore<'_, 'p>,
-    prev_penetration: &dyn Fn(bool, usize) -> f64,
+    prev_penetration: &dyn Fn(bool, usize) -> (f64, f64),
     slices: &mut Vec<Slice<'p>>,
     meta: &mut Vec<(usize, bool, usize, f64)>,
 ) {
@@ -71,7 +71,8 @@ pub(crate) fn push_slices<'p>(
                     law: &skirt.laws[i],
                     damping: piston.contact_damping,
                     at,
-                    prev_penetration: prev_penetration(side, i),
+                    prev_penetration: prev_penetration(side, i).0,
+                    prev_rate: prev_penetration(side, i).1,
                 });
                 meta.push((body, side, i, z));
             }

@@ -86,6 +86,9 @@ pub struct Slice<'a> {
     /// (keeps the law continuous within the step, so the implicit step always has a solution;
     /// the impulse it misses from the onset on is restored by [`onset_impulses`]).
     pub prev_penetration: f64,
+    /// Penetration rate at the previous step [m/s] (where a film or contact had it): with
+    /// `prev_penetration` the first linearisation point of a film.
+    pub prev_rate: f64,
 }
 
 /// One skirt side's oil film in a step ([`crate::piston::lubrication`]): its slices (indices
@@ -99,36 +102,36 @@ pub struct FilmGroup<'a> {
     pub axial_velocity: f64,
 }
 
-/// One engaged film side during a step: the film evaluated at the step's predictor (p0, p0')
-/// and linearised there,
-///   F_f,i = F0_i + sum_k C_ik (p'_k - p0'_k) + k_i (p_i - p0_i),
-/// C = dF/dp' the side's squeeze matrix (implicit: the stiff part), k_i the asperity contact's
-/// stiffness; the Reynolds term's dependence on the gap is taken at the predictor.
+/// One engaged film side during a step: the film evaluated at a linearisation point (p0, p0')
+/// (the previous step's state, then each Newton iterate) and linearised there,
+///   F_f,i = F0_i + sum_k D_ik (p_k - p0_k) + sum_k C_ik (p'_k - p0'_k),
+/// D = dF/dp the side's gap tangent (Reynolds and asperity terms), C = dF/dp' its squeeze
+/// matrix.
 struct FilmBlock {
     slices: Vec<usize>,
     f0: Vec<f64>,
     p0: Vec<f64>,
     r0: Vec<f64>,
     c: DMatrix<f64>,
-    k: Vec<f64>,
+    d: DMatrix<f64>,
 }
 
 impl FilmBlock {
-    /// The engaged films of `films` at the predictor's penetrations and rates.
-    fn at_predictor(films: &[FilmGroup<'_>], (pen, rates): (&[f64], &[f64])) -> Vec<Self> {
+    /// The engaged films of `films` at penetrations `pen` and rates `rates`.
+    fn at(films: &[FilmGroup<'_>], (pen, rates): (&[f64], &[f64])) -> Vec<Self> {
         films
             .iter()
             .filter_map(|g| {
                 let p0: Vec<f64> = g.slices.iter().map(|&i| pen[i]).collect();
                 let r0: Vec<f64> = g.slices.iter().map(|&i| rates[i]).collect();
-                let side = g.film.side_rates(g.first, &p0, &r0, g.axial_velocity);
+                let side = g.film.side(g.first, &p0, &r0, g.axial_velocity);
                 side.engaged.then(|| FilmBlock {
                     slices: g.slices.clone(),
                     f0: side.force.clone(),
-                    k: (0..p0.len()).map(|a| side.d_pen[(a, a)].max(0.0)).collect(),
                     p0,
                     r0,
                     c: side.d_rate,
+                    d: side.d_pen,
                 })
             })
             .collect()
@@ -136,10 +139,9 @@ impl FilmBlock {
 
     /// The film force of the block's slice `a` at penetrations `pen` and rates `rates`.
     fn force(&self, a: usize, pen: &[f64], rates: &[f64]) -> f64 {
-        let i = self.slices[a];
-        let mut f = self.f0[a] + self.k[a] * (pen[i] - self.p0[a]);
+        let mut f = self.f0[a];
         for (k, &j) in self.slices.iter().enumerate() {
-            f += self.c[(a, k)] * (rates[j] - self.r0[k]);
+            f += self.d[(a, k)] * (pen[j] - self.p0[k]) + self.c[(a, k)] * (rates[j] - self.r0[k]);
         }
         f
     }
@@ -251,6 +253,11 @@ impl SliceState {
         film: 0.0,
     };
 
+    /// Penetration and its rate: where a slice of the next step starts ([`Slice`]).
+    pub fn prior(&self) -> (f64, f64) {
+        (self.penetration, self.rate)
+    }
+
     /// Whether the slice carries force from the liner: it penetrates, or its film pushes.
     pub fn engaged(&self) -> bool {
         self.penetration > 0.0 || self.film > 0.0
@@ -358,31 +365,79 @@ fn film_slices(films: &[FilmGroup<'_>], n: usize) -> Vec<bool> {
     in_film
 }
 
-/// Linearises every engaged film side at the step's predictor (gaps `pen`, approach rates
-/// p' = row . v~ - u~') into the step's [`FilmBlock`]s and marks their slices.
-fn link_films(
-    st: &mut Step<'_, '_>,
-    films: &[FilmGroup<'_>],
-    in_film: &[bool],
-    pen: &[f64],
-    pred: &mut Predictions<'_, '_>,
-) {
-    let rates: Vec<f64> = (0..st.slices.len())
-        .map(|i| {
-            let s = &st.slices[i];
-            if in_film[i] {
-                dot2(s.row, st.vh[s.body]) - pred.exact(i).1
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    st.blocks = FilmBlock::at_predictor(films, (pen, &rates));
+/// Linearises every engaged film side at penetrations `pen` and rates `rates` into the step's
+/// [`FilmBlock`]s and marks their slices.
+fn link_films(st: &mut Step<'_, '_>, films: &[FilmGroup<'_>], pen: &[f64], rates: &[f64]) {
+    set_films(st, FilmBlock::at(films, (pen, rates)));
+}
+
+/// Makes `blocks` the step's film linearisation and marks their slices.
+fn set_films(st: &mut Step<'_, '_>, blocks: Vec<FilmBlock>) {
+    st.blocks = blocks;
+    st.in_film.iter_mut().for_each(|v| *v = false);
     for b in &st.blocks {
         for &i in &b.slices {
             st.in_film[i] = true;
         }
     }
+}
+
+/// Relative agreement of a film's force with the film at the state that carries it at which
+/// a step's Newton iteration has converged: per side, the largest slice difference against
+/// the side's force (1e-4: a hundredth of the step's own error, about 1 %).
+pub const FILM_NEWTON_TOL: f64 = 1e-4;
+/// The absolute part of that agreement \[N\].
+pub const FILM_NEWTON_FLOOR_N: f64 = 1e-3;
+
+/// A lubricated step may take this many times the dry step's Newton iterations (its line
+/// search shortens the steps where the film's force turns steeply).
+pub const FILM_ITERATIONS: usize = 4;
+
+/// A line search's state: body coordinates, slice forces, and the films evaluated there with
+/// the film part of the forces (none without a search).
+type SearchedState = (DVector<f64>, Vec<f64>, Option<(Vec<FilmBlock>, Vec<f64>)>);
+
+/// A state of a lubricated step's Newton iteration: body coordinates, every slice's force and
+/// its film part, and the largest slice difference between that film part and the film at
+/// the state \[N\] (the residual the line search lowers).
+struct Accepted {
+    q: DVector<f64>,
+    forces: Vec<f64>,
+    film: Vec<f64>,
+    resid: f64,
+}
+
+/// The residual of the film forces `used` (every slice) against the films `blocks` evaluated
+/// at the same state (their F0; a group slice in no engaged block has none): the largest
+/// slice difference \[N\], and whether every side agrees to [`FILM_NEWTON_TOL`] of its force.
+fn film_agreement(blocks: &[FilmBlock], in_group: &[bool], used: &[f64]) -> (f64, bool) {
+    let mut exact = vec![0.0; used.len()];
+    for b in blocks {
+        for (a, &i) in b.slices.iter().enumerate() {
+            exact[i] = b.f0[a];
+        }
+    }
+    let resid = (0..used.len())
+        .filter(|&i| in_group[i])
+        .map(|i| (used[i] - exact[i]).abs())
+        .fold(0.0, f64::max);
+    let sides = blocks.iter().all(|b| {
+        let total: f64 = b
+            .slices
+            .iter()
+            .map(|&i| exact[i].abs().max(used[i].abs()))
+            .sum();
+        b.slices
+            .iter()
+            .all(|&i| (used[i] - exact[i]).abs() <= FILM_NEWTON_TOL * total + FILM_NEWTON_FLOOR_N)
+    });
+    // a film force on a slice whose side has no film at this state
+    let stray = (0..used.len()).any(|i| {
+        in_group[i]
+            && used[i].abs() > FILM_NEWTON_FLOOR_N
+            && !blocks.iter().any(|b| b.slices.contains(&i))
+    });
+    (resid, sides && !stray)
 }
 
 /// The Newton iteration's first pieces: the previous step's piece of each slice (usually
@@ -399,7 +454,6 @@ fn initial_pieces(slices: &[Slice<'_>], pen: &[f64]) -> Vec<Piece> {
                 mask,
                 damped: s.prev_penetration > 0.0 && s.damping != 0.0,
                 clamped: false,
-                film_off: false,
             }
         })
         .collect()
@@ -413,12 +467,18 @@ fn initial_pieces(slices: &[Slice<'_>], pen: &[f64]) -> Vec<Piece> {
 /// changes. After a third of `max_iterations` only the most violated slice changes per
 /// iteration (guards against cycling).
 ///
-/// The oil films (`films`, empty for a dry skirt) add their forces to their slices, each
-/// side's film evaluated at the step's predictor and linearised there (`FilmBlock`):
-/// F_f,i = F0_i + sum_k C_ik (p'_k - p0'_k) + k_i (p_i - p0_i). The squeeze matrix C acts
-/// implicitly (the stiff part, coupling the side's slices), the Reynolds term's dependence on
-/// the gap is taken at the predictor, k_i is the asperity contact's stiffness; a slice whose
-/// film force would pull has its film off (late in the iteration, an off film stays off).
+/// The oil films (`films`, empty for a dry skirt) add their forces to their slices, fully
+/// implicit: each side's film is linearised (`FilmBlock`) at the state of the last iterate,
+///   F_f,i = F0_i + sum_k D_ik (p_k - p0_k) + sum_k C_ik (p'_k - p0'_k),
+/// D = dF/dp (Reynolds and asperity terms), C = dF/dp' (the squeeze matrix), first at the
+/// previous step's state. The iteration is a damped Newton method: each solution is reached
+/// along a line search (`Step::film_search`) that lowers the films' residual (the film part
+/// of the forces against the film at the state), and the step has converged when no slice
+/// changes its piece and every side's film agrees with its force to [`FILM_NEWTON_TOL`].
+/// Without the line search the iteration cycled where a squeeze film met the liner's light
+/// bore-line modes (the default engine: the residual vectors); without the previous state as
+/// the first point it started from the predictor, which lacks the static part of the
+/// structure's give under the film's force.
 pub fn step(
     bodies: &[Body],
     slices: &[Slice<'_>],
@@ -431,17 +491,29 @@ pub fn step(
     let mut st = Step::new(bodies, slices, dt, scheme);
     let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
     structure.prepare(&locs);
-    let in_film = film_slices(films, slices.len());
-    let mut pred = Predictions::new(slices, &*structure, &in_film);
+    st.in_group = film_slices(films, slices.len());
+    let mut pred = Predictions::new(slices, &*structure, &st.in_group);
     // penetration of each slice without new contact forces: first guess of the pieces
     let mut pen: Vec<f64> = (0..slices.len())
         .map(|i| pred.penetration(i, st.qh[slices[i].body], 0.0, &*structure))
         .collect();
     if !films.is_empty() {
-        link_films(&mut st, films, &in_film, &pen, &mut pred);
+        // the films' first linearisation point: the previous step's state (the predictor
+        // lacks the static part of the structure's response to the film's force, and would
+        // start the iteration far from the solution)
+        let p0: Vec<f64> = slices.iter().map(|s| s.prev_penetration).collect();
+        let r0: Vec<f64> = slices.iter().map(|s| s.prev_rate).collect();
+        link_films(&mut st, films, &p0, &r0);
     }
     let mut pieces = initial_pieces(slices, &pen);
     let mut g_cache: Option<(Vec<usize>, DMatrix<f64>, DMatrix<f64>)> = None;
+    let mut acc: Option<Accepted> = None;
+    // a lubricated step's damped Newton iteration may take short steps for a while
+    let max_iterations = if films.is_empty() {
+        max_iterations
+    } else {
+        FILM_ITERATIONS * max_iterations
+    };
     for it in 1..=max_iterations {
         // a slice carries force when it penetrates or has a film, and its damped force is not
         // clamped
@@ -459,44 +531,63 @@ pub fn step(
         for (r, &i) in active.iter().enumerate() {
             forces[i] = fa[r];
         }
-        // displacement at every slice includes the compliance to the active forces; the
-        // velocity too (the damper's argument, and the rate the onset correction needs)
-        let (extra, vel) = if active.is_empty() {
-            (vec![0.0; slices.len()], vec![0.0; slices.len()])
-        } else {
-            (
-                structure.response(&active, &fa),
-                structure.velocity_response(&active, &fa),
-            )
+        // with films: a damped Newton step, the point on the way from the last state to this
+        // solution where the films' residual falls (a line search)
+        let (q, forces, searched) = match acc.as_ref() {
+            Some(last) if !films.is_empty() => {
+                st.film_search(last, (&q, &forces), &mut pred, &*structure, films)
+            }
+            _ => (q, forces, None),
         };
+        let active: Vec<usize> = if films.is_empty() {
+            active
+        } else {
+            (0..slices.len()).filter(|&i| forces[i] != 0.0).collect()
+        };
+        let fa: Vec<f64> = active.iter().map(|&i| forces[i]).collect();
+        let (extra, vel) = st.responses(&*structure, &active, &fa);
         let mut rates = vec![0.0; slices.len()];
         let (changes, worst) = st.next_pieces(
             &q,
             (&extra, &vel),
-            (&pieces, it > max_iterations / 3),
+            &pieces,
             &mut pred,
             &*structure,
             (&mut pen, &mut rates),
         );
-        if changes.is_empty() {
-            return Ok(st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it));
-        }
-        if it <= max_iterations / 3 {
-            for (i, next) in changes {
-                pieces[i] = next;
+        let film_done = films.is_empty()
+            || st.settle_films(&mut acc, films, searched, (&q, &forces, &pen, &rates));
+        if changes.is_empty() && film_done {
+            let mut res = st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it);
+            // the film part of the forces the step carries (the film at its end differs by
+            // the Newton residual, measured again as stats.film_mismatch)
+            if let Some(last) = acc {
+                res.film = last.film;
             }
-        } else if let Some((i, _)) = worst {
-            let next = changes
-                .iter()
-                .find(|(k, _)| *k == i)
-                .expect("the worst is a change")
-                .1;
-            pieces[i] = next;
+            return Ok(res);
         }
+        apply_changes(&mut pieces, (changes, worst), it > max_iterations / 3);
     }
     Err(StepFailure::NoConvergence {
         iterations: max_iterations,
     })
+}
+
+/// Moves the slices to their next pieces: all that changed, or `late` in the iteration only
+/// the most violated (guards against cycling).
+fn apply_changes(pieces: &mut [Piece], (changes, worst): PieceChanges, late: bool) {
+    if !late {
+        for (i, next) in changes {
+            pieces[i] = next;
+        }
+    } else if let Some((i, _)) = worst {
+        let next = changes
+            .iter()
+            .find(|(k, _)| *k == i)
+            .expect("the worst is a change")
+            .1;
+        pieces[i] = next;
+    }
 }
 
 /// A slice's place on its law during the Newton iterations: the elastic piece (mask), whether
@@ -507,8 +598,6 @@ struct Piece {
     mask: u8,
     damped: bool,
     clamped: bool,
-    /// The film's force would pull: it is off for this step's solution.
-    film_off: bool,
 }
 
 /// The slices whose piece changes in an iteration, with their next piece, and the most
@@ -592,9 +681,11 @@ struct Step<'s, 'a> {
     /// kappa = gamma / (beta dt) (velocity per displacement), 1 / (beta dt^2).
     kappa: f64,
     c_acc: f64,
-    /// The engaged films of this step and whether each slice belongs to one.
+    /// The engaged films of this step and whether each slice belongs to one; whether each
+    /// slice belongs to a film group (engaged or not).
     blocks: Vec<FilmBlock>,
     in_film: Vec<bool>,
+    in_group: Vec<bool>,
 }
 
 fn dot2(r: [f64; 2], q: [f64; 2]) -> f64 {
@@ -629,6 +720,7 @@ impl<'s, 'a> Step<'s, 'a> {
             c_acc: 1.0 / (beta * dt * dt),
             blocks: Vec::new(),
             in_film: vec![false; slices.len()],
+            in_group: vec![false; slices.len()],
         }
     }
 
@@ -677,7 +769,7 @@ impl<'s, 'a> Step<'s, 'a> {
             rhs[(r, 2 + 2 * b)] = f * s.row[1];
         }
         if !self.blocks.is_empty() {
-            self.add_films(active, pieces, (g, gv), pred, (&mut w, &mut rhs));
+            self.add_films(active, (g, gv), pred, (&mut w, &mut rhs));
         }
         let sol = if na > 0 {
             w.lu().solve(&rhs).ok_or(StepFailure::Singular)?
@@ -692,16 +784,15 @@ impl<'s, 'a> Step<'s, 'a> {
         Ok((q, fa))
     }
 
-    /// Adds the engaged films' forces to the rows of their slices (those whose film is on):
-    /// for slice i of a block and every slice k of it, with p_k = s_k . q - g_k - u~_k - (G F)_k
-    /// and p'_k = s_k . (v~ + kappa (q - q~)) - u'~_k - (G_v F)_k,
-    ///   W_i. += C_ik G_v,k. (+ k_i G_i.),
-    ///   r0_i += F0_i - C_ik p0'_k + C_ik (s_k . v~ - kappa s_k . q~ - u'~_k) + k_i (-p0_i - g_i - u~_i),
-    ///   (rhs_q)_i += kappa C_ik s_k (+ k_i s_i).
+    /// Adds the engaged films' linearised forces to the rows of their slices: for slice i of a
+    /// block and every slice k of it, with p_k = s_k . q - g_k - u~_k - (G F)_k and
+    /// p'_k = s_k . (v~ + kappa (q - q~)) - u'~_k - (G_v F)_k,
+    ///   W_i. += D_ik G_k. + C_ik G_v,k.,
+    ///   r0_i += F0_i - D_ik p0_k - C_ik p0'_k - D_ik (g_k + u~_k) + C_ik (s_k . v~ - kappa s_k . q~ - u'~_k),
+    ///   (rhs_q)_i += (D_ik + kappa C_ik) s_k.
     fn add_films(
         &self,
         active: &[usize],
-        pieces: &[Piece],
         (g, gv): (&DMatrix<f64>, &DMatrix<f64>),
         pred: &Predictions<'_, '_>,
         (w, rhs): (&mut DMatrix<f64>, &mut DMatrix<f64>),
@@ -715,9 +806,6 @@ impl<'s, 'a> Step<'s, 'a> {
         };
         for blk in &self.blocks {
             for (a, &i) in blk.slices.iter().enumerate() {
-                if pieces[i].film_off {
-                    continue;
-                }
                 let r = pos(i);
                 rhs[(r, 0)] += blk.f0[a];
                 let mut term = |c: usize, kk: f64, cc: f64, shift: f64| {
@@ -735,16 +823,131 @@ impl<'s, 'a> Step<'s, 'a> {
                     rhs[(r, 2 + 2 * b)] += f * s.row[1];
                 };
                 for (k, &c) in blk.slices.iter().enumerate() {
-                    let cc = blk.c[(a, k)];
-                    if cc != 0.0 {
-                        term(c, 0.0, cc, cc * blk.r0[k]);
+                    let (dd, cc) = (blk.d[(a, k)], blk.c[(a, k)]);
+                    if dd != 0.0 || cc != 0.0 {
+                        term(c, dd, cc, dd * blk.p0[k] + cc * blk.r0[k]);
                     }
-                }
-                if blk.k[a] != 0.0 {
-                    term(i, blk.k[a], 0.0, blk.k[a] * blk.p0[a]);
                 }
             }
         }
+    }
+
+    /// The displacement and velocity at every slice caused by the forces `fa` at `active`:
+    /// G F and G_v F (zero without forces).
+    fn responses(
+        &self,
+        structure: &dyn Structure,
+        active: &[usize],
+        fa: &[f64],
+    ) -> (Vec<f64>, Vec<f64>) {
+        if active.is_empty() {
+            let n = self.slices.len();
+            (vec![0.0; n], vec![0.0; n])
+        } else {
+            (
+                structure.response(active, fa),
+                structure.velocity_response(active, fa),
+            )
+        }
+    }
+
+    /// The film groups' penetrations and rates (0 elsewhere) at body coordinates `q` with
+    /// slice forces `forces`.
+    fn film_state(
+        &self,
+        (q, forces): (&DVector<f64>, &[f64]),
+        pred: &mut Predictions<'_, '_>,
+        structure: &dyn Structure,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let n = self.slices.len();
+        let active: Vec<usize> = (0..n).filter(|&i| forces[i] != 0.0).collect();
+        let fa: Vec<f64> = active.iter().map(|&i| forces[i]).collect();
+        let (extra, vel) = self.responses(structure, &active, &fa);
+        let (mut pen, mut rates) = (vec![0.0; n], vec![0.0; n]);
+        for (i, s) in self.slices.iter().enumerate() {
+            if self.in_group[i] {
+                let qb = [q[2 * s.body], q[2 * s.body + 1]];
+                pen[i] = pred.penetration(i, qb, extra[i], structure);
+                let du = pred.exact(i).1 + vel[i];
+                rates[i] = dot2(s.row, self.body_velocity(q, s.body)) - du;
+            }
+        }
+        (pen, rates)
+    }
+
+    /// A damped Newton step of a lubricated step (a line search): from the last state `last`
+    /// toward the new solution (`q1`, `f1`), solved with the films linearised at `last`, the
+    /// state at the first of omega = 1, 1/2, ..., 1/64 where the films' residual (the film
+    /// part of the forces against the film there, [`film_agreement`]) is below
+    /// (1 - 1e-4 omega) of the last one or within the tolerance; at 1/64 when none is. The
+    /// bodies' and the structure's equations are linear, so every such state satisfies them;
+    /// the film part of the forces moves from `last`'s to the linearisation's at (`q1`, `f1`).
+    /// Returns the state's coordinates and forces, and the films evaluated there with the film
+    /// part of the forces.
+    fn film_search(
+        &self,
+        last: &Accepted,
+        (q1, f1): (&DVector<f64>, &[f64]),
+        pred: &mut Predictions<'_, '_>,
+        structure: &dyn Structure,
+        films: &[FilmGroup<'_>],
+    ) -> SearchedState {
+        let (pen1, rates1) = self.film_state((q1, f1), pred, structure);
+        let film1 = self.film_forces(&pen1, &rates1);
+        let mix = |a: &[f64], b: &[f64], w: f64| -> Vec<f64> {
+            a.iter().zip(b).map(|(x, y)| x + w * (y - x)).collect()
+        };
+        let mut omega = 1.0;
+        loop {
+            let qz = &last.q + (q1 - &last.q) * omega;
+            let fz = mix(&last.forces, f1, omega);
+            let filmz = mix(&last.film, &film1, omega);
+            let (pz, rz) = if omega == 1.0 {
+                (pen1.clone(), rates1.clone())
+            } else {
+                self.film_state((&qz, &fz), pred, structure)
+            };
+            let blocks = FilmBlock::at(films, (&pz, &rz));
+            let (resid, ok) = film_agreement(&blocks, &self.in_group, &filmz);
+            if ok || resid <= (1.0 - 1e-4 * omega) * last.resid || omega <= 1.0 / 64.0 {
+                return (qz, fz, Some((blocks, filmz)));
+            }
+            omega *= 0.5;
+        }
+    }
+
+    /// Relinearises the films at the iteration's new state (`q`, `forces`, with penetrations
+    /// `pen` and rates `rates`; `searched`: the films already evaluated there by the line
+    /// search, with the film part of the forces) and makes it the last state `acc`; returns
+    /// whether the film part of the forces agrees with the films there ([`film_agreement`]).
+    /// Without a search (the first iteration) the film part is the linearisation's at the
+    /// state.
+    fn settle_films(
+        &mut self,
+        acc: &mut Option<Accepted>,
+        films: &[FilmGroup<'_>],
+        searched: Option<(Vec<FilmBlock>, Vec<f64>)>,
+        (q, forces, pen, rates): (&DVector<f64>, &[f64], &[f64], &[f64]),
+    ) -> bool {
+        let film = match searched {
+            Some((blocks, film)) => {
+                set_films(self, blocks);
+                film
+            }
+            None => {
+                let film = self.film_forces(pen, rates);
+                link_films(self, films, pen, rates);
+                film
+            }
+        };
+        let (resid, done) = film_agreement(&self.blocks, &self.in_group, &film);
+        *acc = Some(Accepted {
+            q: q.clone(),
+            forces: forces.to_vec(),
+            film,
+            resid,
+        });
+        done
     }
 
     /// The film force of every slice at penetrations `pen` and rates `rates` (0 off a film).
@@ -813,7 +1016,7 @@ impl<'s, 'a> Step<'s, 'a> {
         &self,
         q: &DVector<f64>,
         (extra, vel): (&[f64], &[f64]),
-        (pieces, late): (&[Piece], bool),
+        pieces: &[Piece],
         pred: &mut Predictions<'_, '_>,
         structure: &dyn Structure,
         (pen, rates): (&mut [f64], &mut [f64]),
@@ -824,7 +1027,7 @@ impl<'s, 'a> Step<'s, 'a> {
             pen[i] = pred.penetration(i, qb, extra[i], structure);
             let mask = s.law.piece(pen[i]).mask;
             next[i].mask = mask;
-            if mask != 0 || self.in_film[i] {
+            if mask != 0 || self.in_group[i] {
                 let du = pred.exact(i).1 + vel[i];
                 rates[i] = dot2(s.row, self.body_velocity(q, s.body)) - du;
             }
@@ -840,31 +1043,17 @@ impl<'s, 'a> Step<'s, 'a> {
                 next[i].clamped = f < 0.0;
             }
         }
-        // a film that would pull is off (cavitation holds no more than its smoothing); late
-        // in the iteration a film that is off stays off (guards against cycling)
-        let film = self.film_forces(pen, rates);
-        for blk in &self.blocks {
-            for &i in &blk.slices {
-                next[i].film_off = film[i] < 0.0 || (late && pieces[i].film_off);
-            }
-        }
         let mut worst: Option<(usize, f64)> = None;
         let mut changes: Vec<(usize, Piece)> = Vec::new();
         for (i, s) in self.slices.iter().enumerate() {
             let (a, b) = (pieces[i], next[i]);
-            if a.mask == b.mask
-                && a.clamped == b.clamped
-                && a.damped == b.damped
-                && a.film_off == b.film_off
-            {
+            if a.mask == b.mask && a.clamped == b.clamped && a.damped == b.damped {
                 continue;
             }
             // violation as a penetration: the clamp's force over the piece's stiffness
             let v = if b.clamped != a.clamped {
                 let f = s.law.force(pen[i]) + s.damping * rates[i];
                 f.abs() / s.law.piece(pen[i]).kt.max(1.0)
-            } else if b.film_off != a.film_off {
-                film[i].abs() * self.dt * self.dt / self.bodies[s.body].mass[0][0]
             } else {
                 pen[i].abs()
             };
@@ -920,12 +1109,7 @@ impl<'s, 'a> Step<'s, 'a> {
                 }
             })
             .collect();
-        let film: Vec<f64> = self
-            .film_forces(&pen, &rates)
-            .iter()
-            .zip(pieces)
-            .map(|(&f, p)| if p.film_off { 0.0 } else { f })
-            .collect();
+        let film = self.film_forces(&pen, &rates);
         StepResult {
             bodies: out,
             forces,

@@ -135,7 +135,7 @@ pub fn run(
         body.tilt_friction = super::bore::tilt_friction(piston, &loads);
         let mut slices = Vec::with_capacity(2 * ns);
         let mut meta = Vec::with_capacity(2 * ns);
-        let pen_of = |side: bool, i: usize| prev[usize::from(!side) * ns + i].penetration;
+        let pen_of = |side: bool, i: usize| prev[usize::from(!side) * ns + i].prior();
         push_slices(
             &PistonInBore {
                 piston,

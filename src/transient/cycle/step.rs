@@ -193,7 +193,7 @@ impl<'a> EngineRun<'a> {
                 first: cyl.rom.contact_offset,
             };
             let prev = |side: bool, i: usize| {
-                self.prev_state[(2 * b + usize::from(!side)) * ns + i].penetration
+                self.prev_state[(2 * b + usize::from(!side)) * ns + i].prior()
             };
             push_slices(
                 &PistonInBore {
