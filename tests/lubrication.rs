@@ -280,12 +280,12 @@ fn warns(v: &serde_json::Value, text: &str) -> bool {
 
 /// Each cylinder's `peak_slap_force_n` of a `simulate --json` output.
 fn slap_forces(v: &serde_json::Value) -> Vec<f64> {
-    v["cylinders"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|c| c["peak_slap_force_n"].as_f64().unwrap())
-        .collect()
+    per_cylinder(v, |c| c["peak_slap_force_n"].as_f64().unwrap())
+}
+
+/// `f` of every cylinder of a `simulate --json`.
+fn per_cylinder(v: &serde_json::Value, f: impl Fn(&serde_json::Value) -> f64) -> Vec<f64> {
+    v["cylinders"].as_array().unwrap().iter().map(f).collect()
 }
 
 /// Contract (issue 39): `simulate --json` names the lubrication model that ran, a lubricated
@@ -324,19 +324,14 @@ fn contract_simulate_names_the_lubrication_and_the_film_changes_the_slap() {
 
 /// Each cylinder's worst (largest) peak negative acceleration [m/s^2] of a `simulate --json`.
 fn worst_peaks(v: &serde_json::Value) -> Vec<f64> {
-    v["cylinders"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|c| {
-            c["points"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|p| p["peak_negative_m_s2"].as_f64().unwrap())
-                .fold(0.0, f64::max)
-        })
-        .collect()
+    per_cylinder(v, |c| {
+        c["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["peak_negative_m_s2"].as_f64().unwrap())
+            .fold(0.0, f64::max)
+    })
 }
 
 /// Verification (issue 39, item 3): the lubricated transient converges with the step. The

@@ -412,9 +412,11 @@ struct Accepted {
 /// slice difference \[N\], and whether every side agrees to [`FILM_NEWTON_TOL`] of its force.
 fn film_agreement(blocks: &[FilmBlock], in_group: &[bool], used: &[f64]) -> (f64, bool) {
     let mut exact = vec![0.0; used.len()];
+    let mut covered = vec![false; used.len()];
     for b in blocks {
         for (a, &i) in b.slices.iter().enumerate() {
             exact[i] = b.f0[a];
+            covered[i] = true;
         }
     }
     let resid = (0..used.len())
@@ -432,11 +434,8 @@ fn film_agreement(blocks: &[FilmBlock], in_group: &[bool], used: &[f64]) -> (f64
             .all(|&i| (used[i] - exact[i]).abs() <= FILM_NEWTON_TOL * total + FILM_NEWTON_FLOOR_N)
     });
     // a film force on a slice whose side has no film at this state
-    let stray = (0..used.len()).any(|i| {
-        in_group[i]
-            && used[i].abs() > FILM_NEWTON_FLOOR_N
-            && !blocks.iter().any(|b| b.slices.contains(&i))
-    });
+    let stray =
+        (0..used.len()).any(|i| in_group[i] && !covered[i] && used[i].abs() > FILM_NEWTON_FLOOR_N);
     (resid, sides && !stray)
 }
 
