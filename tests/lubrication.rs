@@ -425,3 +425,36 @@ fn contract_bad_oil_input_names_the_key() {
         assert!(err.contains(key), "{set}: {err}");
     }
 }
+
+/// Contract (issue 39): a lubricated skirt integrates with HHT unless the scene names a
+/// scheme (the squeeze film is a stiff damper on which the average-acceleration rule rings,
+/// docs/validation.md); a dry skirt keeps Newmark's average acceleration; a lubricated scene
+/// that asks for "newmark" is warned.
+#[test]
+fn contract_a_lubricated_skirt_defaults_to_hht() {
+    use linercav::scene::{sanity, spec::SchemeChoice, Scene};
+    let scene = |sets: &[&str]| {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        Scene::load(
+            std::path::Path::new("tests/fixtures/engine_small.toml"),
+            &sets,
+        )
+        .unwrap()
+    };
+    let scheme = |s: &Scene| s.simulation.as_ref().unwrap().transient.scheme;
+    let dry = scene(&[]);
+    assert_eq!(scheme(&dry), SchemeChoice::AverageAcceleration);
+    let lubricated = scene(&["piston.lubrication=squeeze"]);
+    assert!(matches!(scheme(&lubricated), SchemeChoice::Hht { alpha } if alpha == -0.05));
+    let stiff = "with a lubricated skirt";
+    assert!(!sanity::review(&lubricated)
+        .unwrap()
+        .iter()
+        .any(|w| w.contains(stiff)));
+    let asked = scene(&["piston.lubrication=squeeze", "transient.scheme=newmark"]);
+    assert_eq!(scheme(&asked), SchemeChoice::AverageAcceleration);
+    assert!(sanity::review(&asked)
+        .unwrap()
+        .iter()
+        .any(|w| w.contains(stiff)));
+}

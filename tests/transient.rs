@@ -1181,3 +1181,46 @@ fn verification_liner_maps_equal_the_point_outputs_at_the_points() {
         }
     }
 }
+
+/// Verification (issue 39: why a lubricated skirt integrates with HHT): a stiff damper,
+/// v' = -c v with c dt = 1e4 (a squeeze film on a light mode), rings with the factor of the
+/// scheme's recurrence in the limit c dt -> infinity. Average acceleration:
+/// v_{n+1} / v_n = (1 - c dt / 2) / (1 + c dt / 2) -> -1 (no decay; a damping that falls
+/// from step to step makes it grow). HHT-alpha, from (1 - gamma) [(1 + alpha) v_n - alpha
+/// v_{n-1}] + gamma [(1 + alpha) v_{n+1} - alpha v_n] = 0: the larger root of
+/// gamma (1 + alpha) r^2 + ((1 - gamma)(1 + alpha) - gamma alpha) r - (1 - gamma) alpha = 0,
+/// -0.818 at alpha = -0.05. Tolerance 1e-3: the finite c dt moves the ratio by O(1 / (c dt)).
+#[test]
+fn verification_hht_damps_a_stiff_dampers_ringing() {
+    let dt = 1e-5;
+    let c = 1e4 / dt;
+    let ratio = |scheme: Scheme| {
+        // unit modal mass, omega 1 rad/s: 2 zeta omega = c
+        let mut m = ModalIntegrator::new(&[1.0], &[0.5 * c], scheme);
+        m.deta[0] = 1.0;
+        m.ddeta[0] = -c;
+        let mut v = Vec::new();
+        for _ in 0..40 {
+            m.predict(dt);
+            m.commit(&[0.0]);
+            v.push(m.deta[0]);
+        }
+        v[39] / v[38]
+    };
+    let newmark = ratio(Scheme::average_acceleration());
+    let exact = (1.0 - 0.5 * c * dt) / (1.0 + 0.5 * c * dt);
+    assert!((newmark - exact).abs() < 1e-9, "{newmark} against {exact}");
+    assert!(newmark < -0.999);
+    let alpha: f64 = -0.05;
+    let g = 0.5 - alpha;
+    let (a, b, q) = (
+        g * (1.0 + alpha),
+        (1.0 - g) * (1.0 + alpha) - g * alpha,
+        -(1.0 - g) * alpha,
+    );
+    let root = (-b - (b * b - 4.0 * a * q).sqrt()) / (2.0 * a);
+    let hht = ratio(Scheme::hht(alpha));
+    println!("ringing per step: newmark {newmark:.5}, hht(-0.05) {hht:.5}, limit {root:.5}");
+    assert!((hht - root).abs() < 1e-3, "{hht} against {root}");
+    assert!((root + 0.818).abs() < 1e-3);
+}

@@ -500,10 +500,12 @@ pub(super) fn validate_simulation(
             ))
         }
     };
+    let piston = validate_piston(c, p, engine, liner)?;
+    let lubricated = piston.oil.is_some();
     Ok(Some(Simulation {
-        piston: validate_piston(c, p, engine, liner)?,
+        piston,
         operating: validate_operating(c, base, o)?,
-        transient: validate_transient(c, t)?,
+        transient: validate_transient(c, t, lubricated)?,
     }))
 }
 
@@ -777,13 +779,15 @@ pub(super) fn validate_operating(
     Ok(operating)
 }
 
-/// `[transient]`: scheme, step (a whole number of steps per cycle), cycles, damping,
-/// tolerance.
+/// `[transient]`: scheme (unset: "hht" for a `lubricated` skirt, else "newmark"), step (a
+/// whole number of steps per cycle), cycles, damping, tolerance.
 pub(super) fn validate_transient(
     c: &Checker<'_>,
     t: &raw::RawTransient,
+    lubricated: bool,
 ) -> Result<TransientSpec, SceneError> {
-    let scheme = match t.scheme.as_str() {
+    let implied = if lubricated { "hht" } else { "newmark" };
+    let scheme = match t.scheme.as_deref().unwrap_or(implied) {
         "newmark" => spec::SchemeChoice::AverageAcceleration,
         "hht" => {
             if !(t.hht_alpha.is_finite() && (-1.0 / 3.0..=0.0).contains(&t.hht_alpha)) {
