@@ -376,16 +376,24 @@ impl Factored {
         y
     }
 
-    /// The columns of A^-1.
-    fn inverse_columns(&self) -> Vec<Vec<f64>> {
+    /// A^-1, column-major (column j at `j n..(j + 1) n`): each column the solve of the unit
+    /// vector e_j, its forward sweep started at j (the rows above stay zero there), in one
+    /// buffer.
+    fn inverse(&self) -> Vec<f64> {
         let n = self.den.len();
-        (0..n)
-            .map(|k| {
-                let mut e = vec![0.0; n];
-                e[k] = 1.0;
-                self.solve(&e)
-            })
-            .collect()
+        let mut inv = vec![0.0; n * n];
+        for (j, y) in inv.chunks_exact_mut(n).enumerate() {
+            let mut prev = 0.0;
+            for i in j..n {
+                let rhs = if i == j { 1.0 } else { 0.0 };
+                y[i] = (rhs - self.lower[i] * prev) / self.den[i];
+                prev = y[i];
+            }
+            for i in (0..n.saturating_sub(1)).rev() {
+                y[i] -= self.c[i] * y[i + 1];
+            }
+        }
+        inv
     }
 }
 
@@ -415,6 +423,10 @@ struct Sample<'a> {
     wt: &'a [(f64, f64)],
     dh: &'a [f64],
 }
+
+/// Per node, the three-point weights (node, weight) of the gap's slope dh/dx
+/// ([`Line::slope_weights`]).
+type Slopes = [[(usize, f64); 3]];
 
 /// Which derivatives a film evaluation forms.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -527,6 +539,15 @@ impl Film {
         let dx = self.slice_height();
         let (left, right) = (x[0] - 0.5 * dx, x[n - 1] + 0.5 * dx);
         let slope = Line::slope_weights(x);
+        // the slices' integration weights depend on the nodes only: once per side
+        let q = Line {
+            x,
+            left,
+            right,
+            h: &[],
+            mu: &[],
+        }
+        .integration_weights();
         let mut out = SideFilm {
             force: vec![0.0; n],
             d_pen: DMatrix::zeros(n, n),
@@ -572,7 +593,7 @@ impl Film {
                 wt: &wt,
                 dh: &dh,
             };
-            self.add_sample(&line, &sample, (&slope, dz), &mut out, derivatives);
+            self.add_sample(&line, &sample, (&slope, &q, dz), &mut out, derivatives);
         }
         out
     }
@@ -617,7 +638,7 @@ impl Film {
         &self,
         line: &Line<'_>,
         sample: &Sample<'_>,
-        (slope, dz): (&[[(usize, f64); 3]], f64),
+        (slope, q, dz): (&Slopes, &[[f64; 3]], f64),
         out: &mut SideFilm,
         derivatives: Derivatives,
     ) {
@@ -625,7 +646,6 @@ impl Film {
         let n = raw.len();
         let t = line.system();
         let lu = Factored::new(&t);
-        let q = line.integration_weights();
         let rhs: Vec<f64> = (0..n).map(|i| t.m[i] * wt[i].0 * raw[i]).collect();
         let p = lu.solve(&rhs);
         // the film's pressure where the point is wetted: w_i p+(P_i) (an unwetted point holds
@@ -634,17 +654,17 @@ impl Film {
         let clip: Vec<f64> = cav.iter().zip(wt).map(|(c, w)| w.0 * c.0).collect();
         let keep: Vec<f64> = cav.iter().zip(wt).map(|(c, w)| w.0 * c.1).collect();
         let w = self.arc * c;
-        for (i, f) in integrate_with(&q, &clip).enumerate() {
+        for (i, f) in integrate_with(q, &clip).enumerate() {
             out.force[i] += w * f;
         }
-        let inv = lu.inverse_columns();
+        let inv = lu.inverse();
         let mut dp = vec![0.0; n];
         // target[:, k] += w Q diag(keep) sum_j inv_j r_j over the sparse r
         let mut column = |k: usize, r: &[(usize, f64)], target: &mut DMatrix<f64>| {
             dp.iter_mut().for_each(|v| *v = 0.0);
             for &(j, rj) in r {
                 if rj != 0.0 {
-                    for (v, a) in dp.iter_mut().zip(&inv[j]) {
+                    for (v, a) in dp.iter_mut().zip(&inv[j * n..(j + 1) * n]) {
                         *v += a * rj;
                     }
                 }
@@ -652,7 +672,7 @@ impl Film {
             for (v, kp) in dp.iter_mut().zip(&keep) {
                 *v *= kp;
             }
-            for (i, f) in integrate_with(&q, &dp).enumerate() {
+            for (i, f) in integrate_with(q, &dp).enumerate() {
                 target[(i, k)] += w * f;
             }
         };
@@ -663,12 +683,13 @@ impl Film {
             if derivatives == Derivatives::All {
                 let r = self.pen_rhs(k, line, (&t, &p), sample, (slope, dz));
                 column(k, &r, &mut out.d_pen);
-                // the wetted fraction's own change at node k: p+(P_k) dw_k/dh (-c)
+                // the wetted fraction's own change at node k: p+(P_k) dw_k/dh (-c), integrated
+                // by the rows of Q that reach node k
                 if wt[k].1 != 0.0 {
-                    let mut e = vec![0.0; n];
-                    e[k] = cav[k].0 * wt[k].1 * (-c);
-                    for (i, f) in integrate_with(&q, &e).enumerate() {
-                        out.d_pen[(i, k)] += w * f;
+                    let e = cav[k].0 * wt[k].1 * (-c);
+                    for i in k.saturating_sub(1)..(k + 2).min(n) {
+                        let weight = q[i][1 + k - i];
+                        out.d_pen[(i, k)] += w * (weight * e);
                     }
                 }
             }
@@ -685,12 +706,16 @@ impl Film {
         (t, p): (&Tri, &[f64]),
         sample: &Sample<'_>,
         (slope, dz): (&[[(usize, f64); 3]], f64),
-    ) -> Vec<(usize, f64)> {
+    ) -> [(usize, f64); 3] {
         let Sample { c, raw, wt, dh } = *sample;
         let n = raw.len();
         let lo = k.saturating_sub(1);
         let hi = (k + 1).min(n - 1);
-        let mut r: Vec<(usize, f64)> = (lo..=hi).map(|i| (i, 0.0)).collect();
+        // nodes lo..=hi (the third entry stays zero at a line's end)
+        let mut r = [(k, 0.0); 3];
+        for (e, i) in r.iter_mut().zip(lo..=hi) {
+            e.0 = i;
+        }
         let at = |i: usize| i - lo;
         r[at(k)].1 += t.m[k] * wt[k].1 * (-c) * raw[k];
         if dh[k] == 0.0 {
