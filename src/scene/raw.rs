@@ -653,13 +653,14 @@ pub struct RawCombustion {
 pub struct RawTransient {
     /// "newmark" (average acceleration) or "hht". Default: "newmark" for a dry skirt, "hht"
     /// for a lubricated one: the squeeze film is a stiff damper on the liner's light modes
-    /// (c dt / m up to ~1e3), on which the average-acceleration rule rings with a factor near
+    /// (c dt / m of order 1e3 for a 10 um film, an estimate), on which the average-acceleration
+    /// rule rings with a factor near
     /// -1 per step and grows where the film opens (c ~ h^-3 falls); HHT damps that ringing
     /// (factor -0.82 per step at alpha -0.05). The default engine's squeeze run stopped in
     /// its sixth cycle with "newmark" and runs through with "hht" (docs/validation.md).
     #[serde(default)]
     pub scheme: Option<String>,
-    /// HHT alpha in [-1/3, 0] (scheme = "hht").
+    /// HHT alpha in [-1/3, 0] (scheme "hht", given or a lubricated skirt's default).
     #[serde(default = "default_alpha")]
     pub hht_alpha: f64,
     /// Crank-angle step \[deg\]; 720 must be a whole multiple of it.
