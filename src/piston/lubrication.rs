@@ -204,14 +204,7 @@ impl Line<'_> {
 
     /// Distance from node i to its left (k = i) or right (k = i + 1) face's other end.
     fn distances(&self) -> Vec<f64> {
-        let n = self.n();
-        (0..=n)
-            .map(|k| {
-                let a = if k == 0 { self.left } else { self.x[k - 1] };
-                let b = if k == n { self.right } else { self.x[k] };
-                b - a
-            })
-            .collect()
+        node_distances(self.x, self.left, self.right)
     }
 
     /// Face k's film thickness and viscosity: the mean of its nodes' (a face to an edge takes
@@ -299,31 +292,50 @@ impl Line<'_> {
     /// The weights of [`Line::integrate`]: slice i's force is
     /// q_i0 p_(i-1) + q_i1 p_i + q_i2 p_(i+1) (p = 0 beyond the ends).
     fn integration_weights(&self) -> Vec<[f64; 3]> {
-        let n = self.n();
-        let d = self.distances();
-        (0..n)
-            .map(|i| {
-                let el = if i == 0 {
-                    self.left
-                } else {
-                    0.5 * (self.x[i - 1] + self.x[i])
-                };
-                let er = if i == n - 1 {
-                    self.right
-                } else {
-                    0.5 * (self.x[i] + self.x[i + 1])
-                };
-                let (dl, dr) = (d[i], d[i + 1]);
-                let (a, b) = (el - self.x[i], er - self.x[i]);
-                let f = |pl: f64, p: f64, pr: f64| {
-                    let q2 = 2.0 * ((pr - p) / dr - (p - pl) / dl) / (dl + dr);
-                    let q1 = (pr - p) / dr - 0.5 * q2 * dr;
-                    p * (b - a) + q1 * (b * b - a * a) / 2.0 + q2 * (b.powi(3) - a.powi(3)) / 6.0
-                };
-                [f(1.0, 0.0, 0.0), f(0.0, 1.0, 0.0), f(0.0, 0.0, 1.0)]
-            })
-            .collect()
+        integration_weights(self.x, self.left, self.right)
     }
+}
+
+/// The distances between consecutive nodes `x`, the line's ends `left` and `right` counted as
+/// the outer neighbours (n + 1 of them).
+fn node_distances(x: &[f64], left: f64, right: f64) -> Vec<f64> {
+    let n = x.len();
+    (0..=n)
+        .map(|k| {
+            let a = if k == 0 { left } else { x[k - 1] };
+            let b = if k == n { right } else { x[k] };
+            b - a
+        })
+        .collect()
+}
+
+/// [`Line::integration_weights`] of the nodes `x` between `left` and `right` (they depend on
+/// the nodes only, not on the film).
+fn integration_weights(x: &[f64], left: f64, right: f64) -> Vec<[f64; 3]> {
+    let n = x.len();
+    let d = node_distances(x, left, right);
+    (0..n)
+        .map(|i| {
+            let el = if i == 0 {
+                left
+            } else {
+                0.5 * (x[i - 1] + x[i])
+            };
+            let er = if i == n - 1 {
+                right
+            } else {
+                0.5 * (x[i] + x[i + 1])
+            };
+            let (dl, dr) = (d[i], d[i + 1]);
+            let (a, b) = (el - x[i], er - x[i]);
+            let f = |pl: f64, p: f64, pr: f64| {
+                let q2 = 2.0 * ((pr - p) / dr - (p - pl) / dl) / (dl + dr);
+                let q1 = (pr - p) / dr - 0.5 * q2 * dr;
+                p * (b - a) + q1 * (b * b - a * a) / 2.0 + q2 * (b.powi(3) - a.powi(3)) / 6.0
+            };
+            [f(1.0, 0.0, 0.0), f(0.0, 1.0, 0.0), f(0.0, 0.0, 1.0)]
+        })
+        .collect()
 }
 
 /// Applies integration weights `q` to `v`.
@@ -363,35 +375,34 @@ impl Factored {
     }
 
     fn solve(&self, rhs: &[f64]) -> Vec<f64> {
-        let n = rhs.len();
-        let mut y = vec![0.0; n];
+        let mut y = rhs.to_vec();
+        self.sweep(&mut y, 0);
+        y
+    }
+
+    /// Solves in place for the right-hand side in `y`, which is zero above row `first` (the
+    /// forward sweep starts there): y_i <- (y_i - l_i y_(i-1)) / den_i, then
+    /// y_i <- y_i - c_i y_(i+1).
+    fn sweep(&self, y: &mut [f64], first: usize) {
+        let n = y.len();
         let mut prev = 0.0;
-        for i in 0..n {
-            y[i] = (rhs[i] - self.lower[i] * prev) / self.den[i];
+        for i in first..n {
+            y[i] = (y[i] - self.lower[i] * prev) / self.den[i];
             prev = y[i];
         }
         for i in (0..n.saturating_sub(1)).rev() {
             y[i] -= self.c[i] * y[i + 1];
         }
-        y
     }
 
     /// A^-1, column-major (column j at `j n..(j + 1) n`): each column the solve of the unit
-    /// vector e_j, its forward sweep started at j (the rows above stay zero there), in one
-    /// buffer.
+    /// vector e_j, its forward sweep started at j, in one buffer.
     fn inverse(&self) -> Vec<f64> {
         let n = self.den.len();
         let mut inv = vec![0.0; n * n];
         for (j, y) in inv.chunks_exact_mut(n).enumerate() {
-            let mut prev = 0.0;
-            for i in j..n {
-                let rhs = if i == j { 1.0 } else { 0.0 };
-                y[i] = (rhs - self.lower[i] * prev) / self.den[i];
-                prev = y[i];
-            }
-            for i in (0..n.saturating_sub(1)).rev() {
-                y[i] -= self.c[i] * y[i + 1];
-            }
+            y[j] = 1.0;
+            self.sweep(y, j);
         }
         inv
     }
@@ -540,14 +551,7 @@ impl Film {
         let (left, right) = (x[0] - 0.5 * dx, x[n - 1] + 0.5 * dx);
         let slope = Line::slope_weights(x);
         // the slices' integration weights depend on the nodes only: once per side
-        let q = Line {
-            x,
-            left,
-            right,
-            h: &[],
-            mu: &[],
-        }
-        .integration_weights();
+        let q = integration_weights(x, left, right);
         let mut out = SideFilm {
             force: vec![0.0; n],
             d_pen: DMatrix::zeros(n, n),
