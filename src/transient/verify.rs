@@ -12,7 +12,7 @@
 //! over the analysis points; the speed-up is the full-order wall time (assembly, factorisation
 //! and stepping) over the ROM's window stepping on the cached ROM.
 
-use super::cycle::{CycleSettings, EngineRun, EngineSetup};
+use super::cycle::{integrated_modes, CycleSettings, EngineRun, EngineSetup};
 use super::error::TransientError;
 use super::full_order::{FullLiner, Row};
 use super::modal::ModalStructure;
@@ -449,7 +449,8 @@ fn truncated_liner(
 }
 
 /// Runs the ROM alone on the window with the scene's scheme (HHT-alpha included): system modes
-/// up to `keep_below_hz` (all when None; the dropped ones join the static correction) at
+/// up to `keep_below_hz` (when None: those the cycle integrates, `transient.mode_cutoff_hz`
+/// and `transient.residual_vectors`; the dropped ones join the static correction) at
 /// `step_deg` (the scene's when None).
 pub fn rom_window(
     scene: &Scene,
@@ -507,7 +508,6 @@ pub fn rom_window(
         source: Box::new(source),
     };
     // --- ROM window
-    let all = rom.frequencies_hz.len();
     let nm = match keep_below_hz {
         Some(f) => rom
             .frequencies_hz
@@ -515,7 +515,7 @@ pub fn rom_window(
             .take_while(|&&x| x <= f)
             .count()
             .max(1),
-        None => all,
+        None => integrated_modes(rom, settings),
     };
     let (mut modal, rom_preload) = truncated_liner(rom, idx, nm, (ra, rb), scheme);
     let res = window::run(&win, piston, &mut modal).map_err(|e| fail(e, "ROM"))?;

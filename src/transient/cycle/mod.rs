@@ -139,6 +139,15 @@ fn contact_data(rom: &EngineRom, nm: usize) -> (Dense, Vec<f64>) {
     (rows, pre)
 }
 
+/// How many of the ROM's modes (ascending) the transient integrates: those up to
+/// `modes_below_hz` (all when None); the rest respond statically ([`truncated_flexibility`]).
+pub(crate) fn integrated_modes(rom: &EngineRom, settings: &CycleSettings) -> usize {
+    match settings.modes_below_hz {
+        Some(f) => rom.frequencies_hz.iter().take_while(|&&x| x <= f).count(),
+        None => rom.frequencies_hz.len(),
+    }
+}
+
 /// Residual flexibility when only the first `nm` system modes are integrated: the ROM's R
 /// plus the static part of the ROM modes left out, sum_{j >= nm} phi_j phi_j^T / omega_j^2.
 fn truncated_flexibility(rom: &EngineRom, nm: usize) -> Dense {
@@ -168,10 +177,7 @@ impl<'a> EngineRun<'a> {
     /// A run at rest at global crank angle 0.
     pub fn new(setup: &'a EngineSetup<'a>, settings: CycleSettings) -> Self {
         let rom = setup.rom;
-        let nm = match settings.modes_below_hz {
-            Some(f) => rom.frequencies_hz.iter().take_while(|&&x| x <= f).count(),
-            None => rom.frequencies_hz.len(),
-        };
+        let nm = integrated_modes(rom, &settings);
         let omega: Vec<f64> = rom.frequencies_hz[..nm]
             .iter()
             .map(|f| 2.0 * std::f64::consts::PI * f)
