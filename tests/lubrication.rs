@@ -458,3 +458,31 @@ fn contract_a_lubricated_skirt_defaults_to_hht() {
         .iter()
         .any(|w| w.contains(stiff)));
 }
+
+/// Contract: a lubricated skirt's cylinders are solved in one contact step, a dry skirt's one
+/// by one (the per-cylinder step lags what the other cylinders' forces do to a liner by a
+/// step, which a film's squeeze rate does not tolerate: docs/validation.md).
+#[test]
+fn contract_a_lubricated_skirt_solves_its_cylinders_in_one_step() {
+    use linercav::scene::Scene;
+    use linercav::transient::cycle::Coupling;
+    use linercav::transient::engine::coupling_of;
+    let coupling = |sets: &[&str]| {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let scene = Scene::load(
+            std::path::Path::new("tests/fixtures/engine_small.toml"),
+            &sets,
+        )
+        .unwrap();
+        coupling_of(scene.simulation.as_ref().unwrap())
+    };
+    assert_eq!(coupling(&[]), Coupling::PerCylinder);
+    assert_eq!(
+        coupling(&["piston.lubrication=squeeze"]),
+        Coupling::Monolithic
+    );
+    assert_eq!(
+        coupling(&["piston.lubrication=mixed"]),
+        Coupling::Monolithic
+    );
+}

@@ -487,7 +487,8 @@ pub struct RawPiston {
     /// The skirt's oil film: "dry" (default: the penalty contact alone, the reference study's
     /// model), "squeeze" (the Reynolds squeeze and sliding film, half-Sommerfeld) or "mixed"
     /// (the film plus Greenwood-Tripp asperity contact). The film's data: `[piston.oil]`.
-    /// The lubricated transient is experimental (docs/validation.md).
+    /// The lubricated transient is experimental: verified and converged with the step, about
+    /// 16 times the cost of a dry run (docs/validation.md).
     #[serde(default)]
     pub lubrication: RawLubrication,
     /// Oil film data (used when `lubrication` is not "dry"; every key has a default).

@@ -156,7 +156,7 @@ fn piston(
     }
     if let Some(oil) = &sim.piston.oil {
         warnings.push(format!(
-            "piston.lubrication = \"{}\" is experimental: each step solves the oil film with the structure and converges with the step on the test engine, but a run costs about 8 times a dry one at the same step, and on the default engine its answer is not converged with the step (two cylinders' slap forces fall by two thirds from 1/4 to 1/32 deg; at every step they stay at 17-64 % of the dry skirt's, the conservative answer) (docs/validation.md)",
+            "piston.lubrication = \"{}\" is experimental: the film is verified against closed forms and the lubricated answer converges with the step on the test and the default engine, with the cylinders solved in one contact step, but a run costs about 16 times a dry one at the same step; the dry skirt (the reference study's model) is the conservative answer (docs/validation.md)",
             oil.model.name()
         ));
         if sim.transient.scheme == crate::scene::spec::SchemeChoice::AverageAcceleration {
