@@ -10,10 +10,10 @@ use crate::scene::{Scene, SceneError, Simulation};
 pub const MAX_REFINEMENTS: usize = 2;
 
 /// The transient settings of a scene's `[transient]` section; accelerations reported in the
-/// ROM's band `band_hz`. Fixed choices (not scene keys): contact coupled per cylinder (one step for a
-/// lubricated skirt, [`coupling_of`]), the
-/// residual flexibility at the contact, the onset correction, the step-error windows, and up
-/// to 6 halvings of a failing step with at most 50 contact iterations each.
+/// ROM's band `band_hz`. Fixed choices (not scene keys): contact coupled per cylinder (one
+/// step for a lubricated skirt, [`coupling_of`]), the residual flexibility at the contact, the
+/// onset correction, the step-error windows, and up to 6 halvings of a failing step with at
+/// most 50 contact iterations each.
 pub fn settings_of(sim: &Simulation, band_hz: f64) -> CycleSettings {
     let t = &sim.transient;
     CycleSettings {
