@@ -486,3 +486,28 @@ fn contract_a_lubricated_skirt_solves_its_cylinders_in_one_step() {
         Coupling::Monolithic
     );
 }
+
+/// Contract: the up-front estimate of a lubricated transient (what `simulate`, `sweep` and
+/// `report` check against `limits.max_hours` before any work) counts the film's cost, 24 times
+/// a dry step (measured 11-23 times, session 53), so a budget that fits a dry run does not
+/// pass a lubricated one unseen.
+#[test]
+fn contract_the_transient_estimate_counts_the_film() {
+    use linercav::scene::{budget, Scene};
+    let scene = |sets: &[&str]| {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        Scene::load(
+            std::path::Path::new("tests/fixtures/engine_small.toml"),
+            &sets,
+        )
+        .unwrap()
+    };
+    let dry = budget::transient(&scene(&[])).unwrap();
+    let wet = budget::transient(&scene(&["piston.lubrication=squeeze"])).unwrap();
+    assert!(
+        (wet.seconds / dry.seconds - 24.0).abs() < 1e-9,
+        "{}",
+        wet.seconds / dry.seconds
+    );
+    assert!(wet.keys.contains("piston.lubrication"));
+}
