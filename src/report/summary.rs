@@ -143,7 +143,15 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
         None => "coolant around the liner not modelled (dry, as the study's model)".to_string(),
         Some(mu) => format!("coolant layer on the liner's wet zone: {mu:.2} kg/m^2"),
     };
-    let mut s = format!("# linercav report: {}\n\n{} at {:.0} rpm; peak cylinder pressure {:.1} bar at {:.1} deg; hot clearance {:.1} um; {coolant}.\n\n", r.title, r.scene, r.speed_rpm, r.simulate.peak_pressure_bar, r.simulate.peak_pressure_deg, r.simulate.hot_clearance_um);
+    use crate::piston::lubrication::Lubrication;
+    let skirt = match r.simulate.lubrication {
+        Lubrication::Dry => "skirt dry (penalty contact, the study's model)".to_string(),
+        l => format!(
+            "skirt lubricated (oil film \"{}\", experimental: docs/validation.md)",
+            l.name()
+        ),
+    };
+    let mut s = format!("# linercav report: {}\n\n{} at {:.0} rpm; peak cylinder pressure {:.1} bar at {:.1} deg; hot clearance {:.1} um; {skirt}; {coolant}.\n\n", r.title, r.scene, r.speed_rpm, r.simulate.peak_pressure_bar, r.simulate.peak_pressure_deg, r.simulate.hot_clearance_um);
     let _ = writeln!(s, "## Verdict\n");
     let _ = writeln!(s, "Acceleration criterion ({}): onset {:.0} m/s^2, high risk {:.0} m/s^2 (k_p {:.1} Pa per m/s^2). Cylinders from the highest to the lowest peak negative acceleration: {}. The most active point along the liner: {} (of {}, top to bottom).\n", ev.threshold_source, t.onset_m_s2, t.high_risk_m_s2, t.k_p_pa_per_m_s2, crate::text::joined(&ev.ranking, ", "), ev.most_active_point, ev.cylinders.first().map(|c| c.points.len()).unwrap_or(0));
     let n_avg = r.simulate.stats.cycles_averaged;
