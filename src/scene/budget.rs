@@ -359,7 +359,7 @@ fn part_dofs(scene: &Scene) -> Option<(f64, f64)> {
 }
 
 /// The transient of `simulate`: steps N = cycles 720 / step (plus the step-error windows),
-/// t = N n_cyl t_1 max(1, slices / 12), times [`FILM_STEP_FACTOR`] for a lubricated skirt;
+/// t = N n_cyl t_1 max(1, slices / 12), times `FILM_STEP_FACTOR` for a lubricated skirt;
 /// memory per cylinder and step of a cycle, 8 bytes each:
 /// the points' two rolling series (up to twice their length while they grow), their spectra's
 /// power sums and frequencies, and three cycles of the eight piston series.
