@@ -426,6 +426,16 @@ fn contract_bad_oil_input_names_the_key() {
     }
 }
 
+/// The small test engine's scene with `sets` applied.
+fn small_scene(sets: &[&str]) -> linercav::scene::Scene {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    linercav::scene::Scene::load(
+        std::path::Path::new("tests/fixtures/engine_small.toml"),
+        &sets,
+    )
+    .unwrap()
+}
+
 /// Contract (issue 39): a lubricated skirt integrates with HHT unless the scene names a
 /// scheme (the squeeze film is a stiff damper on which the average-acceleration rule rings,
 /// docs/validation.md); a dry skirt keeps Newmark's average acceleration; a lubricated scene
@@ -433,14 +443,7 @@ fn contract_bad_oil_input_names_the_key() {
 #[test]
 fn contract_a_lubricated_skirt_defaults_to_hht() {
     use linercav::scene::{sanity, spec::SchemeChoice, Scene};
-    let scene = |sets: &[&str]| {
-        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-        Scene::load(
-            std::path::Path::new("tests/fixtures/engine_small.toml"),
-            &sets,
-        )
-        .unwrap()
-    };
+    let scene = small_scene;
     let scheme = |s: &Scene| s.simulation.as_ref().unwrap().transient.scheme;
     let dry = scene(&[]);
     assert_eq!(scheme(&dry), SchemeChoice::AverageAcceleration);
@@ -464,18 +467,9 @@ fn contract_a_lubricated_skirt_defaults_to_hht() {
 /// step, which a film's squeeze rate does not tolerate: docs/validation.md).
 #[test]
 fn contract_a_lubricated_skirt_solves_its_cylinders_in_one_step() {
-    use linercav::scene::Scene;
     use linercav::transient::cycle::Coupling;
     use linercav::transient::engine::coupling_of;
-    let coupling = |sets: &[&str]| {
-        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-        let scene = Scene::load(
-            std::path::Path::new("tests/fixtures/engine_small.toml"),
-            &sets,
-        )
-        .unwrap();
-        coupling_of(scene.simulation.as_ref().unwrap())
-    };
+    let coupling = |sets: &[&str]| coupling_of(small_scene(sets).simulation.as_ref().unwrap());
     assert_eq!(coupling(&[]), Coupling::PerCylinder);
     assert_eq!(
         coupling(&["piston.lubrication=squeeze"]),
@@ -493,15 +487,8 @@ fn contract_a_lubricated_skirt_solves_its_cylinders_in_one_step() {
 /// pass a lubricated one unseen.
 #[test]
 fn contract_the_transient_estimate_counts_the_film() {
-    use linercav::scene::{budget, Scene};
-    let scene = |sets: &[&str]| {
-        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-        Scene::load(
-            std::path::Path::new("tests/fixtures/engine_small.toml"),
-            &sets,
-        )
-        .unwrap()
-    };
+    use linercav::scene::budget;
+    let scene = small_scene;
     let dry = budget::transient(&scene(&[])).unwrap();
     let wet = budget::transient(&scene(&["piston.lubrication=squeeze"])).unwrap();
     assert!(
