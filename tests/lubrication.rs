@@ -498,3 +498,110 @@ fn contract_the_transient_estimate_counts_the_film() {
     );
     assert!(wet.keys.contains("piston.lubrication"));
 }
+
+/// Contract (issue 39, item 4): `report.compare_lubrication` adds the other skirt model's run
+/// and sweeps to the report. The comparison's runs are the runs a user gets from `simulate`
+/// with that model (the same slap forces and worst points to 1e-9: the same code path and
+/// settings, deterministic), its sweeps are at the scene's sweeps' values, and the point at
+/// the scene's own value is the other model's scene run. A model equal to the scene's own is
+/// refused naming the key, before any output; the budget names the key when it refuses.
+#[test]
+fn contract_report_compares_skirt_models_when_the_scene_asks() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = format!("{}", dir.path().join("cache").display());
+    let out = dir.path().join("rep");
+    let scene = "tests/fixtures/engine_small.toml";
+    let ask = "report.compare_lubrication=squeeze";
+    let (code, _, err) = common::linercav(&[
+        "report",
+        scene,
+        "--set",
+        ask,
+        "--cache-dir",
+        &cache,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let png = std::fs::read(out.join("skirt_comparison.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG"));
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("## Skirt models compared"), "{md}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let c = &v["skirt_comparison"];
+    assert_eq!(c["models"], serde_json::json!(["dry", "squeeze"]));
+    // the other model's scene run, as `simulate` gives it (the scene's cycles)
+    let mut args = vec!["simulate", scene, "--set", "piston.lubrication=squeeze"];
+    args.extend(["--cache-dir", &cache, "--json"]);
+    let wet = json(&linercav(&args));
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+    let cyls = c["cylinders"].as_array().unwrap();
+    assert_eq!(cyls.len(), 2);
+    for (pair, (own, w)) in cyls.iter().zip(
+        v["simulate"]["cylinders"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(wet["cylinders"].as_array().unwrap()),
+    ) {
+        let slap = &pair["slap_force_n"];
+        assert!(close(
+            slap[0].as_f64().unwrap(),
+            own["peak_slap_force_n"].as_f64().unwrap()
+        ));
+        assert!(close(
+            slap[1].as_f64().unwrap(),
+            w["peak_slap_force_n"].as_f64().unwrap()
+        ));
+        let worst = w["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["peak_negative_m_s2"].as_f64().unwrap())
+            .fold(f64::MIN, f64::max);
+        assert!(
+            close(pair["worst_m_s2"][1].as_f64().unwrap(), worst),
+            "{pair}"
+        );
+    }
+    // the sweeps at the scene's values; at the scene's own value, the other model's scene run
+    let largest_wet = cyls
+        .iter()
+        .map(|p| p["worst_m_s2"][1].as_f64().unwrap())
+        .fold(f64::MIN, f64::max);
+    for (key, own) in [("clearance", 80.0), ("pin_offset", 0.0)] {
+        let values = |a: &serde_json::Value| -> Vec<f64> {
+            a.as_array()
+                .unwrap()
+                .iter()
+                .map(|p| p["value"].as_f64().unwrap())
+                .collect()
+        };
+        let sweep = &c[format!("{key}_sweep")];
+        assert_eq!(values(sweep), values(&v[format!("{key}_sweep")]), "{key}");
+        let at_own = sweep
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["value"].as_f64().unwrap() == own)
+            .unwrap_or_else(|| panic!("{key}: the scene's own value {own}"));
+        assert!(
+            close(at_own["largest_m_s2"].as_f64().unwrap(), largest_wet),
+            "{key}"
+        );
+    }
+    // the scene's own model is refused, before any output
+    let out2 = dir.path().join("rep2");
+    let o2 = out2.to_str().unwrap();
+    let same = ["--set", "piston.lubrication=squeeze", "--set", ask];
+    let mut args = vec!["report", scene];
+    args.extend(same);
+    args.extend(["--out", o2]);
+    common::refused(&args, 2, "report.compare_lubrication");
+    assert!(!out2.exists());
+    // a budget the comparison exceeds names its key
+    let mut args = vec!["report", scene, "--set", ask];
+    args.extend(["--set", "limits.max_hours=1e-4", "--out", o2]);
+    common::refused(&args, 2, "report.compare_lubrication");
+}

@@ -205,6 +205,9 @@ fn contract_report_writes_the_figure_set() {
             assert!(m["uncertainty"].as_f64().unwrap() > 0.0, "{key} {q}: {m}");
         }
     }
+    // no skirt comparison unless the scene asks (`report.compare_lubrication`)
+    assert!(v.get("skirt_comparison").is_none());
+    assert!(!out.join("skirt_comparison.png").exists());
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(
         md.contains("The largest mean slap force over the pin offset sweep (-1.000 to 1.000 mm)"),

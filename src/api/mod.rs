@@ -21,6 +21,7 @@
 //! ```
 
 pub mod cavitation;
+pub mod compare;
 pub mod export;
 pub mod full_modes;
 pub mod full_order;
@@ -409,6 +410,9 @@ pub struct ReportRuns {
     /// The scene's run mapped over every liner's wet outer surface (empty when the liner mesh
     /// has no `coolant_wetted` set).
     pub maps: Vec<crate::cavitation::maps::LinerMap>,
+    /// The scene and its sweeps under another skirt model, when the scene asks
+    /// (`report.compare_lubrication`).
+    pub skirts: Option<crate::report::comparison::SkirtComparison>,
 }
 
 /// What a report run varies.
@@ -637,6 +641,21 @@ pub fn report_runs(
     let [clearance, pin_offset] = sweeps;
     let (clearance, clearance_maximum) = clearance.finish();
     let (pin_offset, pin_offset_maximum) = pin_offset.finish();
+    let evaluation = evaluate_scene(scene, &variants.roms[scene_rom].rom, &base)?;
+    let mut skirts = None;
+    if let Some(other) = compare::checked_request(scene)? {
+        phase("the scene and its sweeps with the other skirt model (report.compare_lubrication)");
+        let side = compare::SceneSide {
+            base: &base,
+            evaluation: &evaluation,
+            clearance: &clearance,
+            pin_offset: &pin_offset,
+            own: (cur_c, cur_o),
+        };
+        let (v, c) = compare::compare_skirts(variants, scene, (path, sets), cache, other, &side)?;
+        variants = v;
+        skirts = Some(c);
+    }
     let Variants { mut roms, .. } = variants;
     let rom = roms.swap_remove(scene_rom);
     let piston = piston_of(scene)?;
@@ -649,7 +668,6 @@ pub fn report_runs(
     );
     let tradeoff = tradeoff?;
     let (half_step, half_step_seconds) = check?;
-    let evaluation = evaluate_scene(scene, &rom.rom, &base)?;
     let maps = maps::maps_of(scene, &base)?;
     Ok(ReportRuns {
         maps,
@@ -663,5 +681,6 @@ pub fn report_runs(
         pin_offset_maximum,
         tradeoff,
         evaluation,
+        skirts,
     })
 }

@@ -7,7 +7,9 @@
 //! (per cylinder and point, with the thresholds), `modes_risk.png` (coefficients of the
 //! best-correlated of the modes nearest the dominant response beside the per-cylinder peaks), `sweep_clearance.png`,
 //! `sweep_pin_offset.png`, `criteria.png` (CSF against Ca), `speed_error.png`, `frf.png`
-//! (inertance from the slap location to each cylinder's worst point, from the modal model).
+//! (inertance from the slap location to each cylinder's worst point, from the modal model);
+//! with `report.compare_lubrication`, `skirt_comparison.png` (the scene's skirt model against
+//! the other over the sweeps: [`crate::report::comparison`]).
 
 use super::rom::CacheOptions;
 use crate::api::{report_runs, CLEARANCE_RANGE_UM, PIN_OFFSET_RANGE_MM, REPORT_SWEEP_RUNS};
@@ -24,6 +26,18 @@ use std::time::Instant;
 /// The files `report --out` writes (the figures all PNG).
 pub const OUTPUTS: &[&str] = &["summary.md", "summary.json", "liner_maps.vtu", "*.png"];
 
+/// The time of the comparison's runs with the other skirt model
+/// (`report.compare_lubrication`) \[s\]: the scene's transient estimate under that model,
+/// times the runs (the scene and both sweeps, two at a time); 0 without a comparison.
+fn comparison_seconds(scene: &crate::scene::Scene) -> Result<f64> {
+    let Some(other) = super::compare::checked_request(scene)? else {
+        return Ok(0.0);
+    };
+    let lubricated = other != crate::scene::spec::Lubrication::Dry;
+    let one = crate::scene::budget::transient_as(scene, lubricated).map_or(0.0, |e| e.seconds);
+    Ok(one * (1 + 2 * REPORT_SWEEP_RUNS) as f64 / 2.0)
+}
+
 /// Writes the report of `scene` into `out`.
 pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions) -> Result<Report> {
     let started = Instant::now();
@@ -37,6 +51,12 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         // two at a time (the sweeps' runs besides the scene's), then the whole-run step
         // check at half the step (about two transients)
         est.seconds *= (1 + 2 * REPORT_SWEEP_RUNS) as f64 / 2.0 + 2.0;
+        // the comparison's runs with the other skirt model, two at a time
+        let compared = comparison_seconds(&scene)?;
+        if compared > 0.0 {
+            est.seconds += compared;
+            est.keys = "transient.step_deg, transient.cycles, piston.slices, piston.lubrication, report.compare_lubrication";
+        }
         // and the decided ranking's realisations, within their budget
         est.seconds += crate::piston::setup::simulation(&scene)?
             .transient
@@ -65,7 +85,10 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
     .draw()?;
     let (liner_maps, map_files) =
         super::maps::write_maps(&scene, &runs.maps, &runs.rom.rom, Some(stage.path()))?;
-    let figs: Vec<std::path::PathBuf> = figs.into_iter().chain(map_files).collect();
+    let mut figs: Vec<std::path::PathBuf> = figs.into_iter().chain(map_files).collect();
+    if let Some(c) = &runs.skirts {
+        figs.push(c.draw(stage.path(), (&runs.clearance, &runs.pin_offset))?);
+    }
     // the report's own run and check are the first realisation; the budget is for the others
     let ranking = super::rank::decided_ranking(
         &scene,
@@ -84,6 +107,7 @@ pub fn run(scene_path: &Path, sets: &[String], out: &Path, cache: &CacheOptions)
         evaluation: runs.evaluation,
         clearance_sweep: runs.clearance,
         pin_offset_sweep: runs.pin_offset,
+        skirt_comparison: runs.skirts,
         clearance_maximum: runs.clearance_maximum,
         pin_offset_maximum: runs.pin_offset_maximum,
         clearance_range_um: [CLEARANCE_RANGE_UM.0, CLEARANCE_RANGE_UM.1],

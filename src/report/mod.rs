@@ -2,6 +2,7 @@
 //! records of an engine run (JSON, text, time-series CSV).
 
 pub mod calibration;
+pub mod comparison;
 pub mod figures;
 pub mod maps;
 pub mod mtx;

@@ -22,6 +22,9 @@ pub struct Report {
     pub evaluation: Evaluation,
     pub clearance_sweep: Vec<SweepPoint>,
     pub pin_offset_sweep: Vec<SweepPoint>,
+    /// The scene and its sweeps under another skirt model (`report.compare_lubrication`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skirt_comparison: Option<crate::report::comparison::SkirtComparison>,
     /// Where each sweep's largest engine-wide mean slap force (`peak_slap_force_n`) and peak
     /// negative acceleration (`peak_negative_m_s2`) lie: the run with the largest value, its
     /// mean and standard error, `at` +- `uncertainty` (half the larger spacing to the
@@ -192,6 +195,9 @@ pub fn markdown(r: &Report, scene: &Path, out: &Path) -> String {
     s.push_str(&maps_section(r));
     s.push_str(&why_section(r));
     s.push_str(&what_if_section(r));
+    if let Some(c) = &r.skirt_comparison {
+        s.push_str(&c.markdown((&r.clearance_sweep, &r.pin_offset_sweep)));
+    }
     let _ = writeln!(s, "\n## Speed against error\n\nAgainst a converged reference (a step 64 times finer, uniform, all modes): the mode cut-off on one cylinder's window from rest (330-420 deg, largest error over its points), the step on the six firing slaps of cycle 3 from identical states (largest error over the cylinders' worst points).\n\n| setting | modes | error | wall time [ms] |\n|---|---|---|---|");
     for x in &r.tradeoff {
         let _ = writeln!(
@@ -306,13 +312,10 @@ impl Report {
 
 /// A what-if row's change against the scene's run: "+123 ± 20 (higher)", or "the scene's".
 fn change_text(p: &crate::report::figures::SweepPoint) -> String {
-    match &p.change {
-        Some(c) if c.se_m_s2.is_finite() => {
-            format!("{:+.0} ± {:.0} ({})", c.delta_m_s2, c.se_m_s2, c.verdict)
-        }
-        Some(c) => format!("{:+.0} ({})", c.delta_m_s2, c.verdict),
-        None => "the scene's".into(),
-    }
+    p.change.as_ref().map_or(
+        "the scene's".into(),
+        crate::report::comparison::change_words,
+    )
 }
 
 /// Where a sweep's maxima lie, in words: the run with the largest engine-wide mean slap force

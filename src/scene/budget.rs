@@ -364,6 +364,13 @@ fn part_dofs(scene: &Scene) -> Option<(f64, f64)> {
 /// the points' two rolling series (up to twice their length while they grow), their spectra's
 /// power sums and frequencies, and three cycles of the eight piston series.
 pub fn transient(scene: &Scene) -> Option<Estimate> {
+    let lubricated = scene.simulation.as_ref()?.piston.oil.is_some();
+    transient_as(scene, lubricated)
+}
+
+/// [`transient`] with the skirt dry or `lubricated` whatever the scene's (the report's
+/// comparison of skirt models).
+pub fn transient_as(scene: &Scene, lubricated: bool) -> Option<Estimate> {
     let sim = scene.simulation.as_ref()?;
     let t = &sim.transient;
     let per_cycle = 720.0 / t.step_deg;
@@ -371,11 +378,7 @@ pub fn transient(scene: &Scene) -> Option<Estimate> {
     let ncyl = scene.rom.cylinders.len() as f64;
     let slices = sim.piston.skirt.slices as f64;
     let points = scene.liner_geometry.analysis_depths.len() as f64;
-    let film = if sim.piston.oil.is_some() {
-        FILM_STEP_FACTOR
-    } else {
-        1.0
-    };
+    let film = if lubricated { FILM_STEP_FACTOR } else { 1.0 };
     Some(Estimate {
         what: "the transient",
         memory: per_cycle * ncyl * (5.0 * points + 24.0) * 8.0 + ncyl * slices * 2.0 * 1e4,

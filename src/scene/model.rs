@@ -199,8 +199,17 @@ pub struct Scene {
     pub simulation: Option<Simulation>,
     pub cavitation: CavitationSpec,
     pub limits: Limits,
+    /// What the report adds when asked (`[report]`).
+    pub report: ReportSpec,
     /// Values that are accepted but physically doubtful (also logged as warnings on load).
     pub warnings: Vec<String>,
+}
+
+/// Optional parts of the report (`[report]`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReportSpec {
+    /// The skirt model the scene's is compared against (never the scene's own).
+    pub compare_lubrication: Option<super::spec::Lubrication>,
 }
 
 /// Resource limits of a run (`[limits]`; see [`budget`]).

@@ -39,6 +39,23 @@ pub struct RawScene {
     /// What a run may take: work estimated beyond it is refused before it starts.
     #[serde(default)]
     pub limits: RawLimits,
+    /// Optional parts of the design-review report (`linercav report`).
+    #[serde(default)]
+    pub report: RawReport,
+}
+
+/// `[report]`: what `linercav report` adds to its standard content when asked.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawReport {
+    /// Another skirt model to compare the scene's against: "dry", "squeeze" or "mixed", not
+    /// the scene's own `piston.lubrication`. The report then runs the scene, and its
+    /// clearance and pin-offset sweeps at the same values, with that skirt as well (the oil
+    /// film's data from `[piston.oil]`), and adds the section "Skirt models compared" to
+    /// summary.md, `skirt_comparison` to summary.json and `skirt_comparison.png`. A
+    /// lubricated run costs about 16 dry ones (docs/validation.md). Default: none.
+    #[serde(default)]
+    pub compare_lubrication: Option<RawLubrication>,
 }
 
 /// Resource limits. Before any work starts, linercav estimates the memory and time the scene

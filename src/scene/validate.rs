@@ -80,6 +80,7 @@ pub(super) fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> 
     let rom = validate_rom(&c, &raw.rom, base, &engine, &liner)?;
     let simulation = validate_simulation(&c, base, &raw, &engine, &liner_geometry)?;
     let cavitation = validate_cavitation(&c, base, &raw.cavitation)?;
+    let report = validate_report(&c, &raw, simulation.is_some())?;
     Ok(Scene {
         path: path.to_path_buf(),
         title: raw.title,
@@ -92,6 +93,7 @@ pub(super) fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> 
         simulation,
         cavitation,
         limits: validate_limits(&c, &raw.limits)?,
+        report,
         warnings: Vec::new(),
     })
 }
@@ -367,6 +369,37 @@ pub(super) fn validate_limits(c: &Checker<'_>, l: &raw::RawLimits) -> Result<Lim
         max_memory_gb: l.max_memory_gb,
         max_hours: l.max_hours,
     })
+}
+
+/// `[report]`: a skirt model to compare against needs the transient's sections (that it
+/// differs from the scene's own is checked by `report`, since the comparison's own runs are
+/// the scene with `piston.lubrication` set to it).
+fn validate_report(
+    c: &Checker<'_>,
+    raw: &raw::RawScene,
+    simulated: bool,
+) -> Result<ReportSpec, SceneError> {
+    let Some(other) = raw.report.compare_lubrication else {
+        return Ok(ReportSpec::default());
+    };
+    if !simulated {
+        return Err(c.err(
+            "report.compare_lubrication",
+            "compares two transients: the scene needs [piston], [operating] and [transient]",
+        ));
+    }
+    Ok(ReportSpec {
+        compare_lubrication: Some(lubrication_of(other)),
+    })
+}
+
+/// The validated skirt model of a raw one.
+fn lubrication_of(l: raw::RawLubrication) -> spec::Lubrication {
+    match l {
+        raw::RawLubrication::Dry => spec::Lubrication::Dry,
+        raw::RawLubrication::Squeeze => spec::Lubrication::Squeeze,
+        raw::RawLubrication::Mixed => spec::Lubrication::Mixed,
+    }
 }
 
 /// Thresholds written by `linercav calibrate --json`.
@@ -661,11 +694,10 @@ fn pin_radius(c: &Checker<'_>, p: &raw::RawPiston, engine: &Engine) -> Result<f6
 /// `piston.lubrication` and `[piston.oil]`: the film's data, SI; `None` for a dry skirt.
 fn validate_oil(c: &Checker<'_>, p: &raw::RawPiston) -> Result<Option<spec::OilSpec>, SceneError> {
     use spec::Lubrication;
-    let model = match p.lubrication {
-        raw::RawLubrication::Dry => return Ok(None),
-        raw::RawLubrication::Squeeze => Lubrication::Squeeze,
-        raw::RawLubrication::Mixed => Lubrication::Mixed,
-    };
+    let model = lubrication_of(p.lubrication);
+    if model == Lubrication::Dry {
+        return Ok(None);
+    }
     let o = &p.oil;
     let supply = c.positive("piston.oil.supply_um", o.supply_um)?;
     if supply > 1000.0 {
