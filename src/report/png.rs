@@ -65,6 +65,8 @@ pub enum Mark {
     Line,
     Dots,
     LineDots,
+    /// A dashed line through dots (a second set of lines beside `LineDots` in the same colours).
+    DashedDots,
 }
 
 /// An axis tick's label: at most three decimals, trailing zeros dropped; roundoff around zero
@@ -186,7 +188,20 @@ impl Chart<'_> {
                     });
                 }
             }
-            if matches!(s.mark, Mark::Dots | Mark::LineDots) {
+            if s.mark == Mark::DashedDots {
+                let e = chart.draw_series(DashedLineSeries::new(
+                    s.points.iter().copied(),
+                    8,
+                    5,
+                    c.stroke_width(2),
+                ))?;
+                if !s.name.is_empty() {
+                    e.label(s.name.clone()).legend(move |(a, b)| {
+                        PathElement::new(vec![(a, b), (a + 7, b)], c.stroke_width(2))
+                    });
+                }
+            }
+            if matches!(s.mark, Mark::Dots | Mark::LineDots | Mark::DashedDots) {
                 let e =
                     chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
                 if !s.name.is_empty() && s.mark == Mark::Dots {

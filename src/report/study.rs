@@ -241,9 +241,55 @@ pub fn numeric(v: &str) -> Option<f64> {
     v.parse::<f64>().ok()
 }
 
+/// The runs `draw_key` plots against key `key`, in sets of lines with their labels: a sample's
+/// every run in one set; a grid's runs with the other numeric keys at their first value, one
+/// set per combination of the other non-numeric keys' values ("piston.lubrication=squeeze"),
+/// in the order they first appear.
+pub fn key_groups<'a>(
+    keys: &[String],
+    lines: &'a [RunLine],
+    sample: bool,
+    key: usize,
+) -> Vec<(String, Vec<&'a RunLine>)> {
+    let categorical: Vec<usize> = (0..keys.len())
+        .filter(|&j| j != key && lines.iter().any(|l| numeric(&l.values[j]).is_none()))
+        .collect();
+    let label = |r: &RunLine| -> String {
+        match sample {
+            true => String::new(),
+            false => crate::text::joined(
+                &categorical
+                    .iter()
+                    .map(|&j| format!("{}={}", keys[j], r.values[j]))
+                    .collect::<Vec<_>>(),
+                ", ",
+            ),
+        }
+    };
+    let mut groups: Vec<(String, Vec<&RunLine>)> = Vec::new();
+    for r in lines {
+        let held = r
+            .values
+            .iter()
+            .enumerate()
+            .all(|(j, v)| j == key || categorical.contains(&j) || *v == lines[0].values[j]);
+        if !(sample || held) {
+            continue;
+        }
+        let l = label(r);
+        match groups.iter_mut().find(|g| g.0 == l) {
+            Some(g) => g.1.push(r),
+            None => groups.push((l, vec![r])),
+        }
+    }
+    groups
+}
+
 /// The three-panel figure of one varied key: per cylinder, slap force, peak tilt and peak
 /// negative acceleration (largest over the points) against the key; for a grid the other
-/// keys held at their first value (lines), for a sample every run (dots).
+/// numeric keys held at their first value and each combination of the other non-numeric keys
+/// (such as `piston.lubrication`) its own set of lines (solid, then dashed), for a sample
+/// every run (dots).
 pub fn draw_key(
     path: &Path,
     keys: &[String],
@@ -251,29 +297,33 @@ pub fn draw_key(
     sample: bool,
     key: usize,
 ) -> Result<(), WriteError> {
-    let runs: Vec<&RunLine> = lines
-        .iter()
-        .filter(|r| {
-            sample
-                || r.values
-                    .iter()
-                    .enumerate()
-                    .all(|(j, v)| j == key || *v == lines[0].values[j])
-        })
-        .collect();
+    let groups = key_groups(keys, lines, sample, key);
+    let runs: Vec<&RunLine> = groups.iter().flat_map(|g| g.1.iter().copied()).collect();
     let ncyl = runs.first().map(|r| r.cylinders.len()).unwrap_or(0);
     let series = |f: &dyn Fn(&RunLine, usize) -> f64| -> Vec<Series> {
-        (0..ncyl)
-            .map(|c| Series {
-                name: format!("cylinder {}", runs[0].cylinders[c].cylinder),
-                points: runs
-                    .iter()
-                    .filter_map(|r| Some((numeric(&r.values[key])?, f(r, c))))
-                    .collect(),
-                mark: if sample { Mark::Dots } else { Mark::LineDots },
-                color: c,
-            })
-            .collect()
+        let mut all = Vec::new();
+        for (gi, (label, group)) in groups.iter().enumerate() {
+            for c in 0..ncyl {
+                let mut name = format!("cylinder {}", runs[0].cylinders[c].cylinder);
+                if groups.len() > 1 {
+                    name = format!("{name}, {label}");
+                }
+                all.push(Series {
+                    name,
+                    points: group
+                        .iter()
+                        .filter_map(|r| Some((numeric(&r.values[key])?, f(r, c))))
+                        .collect(),
+                    mark: match (sample, gi % 2) {
+                        (true, _) => Mark::Dots,
+                        (false, 0) => Mark::LineDots,
+                        (false, _) => Mark::DashedDots,
+                    },
+                    color: c,
+                });
+            }
+        }
+        all
     };
     let k = &keys[key];
     let chart = |title, y_label, series| Chart {
@@ -403,4 +453,58 @@ pub fn draw_statistics(
         Ok(())
     })?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::study::CylinderLine;
+
+    fn run(index: usize, values: &[&str]) -> RunLine {
+        RunLine {
+            index,
+            values: values.iter().map(|v| v.to_string()).collect(),
+            csv: String::new(),
+            cylinders: vec![CylinderLine {
+                cylinder: 1,
+                slap_force_n: 0.0,
+                tilt_rad: 0.0,
+                peak_negative_m_s2: vec![0.0],
+                risk: vec!["safe".into()],
+            }],
+        }
+    }
+
+    /// Contract: a grid over a string key and a numeric one plots each string value's runs as
+    /// its own set of lines against the numeric key (the pin-offset figure of a dry-against-
+    /// lubricated sweep showed the dry runs only); another numeric key stays held at its first
+    /// value; a sample keeps every run in one set.
+    #[test]
+    fn contract_a_string_key_splits_the_lines() {
+        let keys: Vec<String> = ["piston.lubrication", "piston.pin_offset_mm", "x"]
+            .map(String::from)
+            .to_vec();
+        let mut lines = Vec::new();
+        for l in ["dry", "squeeze"] {
+            for o in ["-1", "0", "1"] {
+                for x in ["1", "2"] {
+                    lines.push(run(lines.len(), &[l, o, x]));
+                }
+            }
+        }
+        let g = key_groups(&keys, &lines, false, 1);
+        let labels: Vec<&str> = g.iter().map(|x| x.0.as_str()).collect();
+        assert_eq!(
+            labels,
+            ["piston.lubrication=dry", "piston.lubrication=squeeze"]
+        );
+        for (label, runs) in &g {
+            let offsets: Vec<&str> = runs.iter().map(|r| r.values[1].as_str()).collect();
+            assert_eq!(offsets, ["-1", "0", "1"], "{label}");
+            assert!(runs.iter().all(|r| r.values[2] == "1"), "{label}");
+        }
+        let s = key_groups(&keys, &lines, true, 1);
+        assert_eq!(s.len(), 1);
+        assert_eq!(s[0].1.len(), lines.len());
+    }
 }
