@@ -502,9 +502,12 @@ fn contract_the_transient_estimate_counts_the_film() {
 /// Contract (issue 39, item 4): `report.compare_lubrication` adds the other skirt model's run
 /// and sweeps to the report. The comparison's runs are the runs a user gets from `simulate`
 /// with that model (the same slap forces and worst points to 1e-9: the same code path and
-/// settings, deterministic), its sweeps are at the scene's sweeps' values, and the point at
-/// the scene's own value is the other model's scene run. A model equal to the scene's own is
-/// refused naming the key, before any output; the budget names the key when it refuses.
+/// settings, deterministic), at the scene and away from it (40 um, a sweep end), its sweeps
+/// are at the scene's sweeps' values with each change = other - scene's at that value, and
+/// the point at the scene's own value is the other model's scene run. A model equal to the
+/// scene's own is refused naming the key, before any output; the up-front estimate counts the
+/// comparison's 19 runs (at most; two at a time) at the lubricated cost, and a refusal names
+/// the key.
 #[test]
 fn contract_report_compares_skirt_models_when_the_scene_asks() {
     let dir = tempfile::tempdir().unwrap();
@@ -531,45 +534,46 @@ fn contract_report_compares_skirt_models_when_the_scene_asks() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let c = &v["skirt_comparison"];
     assert_eq!(c["models"], serde_json::json!(["dry", "squeeze"]));
-    // the other model's scene run, as `simulate` gives it (the scene's cycles)
-    let mut args = vec!["simulate", scene, "--set", "piston.lubrication=squeeze"];
-    args.extend(["--cache-dir", &cache, "--json"]);
-    let wet = json(&linercav(&args));
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+    // `simulate` with the other model (the scene's cycles), at the scene and at 40 um
+    let wet_at = |sets: &[&str]| {
+        let mut args = vec!["simulate", scene, "--set", "piston.lubrication=squeeze"];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        args.extend(["--cache-dir", &cache, "--json"]);
+        json(&linercav(&args))
+    };
+    let wet = wet_at(&[]);
     let cyls = c["cylinders"].as_array().unwrap();
     assert_eq!(cyls.len(), 2);
-    for (pair, (own, w)) in cyls.iter().zip(
-        v["simulate"]["cylinders"]
+    for (pair, (w, worst)) in cyls.iter().zip(
+        wet["cylinders"]
             .as_array()
             .unwrap()
             .iter()
-            .zip(wet["cylinders"].as_array().unwrap()),
+            .zip(worst_peaks(&wet)),
     ) {
-        let slap = &pair["slap_force_n"];
-        assert!(close(
-            slap[0].as_f64().unwrap(),
-            own["peak_slap_force_n"].as_f64().unwrap()
-        ));
-        assert!(close(
-            slap[1].as_f64().unwrap(),
-            w["peak_slap_force_n"].as_f64().unwrap()
-        ));
-        let worst = w["points"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|p| p["peak_negative_m_s2"].as_f64().unwrap())
-            .fold(f64::MIN, f64::max);
+        let slap = pair["slap_force_n"][1].as_f64().unwrap();
+        assert!(
+            close(slap, w["peak_slap_force_n"].as_f64().unwrap()),
+            "{pair}"
+        );
         assert!(
             close(pair["worst_m_s2"][1].as_f64().unwrap(), worst),
             "{pair}"
         );
     }
+    let largest = |v: &serde_json::Value| worst_peaks(v).into_iter().fold(f64::MIN, f64::max);
+    let point = |sweep: &serde_json::Value, x: f64| -> serde_json::Value {
+        let p = sweep
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["value"].as_f64().unwrap() == x);
+        p.unwrap_or_else(|| panic!("no point at {x}")).clone()
+    };
     // the sweeps at the scene's values; at the scene's own value, the other model's scene run
-    let largest_wet = cyls
-        .iter()
-        .map(|p| p["worst_m_s2"][1].as_f64().unwrap())
-        .fold(f64::MIN, f64::max);
     for (key, own) in [("clearance", 80.0), ("pin_offset", 0.0)] {
         let values = |a: &serde_json::Value| -> Vec<f64> {
             a.as_array()
@@ -580,17 +584,18 @@ fn contract_report_compares_skirt_models_when_the_scene_asks() {
         };
         let sweep = &c[format!("{key}_sweep")];
         assert_eq!(values(sweep), values(&v[format!("{key}_sweep")]), "{key}");
-        let at_own = sweep
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|p| p["value"].as_f64().unwrap() == own)
-            .unwrap_or_else(|| panic!("{key}: the scene's own value {own}"));
-        assert!(
-            close(at_own["largest_m_s2"].as_f64().unwrap(), largest_wet),
-            "{key}"
-        );
+        let at_own = point(sweep, own)["largest_m_s2"].as_f64().unwrap();
+        assert!(close(at_own, largest(&wet)), "{key}");
     }
+    // away from the scene: the other model's run at 40 um, its change against the scene's
+    let wet40 = largest(&wet_at(&["piston.clearance_um=40"]));
+    let p40 = point(&c["clearance_sweep"], 40.0);
+    assert!(close(p40["largest_m_s2"].as_f64().unwrap(), wet40), "{p40}");
+    let dry40 = point(&v["clearance_sweep"], 40.0)["largest_m_s2"]
+        .as_f64()
+        .unwrap();
+    let delta = p40["change"]["delta_m_s2"].as_f64().unwrap();
+    assert!(close(delta, wet40 - dry40), "{p40}");
     // the scene's own model is refused, before any output
     let out2 = dir.path().join("rep2");
     let o2 = out2.to_str().unwrap();
@@ -600,8 +605,30 @@ fn contract_report_compares_skirt_models_when_the_scene_asks() {
     args.extend(["--out", o2]);
     common::refused(&args, 2, "report.compare_lubrication");
     assert!(!out2.exists());
-    // a budget the comparison exceeds names its key
+    // the estimate: the comparison adds 19 / 2 lubricated transients, and a refusal names it
+    let hours = |extra: &[&str]| -> f64 {
+        let mut args = vec!["report", scene, "--set", "limits.max_hours=1e-6"];
+        for s in extra {
+            args.extend(["--set", s]);
+        }
+        args.extend(["--out", o2]);
+        let err = common::refused(&args, 2, "limits.max_hours");
+        let h = err.split("would take about ").nth(1).unwrap();
+        h.split(' ').next().unwrap().parse().unwrap()
+    };
+    let (with, without) = (hours(&[ask]), hours(&[]));
+    let lubricated =
+        linercav::scene::budget::transient(&small_scene(&["piston.lubrication=squeeze"]))
+            .unwrap()
+            .seconds;
+    let added = (with - without) * 3600.0;
+    let expected = lubricated * 19.0 / 2.0;
+    // the refusal prints 4 significant digits of hours: 0.1 % of the sums here
+    assert!(
+        (added - expected).abs() <= 0.01 * expected,
+        "{added} s against {expected} s"
+    );
     let mut args = vec!["report", scene, "--set", ask];
-    args.extend(["--set", "limits.max_hours=1e-4", "--out", o2]);
+    args.extend(["--set", "limits.max_hours=1e-6", "--out", o2]);
     common::refused(&args, 2, "report.compare_lubrication");
 }

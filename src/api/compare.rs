@@ -4,7 +4,7 @@
 //! enter the reduction).
 
 use super::rom::CacheOptions;
-use super::{evaluate_scene, Variants};
+use super::{evaluate_scene, Swept, Variants};
 use crate::error::Result;
 use crate::report::comparison::SkirtComparison;
 use crate::report::figures::SweepPoint;
@@ -19,16 +19,13 @@ pub struct SceneSide<'a> {
     pub evaluation: &'a crate::cavitation::evaluate::Evaluation,
     pub clearance: &'a [SweepPoint],
     pub pin_offset: &'a [SweepPoint],
-    /// The scene's own clearance \[um\] and pin offset \[mm\] (their sweep points are the
-    /// scene's run).
-    pub own: (f64, f64),
 }
 
-/// The overrides of one comparison run: the other model, and the swept key's value when the
-/// run is a sweep point away from the scene's own value.
-fn comparison_sets(other: Lubrication, swept: Option<(&str, f64)>) -> Vec<String> {
+/// The overrides of one comparison run: the other model, and those of the sweep point it
+/// repeats (none for the scene's own run).
+fn comparison_sets(other: Lubrication, swept: Swept) -> Vec<String> {
     let mut sets = vec![format!("piston.lubrication={}", other.name())];
-    sets.extend(swept.map(|(key, v)| format!("{key}={v}")));
+    sets.extend(swept.sets());
     sets
 }
 
@@ -44,22 +41,19 @@ pub fn compare_skirts(
     other: Lubrication,
     side: &SceneSide<'_>,
 ) -> Result<(Variants, SkirtComparison)> {
-    let near = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(1.0);
     // per job: the sweep (0 clearance, 1 pin offset) and the point's index, None: the scene
     let mut jobs: Vec<Option<(usize, usize)>> = vec![None];
-    let mut extra = vec![comparison_sets(other, None)];
-    for (s, (key, pts, own)) in [
-        ("piston.clearance_um", side.clearance, side.own.0),
-        ("piston.pin_offset_mm", side.pin_offset, side.own.1),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        for (i, p) in pts.iter().enumerate() {
-            if !near(p.value, own) {
-                jobs.push(Some((s, i)));
-                extra.push(comparison_sets(other, Some((key, p.value))));
-            }
+    let mut extra = vec![comparison_sets(other, Swept::Scene)];
+    let sweeps = [side.clearance, side.pin_offset];
+    let swept = |s: usize, v: f64| match s {
+        0 => Swept::Clearance(v),
+        _ => Swept::PinOffset(v),
+    };
+    for (s, pts) in sweeps.into_iter().enumerate() {
+        // the scene's own point (no change against itself) is the scene's run
+        for (i, p) in pts.iter().enumerate().filter(|(_, p)| p.change.is_some()) {
+            jobs.push(Some((s, i)));
+            extra.push(comparison_sets(other, swept(s, p.value)));
         }
     }
     let names: Vec<String> = extra.iter().map(|e| e.join(" ")).collect();

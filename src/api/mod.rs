@@ -650,7 +650,6 @@ pub fn report_runs(
             evaluation: &evaluation,
             clearance: &clearance,
             pin_offset: &pin_offset,
-            own: (cur_c, cur_o),
         };
         let (v, c) = compare::compare_skirts(variants, scene, (path, sets), cache, other, &side)?;
         variants = v;

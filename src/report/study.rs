@@ -288,8 +288,8 @@ pub fn key_groups<'a>(
 /// The three-panel figure of one varied key: per cylinder, slap force, peak tilt and peak
 /// negative acceleration (largest over the points) against the key; for a grid the other
 /// numeric keys held at their first value and each combination of the other non-numeric keys
-/// (such as `piston.lubrication`) its own set of lines (solid, then dashed), for a sample
-/// every run (dots).
+/// (such as `piston.lubrication`) its own set of lines (solid, dashed, dots only, in turn),
+/// for a sample every run (dots).
 pub fn draw_key(
     path: &Path,
     keys: &[String],
@@ -314,8 +314,8 @@ pub fn draw_key(
                         .iter()
                         .filter_map(|r| Some((numeric(&r.values[key])?, f(r, c))))
                         .collect(),
-                    mark: match (sample, gi % 2) {
-                        (true, _) => Mark::Dots,
+                    mark: match (sample, gi % 3) {
+                        (true, _) | (false, 2) => Mark::Dots,
                         (false, 0) => Mark::LineDots,
                         (false, _) => Mark::DashedDots,
                     },

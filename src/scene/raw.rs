@@ -53,7 +53,8 @@ pub struct RawReport {
     /// clearance and pin-offset sweeps at the same values, with that skirt as well (the oil
     /// film's data from `[piston.oil]`), and adds the section "Skirt models compared" to
     /// summary.md, `skirt_comparison` to summary.json and `skirt_comparison.png`. A
-    /// lubricated run costs about 16 dry ones (docs/validation.md). Default: none.
+    /// lubricated run costs about 16 dry ones (docs/validation.md); a run that stops (a
+    /// starved film's, exit 1) stops the report, as any of its runs does. Default: none.
     #[serde(default)]
     pub compare_lubrication: Option<RawLubrication>,
 }

@@ -382,12 +382,16 @@ fn validate_report(
     let Some(other) = raw.report.compare_lubrication else {
         return Ok(ReportSpec::default());
     };
-    if !simulated {
+    let Some(piston) = raw.piston.as_ref().filter(|_| simulated) else {
         return Err(c.err(
             "report.compare_lubrication",
             "compares two transients: the scene needs [piston], [operating] and [transient]",
         ));
-    }
+    };
+    // the other model's film data (`[piston.oil]`) are checked now, not after the scene's runs
+    let mut other_piston = piston.clone();
+    other_piston.lubrication = other;
+    validate_oil(c, &other_piston)?;
     Ok(ReportSpec {
         compare_lubrication: Some(lubrication_of(other)),
     })

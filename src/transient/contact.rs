@@ -572,6 +572,14 @@ pub fn step(
     })
 }
 
+/// w_j += k g_j + c v_j for every j: a row of the step matrix W (stored as a column of its
+/// transpose) gains a slice's stiffness and damping times a row of G and G_v.
+fn add_row(w: &mut [f64], (k, g): (f64, &[f64]), (c, v): (f64, &[f64])) {
+    for ((wj, gj), vj) in w.iter_mut().zip(g).zip(v) {
+        *wj += k * gj + c * vj;
+    }
+}
+
 /// Moves the slices to their next pieces: all that changed, or `late` in the iteration only
 /// the most violated (guards against cycling).
 fn apply_changes(pieces: &mut [Piece], (changes, worst): PieceChanges, late: bool) {
@@ -751,14 +759,19 @@ impl<'s, 'a> Step<'s, 'a> {
                 cd[r] = if pieces[i].damped { s.damping } else { 0.0 };
             }
         }
-        // W and right-hand sides [r0 | (Kt + kappa Cd) S]
-        let mut w = DMatrix::<f64>::identity(na, na);
+        // W built as its transpose from the transposes of G and G_v: row r of each is the
+        // contiguous column r (the same sums in the same order as row by row) and right-hand
+        // sides [r0 | (Kt + kappa Cd) S]
+        let (g, gv) = (&g.transpose(), &gv.transpose());
+        let mut wt = DMatrix::<f64>::identity(na, na);
         let mut rhs = DMatrix::<f64>::zeros(na, 1 + nq);
         for (r, &i) in active.iter().enumerate() {
             let s = &slices[i];
-            for (c2, _) in active.iter().enumerate() {
-                w[(r, c2)] += kt[r] * g[(r, c2)] + cd[r] * gv[(r, c2)];
-            }
+            add_row(
+                wt.column_mut(r).as_mut_slice(),
+                (kt[r], g.column(r).as_slice()),
+                (cd[r], gv.column(r).as_slice()),
+            );
             let (u, du) = pred.exact(i);
             let b = s.body;
             rhs[(r, 0)] = av[r] - kt[r] * (s.gap + u)
@@ -768,10 +781,13 @@ impl<'s, 'a> Step<'s, 'a> {
             rhs[(r, 2 + 2 * b)] = f * s.row[1];
         }
         if !self.blocks.is_empty() {
-            self.add_films(active, (g, gv), pred, (&mut w, &mut rhs));
+            self.add_films(active, (g, gv), pred, (&mut wt, &mut rhs));
         }
         let sol = if na > 0 {
-            w.lu().solve(&rhs).ok_or(StepFailure::Singular)?
+            wt.transpose()
+                .lu()
+                .solve(&rhs)
+                .ok_or(StepFailure::Singular)?
         } else {
             rhs.clone()
         };
@@ -783,10 +799,11 @@ impl<'s, 'a> Step<'s, 'a> {
         Ok((q, fa))
     }
 
-    /// Adds the engaged films' linearised forces to the rows of their slices: for slice i of a
-    /// block and every slice k of it, with p_k = s_k . q - g_k - u~_k - (G F)_k and
+    /// Adds the engaged films' linearised forces to the rows of their slices (`g`, `gv`: G and
+    /// G_v transposed, so that their rows are contiguous): for slice i of a block and every
+    /// slice k of it, with p_k = s_k . q - g_k - u~_k - (G F)_k and
     /// p'_k = s_k . (v~ + kappa (q - q~)) - u'~_k - (G_v F)_k,
-    ///   W_i. += D_ik G_k. + C_ik G_v,k.,
+    ///   W_i. += D_ik G_k. + C_ik G_v,k. (W stored as its transpose `wt`),
     ///   r0_i += F0_i - D_ik p0_k - C_ik p0'_k - D_ik (g_k + u~_k) + C_ik (s_k . v~ - kappa s_k . q~ - u'~_k),
     ///   (rhs_q)_i += (D_ik + kappa C_ik) s_k.
     fn add_films(
@@ -794,10 +811,9 @@ impl<'s, 'a> Step<'s, 'a> {
         active: &[usize],
         (g, gv): (&DMatrix<f64>, &DMatrix<f64>),
         pred: &Predictions<'_, '_>,
-        (w, rhs): (&mut DMatrix<f64>, &mut DMatrix<f64>),
+        (wt, rhs): (&mut DMatrix<f64>, &mut DMatrix<f64>),
     ) {
         let kappa = self.kappa;
-        let na = active.len();
         let pos = |i: usize| {
             active
                 .binary_search(&i)
@@ -809,9 +825,11 @@ impl<'s, 'a> Step<'s, 'a> {
                 rhs[(r, 0)] += blk.f0[a];
                 let mut term = |c: usize, kk: f64, cc: f64, shift: f64| {
                     let rc = pos(c);
-                    for col in 0..na {
-                        w[(r, col)] += kk * g[(rc, col)] + cc * gv[(rc, col)];
-                    }
+                    add_row(
+                        wt.column_mut(r).as_mut_slice(),
+                        (kk, g.column(rc).as_slice()),
+                        (cc, gv.column(rc).as_slice()),
+                    );
                     let s = &self.slices[c];
                     let b = s.body;
                     let (u, du) = pred.exact(c);
