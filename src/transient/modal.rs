@@ -322,7 +322,9 @@ impl Structure for ModalStructure {
 
 impl ModalStructure {
     /// scale * sum_d w_id sum_e X_de F_e at every location of this step, X a DOF-level step
-    /// matrix (S or T) and the forces at `active` gathered on the DOFs.
+    /// matrix (S or T) and the forces at `active` gathered on the DOFs. Each DOF's sum over e
+    /// is formed once (neighbouring locations share their DOFs), the same sum in the same
+    /// order as per location.
     fn apply_step_matrix(
         &self,
         x: &Dense,
@@ -336,13 +338,19 @@ impl ModalStructure {
                 .map(|&k| &self.locs[k])
                 .zip(forces.iter().copied()),
         );
+        let mut at_dof: Vec<Option<f64>> = vec![None; x.nrows()];
+        let mut sum_at = |d: usize| -> f64 {
+            *at_dof[d].get_or_insert_with(|| {
+                let row = row(x, d);
+                gathered.iter().map(|&(e, f)| row[e] * f).sum::<f64>()
+            })
+        };
         self.locs
             .iter()
             .map(|at| {
                 let mut u = 0.0;
                 for m in 0..2 {
-                    let row = row(x, at.dofs[m]);
-                    u += at.weights[m] * gathered.iter().map(|&(e, f)| row[e] * f).sum::<f64>();
+                    u += at.weights[m] * sum_at(at.dofs[m]);
                 }
                 scale * u
             })
