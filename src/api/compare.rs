@@ -113,6 +113,5 @@ pub fn model_of(scene: &Scene) -> Lubrication {
     scene
         .simulation
         .as_ref()
-        .and_then(|s| s.piston.oil.as_ref())
-        .map_or(Lubrication::Dry, |o| o.model)
+        .map_or(Lubrication::Dry, |s| s.piston.lubrication())
 }

@@ -133,6 +133,15 @@ pub struct PistonSpec {
     pub oil: Option<spec::OilSpec>,
 }
 
+impl PistonSpec {
+    /// The skirt model that runs: the oil film's, or dry without one.
+    pub fn lubrication(&self) -> spec::Lubrication {
+        self.oil
+            .as_ref()
+            .map_or(spec::Lubrication::Dry, |o| o.model)
+    }
+}
+
 /// Operating point besides the speed, SI.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Operating {
