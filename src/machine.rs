@@ -1,6 +1,6 @@
 //! What the machine can hold: memory available to a new job (Linux `/proc/meminfo`, the
 //! address-space limit a batch scheduler or `prlimit --as` sets, and the memory cgroup's
-//! limit a container or a scheduler sets).
+//! limit a container or a scheduler sets), and a way to hand freed memory back to it.
 
 /// Memory available for new work \[bytes\]: the smaller of the system's (`MemAvailable`: what can
 /// be allocated without swapping, else `MemTotal`, else 8 GiB when the kernel does not say)
@@ -119,6 +119,25 @@ fn system_memory() -> u64 {
     field("MemAvailable:")
         .or_else(|| field("MemTotal:"))
         .unwrap_or(8 << 30)
+}
+
+/// The allocator's way to hand the memory it keeps after a free back to the operating system,
+/// set once by the program that chose the allocator ([`set_memory_release`]).
+static RELEASE: std::sync::OnceLock<fn()> = std::sync::OnceLock::new();
+
+/// Sets what [`release_memory`] calls (the command line sets mimalloc's collection; the
+/// system allocator needs none: it unmaps large blocks when they are freed).
+pub fn set_memory_release(release: fn()) {
+    let _ = RELEASE.set(release);
+}
+
+/// Hands freed memory back to the operating system now, where the allocator would keep it
+/// for reuse: called after large arrays are let go so that the next large allocation (a
+/// factor) does not come on top of them in resident memory.
+pub fn release_memory() {
+    if let Some(release) = RELEASE.get() {
+        release();
+    }
 }
 
 #[cfg(test)]

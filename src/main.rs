@@ -15,6 +15,13 @@ use std::time::Instant;
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+/// mimalloc keeps freed pages for reuse; the large solves hand them back when they let arrays
+/// go before a factorisation (`linercav::machine::release_memory`).
+fn release_freed_memory() {
+    // SAFETY: mi_collect only frees what mimalloc itself holds unused; any thread may call it.
+    unsafe { libmimalloc_sys::mi_collect(true) }
+}
+
 #[derive(Parser)]
 #[command(
     name = "linercav",
@@ -751,6 +758,7 @@ fn set_arguments() -> Vec<String> {
 
 fn main() {
     single_threaded_blas();
+    linercav::machine::set_memory_release(release_freed_memory);
     cli::install();
     static LOG: std::sync::OnceLock<StderrLog> = std::sync::OnceLock::new();
     let logger = LOG.get_or_init(|| StderrLog {

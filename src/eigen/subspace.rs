@@ -26,14 +26,22 @@ pub fn inverse_subspace(
     x
 }
 
-/// One pass X <- orth((K - sigma M)^-1 M X): the block solved in panels of at most 64
-/// columns on both cores (a block narrower than 64 in two panels of half its width, so that
-/// both cores work), then orthonormalised (thin QR). `x` is let go once M X is formed.
+/// One pass X <- orth((K - sigma M)^-1 M X): the block solved by [`solve_block`], then
+/// orthonormalised (thin QR). `x` is let go once M X is formed.
 pub fn inverse_pass(mass: &SymCsc, llt: &Llt<'_>, x: Mat<f64>) -> Mat<f64> {
     let (n, count) = (x.nrows(), x.ncols());
     let mut y = Mat::<f64>::zeros(n, count);
     mass.mul_dense(x.as_ref(), y.as_mut());
     drop(x);
+    solve_block(llt, &mut y);
+    thin_q(y)
+}
+
+/// Y <- (K - sigma M)^-1 Y in place, in panels of at most 64 columns on both cores (a block
+/// narrower than 64 in two panels of half its width, so that both cores work); each panel's
+/// arithmetic is the same on any number of threads.
+pub fn solve_block(llt: &Llt<'_>, y: &mut Mat<f64>) {
+    let count = y.ncols();
     let panel = if count < 64 {
         count.div_ceil(2).max(1)
     } else {
@@ -41,7 +49,6 @@ pub fn inverse_pass(mass: &SymCsc, llt: &Llt<'_>, x: Mat<f64>) -> Mat<f64> {
     };
     y.par_col_chunks_mut(panel)
         .for_each(|p| llt.solve_in_place(p));
-    thin_q(y)
 }
 
 /// The thin Q of Y = Q R (Householder, blocked), with Y's storage holding the reflectors: one

@@ -6,6 +6,7 @@ pub mod factor;
 pub mod kernels;
 pub mod ordering;
 pub mod sparse;
+pub mod spill;
 pub mod tree_solve;
 
 /// Makes faer's dense operations that take no explicit parallelism (products by `*`, dense

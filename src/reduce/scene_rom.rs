@@ -621,9 +621,9 @@ pub fn full_modes(scene: &Scene, count: usize) -> Result<SceneFullModes> {
     let em = load_meshes(scene)?;
     let inp = rom_inputs(scene, &em, false);
     let axis_x = inp.axis_x.clone();
-    let system = super::full::FullSystem::build(&inp)?;
+    let mut system = super::full::FullSystem::build(&inp)?;
     let (sol, _) = crate::eigen::modal::certified_modes(
-        &system.km,
+        &mut system.km,
         &system.analysis,
         count,
         scene.solver.sigma(),
