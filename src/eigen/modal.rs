@@ -147,7 +147,8 @@ fn certify_with_recovery(
         timings.factorisation += t.0;
         timings.eigen += t.1;
         let t = Instant::now();
-        let sturm = sturm_check(km, analysis, &all.eigenvalues, count)?;
+        let mut all = all;
+        let sturm = sturm_check(km, analysis, &mut all, count)?;
         timings.certification += t.elapsed().as_secs_f64();
         let retry = match &sturm {
             Some(st) if st.found > st.expected && attempt < RECOVERY_ATTEMPTS => {
@@ -213,25 +214,26 @@ fn lanczos(
     loop {
         let mut settings = EigenSettings::new(nev, sigma);
         settings.seed = seed;
-        let solved = with_shifted(km, analysis, sigma, |pattern, values| {
+        let solved = with_shifted((km, &mut Vec::new()), analysis, sigma, |pattern, values| {
             let t = Instant::now();
-            let llt = analysis.llt(pattern, &values)?;
-            drop(values);
+            let n = pattern.n;
+            let llt = analysis.llt(&pattern, &values)?;
+            drop((values, pattern));
             crate::machine::release_memory();
             let better = (checks > 0)
                 .then(|| placed_shift(&mass, &llt, nev, sigma))
                 .flatten();
             t_factor += t.elapsed().as_secs_f64();
+            // the check's block goes back to the system before ARPACK's basis is allocated
+            crate::machine::release_memory();
             if let Some(better) = better {
                 return Ok::<_, ModalError>(Err(better));
             }
             let t = Instant::now();
-            let modes = solve_modes(
-                pattern.n,
-                &settings,
-                |x, y| mass.matvec(x, y),
-                |x| llt.solve_vec(x),
-            );
+            // the solve owns the factor: it goes when the iteration ends, before the Ritz
+            // vectors are formed beside ARPACK's basis
+            let solve = move |x: &mut [f64]| llt.solve_vec(x);
+            let modes = solve_modes(n, &settings, |x, y| mass.matvec(x, y), solve);
             t_eigen += t.elapsed().as_secs_f64();
             Ok(Ok(modes?))
         })??;
@@ -254,26 +256,26 @@ fn lanczos(
 
 /// Runs `work` on the lower triangle of K - sigma M (what the lower-side factorisations read,
 /// half the memory of both triangles) and the pattern it lies on. When the factor of the
-/// analysis will take [`crate::linalg::spill::SPILL_FACTOR_BYTES`] or more, K, M and the full
-/// pattern's rows wait on disk meanwhile ([`crate::linalg::spill`]): they are not read while a
+/// analysis will take [`crate::linalg::spill::SPILL_FACTOR_BYTES`] or more, K, M, the full
+/// pattern's rows and `extra` (mode shapes, or nothing) wait on disk meanwhile ([`crate::linalg::spill`]): they are not read while a
 /// factor exists, and the factor is most of the memory. They are taken back, bit for bit,
 /// before this returns, whatever `work` returned. `work` owns the values, so it can let them
-/// go once factorised.
+/// go, with their pattern, once factorised.
 fn with_shifted<R>(
-    km: &mut StiffnessMass,
+    (km, extra): (&mut StiffnessMass, &mut Vec<f64>),
     analysis: &Analysis,
     sigma: f64,
-    work: impl FnOnce(&Pattern, Vec<f64>) -> R,
+    work: impl FnOnce(Pattern, Vec<f64>) -> R,
 ) -> Result<R, ModalError> {
     let (lower, values) = lower_shifted(km, sigma);
     if analysis.factor_nnz().saturating_mul(8) < spill_threshold() {
-        return Ok(work(&lower, values));
+        return Ok(work(lower, values));
     }
-    let aside = km.put_aside();
+    let aside = km.put_aside(extra);
     crate::machine::release_memory();
-    let result = work(&lower, values);
+    let result = work(lower, values);
     if let Some(aside) = aside {
-        km.take_back(aside).map_err(ModalError::Aside)?;
+        km.take_back(aside, extra).map_err(ModalError::Aside)?;
     }
     Ok(result)
 }
@@ -325,12 +327,26 @@ pub fn placed_shift(
     if nev == 0 || sigma >= 0.0 {
         return None;
     }
+    // the fixed start block, its rows put in the factor's order (the check works there)
     let mut x = super::dense_lanczos::random_block(n, b, 0x2545_f491_4f6c_dd1d);
+    let (fwd, _) = llt.order();
+    let mut column = vec![0.0; n];
+    for j in 0..b {
+        column
+            .iter_mut()
+            .zip(x.col(j).iter())
+            .for_each(|(c, v)| *c = *v);
+        x.col_mut(j)
+            .iter_mut()
+            .zip(fwd)
+            .for_each(|(v, &old)| *v = column[old]);
+    }
+    drop(column);
     let mut last: Option<f64> = None;
     for pass in 1..=SHIFT_CHECK_PASSES {
-        let (next, ritz) = checked_pass(mass, llt, x, sigma);
+        let (next, ritz) = checked_pass(mass, llt, x, sigma)?;
         x = next;
-        let theta_max = ritz?[nev - 1];
+        let theta_max = ritz[nev - 1];
         log::debug!("shift check pass {pass}: lambda_{nev} <= {theta_max:.4e} (shift {sigma:.4e})");
         if pass == SHIFT_CHECK_PASSES {
             return (theta_max > 0.0 && -sigma > SHIFT_REACH * theta_max)
@@ -355,39 +371,86 @@ pub fn placed_shift(
 /// of a move ([`placed_shift`]).
 pub const SHIFT_CHECK_MARGIN: f64 = 4.0;
 
-/// One pass of the shift check: Y = (K - sigma M)^-1 M X ([`super::subspace::solve_block`]),
-/// the Rayleigh-Ritz values of (K, M) on span(Y), ascending (None when Y^T M Y is not
-/// positive definite), and the next block orth(Y). K is not read: K Y = (K - sigma M) Y +
-/// sigma M Y = M X + sigma M Y, so Y^T K Y = Y^T (M X) + sigma Y^T M Y. With D scaling Y^T M Y
-/// to a unit diagonal and C C^T = D Y^T M Y D, the values are the eigenvalues of
-/// C^-1 D (Y^T K Y) D C^-T; the k-th bounds the k-th eigenvalue from above. At most two n x b
-/// blocks are alive at once (the check's memory adds to the factor's).
+/// One pass of the shift check on a block X held in the factor's row order (P X, [`Llt::order`]):
+/// Y = (K - sigma M)^-1 M X, the Rayleigh-Ritz values of (K, M) on span(Y), ascending, and
+/// the next block, Y made M-orthonormal (None when Y^T M Y is not positive definite: the
+/// block's columns are numerically dependent, which a shift near the wanted band causes, and
+/// such a shift is kept). With
+/// K - sigma M = P^T L L^T P and Z = L^-1 P M X (the forward half of the solve), P Y = L^-T Z,
+/// so Y^T M X = Z^T Z: the block is transformed in place and no second n x b block is alive
+/// (the check's memory adds to the factor's). K is not read: K Y = M X + sigma M Y, so
+/// Y^T K Y = Y^T (M X) + sigma Y^T M Y. With D scaling Y^T M Y to a unit diagonal and
+/// C C^T = D Y^T M Y D, the values are the eigenvalues of C^-1 D (Y^T K Y) D C^-T (the k-th
+/// bounds the k-th eigenvalue from above), and Y D C^-T is M-orthonormal.
+///
+/// [`Llt::order`]: crate::linalg::factor::Llt::order
 fn checked_pass(
     mass: &SymCsc,
     llt: &crate::linalg::factor::Llt<'_>,
-    x: faer::Mat<f64>,
+    mut x: faer::Mat<f64>,
     sigma: f64,
-) -> (faer::Mat<f64>, Option<Vec<f64>>) {
-    use faer::Mat;
-    let (n, b) = (x.nrows(), x.ncols());
-    let mut y = Mat::<f64>::zeros(n, b);
-    mass.mul_dense(x.as_ref(), y.as_mut());
-    drop(x);
-    let mx = y.clone();
-    super::subspace::solve_block(llt, &mut y);
-    let ymx = y.transpose() * &mx;
-    drop(mx);
-    let mut my = Mat::<f64>::zeros(n, b);
-    mass.mul_dense(y.as_ref(), my.as_mut());
-    let ymy = y.transpose() * &my;
-    drop(my);
-    let ritz = rayleigh_ritz(&ymx, &ymy, sigma);
-    (super::subspace::thin_q(y), ritz)
+) -> Option<(faer::Mat<f64>, Vec<f64>)> {
+    let order = llt.order();
+    mass.mul_dense_permuted_in_place(order, x.as_mut());
+    super::subspace::forward_block(llt, &mut x);
+    let ymx = x.transpose() * &x;
+    super::subspace::backward_block(llt, &mut x);
+    let ymy = mass_gram(mass, order, &x);
+    let (ritz, d, c) = rayleigh_ritz(&ymx, &ymy, sigma)?;
+    // X <- Y D C^-T, i.e. (C^-1 (Y D)^T)^T, then once more on its own Gram matrix (CholQR2:
+    // the second pass restores M-orthonormality to roundoff for condition numbers of Y up to
+    // about 1e8)
+    for (j, dj) in d.iter().enumerate() {
+        x.col_mut(j).iter_mut().for_each(|v| *v *= dj);
+    }
+    right_solve_lower_transposed(&c, &mut x);
+    if let Ok(again) = mass_gram(mass, order, &x).llt(faer::Side::Lower) {
+        right_solve_lower_transposed(&again.L().to_owned(), &mut x);
+    }
+    Some((x, ritz))
+}
+
+/// X <- X C^-T in place for a lower triangular C: (C^-1 X^T)^T.
+fn right_solve_lower_transposed(c: &faer::Mat<f64>, x: &mut faer::Mat<f64>) {
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        c.as_ref(),
+        x.as_mut().transpose_mut(),
+        faer::get_global_parallelism(),
+    );
+}
+
+/// Columns of M Y formed at a time by [`mass_gram`].
+const GRAM_COLUMNS: usize = 8;
+
+/// Y^T M Y for a block Y in the factor's row order (`order`, P Y): (P Y)^T (P M P^T) (P Y),
+/// [`GRAM_COLUMNS`] columns of the product at a time.
+fn mass_gram(mass: &SymCsc, order: (&[usize], &[usize]), y: &faer::Mat<f64>) -> faer::Mat<f64> {
+    let b = y.ncols();
+    let mut gram = faer::Mat::<f64>::zeros(b, b);
+    for c0 in (0..b).step_by(GRAM_COLUMNS) {
+        let w = GRAM_COLUMNS.min(b - c0);
+        let mut my = y.subcols(c0, w).to_owned();
+        mass.mul_dense_permuted_in_place(order, my.as_mut());
+        faer::linalg::matmul::matmul(
+            gram.as_mut().subcols_mut(c0, w),
+            faer::Accum::Replace,
+            y.transpose(),
+            my.as_ref(),
+            1.0,
+            faer::get_global_parallelism(),
+        );
+    }
+    gram
 }
 
 /// The eigenvalues of (Y^T M X + sigma Y^T M Y, Y^T M Y) (both symmetrised), ascending, by a
-/// scaled Cholesky of the second ([`checked_pass`]); None when it is not positive definite.
-fn rayleigh_ritz(ymx: &faer::Mat<f64>, ymy: &faer::Mat<f64>, sigma: f64) -> Option<Vec<f64>> {
+/// scaled Cholesky of the second ([`checked_pass`]), with the scaling D and the factor C
+/// (C C^T = D Y^T M Y D); None when Y^T M Y is not positive definite.
+fn rayleigh_ritz(
+    ymx: &faer::Mat<f64>,
+    ymy: &faer::Mat<f64>,
+    sigma: f64,
+) -> Option<(Vec<f64>, Vec<f64>, faer::Mat<f64>)> {
     use faer::Mat;
     let b = ymy.nrows();
     let d: Vec<f64> = (0..b)
@@ -396,22 +459,22 @@ fn rayleigh_ritz(ymx: &faer::Mat<f64>, ymy: &faer::Mat<f64>, sigma: f64) -> Opti
     let sym = |m: &Mat<f64>, i: usize, j: usize| 0.5 * (m[(i, j)] + m[(j, i)]) * d[i] * d[j];
     let bm = Mat::from_fn(b, b, |i, j| sym(ymy, i, j));
     let a = Mat::from_fn(b, b, |i, j| sym(ymx, i, j) + sigma * bm[(i, j)]);
-    let c = bm.llt(faer::Side::Lower).ok()?;
+    let c = bm.llt(faer::Side::Lower).ok()?.L().to_owned();
     let mut s = a;
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-        c.L(),
+        c.as_ref(),
         s.as_mut(),
         faer::Par::Seq,
     );
     let mut st = s.transpose().to_owned();
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-        c.L(),
+        c.as_ref(),
         st.as_mut(),
         faer::Par::Seq,
     );
     let mut ritz = st.self_adjoint_eigenvalues(faer::Side::Lower).ok()?;
     ritz.sort_by(f64::total_cmp);
-    Some(ritz)
+    Some((ritz, d, c))
 }
 
 /// The Sturm certificate of computed eigenvalues: the negative pivots of K - sigma_c M at a
@@ -420,14 +483,16 @@ fn rayleigh_ritz(ymx: &faer::Mat<f64>, ymy: &faer::Mat<f64>, sigma: f64) -> Opti
 fn sturm_check(
     km: &mut StiffnessMass,
     analysis: &Analysis,
-    eigenvalues: &[f64],
+    modes: &mut Modes,
     count: usize,
 ) -> Result<Option<SturmCheck>, ModalError> {
-    let Some((sigma_c, expected)) = certify::sturm_shift(eigenvalues, count, 1e-4) else {
+    let Some((sigma_c, expected)) = certify::sturm_shift(&modes.eigenvalues, count, 1e-4) else {
         return Ok(None);
     };
-    let found = with_shifted(km, analysis, sigma_c, |pattern, values| {
-        analysis.negative_pivots(pattern, &values)
+    // the mode shapes wait on disk with K and M while the L D L^T lives
+    let aside = (km, &mut modes.vectors);
+    let found = with_shifted(aside, analysis, sigma_c, |pattern, values| {
+        analysis.negative_pivots(&pattern, &values)
     })??;
     Ok(Some(SturmCheck {
         shift_hz: sigma_c.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
@@ -443,6 +508,16 @@ mod tests {
     use crate::fem::model::FeModel;
     use crate::mesh::lattice::Lattice;
     use crate::scene::spec::Elastic;
+
+    /// The free-free steel model of [`block`] with cells of 50 m.
+    fn steel_block() -> FeModel {
+        let steel = Elastic {
+            young: 210e9,
+            poisson: 0.3,
+            density: 7850.0,
+        };
+        FeModel::build(block(50.0), &steel, &[]).unwrap()
+    }
 
     /// A 4 x 2 x 1 block of hex8 cells of `cell` metres.
     fn block(cell: f64) -> crate::mesh::Mesh {
@@ -535,13 +610,7 @@ mod tests {
     /// in the last bits whatever the path.
     #[test]
     fn verification_the_out_of_core_solve_gives_the_same_modes() {
-        let mesh = block(50.0);
-        let steel = Elastic {
-            young: 210e9,
-            poisson: 0.3,
-            density: 7850.0,
-        };
-        let mut model = FeModel::build(mesh, &steel, &[]).unwrap();
+        let mut model = steel_block();
         let before = model.km.clone();
         let sigma = -(2.0 * std::f64::consts::PI * 100.0_f64).powi(2);
         let (km, an) = (&mut model.km, &model.analysis);
@@ -561,5 +630,57 @@ mod tests {
         assert_eq!(model.km.pattern, before.pattern);
         assert_eq!(bits(&model.km.k), bits(&before.k));
         assert_eq!(bits(&model.km.m), bits(&before.m));
+    }
+
+    /// The shift check's pass, formed in place from the halves of the solve: on a free-free
+    /// block whose spectrum the certified solve gives, each pass's k-th Rayleigh-Ritz value
+    /// bounds the k-th eigenvalue from above (Courant-Fischer; 1e-9 of the value for
+    /// roundoff), the next block is M-orthonormal (1e-10: CholQR2 reaches roundoff times a
+    /// small multiple of b while the block's condition number stays below 1e8), and after p passes the bound of the
+    /// lowest elastic mode k = 7 is within the subspace iteration's error bound
+    /// (lambda_b+1 / lambda_k) tan^2(angle of the start) r^2p, r = (lambda_k - sigma) /
+    /// (lambda_b+1 - sigma), with tan^2 taken as n (generous for a random start on n DOFs).
+    #[test]
+    fn verification_the_shift_check_bounds_the_eigenvalues_from_above() {
+        let mut model = steel_block();
+        let sigma = -(2.0 * std::f64::consts::PI * 100.0_f64).powi(2);
+        let (km, an) = (&mut model.km, &model.analysis);
+        let b = 24;
+        let (exact, _) = certified_modes(km, an, b + 1, sigma, 4, false).unwrap();
+        let lambda = &exact.modes.eigenvalues;
+        // a shift just below zero: the check's case of a shift near the wanted modes
+        let sigma = -0.01 * lambda[6];
+        let rate = (lambda[6] - sigma) / (lambda[b] - sigma);
+        let mass = km.pattern.compress(&km.m);
+        let (lower, values) = lower_shifted(km, sigma);
+        let llt = an.llt(&lower, &values).unwrap();
+        let n = km.pattern.n;
+        let (fwd, _) = llt.order();
+        let start = super::super::dense_lanczos::random_block(n, b, 7);
+        let mut x = faer::Mat::from_fn(n, b, |new, j| start[(fwd[new], j)]);
+        for pass in 0..SHIFT_CHECK_PASSES {
+            let (next, ritz) = checked_pass(&mass, &llt, x, sigma).unwrap();
+            for (k, (r, l)) in ritz.iter().zip(lambda).enumerate() {
+                let scale = l.abs().max(lambda[6]);
+                assert!(
+                    *r >= l - 1e-9 * scale,
+                    "pass {pass} value {k}: {r} below {l}"
+                );
+            }
+            let p = (pass + 1) as i32;
+            let bound = lambda[b] / lambda[6] * n as f64 * rate.powi(2 * p);
+            let rel = (ritz[6] - lambda[6]) / lambda[6];
+            assert!(
+                rel <= bound.max(1e-9),
+                "pass {p}: bound {rel:e} off, theory {bound:e}"
+            );
+            let gram = mass_gram(&mass, llt.order(), &next);
+            let off = (0..b)
+                .flat_map(|i| (0..b).map(move |j| (i, j)))
+                .map(|(i, j)| (gram[(i, j)] - f64::from(u8::from(i == j))).abs())
+                .fold(0.0, f64::max);
+            assert!(off < 1e-10, "pass {pass}: X^T M X - I = {off:e}");
+            x = next;
+        }
     }
 }

@@ -123,7 +123,8 @@ fn start_vector(n: usize, seed: u64) -> Vec<f64> {
 /// Lowest `settings.count` eigenpairs of (K, M) given y = M x (`mass`) and x <- A^{-1} x
 /// (`solve`, A = K - sigma M): ARPACK's workspace (`Workspace::new`, refused when it would not
 /// fit in memory), its reverse-communication loop (`Workspace::iterate`) and the Ritz
-/// vectors (`Workspace::extract`), under the process-wide ARPACK lock.
+/// vectors (`Workspace::extract`), under the process-wide ARPACK lock. `solve` is dropped when
+/// the iteration ends (a solve that owns its factor lets it go before the Ritz vectors).
 pub fn solve_modes(
     n: usize,
     settings: &EigenSettings,

@@ -41,14 +41,32 @@ pub fn inverse_pass(mass: &SymCsc, llt: &Llt<'_>, x: Mat<f64>) -> Mat<f64> {
 /// narrower than 64 in two panels of half its width, so that both cores work); each panel's
 /// arithmetic is the same on any number of threads.
 pub fn solve_block(llt: &Llt<'_>, y: &mut Mat<f64>) {
-    let count = y.ncols();
-    let panel = if count < 64 {
+    y.par_col_chunks_mut(panel(y.ncols()))
+        .for_each(|p| llt.solve_in_place(p));
+}
+
+/// Z <- L^-1 Z in place, rows in the factor's order ([`Llt::order`]); panels as
+/// [`solve_block`].
+pub fn forward_block(llt: &Llt<'_>, z: &mut Mat<f64>) {
+    z.par_col_chunks_mut(panel(z.ncols()))
+        .for_each(|p| llt.forward_in_place(p));
+}
+
+/// Z <- L^-T Z in place, rows in the factor's order ([`Llt::order`]); panels as
+/// [`solve_block`].
+pub fn backward_block(llt: &Llt<'_>, z: &mut Mat<f64>) {
+    z.par_col_chunks_mut(panel(z.ncols()))
+        .for_each(|p| llt.backward_in_place(p));
+}
+
+/// Panel width of the block solves: at most 64 columns, a narrower block in two panels so
+/// that both cores work.
+fn panel(count: usize) -> usize {
+    if count < 64 {
         count.div_ceil(2).max(1)
     } else {
         64
-    };
-    y.par_col_chunks_mut(panel)
-        .for_each(|p| llt.solve_in_place(p));
+    }
 }
 
 /// The thin Q of Y = Q R (Householder, blocked), with Y's storage holding the reflectors: one

@@ -13,7 +13,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltParams, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltParams, LltRegularization};
 use faer::perm::PermRef;
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLdltRef, SupernodalLltRef};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
     SymbolicCholeskyRaw, SymmetricOrdering,
@@ -178,6 +178,39 @@ impl Llt<'_> {
             Par::Seq,
             MemStack::new(&mut mem),
         );
+    }
+
+    /// The factor's fill-reducing order (fwd, inv), fwd\[new\] = old: A = P^T L L^T P with
+    /// (P b)\[new\] = b\[fwd\[new\]\].
+    pub fn order(&self) -> (&[usize], &[usize]) {
+        self.analysis
+            .symbolic
+            .perm()
+            .expect("a fill-reducing order is given")
+            .arrays()
+    }
+
+    /// Z = L^-1 Z in place (the forward half of a solve), on rows in the factor's order
+    /// ([`Llt::order`]), on the calling thread.
+    pub fn forward_in_place(&self, rhs: MatMut<'_, f64>) {
+        let (sup, mut mem) = self.supernodal(rhs.ncols());
+        sup.l_solve_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut mem));
+    }
+
+    /// Z = L^-T Z in place (the backward half of a solve), on rows in the factor's order
+    /// ([`Llt::order`]), on the calling thread.
+    pub fn backward_in_place(&self, rhs: MatMut<'_, f64>) {
+        let (sup, mut mem) = self.supernodal(rhs.ncols());
+        sup.l_transpose_solve_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut mem));
+    }
+
+    /// The supernodal factor and the scratch of a solve with `k` right-hand sides.
+    fn supernodal(&self, k: usize) -> (SupernodalLltRef<'_, usize, f64>, MemBuffer) {
+        let SymbolicCholeskyRaw::Supernodal(sup) = self.analysis.symbolic.raw() else {
+            unreachable!("supernodal factorisation is forced in the analysis")
+        };
+        let mem = MemBuffer::new(sup.solve_in_place_scratch::<f64>(k, Par::Seq));
+        (SupernodalLltRef::new(sup, &self.l), mem)
     }
 
     /// Solves A x = b in place for one vector, on both cores along the elimination tree

@@ -23,6 +23,15 @@ impl SymCsc {
     pub fn mul_dense(&self, x: faer::MatRef<'_, f64>, y: faer::MatMut<'_, f64>) {
         self.pattern.mul_dense(&self.values, x, y)
     }
+    /// X <- P A P^T X in place ([`Pattern::mul_dense_permuted_in_place`]).
+    pub fn mul_dense_permuted_in_place(
+        &self,
+        order: (&[usize], &[usize]),
+        x: faer::MatMut<'_, f64>,
+    ) {
+        self.pattern
+            .mul_dense_permuted_in_place(&self.values, order, x)
+    }
 }
 
 /// Column-compressed symmetric pattern (both triangles), rows sorted in each column.
@@ -66,50 +75,105 @@ impl Pattern {
     /// Y = A X for a dense block X (column-major), blocked: 16 columns of X at a time are
     /// copied row-major so each stored entry of A is read once per block and multiplies a
     /// contiguous row of X (the single-vector gather is memory-bound on A).
-    pub fn mul_dense(
-        &self,
-        values: &[f64],
-        x: faer::MatRef<'_, f64>,
-        mut y: faer::MatMut<'_, f64>,
-    ) {
-        use rayon::prelude::*;
+    pub fn mul_dense(&self, values: &[f64], x: faer::MatRef<'_, f64>, y: faer::MatMut<'_, f64>) {
         const B: usize = 16;
         let n = self.n;
-        let ncol = x.ncols();
-        let mut c0 = 0;
-        let mut xr = vec![0.0; n * B];
-        let mut yr = vec![0.0; n * B];
-        while c0 < ncol {
-            let w = (ncol - c0).min(B);
-            for r in 0..n {
-                for k in 0..w {
-                    xr[r * B + k] = x[(r, c0 + k)];
-                }
-            }
-            yr.par_chunks_mut(B * 1024)
-                .enumerate()
-                .for_each(|(chunk, ys)| {
-                    let r0 = chunk * 1024;
-                    for (i, yrow) in ys.chunks_mut(B).enumerate() {
-                        let r = r0 + i;
-                        let mut acc = [0.0f64; B];
-                        for p in self.col_ptr[r]..self.col_ptr[r + 1] {
-                            let v = values[p];
-                            let xrow = &xr[self.row_idx[p] * B..self.row_idx[p] * B + B];
-                            for k in 0..B {
-                                acc[k] += v * xrow[k];
-                            }
-                        }
-                        yrow.copy_from_slice(&acc);
+        self.blocked_product::<B, _>(
+            values,
+            x.ncols(),
+            &mut (x, y),
+            |(x, _), xr, c0, w| {
+                for r in 0..n {
+                    for k in 0..w {
+                        xr[r * B + k] = x[(r, c0 + k)];
                     }
-                });
-            for r in 0..n {
-                for k in 0..w {
-                    y[(r, c0 + k)] = yr[r * B + k];
                 }
-            }
-            c0 += w;
+            },
+            |(_, y), yr, c0, w| {
+                for r in 0..n {
+                    for k in 0..w {
+                        y[(r, c0 + k)] = yr[r * B + k];
+                    }
+                }
+            },
+        );
+    }
+
+    /// X <- P A P^T X in place for a dense block X whose rows are in the order `fwd`
+    /// (fwd\[new\] = old, `inv` its inverse; (P x)\[new\] = x\[fwd\[new\]\]): the product
+    /// of [`Pattern::mul_dense`] (the same sums in the same order) on 8 columns at a time, with
+    /// two n x 8 buffers and no second block.
+    pub fn mul_dense_permuted_in_place(
+        &self,
+        values: &[f64],
+        (fwd, inv): (&[usize], &[usize]),
+        mut x: faer::MatMut<'_, f64>,
+    ) {
+        const B: usize = 8;
+        self.blocked_product::<B, _>(
+            values,
+            x.ncols(),
+            &mut x,
+            |x, xr, c0, w| {
+                for (old, &new) in inv.iter().enumerate() {
+                    for k in 0..w {
+                        xr[old * B + k] = x[(new, c0 + k)];
+                    }
+                }
+            },
+            |x, yr, c0, w| {
+                for (new, &old) in fwd.iter().enumerate() {
+                    for k in 0..w {
+                        x[(new, c0 + k)] = yr[old * B + k];
+                    }
+                }
+            },
+        );
+    }
+
+    /// The product A X of `ncol` columns, B at a time, X and the result reached through `blocks`:
+    /// `gather(blocks, xr, c0, w)` puts columns c0 .. c0 + w of X interleaved into xr (row r's
+    /// entries at r B ..), [`Pattern::interleaved_product`] forms yr = A xr, and
+    /// `scatter(blocks, yr, c0, w)` takes them out. Two n x B buffers.
+    fn blocked_product<const B: usize, S>(
+        &self,
+        values: &[f64],
+        ncol: usize,
+        blocks: &mut S,
+        gather: impl Fn(&S, &mut [f64], usize, usize),
+        scatter: impl Fn(&mut S, &[f64], usize, usize),
+    ) {
+        let mut xr = vec![0.0; self.n * B];
+        let mut yr = vec![0.0; self.n * B];
+        for c0 in (0..ncol).step_by(B) {
+            let w = (ncol - c0).min(B);
+            gather(blocks, &mut xr, c0, w);
+            self.interleaved_product::<B>(values, &xr, &mut yr);
+            scatter(blocks, &yr, c0, w);
         }
+    }
+
+    /// yr = A xr for B interleaved columns (row r's B entries at r B .. r B + B), rows on
+    /// both cores; each row's sum runs over its stored entries in order.
+    fn interleaved_product<const B: usize>(&self, values: &[f64], xr: &[f64], yr: &mut [f64]) {
+        use rayon::prelude::*;
+        yr.par_chunks_mut(B * 1024)
+            .enumerate()
+            .for_each(|(chunk, ys)| {
+                let r0 = chunk * 1024;
+                for (i, yrow) in ys.chunks_mut(B).enumerate() {
+                    let r = r0 + i;
+                    let mut acc = [0.0f64; B];
+                    for p in self.col_ptr[r]..self.col_ptr[r + 1] {
+                        let v = values[p];
+                        let xrow = &xr[self.row_idx[p] * B..self.row_idx[p] * B + B];
+                        for k in 0..B {
+                            acc[k] += v * xrow[k];
+                        }
+                    }
+                    yrow.copy_from_slice(&acc);
+                }
+            });
     }
     /// The entries of `values` on this pattern that are not exactly zero, on a pattern of
     /// their own. An assembled consistent mass matrix couples only like directions

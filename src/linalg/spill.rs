@@ -1,5 +1,5 @@
-//! A model's K, M and pattern rows put aside on disk while a large factor is alive (out of
-//! core). The certified eigen-solve reads them only before and after each factorisation and
+//! A model's K, M and pattern rows (and mode shapes waiting for their certificate) put aside
+//! on disk while a large factor is alive (out of core). The certified eigen-solve reads them only before and after each factorisation and
 //! the Lanczos iteration ([`crate::eigen::modal`]); in between, the factor holds most of the
 //! memory, so they wait in an unnamed temporary file and come back bit for bit.
 
@@ -32,29 +32,36 @@ pub fn set_spill_threshold(bytes: usize) {
 /// The arrays put aside: an unnamed temporary file (deleted when dropped) and their lengths.
 pub struct Aside {
     file: std::fs::File,
-    lens: [usize; 3],
+    lens: [usize; 4],
 }
 
 impl StiffnessMass {
-    /// Moves K, M and the pattern's row indices into a temporary file, leaving them empty,
-    /// and returns what [`StiffnessMass::take_back`] restores. None (the arrays stay in
-    /// memory) when the file cannot be made or written: putting aside saves memory, never
-    /// decides a result.
-    pub fn put_aside(&mut self) -> Option<Aside> {
+    /// Moves K, M, the pattern's row indices and `extra` (mode shapes waiting for their
+    /// certificate, or nothing) into a temporary file, leaving them empty, and returns what
+    /// [`StiffnessMass::take_back`] restores. None (the arrays stay in memory) when the file
+    /// cannot be made or written: putting aside saves memory, never decides a result.
+    pub fn put_aside(&mut self, extra: &mut Vec<f64>) -> Option<Aside> {
         let rows: &[usize] = &self.pattern.row_idx;
         let written = (|| -> std::io::Result<std::fs::File> {
             let mut file = tempfile::tempfile()?;
             file.write_all(bytemuck::cast_slice(&self.k))?;
             file.write_all(bytemuck::cast_slice(&self.m))?;
             file.write_all(bytemuck::cast_slice(rows))?;
+            file.write_all(bytemuck::cast_slice(extra))?;
             Ok(file)
         })();
         match written {
             Ok(file) => {
-                let lens = [self.k.len(), self.m.len(), self.pattern.row_idx.len()];
+                let lens = [
+                    self.k.len(),
+                    self.m.len(),
+                    self.pattern.row_idx.len(),
+                    extra.len(),
+                ];
                 self.k = Vec::new();
                 self.m = Vec::new();
                 self.pattern.row_idx = Vec::new();
+                *extra = Vec::new();
                 Some(Aside { file, lens })
             }
             Err(e) => {
@@ -64,9 +71,10 @@ impl StiffnessMass {
         }
     }
 
-    /// Reads back what [`StiffnessMass::put_aside`] wrote; an error when the file cannot be
-    /// read back in full (the model is then incomplete and the solve must stop).
-    pub fn take_back(&mut self, aside: Aside) -> std::io::Result<()> {
+    /// Reads back what [`StiffnessMass::put_aside`] wrote (`extra` receives its array); an
+    /// error when the file cannot be read back in full (the model is then incomplete and the
+    /// solve must stop).
+    pub fn take_back(&mut self, aside: Aside, extra: &mut Vec<f64>) -> std::io::Result<()> {
         let Aside { mut file, lens } = aside;
         file.rewind()?;
         let mut k = vec![0.0f64; lens[0]];
@@ -75,7 +83,9 @@ impl StiffnessMass {
         file.read_exact(bytemuck::cast_slice_mut(&mut m))?;
         let mut rows = vec![0usize; lens[2]];
         file.read_exact(bytemuck::cast_slice_mut(&mut rows))?;
-        (self.k, self.m, self.pattern.row_idx) = (k, m, rows);
+        let mut more = vec![0.0f64; lens[3]];
+        file.read_exact(bytemuck::cast_slice_mut(&mut more))?;
+        (self.k, self.m, self.pattern.row_idx, *extra) = (k, m, rows, more);
         Ok(())
     }
 }
@@ -122,10 +132,16 @@ mod tests {
         let m: Vec<f64> = k.iter().map(|v| v * std::f64::consts::PI).collect();
         let before = StiffnessMass { pattern, k, m };
         let mut km = before.clone();
-        let aside = km.put_aside().expect("the temporary directory is writable");
-        assert!(km.k.is_empty() && km.m.is_empty() && km.pattern.row_idx.is_empty());
-        km.take_back(aside).unwrap();
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let shapes: Vec<f64> = (0..7).map(|i| (i as f64).exp()).collect();
+        let mut extra = shapes.clone();
+        let aside = km
+            .put_aside(&mut extra)
+            .expect("the temporary directory is writable");
+        assert!(km.k.is_empty() && km.m.is_empty() && km.pattern.row_idx.is_empty());
+        assert!(extra.is_empty());
+        km.take_back(aside, &mut extra).unwrap();
+        assert_eq!(bits(&extra), bits(&shapes));
         assert_eq!(km.pattern, before.pattern);
         assert_eq!(bits(&km.k), bits(&before.k));
         assert_eq!(bits(&km.m), bits(&before.m));
