@@ -371,14 +371,13 @@ pub fn placed_shift(
 /// of a move ([`placed_shift`]).
 pub const SHIFT_CHECK_MARGIN: f64 = 4.0;
 
-/// One pass of the shift check on a block X held in the factor's row order (P X, [`Llt::order`]):
-/// Y = (K - sigma M)^-1 M X, the Rayleigh-Ritz values of (K, M) on span(Y), ascending, and
-/// the next block, Y made M-orthonormal (None when Y^T M Y is not positive definite: the
-/// block's columns are numerically dependent, which a shift near the wanted band causes, and
-/// such a shift is kept). With
-/// K - sigma M = P^T L L^T P and Z = L^-1 P M X (the forward half of the solve), P Y = L^-T Z,
-/// so Y^T M X = Z^T Z: the block is transformed in place and no second n x b block is alive
-/// (the check's memory adds to the factor's). K is not read: K Y = M X + sigma M Y, so
+/// One pass of the shift check on a block X held in the factor's row order (P X,
+/// [`Llt::order`]): Y = (K - sigma M)^-1 M X, the Rayleigh-Ritz values of (K, M) on span(Y),
+/// ascending, and the next block, Y made M-orthonormal (None when Y^T M Y is not positive
+/// definite: the block's columns are numerically dependent, which a shift near the wanted band
+/// causes, and such a shift is kept). With K - sigma M = P^T L L^T P and Z = L^-1 P M X (the
+/// forward half of the solve), P Y = L^-T Z, so Y^T M X = Z^T Z: the block is transformed in
+/// place and no second n x b block is alive (the check's memory adds to the factor's). K is not read: K Y = M X + sigma M Y, so
 /// Y^T K Y = Y^T (M X) + sigma Y^T M Y. With D scaling Y^T M Y to a unit diagonal and
 /// C C^T = D Y^T M Y D, the values are the eigenvalues of C^-1 D (Y^T K Y) D C^-T (the k-th
 /// bounds the k-th eigenvalue from above), and Y D C^-T is M-orthonormal.
