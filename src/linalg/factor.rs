@@ -13,7 +13,9 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltParams, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::{LltParams, LltRegularization};
 use faer::perm::PermRef;
-use faer::sparse::linalg::cholesky::supernodal::{SupernodalLdltRef, SupernodalLltRef};
+use faer::sparse::linalg::cholesky::supernodal::{
+    SupernodalLdltRef, SupernodalLltRef, SymbolicSupernodalCholesky,
+};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
     SymbolicCholeskyRaw, SymmetricOrdering,
@@ -70,6 +72,14 @@ impl Analysis {
             plan,
             n: pattern.n,
         })
+    }
+
+    /// The supernodal structure (the analysis forces a supernodal factorisation).
+    fn supernodes(&self) -> &SymbolicSupernodalCholesky<usize> {
+        let SymbolicCholeskyRaw::Supernodal(sup) = self.symbolic.raw() else {
+            unreachable!("supernodal factorisation is forced in the analysis")
+        };
+        sup
     }
 
     /// Number of stored entries of the factor L.
@@ -129,9 +139,7 @@ impl Analysis {
                     n: self.n,
                 }
             })?;
-        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
-            unreachable!("supernodal factorisation was forced in the analysis")
-        };
+        let sym = self.supernodes();
         let ldlt = SupernodalLdltRef::new(sym, &l);
         let mut negative = 0;
         for s in 0..sym.n_supernodes() {
@@ -206,9 +214,7 @@ impl Llt<'_> {
 
     /// The supernodal factor and the scratch of a solve with `k` right-hand sides.
     fn supernodal(&self, k: usize) -> (SupernodalLltRef<'_, usize, f64>, MemBuffer) {
-        let SymbolicCholeskyRaw::Supernodal(sup) = self.analysis.symbolic.raw() else {
-            unreachable!("supernodal factorisation is forced in the analysis")
-        };
+        let sup = self.analysis.supernodes();
         let mem = MemBuffer::new(sup.solve_in_place_scratch::<f64>(k, Par::Seq));
         (SupernodalLltRef::new(sup, &self.l), mem)
     }
@@ -216,13 +222,11 @@ impl Llt<'_> {
     /// Solves A x = b in place for one vector, on both cores along the elimination tree
     /// ([`super::tree_solve`]; the same bits on any number of threads): x = P^T L^-T L^-1 P b.
     pub fn solve_vec(&self, x: &mut [f64]) {
-        let sym = &self.analysis.symbolic;
-        let SymbolicCholeskyRaw::Supernodal(sup) = sym.raw() else {
-            unreachable!("supernodal factorisation is forced in the analysis")
-        };
-        let (fwd, inv) = sym.perm().expect("a fill-reducing order is given").arrays();
+        let (fwd, inv) = self.order();
         let mut y: Vec<f64> = fwd.iter().map(|&f| x[f]).collect();
-        self.analysis.plan.solve(sup, &self.l, &mut y);
+        self.analysis
+            .plan
+            .solve(self.analysis.supernodes(), &self.l, &mut y);
         for (xi, &i) in x.iter_mut().zip(inv) {
             *xi = y[i];
         }
