@@ -103,6 +103,7 @@ impl ModelArgs {
                     unit,
                     material,
                     fix: Vec::new(),
+                    sets: self.sets.clone(),
                 })
             }
             _ => Err(Error::Argument {

@@ -179,27 +179,105 @@ fn regression_the_full_engine_and_exported_meshes_are_sized_before_they_are_made
     assert!(!msh.exists());
 }
 
+/// `modes` of the small engine's liner read from the hex20 fixture under
+/// `limits.max_memory_gb` = `gb`: (exit code, stdout, stderr).
+fn modes_of_the_liner_fixture(gb: &str) -> (i32, String, String) {
+    linercav(&[
+        "modes",
+        SMALL,
+        "--part",
+        "liner",
+        "--count",
+        "5",
+        "--set",
+        "liner.mesh_file=liner_hex20.msh",
+        "--set",
+        &format!("limits.max_memory_gb={gb}"),
+    ])
+}
+
 /// Regression: `modes SCENE --part liner` with the liner from a mesh file ignored the scene's
 /// `limits.max_memory_gb` (the machine's limit was checked); the scene's own limit now holds.
 #[test]
 fn regression_a_scene_mesh_file_is_held_to_the_scene_limits() {
-    let err = refused(
-        &[
+    let (code, out, err) = modes_of_the_liner_fixture("1e-9");
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(err.contains("limits.max_memory_gb allows"), "{err}");
+    assert!(err.contains("liner_hex20.msh"), "{err}");
+}
+
+/// Regression: `modes` on a mesh file was held to the ROM build's memory scaled by DOFs (13 GB
+/// for the 754k-DOF tet4 casting, which peaks at 4.8 GB), so a machine with 8-12 GB free
+/// refused it. Now the assembly is checked before it starts and the solve once the factor's
+/// size is known: a limit the assembly fits but the solve does not is refused naming the
+/// factor's entries, before the factorisation; a limit above the solve's need runs.
+#[test]
+fn regression_the_modal_solve_is_held_to_its_factor_size() {
+    let run = modes_of_the_liner_fixture;
+    // the fixture's assembly is estimated at 0.019 GB and its solve at 0.088 GB
+    let (code, out, err) = run("0.06");
+    assert_eq!(code, 2, "{out}{err}");
+    for part in [
+        "liner_hex20.msh",
+        "the modal solve",
+        "factor entries",
+        "allows 0.06 GB",
+    ] {
+        assert!(err.contains(part), "{part}: {err}");
+    }
+    let (code, _, err) = run("0.2");
+    assert_eq!(code, 0, "{err}");
+}
+
+/// Regression: `--set` beside `--mesh` was dropped without a word, so a refusal's advice to
+/// raise `limits.max_memory_gb` could not be followed for a bare mesh. The limits keys now
+/// apply; any other key, or a value that is not a positive number, is refused naming it.
+#[test]
+fn regression_set_beside_a_bare_mesh_is_applied_or_refused() {
+    let run = |set: &str| {
+        linercav(&[
             "modes",
-            SMALL,
-            "--part",
-            "liner",
+            "--mesh",
+            "tests/fixtures/liner_hex20.msh",
+            "--youngs",
+            "1.4e11",
+            "--poisson",
+            "0.26",
+            "--density",
+            "7200",
             "--count",
             "5",
             "--set",
-            "liner.mesh_file=liner_hex20.msh",
-            "--set",
-            "limits.max_memory_gb=1e-9",
-        ],
-        2,
-        "limits.max_memory_gb allows",
-    );
-    assert!(err.contains("liner_hex20.msh"), "{err}");
+            set,
+        ])
+    };
+    // (the override, what the message says, what it names)
+    for (set, expected, named) in [
+        (
+            "limits.max_memory_gb=0.01",
+            "limits.max_memory_gb allows 0.01 GB",
+            "liner_hex20.msh",
+        ),
+        (
+            "limits.max_hours=-1",
+            "expected a positive number",
+            "--set limits.max_hours=-1",
+        ),
+        (
+            "liner.mesh.radial=3",
+            "with --mesh only limits.max_memory_gb",
+            "--set liner.mesh.radial=3",
+        ),
+    ] {
+        let (code, out, err) = run(set);
+        assert_eq!(code, 2, "{set}: {out}{err}");
+        assert!(
+            err.contains(expected) && err.contains(named),
+            "{set}: {err}"
+        );
+    }
+    let (code, _, err) = run("limits.max_memory_gb=1");
+    assert_eq!(code, 0, "{err}");
 }
 
 /// Regression: a report into a directory holding `summary.md/` (a directory) ran to the end

@@ -100,7 +100,44 @@ pub enum ModelInput {
         unit: crate::mesh::MeshUnit,
         material: Option<Elastic>,
         fix: Vec<String>,
+        /// `--set` overrides: with a bare mesh only `limits.max_memory_gb` and
+        /// `limits.max_hours` ([`mesh_limits`]).
+        sets: Vec<String>,
     },
+}
+
+/// The limits of work on a bare mesh: the machine's ([`crate::scene::budget::Limits::machine`])
+/// with `limits.max_memory_gb=GB` and `limits.max_hours=H` from `sets` (the only scene keys
+/// that apply without a scene); any other key, or a value that is not a positive number, is
+/// refused naming it.
+pub fn mesh_limits(sets: &[String]) -> Result<crate::scene::budget::Limits> {
+    let (mut gb, mut hours) = (None, None);
+    for set in sets {
+        let bad = |msg: &str| Error::Argument {
+            flag: format!("--set {set}"),
+            msg: msg.into(),
+        };
+        let (key, value) = set
+            .split_once('=')
+            .ok_or_else(|| bad("expected KEY=VALUE"))?;
+        let slot = match key.trim() {
+            "limits.max_memory_gb" => &mut gb,
+            "limits.max_hours" => &mut hours,
+            _ => {
+                return Err(bad(
+                    "with --mesh only limits.max_memory_gb and limits.max_hours apply (the other keys are a scene's)",
+                ))
+            }
+        };
+        let v: f64 = value
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite() && *v > 0.0)
+            .ok_or_else(|| bad("expected a positive number"))?;
+        *slot = Some(v);
+    }
+    Ok(crate::scene::budget::Limits::machine().with(gb, hours))
 }
 
 /// A checked mesh with its material, the sets to fix, and the mesh-check findings.
@@ -116,7 +153,20 @@ pub struct LoadedPart {
     /// Shift frequency of the modal solve \[Hz\].
     pub shift_hz: f64,
     pub guard_modes: usize,
+    /// The limits the work on the part must stay within (the scene's, or the machine's for a
+    /// bare mesh), and the file a refusal names (the mesh file, else the scene).
+    pub limits: crate::scene::budget::Limits,
+    pub limits_file: std::path::PathBuf,
 }
+
+/// A mesh as read: the mesh, its file (None when generated), the material and where it came
+/// from.
+type ReadMesh = (
+    Mesh,
+    Option<String>,
+    Elastic,
+    crate::mesh::import::MaterialSource,
+);
 
 /// A part's mesh: generated, or a file read in `unit`, with its material resolved.
 fn read_mesh(
@@ -125,12 +175,7 @@ fn read_mesh(
     unit_key: &str,
     given: Option<Elastic>,
     material_key: &str,
-) -> Result<(
-    Mesh,
-    Option<String>,
-    Elastic,
-    crate::mesh::import::MaterialSource,
-)> {
+) -> Result<ReadMesh> {
     use crate::mesh::import;
     match source {
         MeshSource::Liner { geometry, meshing } => {
@@ -155,8 +200,9 @@ fn read_mesh(
     }
 }
 
-/// Sizes a generated liner's modal solve before the mesh is made (`liner.mesh.radial =
-/// 100000` ran for minutes at 6-12 GB, and aborted under an address-space cap).
+/// Sizes a generated liner's assembly before the mesh is made (`liner.mesh.radial = 100000`
+/// ran for minutes at 6-12 GB, and aborted under an address-space cap); its solve is checked
+/// once the factor's size is known (`crate::scene::budget::modal_solve`).
 fn check_generated(
     sc: &Scene,
     source: &MeshSource,
@@ -164,17 +210,40 @@ fn check_generated(
 ) -> Result<()> {
     if let MeshSource::Liner { geometry, meshing } = source {
         let dofs = crate::scene::budget::liner_dofs(geometry, meshing);
-        let mut est = crate::scene::budget::fe_model(dofs.min(1e18) as usize, "the modal solve");
+        let kind = std::iter::once(meshing.kind);
+        let mut est = crate::scene::budget::assembly(dofs.min(1e18) as usize, kind);
         est.keys = "liner.mesh (radial, radial_flange, circumferential, axial_size_mm)";
         limits.check(sc, &est)?;
     }
     Ok(())
 }
 
+/// A bare mesh file read in `unit`, with the material of the flags (checked) or the deck's.
+fn read_bare_mesh(
+    mesh: &std::path::Path,
+    unit: crate::mesh::MeshUnit,
+    material: Option<Elastic>,
+) -> Result<ReadMesh> {
+    if let Some(m) = material {
+        m.validate().map_err(|m| Error::Argument {
+            flag: "--youngs/--poisson/--density".into(),
+            msg: m.to_string(),
+        })?;
+    }
+    read_mesh(
+        &MeshSource::File(mesh.to_path_buf()),
+        unit,
+        "--unit",
+        material,
+        "--youngs/--poisson/--density",
+    )
+}
+
 /// Resolves a [`ModelInput`] to a checked mesh and material. `extra_fix` adds sets to fix.
 pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart> {
-    // a scene's own limits (`limits.max_memory_gb`), the machine's for a bare mesh
-    let mut limits = crate::scene::budget::Limits::machine();
+    // a scene's own limits (`limits.max_memory_gb`), the machine's (with `--set limits.*`) for
+    // a bare mesh
+    let limits;
     let (mesh, file, material, material_source, mut fix, label, shift_hz, guard_modes) = match input
     {
         ModelInput::Scene { scene, part, sets } => {
@@ -211,20 +280,10 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
             unit,
             material,
             fix,
+            sets,
         } => {
-            if let Some(m) = material {
-                m.validate().map_err(|m| Error::Argument {
-                    flag: "--youngs/--poisson/--density".into(),
-                    msg: m.to_string(),
-                })?;
-            }
-            let (m, file, material, src) = read_mesh(
-                &MeshSource::File(mesh.clone()),
-                *unit,
-                "--unit",
-                *material,
-                "--youngs/--poisson/--density",
-            )?;
+            limits = mesh_limits(sets)?;
+            let (m, file, material, src) = read_bare_mesh(mesh, *unit, *material)?;
             (
                 m,
                 file,
@@ -243,10 +302,18 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
         file: file.clone(),
         source,
     })?;
-    // estimated on the nodes the elements use (unused GRIDs inflated it: 3M of them, 355 GB)
-    if let Some(f) = &file {
-        let est = crate::scene::budget::fe_model(3 * mesh.nodes.len(), "the modal solve");
-        limits.check_at(std::path::Path::new(f), &est)?;
+    // the assembly, estimated on the nodes the elements use (unused GRIDs inflated it: 3M of
+    // them, 355 GB); the solve is checked once its factor's size is known
+    // (`crate::scene::budget::modal_solve`)
+    let limits_file = match (&file, input) {
+        (Some(f), _) => std::path::PathBuf::from(f),
+        (None, ModelInput::Scene { scene, .. }) => scene.clone(),
+        (None, ModelInput::Mesh { mesh, .. }) => mesh.clone(),
+    };
+    if file.is_some() {
+        let kinds = mesh.blocks.iter().map(|b| b.kind);
+        let est = crate::scene::budget::assembly(3 * mesh.nodes.len(), kinds);
+        limits.check_at(&limits_file, &est)?;
     }
     for name in &fix {
         if mesh.node_set(name).is_none() {
@@ -265,6 +332,8 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
         label,
         shift_hz,
         guard_modes,
+        limits,
+        limits_file,
     })
 }
 

@@ -45,6 +45,9 @@ pub struct ModesReport {
     /// warning says so).
     pub shift_hz: f64,
     pub factor_nnz: usize,
+    /// The solve's memory as estimated before it started, from the factor's size
+    /// (`scene::budget::modal_solve`) \[GB\].
+    pub estimated_memory_gb: f64,
     pub solves: usize,
     pub mass_products: usize,
     pub ncv: usize,
@@ -103,6 +106,9 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
             ),
         });
     }
+    let estimate =
+        crate::scene::budget::modal_solve(&model.modal_solve_sizes(req.count, part.guard_modes));
+    part.limits.check_at(&part.limits_file, &estimate)?;
     progress.phase("factorising and solving (ARPACK shift-invert)");
     let sigma = -(2.0 * std::f64::consts::PI * shift_hz).powi(2);
     let sol = model.modes_at(req.count, sigma, part.guard_modes, !req.keep_shift)?;
@@ -141,6 +147,7 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
         recovered_modes: sol.recovered,
         shift_hz: used_hz,
         factor_nnz: model.analysis.factor_nnz(),
+        estimated_memory_gb: estimate.memory / 1e9,
         solves: sol.modes.solves,
         mass_products: sol.modes.mass_products,
         ncv: sol.modes.ncv,
@@ -194,8 +201,8 @@ impl ModesReport {
             );
         }
         s += &format!(
-            "work: {} solves, {} M-products, ncv {}, factor nnz {}\ntime: {:.2} s (assembly {:.2}, ordering {:.2}, factorisation {:.2}, eigen {:.2}, certification {:.2})\n",
-            self.solves, self.mass_products, self.ncv, self.factor_nnz, self.seconds,
+            "work: {} solves, {} M-products, ncv {}, factor nnz {} (memory estimated {:.2} GB)\ntime: {:.2} s (assembly {:.2}, ordering {:.2}, factorisation {:.2}, eigen {:.2}, certification {:.2})\n",
+            self.solves, self.mass_products, self.ncv, self.factor_nnz, self.estimated_memory_gb, self.seconds,
             self.timings.assembly, self.timings.ordering, self.timings.factorisation, self.timings.eigen, self.timings.certification
         );
         s

@@ -7,6 +7,7 @@ use crate::fem::model::{FeModel, Timings};
 use crate::linalg::factor::{Analysis, FactorError};
 use crate::linalg::sparse::{Pattern, StiffnessMass, SymCsc};
 use crate::linalg::spill::{lower_shifted, spill_threshold};
+use crate::scene::budget::SolveSizes;
 use std::time::Instant;
 
 /// Why a certified modal solve failed.
@@ -69,6 +70,34 @@ impl FeModel {
         self.timings.eigen = t.eigen;
         self.timings.certification = t.certification;
         Ok(sol)
+    }
+}
+
+impl FeModel {
+    /// What solving `count` + `guard` modes of this model will hold
+    /// ([`crate::scene::budget::modal_solve`]): known exactly once the model is analysed, so a
+    /// solve that cannot fit is refused before its factorisation starts.
+    pub fn modal_solve_sizes(&self, count: usize, guard: usize) -> SolveSizes {
+        let n = self.n_free();
+        let nev = (count + guard).min(n.saturating_sub(1)).max(count);
+        let ncv = EigenSettings::new(nev, 0.0).basis_size(n);
+        let factor_entries = self.analysis.factor_nnz();
+        let nnz = self.km.pattern.nnz();
+        // the mass couples only like directions: about a third of the pattern
+        let mass_entries = nnz.div_ceil(3);
+        SolveSizes {
+            dofs: n,
+            factor_entries,
+            factor_scratch: self.analysis.factor_scratch_bytes(),
+            model: 24 * nnz + 8 * (n + 1),
+            model_resident: factor_entries.saturating_mul(8) < spill_threshold(),
+            mass: 16 * mass_entries,
+            // row indices and values of the lower triangle and the diagonal
+            lower: 8 * (nnz + n),
+            // the check's block of 2 nev columns with its product buffers, or ARPACK's basis,
+            // its eigenvectors and its three work vectors
+            columns: (2 * nev + 2 * GRAM_COLUMNS).max(ncv + nev + 3),
+        }
     }
 }
 

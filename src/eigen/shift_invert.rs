@@ -30,6 +30,17 @@ pub struct EigenSettings {
 }
 
 impl EigenSettings {
+    /// The Lanczos basis size on n DOFs: `ncv`, or max(2 nev + 1, nev + 16) when it is 0; at
+    /// most n.
+    pub fn basis_size(&self, n: usize) -> usize {
+        let nev = self.count;
+        if self.ncv == 0 {
+            (2 * nev + 1).max(nev + 16).min(n)
+        } else {
+            self.ncv.clamp(nev + 1, n)
+        }
+    }
+
     pub fn new(count: usize, sigma: f64) -> Self {
         Self {
             count,
@@ -192,11 +203,7 @@ impl Workspace {
         if nev == 0 || nev >= n {
             return Err(EigenError::TooMany { count: nev, n });
         }
-        let ncv = if settings.ncv == 0 {
-            (2 * nev + 1).max(nev + 16).min(n)
-        } else {
-            settings.ncv.clamp(nev + 1, n)
-        };
+        let ncv = settings.basis_size(n);
         let need = 8.0 * (n as f64 * (ncv + nev) as f64 + (ncv * (ncv + 8)) as f64);
         let available = crate::machine::available_memory() as f64;
         if need > 0.8 * available {

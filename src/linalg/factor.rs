@@ -87,6 +87,17 @@ impl Analysis {
         self.symbolic.len_val()
     }
 
+    /// Bytes of scratch the numeric L L^T (or L D L^T) factorisation takes beside the factor.
+    pub fn factor_scratch_bytes(&self) -> usize {
+        let llt = self
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(par(), Spec::<LltParams, f64>::default());
+        let ldlt = self
+            .symbolic
+            .factorize_numeric_ldlt_scratch::<f64>(par(), Spec::<LdltParams, f64>::default());
+        llt.size_bytes().max(ldlt.size_bytes())
+    }
+
     /// L L^T factorisation of the matrix with `values` on `pattern`.
     pub fn llt(&self, pattern: &Pattern, values: &[f64]) -> Result<Llt<'_>, FactorError> {
         let mut l = vec![0.0; self.symbolic.len_val()];

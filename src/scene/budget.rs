@@ -74,13 +74,17 @@ impl Limits {
 
     /// `limits.max_memory_gb` or 80 % of the memory available now; `limits.max_hours` or 24 h.
     pub fn of(scene: &Scene) -> Self {
-        let m = Self::machine();
-        let l = &scene.limits;
+        Self::machine().with(scene.limits.max_memory_gb, scene.limits.max_hours)
+    }
+
+    /// These limits with a memory limit of `max_memory_gb` and a time limit of `max_hours`
+    /// where given.
+    pub fn with(self, max_memory_gb: Option<f64>, max_hours: Option<f64>) -> Self {
         Self {
-            memory: l.max_memory_gb.map_or(m.memory, |gb| gb * 1e9),
-            seconds: l.max_hours.map_or(m.seconds, |h| h * 3600.0),
-            memory_from_scene: l.max_memory_gb.is_some(),
-            memory_bound: m.memory_bound,
+            memory: max_memory_gb.map_or(self.memory, |gb| gb * 1e9),
+            seconds: max_hours.map_or(self.seconds, |h| h * 3600.0),
+            memory_from_scene: max_memory_gb.is_some() || self.memory_from_scene,
+            memory_bound: self.memory_bound,
         }
     }
 
@@ -203,6 +207,84 @@ pub fn fe_model(dofs: usize, what: &'static str) -> Estimate {
         seconds: REF_BUILD_SECONDS * r.powf(1.5),
         keys: "the mesh (a coarser one)",
         detail: format!("{} DOFs", num(dofs as f64)),
+    }
+}
+
+/// Stored entries per row of K (both triangles) of a mesh of `kind`, rounded up from measured
+/// meshes: 138 for the default liner (hex20); a node of an unstructured tet4 mesh has about 14
+/// neighbours (45 entries); tet10 and hex8 from their node graphs' degrees, with room.
+fn entries_per_row(kind: ElementKind) -> f64 {
+    match kind {
+        ElementKind::Tet4 => 60.0,
+        ElementKind::Tet10 => 110.0,
+        ElementKind::Hex8 => 90.0,
+        ElementKind::Hex20 => 150.0,
+    }
+}
+
+/// Assembling K and M of a mesh read from a file, checked before the assembly starts: the
+/// pattern's rows (8 bytes an entry), the values of K and M (16) and the node graph with the
+/// assembler's maps (a third more), at the rows per DOF of the mesh's densest element kind
+/// (`entries_per_row`); time at 10 us per DOF (the 754k-DOF tet4 casting: 7-10 s). What the
+/// modal solve needs beyond it is checked once the factor's size is known
+/// ([`modal_solve`]).
+pub fn assembly(dofs: usize, kinds: impl Iterator<Item = ElementKind>) -> Estimate {
+    let rows = kinds.map(entries_per_row).fold(0.0, f64::max);
+    Estimate {
+        what: "assembling the model",
+        memory: 24.0 * rows * dofs as f64 * 4.0 / 3.0,
+        seconds: 1e-5 * dofs as f64,
+        keys: "the mesh (a coarser one)",
+        detail: format!("{} DOFs", num(dofs as f64)),
+    }
+}
+
+/// What one modal solve will hold, known exactly once the symbolic analysis has run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolveSizes {
+    pub dofs: usize,
+    /// Entries of the factor L.
+    pub factor_entries: usize,
+    /// The numeric factorisation's scratch \[bytes\].
+    pub factor_scratch: usize,
+    /// K, M and their pattern \[bytes\], and whether they stay in memory beside the factor
+    /// (they wait on disk when the factor is large, `linalg::spill`).
+    pub model: usize,
+    pub model_resident: bool,
+    /// The mass compressed for the products (it stays in memory) \[bytes\].
+    pub mass: usize,
+    /// The lower triangle of K - sigma M that a factorisation reads \[bytes\].
+    pub lower: usize,
+    /// n-vectors alive beside the factor at most (the shift check's block, or ARPACK's basis
+    /// with the eigenvectors).
+    pub columns: usize,
+}
+
+/// The modal solve once the factor's size is known (after the symbolic analysis): the factor
+/// (8 bytes an entry) with the compressed mass and the model when it stays in memory, beside
+/// the larger of the factorisation's own (its scratch and the lower triangle it reads) and
+/// the iteration's (n-vectors: the shift check's block, or ARPACK's basis with the
+/// eigenvectors), with 20 % for the allocator and the analysis, and 50 MB for the process:
+/// M = 1.2 (8 nnz(L) + mass + model + max(scratch + lower, 8 n c)) + 50 MB.
+/// Measured: the 754k-DOF casting peaks at 4.66-4.84 GB (estimate 5.51 GB), the default liner
+/// (48.7k DOFs) at 0.65-0.70 GB (estimate 0.74 GB). Time: the solves and
+/// factorisations read the factor some 150 times, at about 5 GB/s (the casting: 96-115 s
+/// for 458M entries).
+pub fn modal_solve(s: &SolveSizes) -> Estimate {
+    let resident = if s.model_resident { s.model } else { 0 };
+    let factorising = s.factor_scratch + s.lower;
+    let iterating = 8 * s.dofs * s.columns;
+    let bytes = 8 * s.factor_entries + s.mass + resident + factorising.max(iterating);
+    Estimate {
+        what: "the modal solve",
+        memory: 1.2 * bytes as f64 + 50e6,
+        seconds: 2.4e-7 * s.factor_entries as f64,
+        keys: "the mesh (a coarser one), or --count",
+        detail: format!(
+            "{} DOFs, {} factor entries",
+            num(s.dofs as f64),
+            num(s.factor_entries as f64)
+        ),
     }
 }
 
@@ -421,4 +503,43 @@ pub fn maps(scene: &Scene, surface_nodes: &[usize], coordinates: usize) -> Optio
             num(per_cycle.round())
         ),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Validation against measured peaks (`/usr/bin/time` maximum resident set, whole process):
+    /// the estimate must not fall below a measured peak (a run that cannot fit would start)
+    /// nor exceed the lowest by more than 25 % (runs that fit would be refused). Sizes as
+    /// `modes -v` analysed them.
+    #[test]
+    fn validation_the_modal_solve_estimate_brackets_the_measured_peaks() {
+        let casting = SolveSizes {
+            dofs: 754_194,
+            factor_entries: 458_010_558,
+            factor_scratch: 485_144_960,
+            model: 714_437_960,
+            model_resident: false,
+            mass: 157_423_200,
+            lower: 242_168_352,
+            columns: 76,
+        };
+        let liner = SolveSizes {
+            dofs: 48_672,
+            factor_entries: 26_436_528,
+            factor_scratch: 108_343_936,
+            model: 161_632_520,
+            model_resident: true,
+            mass: 35_831_808,
+            lower: 54_137_088,
+            columns: 76,
+        };
+        // (sizes, lowest and highest measured peak [bytes]): the 754k-DOF tet4 casting, 20
+        // modes (sessions 56-57); the default liner, 20 modes (session 57)
+        for (s, low, high) in [(casting, 4.66e9, 4.84e9), (liner, 0.65e9, 0.70e9)] {
+            let est = modal_solve(&s).memory;
+            assert!(est >= high && est <= 1.25 * low, "{est} vs {low}-{high}");
+        }
+    }
 }
