@@ -71,9 +71,7 @@ impl FeModel {
         self.timings.certification = t.certification;
         Ok(sol)
     }
-}
 
-impl FeModel {
     /// What solving `count` + `guard` modes of this model will hold
     /// ([`crate::scene::budget::modal_solve`]): known exactly once the model is analysed, so a
     /// solve that cannot fit is refused before its factorisation starts.

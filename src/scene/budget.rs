@@ -211,8 +211,8 @@ pub fn fe_model(dofs: usize, what: &'static str) -> Estimate {
 }
 
 /// Stored entries per row of K (both triangles) of a mesh of `kind`, rounded up from measured
-/// meshes: 138 for the default liner (hex20); a node of an unstructured tet4 mesh has about 14
-/// neighbours (45 entries); tet10 and hex8 from their node graphs' degrees, with room.
+/// meshes: 138 for the default liner (hex20), 39 for the 754k-DOF tet4 casting; tet10 and hex8
+/// from their node graphs' degrees, with room.
 fn entries_per_row(kind: ElementKind) -> f64 {
     match kind {
         ElementKind::Tet4 => 60.0,
