@@ -88,7 +88,9 @@ impl FeModel {
             factor_entries,
             factor_scratch: self.analysis.factor_scratch_bytes(),
             model: 24 * nnz + 8 * (n + 1),
-            model_resident: factor_entries.saturating_mul(8) < spill_threshold(),
+            // they wait on disk when the factor is large and the temporary directory has room
+            model_resident: factor_entries.saturating_mul(8) < spill_threshold()
+                || !crate::linalg::spill::room_for(24 * nnz + 8 * n),
             mass: 16 * mass_entries,
             // row indices and values of the lower triangle and the diagonal
             lower: 8 * (nnz + n),

@@ -29,6 +29,21 @@ pub fn set_spill_threshold(bytes: usize) {
     SPILL_AT.with(|c| c.set(bytes));
 }
 
+/// Whether the temporary directory (where [`StiffnessMass::put_aside`] writes) has `bytes`
+/// free for an unprivileged writer, by `statvfs` (false when it cannot be asked).
+pub fn room_for(bytes: usize) -> bool {
+    use std::os::unix::ffi::OsStrExt;
+    let Ok(dir) = std::ffi::CString::new(std::env::temp_dir().as_os_str().as_bytes()) else {
+        return false;
+    };
+    // SAFETY: statvfs writes only into the zeroed struct it is given; dir is NUL-terminated
+    let mut st: libc::statvfs = unsafe { std::mem::zeroed() };
+    if unsafe { libc::statvfs(dir.as_ptr(), &mut st) } != 0 {
+        return false;
+    }
+    (st.f_bavail as u128) * (st.f_frsize as u128) >= bytes as u128
+}
+
 /// The arrays put aside: an unnamed temporary file (deleted when dropped) and their lengths.
 pub struct Aside {
     file: std::fs::File,
@@ -42,6 +57,13 @@ impl StiffnessMass {
     /// cannot be made or written: putting aside saves memory, never decides a result.
     pub fn put_aside(&mut self, extra: &mut Vec<f64>) -> Option<Aside> {
         let rows: &[usize] = &self.pattern.row_idx;
+        let bytes = 8 * (self.k.len() + self.m.len() + rows.len() + extra.len());
+        if !room_for(bytes) {
+            log::debug!(
+                "K and M stay in memory: the temporary directory has no room for {bytes} bytes"
+            );
+            return None;
+        }
         let written = (|| -> std::io::Result<std::fs::File> {
             let mut file = tempfile::tempfile()?;
             file.write_all(bytemuck::cast_slice(&self.k))?;
@@ -118,6 +140,14 @@ pub fn lower_shifted(km: &StiffnessMass, sigma: f64) -> (Pattern, Vec<f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Verification: the free space of the temporary directory is read, not assumed: a byte
+    /// fits (the tests write there), usize::MAX bytes (16 EiB) do not.
+    #[test]
+    fn verification_the_room_for_putting_aside_is_read_from_the_disk() {
+        assert!(room_for(1));
+        assert!(!room_for(usize::MAX));
+    }
 
     /// Verification: what is put aside comes back bit for bit, the arrays are empty meanwhile,
     /// and the lower triangle of K - sigma M keeps each column's rows at or below the diagonal.
