@@ -83,14 +83,15 @@ impl FeModel {
         let nnz = self.km.pattern.nnz();
         // the mass couples only like directions: about a third of the pattern
         let mass_entries = nnz.div_ceil(3);
+        let model = 24 * nnz + 8 * (n + 1);
         SolveSizes {
             dofs: n,
             factor_entries,
             factor_scratch: self.analysis.factor_scratch_bytes(),
-            model: 24 * nnz + 8 * (n + 1),
+            model,
             // they wait on disk when the factor is large and the temporary directory has room
             model_resident: factor_entries.saturating_mul(8) < spill_threshold()
-                || !crate::linalg::spill::room_for(24 * nnz + 8 * n),
+                || !crate::linalg::spill::room_for(model),
             mass: 16 * mass_entries,
             // row indices and values of the lower triangle and the diagonal
             lower: 8 * (nnz + n),
