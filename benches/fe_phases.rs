@@ -56,6 +56,44 @@ fn bench(c: &mut Criterion) {
         })
     });
     g.finish();
+    solves(c);
+}
+
+/// A single-vector solve with the default liner's factor (48,672 DOF, 26M entries): the Lanczos
+/// iteration's unit of work, bound by reading the factor (2 x 211 MB per solve); the tree solve
+/// on both cores against faer's serial supernodal solve.
+fn solves(c: &mut Criterion) {
+    let scene = Scene::load(Path::new("models/engine.toml"), &[]).unwrap();
+    let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
+        unreachable!()
+    };
+    let mesh = generate(geometry, meshing);
+    let mat = scene.liner.material.expect("a material");
+    let model = FeModel::build(mesh, &mat, &[]).unwrap();
+    let shifted = model.km.shifted(scene.solver.sigma());
+    let llt = model.analysis.llt(&model.km.pattern, &shifted).unwrap();
+    let n = model.n_free();
+    let b: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
+    let mut g = c.benchmark_group("default_liner_factor");
+    g.sample_size(20);
+    g.bench_function(
+        "single-vector solve, elimination tree on both cores",
+        |bench| {
+            bench.iter(|| {
+                let mut x = b.clone();
+                llt.solve_vec(&mut x);
+                x
+            })
+        },
+    );
+    g.bench_function("single-vector solve, faer serial", |bench| {
+        bench.iter(|| {
+            let mut x = b.clone();
+            llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut x, n, 1));
+            x
+        })
+    });
+    g.finish();
 }
 
 criterion_group!(benches, bench);

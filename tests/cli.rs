@@ -454,7 +454,8 @@ fn contract_thresholds_out_of_order_are_refused() {
 /// (separated: D > 2 u; tied: |D| + 2 u <= resolution; else undecided), the resolution is 2 %
 /// of the mean worst-point peak, and the run says where it stopped: with a budget below one
 /// realisation it stops after the first and names `transient.max_seconds` unless every pair
-/// is already decided; with room it pools more realisations until decided or the budget.
+/// is already decided; with room it pools more realisations until decided, the budget, or a
+/// step error that the realisations the budget allows cannot outweigh (then it names the step).
 #[test]
 fn contract_simulate_rank_decides_or_names_the_budget() {
     let base = [
@@ -467,7 +468,10 @@ fn contract_simulate_rank_decides_or_names_the_budget() {
         "--set",
         "transient.averaged_cycles=2",
     ];
-    // at 120 um the first realisation leaves the pair open and a second is pooled
+    // at 120 um the first realisation leaves the pair open; whether a second is pooled
+    // depends on the machine's speed: the budget's room is counted in realisations of the
+    // time the first's step check took, and under the other tests' load that is a few, too
+    // few to shrink the scatter below the step error (then the run stops and says so)
     for (budget, clearance) in [("0.001", "80"), ("20", "80"), ("20", "120")] {
         let mut a = base.to_vec();
         let set = format!("transient.max_seconds={budget}");
@@ -512,8 +516,10 @@ fn contract_simulate_rank_decides_or_names_the_budget() {
         if budget == "0.001" {
             assert_eq!(realisations, 1);
         }
-        if clearance.ends_with("120") {
-            assert!(realisations >= 2, "{r}");
+        if clearance.ends_with("120") && realisations < 2 {
+            // one realisation with room for more: only a step error that keeps the pair
+            // open whatever the realisations the budget allows can do stops it there
+            assert!(stopped.contains("a finer transient.step_deg can"), "{r}");
         }
         if !decided {
             assert!(stopped.contains("transient.max_seconds"), "{stopped}");

@@ -263,9 +263,17 @@ fn lanczos(
             // the solve owns the factor: it goes when the iteration ends, before the Ritz
             // vectors are formed beside ARPACK's basis
             let solve = move |x: &mut [f64]| llt.solve_vec(x);
-            let modes = solve_modes(n, &settings, |x, y| mass.matvec(x, y), solve);
+            let modes = solve_modes(n, &settings, |x, y| mass.matvec(x, y), solve)?;
             t_eigen += t.elapsed().as_secs_f64();
-            Ok(Ok(modes?))
+            log::info!(
+                "Lanczos: {} solves ({:.2} s), {} M products ({:.2} s), ARPACK {:.2} s",
+                modes.solves,
+                modes.seconds_solve,
+                modes.mass_products,
+                modes.seconds_mass,
+                modes.seconds_arpack,
+            );
+            Ok(Ok(modes))
         })??;
         match solved {
             Ok(modes) => return Ok((modes, sigma, (t_factor, t_eigen))),

@@ -13,10 +13,16 @@
 //! the tasks in parallel, each on a local copy of its rows, gathering its updates of the top
 //! rows, -sum L_ts y_s, in a buffer of its own; the rows and buffers are written back in task
 //! order, then the top supernodes run in order. The backward solve L^T x = y runs the top in reverse order, then the tasks in
-//! parallel (they only read the top rows). The split depends on the factor's structure only,
-//! and every sum runs in the same order on any number of threads, so the result is the same
-//! to the last bit on 1 or 2 cores (the property the ROM builds rely on; see
-//! [`super::thread_count_invariant`]).
+//! parallel (they only read the top rows). The top's supernodes, the separators of the first
+//! few dissections (a fifth to two fifths of the factor's entries on the casting and the
+//! liner), are each split in turn: their products L_ps y and L_ps^T x by halves of rows or
+//! columns, their triangles L_ss recursively into [A 0; B C] where faer's triangular solve
+//! splits them, with the product by B in halves (`lower_solve`, `lower_transposed_solve`),
+//! the halves run by `rayon::join`; every entry is still summed by faer's kernel in faer's
+//! order, so the top gives the bits it gave on one core. The split depends on the factor's
+//! structure only, and every sum runs in the same order on any number of threads, so the
+//! result is the same to the last bit on 1 or 2 cores (the property the ROM builds rely on;
+//! see [`super::thread_count_invariant`]).
 
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::{
@@ -40,7 +46,7 @@ struct Task {
     /// Its rows (columns of its supernodes, one supernode after the other): the global row
     /// of each entry of its local vector.
     rows: Vec<usize>,
-    /// The top rows its supernodes update, ascending.
+    /// The top rows its supernodes update, ascending (the rows of its buffer added to x).
     outside: Vec<usize>,
 }
 
@@ -52,8 +58,10 @@ pub struct TreePlan {
     /// For each row (column of L): its task, or [`TOP`].
     owner: Vec<u32>,
     /// For each row of a task: its place in the task's local vector (its supernodes' columns
-    /// one after the other).
+    /// one after the other); for each row of the top: its place among the top's rows.
     local: Vec<usize>,
+    /// Rows of the top (the length of a task's buffer of updates to them).
+    top_rows: usize,
 }
 
 impl TreePlan {
@@ -136,11 +144,20 @@ impl TreePlan {
                 task
             })
             .collect();
+        // the top's rows in order: their slots in the tasks' buffers
+        let mut top_rows = 0;
+        for &s in &top {
+            for row in begin[s]..end[s] {
+                local[row] = top_rows;
+                top_rows += 1;
+            }
+        }
         Self {
             tasks,
             top,
             owner,
             local,
+            top_rows,
         }
     }
 
@@ -148,47 +165,60 @@ impl TreePlan {
     pub fn solve(&self, sym: &SymbolicSupernodalCholesky<usize>, values: &[f64], x: &mut [f64]) {
         let node = |s: usize| Supernode::new(sym, values, s);
         let begin = sym.supernode_begin();
-        let everywhere = |row: usize| Some(row);
-        // forward: the tasks on their local vectors, each gathering its updates of the top
+        // forward: the tasks on their local vectors, each gathering its updates of the top in
+        // a buffer over the top's rows (a task's rows reach only its own rows and the top's)
         let done: Vec<(Vec<f64>, Vec<f64>)> = (0..self.tasks.len())
             .into_par_iter()
             .map(|t| {
                 let task = &self.tasks[t];
                 let mut loc = self.gather(t, x);
-                let mut buffer = vec![0.0; task.outside.len()];
-                let locate = |row: usize| (self.owner[row] == t as u32).then(|| self.local[row]);
+                let mut buffer = vec![0.0; self.top_rows];
+                let mut tmp = Vec::new();
                 for &s in &task.supernodes {
-                    let at = self.local[begin[s]];
-                    node(s).forward(&mut loc, at, &locate, &mut |row, v| {
-                        let i = task.outside.binary_search(&row).expect("listed");
-                        buffer[i] -= v;
-                    });
+                    let (node, at) = (node(s), self.local[begin[s]]);
+                    node.forward(&mut loc[at..at + node.width()], &mut tmp);
+                    for (&row, &v) in node.pattern.iter().zip(&tmp) {
+                        let target = if self.owner[row] == t as u32 {
+                            &mut loc
+                        } else {
+                            &mut buffer
+                        };
+                        target[self.local[row]] -= v;
+                    }
                 }
                 (loc, buffer)
             })
             .collect();
         for (t, (loc, buffer)) in done.iter().enumerate() {
             self.scatter(t, loc, x);
-            for (&row, v) in self.tasks[t].outside.iter().zip(buffer) {
-                x[row] += v;
+            for &row in &self.tasks[t].outside {
+                x[row] += buffer[self.local[row]];
             }
         }
         for &s in &self.top {
-            node(s).forward(x, begin[s], &everywhere, &mut |_, _| {
-                unreachable!("the top updates only its own rows")
-            });
+            node(s).forward_split(x, begin[s]);
         }
+
         // backward: the top, then the tasks reading the top's final values
         for &s in self.top.iter().rev() {
-            node(s).backward(x, begin[s], &everywhere, &[]);
+            node(s).backward_split(x, begin[s]);
         }
         let done: Vec<Vec<f64>> = (0..self.tasks.len())
             .into_par_iter()
             .map(|t| {
                 let mut loc = self.gather(t, x);
-                let locate = |row: usize| (self.owner[row] == t as u32).then(|| self.local[row]);
+                let mut tmp = Vec::new();
                 for &s in self.tasks[t].supernodes.iter().rev() {
-                    node(s).backward(&mut loc, self.local[begin[s]], &locate, x);
+                    let (node, at) = (node(s), self.local[begin[s]]);
+                    tmp.clear();
+                    tmp.extend(node.pattern.iter().map(|&row| {
+                        if self.owner[row] == t as u32 {
+                            loc[self.local[row]]
+                        } else {
+                            x[row]
+                        }
+                    }));
+                    node.backward(&mut loc[at..at + node.width()], &tmp);
                 }
                 loc
             })
@@ -233,62 +263,168 @@ impl<'a> Supernode<'a> {
         }
     }
 
-    /// Forward step: y_s = L_ss^-1 b_s, then b_p -= L_ps y_s for the rows p below. `loc` holds
-    /// the supernode's rows from `at`; `locate` gives a row's place in `loc`, or None for a
-    /// row elsewhere, whose update goes to `outside(row, value)` (to subtract).
-    fn forward(
-        &self,
-        loc: &mut [f64],
-        at: usize,
-        locate: &dyn Fn(usize) -> Option<usize>,
-        outside: &mut dyn FnMut(usize, f64),
-    ) {
-        let width = self.l_ss.ncols();
-        let mut y = ColMut::from_slice_mut(&mut loc[at..at + width]);
-        solve_lower_triangular_in_place(self.l_ss, y.as_mut().as_mat_mut(), Par::Seq);
-        let mut tmp = vec![0.0; self.pattern.len()];
+    /// Columns of the supernode.
+    fn width(&self) -> usize {
+        self.l_ss.ncols()
+    }
+
+    /// Forward step: y_s = L_ss^-1 b_s in place (`y` holds b_s), and `tmp` = L_ps y_s, the
+    /// amounts to subtract from the rows `pattern` below.
+    fn forward(&self, y: &mut [f64], tmp: &mut Vec<f64>) {
+        solve_lower_triangular_in_place(self.l_ss, column_mut(y), Par::Seq);
+        tmp.clear();
+        tmp.resize(self.pattern.len(), 0.0);
         matmul(
-            ColMut::from_slice_mut(&mut tmp).as_mat_mut(),
+            column_mut(tmp),
             Accum::Replace,
             self.l_ps,
-            y.as_ref().as_mat(),
+            column(y),
             1.0,
             Par::Seq,
         );
-        for (&row, v) in self.pattern.iter().zip(tmp) {
-            match locate(row) {
-                Some(i) => loc[i] -= v,
-                None => outside(row, v),
-            }
-        }
     }
 
-    /// Backward step: x_s = L_ss^-T (y_s - L_ps^T x_p); rows `locate` does not place in `loc`
-    /// are read from `above` (final there).
-    fn backward(
-        &self,
-        loc: &mut [f64],
-        at: usize,
-        locate: &dyn Fn(usize) -> Option<usize>,
-        above: &[f64],
-    ) {
-        let width = self.l_ss.ncols();
-        let tmp: Vec<f64> = self
-            .pattern
-            .iter()
-            .map(|&row| locate(row).map_or_else(|| above[row], |i| loc[i]))
-            .collect();
-        let mut x = ColMut::from_slice_mut(&mut loc[at..at + width]);
+    /// Backward step: x_s = L_ss^-T (y_s - L_ps^T x_p) in place (`x` holds y_s), `above` the
+    /// final x_p of the rows `pattern`.
+    fn backward(&self, x: &mut [f64], above: &[f64]) {
         matmul(
-            x.as_mut().as_mat_mut(),
+            column_mut(x),
             Accum::Add,
             self.l_ps.transpose(),
-            faer::ColRef::from_slice(&tmp).as_mat(),
+            column(above),
             -1.0,
             Par::Seq,
         );
-        solve_upper_triangular_in_place(self.l_ss.transpose(), x.as_mat_mut(), Par::Seq);
+        solve_upper_triangular_in_place(self.l_ss.transpose(), column_mut(x), Par::Seq);
     }
+}
+
+impl Supernode<'_> {
+    /// [`Supernode::forward`] on the whole vector `x` (a top supernode: every row it updates
+    /// is in `x`), its triangle and product split in halves on both cores.
+    fn forward_split(&self, x: &mut [f64], at: usize) {
+        let width = self.l_ss.ncols();
+        lower_solve(self.l_ss, &mut x[at..at + width]);
+        let mut tmp = vec![0.0; self.pattern.len()];
+        mul_add(&mut tmp, Accum::Replace, self.l_ps, &x[at..at + width], 1.0);
+        for (&row, v) in self.pattern.iter().zip(tmp) {
+            x[row] -= v;
+        }
+    }
+
+    /// [`Supernode::backward`] on the whole vector `x`, split as [`Supernode::forward_split`].
+    fn backward_split(&self, x: &mut [f64], at: usize) {
+        let width = self.l_ss.ncols();
+        let tmp: Vec<f64> = self.pattern.iter().map(|&row| x[row]).collect();
+        let xs = &mut x[at..at + width];
+        mul_transposed_add(xs, self.l_ps, &tmp, -1.0);
+        lower_transposed_solve(self.l_ss, xs);
+    }
+}
+
+/// A product is split while its block holds more than this many entries (256 kB: the
+/// halves' `rayon::join` costs microseconds against their tens of microseconds of reading).
+const SPLIT_ENTRIES: usize = 1 << 15;
+
+/// A triangle is split while it is wider than this.
+const SPLIT_WIDTH: usize = 128;
+
+fn column(v: &[f64]) -> MatRef<'_, f64> {
+    faer::ColRef::from_slice(v).as_mat()
+}
+
+fn column_mut(v: &mut [f64]) -> faer::MatMut<'_, f64> {
+    ColMut::from_slice_mut(v).as_mat_mut()
+}
+
+/// y = alpha A x (`Accum::Replace`) or y += alpha A x (`Accum::Add`), A's rows split in
+/// halves while the block is larger than [`SPLIT_ENTRIES`]: each row's sum is formed by one
+/// call of faer's kernel as over the whole block, so the result does not depend on the split
+/// or the number of threads.
+fn mul_add(y: &mut [f64], accum: Accum, a: MatRef<'_, f64>, x: &[f64], alpha: f64) {
+    let (m, k) = a.shape();
+    if m * k <= SPLIT_ENTRIES || m < 2 {
+        matmul(column_mut(y), accum, a, column(x), alpha, Par::Seq);
+        return;
+    }
+    let h = m / 2;
+    let (top, bottom) = a.split_at_row(h);
+    let (y1, y2) = y.split_at_mut(h);
+    rayon::join(
+        || mul_add(y1, accum, top, x, alpha),
+        || mul_add(y2, accum, bottom, x, alpha),
+    );
+}
+
+/// y += alpha A^T x, A's columns (y's rows) split in halves as in [`mul_add`].
+fn mul_transposed_add(y: &mut [f64], a: MatRef<'_, f64>, x: &[f64], alpha: f64) {
+    let (m, k) = a.shape();
+    if m * k <= SPLIT_ENTRIES || k < 2 {
+        matmul(
+            column_mut(y),
+            Accum::Add,
+            a.transpose(),
+            column(x),
+            alpha,
+            Par::Seq,
+        );
+        return;
+    }
+    let h = k / 2;
+    let (left, right) = a.split_at_col(h);
+    let (y1, y2) = y.split_at_mut(h);
+    rayon::join(
+        || mul_transposed_add(y1, left, x, alpha),
+        || mul_transposed_add(y2, right, x, alpha),
+    );
+}
+
+/// Where faer's triangular solve splits a triangle of order n (its `block_size`): the first
+/// block holds n minus n / 2 rounded up to a multiple of 16 (of 8, 4 for smaller n).
+/// [`lower_solve`] and [`lower_transposed_solve`] split at the same place, so their sums run
+/// as faer's do and a solve gives the bits it gave on one core.
+fn faer_block(n: usize) -> usize {
+    let half = n / 2;
+    n - if n >= 32 {
+        half.div_ceil(16) * 16
+    } else if n >= 16 {
+        half.div_ceil(8) * 8
+    } else if n >= 8 {
+        half.div_ceil(4) * 4
+    } else {
+        half
+    }
+}
+
+/// y <- L^-1 y for a lower triangular L = [A 0; B C] (A of order h = [`faer_block`]):
+/// A y_1 = b_1, then C y_2 = b_2 - B y_1, the product B y_1 split ([`mul_add`]); recursively
+/// while wider than [`SPLIT_WIDTH`].
+fn lower_solve(l: MatRef<'_, f64>, y: &mut [f64]) {
+    let w = l.nrows();
+    if w <= SPLIT_WIDTH {
+        solve_lower_triangular_in_place(l, column_mut(y), Par::Seq);
+        return;
+    }
+    let h = faer_block(w);
+    let (y1, y2) = y.split_at_mut(h);
+    lower_solve(l.submatrix(0, 0, h, h), y1);
+    mul_add(y2, Accum::Add, l.submatrix(h, 0, w - h, h), y1, -1.0);
+    lower_solve(l.submatrix(h, h, w - h, w - h), y2);
+}
+
+/// x <- L^-T x for L = [A 0; B C] with C of order h = [`faer_block`] (faer solves L^T from
+/// its last row up): C^T x_2 = y_2, then A^T x_1 = y_1 - B^T x_2.
+fn lower_transposed_solve(l: MatRef<'_, f64>, x: &mut [f64]) {
+    let w = l.nrows();
+    if w <= SPLIT_WIDTH {
+        solve_upper_triangular_in_place(l.transpose(), column_mut(x), Par::Seq);
+        return;
+    }
+    let h = w - faer_block(w);
+    let (x1, x2) = x.split_at_mut(h);
+    lower_transposed_solve(l.submatrix(h, h, w - h, w - h), x2);
+    mul_transposed_add(x1, l.submatrix(h, 0, w - h, h), x2, -1.0);
+    lower_transposed_solve(l.submatrix(0, 0, h, h), x1);
 }
 
 #[cfg(test)]
@@ -347,7 +483,7 @@ mod tests {
     /// thread as on two (the split depends on the structure only).
     #[test]
     fn verification_tree_solve_matches_the_serial_solve_and_ignores_the_thread_count() {
-        let (pattern, values, fwd, inv) = grid(18);
+        let (pattern, values, fwd, inv) = grid(26);
         let analysis = Analysis::new(&pattern, &fwd, &inv).unwrap();
         let llt = analysis.llt(&pattern, &values).unwrap();
         let b: Vec<f64> = (0..pattern.n)
@@ -371,5 +507,63 @@ mod tests {
         let mut single = b.clone();
         one.install(|| llt.solve_vec(&mut single));
         assert_eq!(single, tree);
+    }
+
+    /// Verification that the top's split kernels do faer's arithmetic: the triangle split where
+    /// faer's own recursion splits it, the products by halves of rows or columns, each result
+    /// equal to the last bit to faer's serial kernel on the same block (so the tree solve gives
+    /// the bits it gave with the top on one core), at orders below, at and well above the
+    /// split width, odd and even.
+    #[test]
+    fn verification_split_top_kernels_give_faers_bits() {
+        use super::*;
+        let rows = 900;
+        for w in [100usize, 129, 300, 701, 1500] {
+            let l = faer::Mat::<f64>::from_fn(w, w, |i, j| match i.cmp(&j) {
+                std::cmp::Ordering::Equal => 2.0 + (i % 7) as f64 * 0.1,
+                std::cmp::Ordering::Greater => ((i * 31 + j * 17) % 13) as f64 * 0.01 - 0.06,
+                std::cmp::Ordering::Less => 0.0,
+            });
+            let a = faer::Mat::<f64>::from_fn(rows, w, |i, j| {
+                ((i * 7 + j * 3) % 11) as f64 * 0.013 - 0.07
+            });
+            let b: Vec<f64> = (0..w).map(|i| ((i * 13) % 17) as f64 - 8.0).collect();
+            let c: Vec<f64> = (0..rows).map(|i| ((i * 5) % 9) as f64 - 4.0).collect();
+            let (mut faer_y, mut y) = (b.clone(), b.clone());
+            solve_lower_triangular_in_place(l.as_ref(), column_mut(&mut faer_y), Par::Seq);
+            lower_solve(l.as_ref(), &mut y);
+            assert_eq!(y, faer_y, "L^-1 b, order {w}");
+            let (mut faer_x, mut x) = (b.clone(), b.clone());
+            let lt = l.as_ref().transpose();
+            solve_upper_triangular_in_place(lt, column_mut(&mut faer_x), Par::Seq);
+            lower_transposed_solve(l.as_ref(), &mut x);
+            assert_eq!(x, faer_x, "L^-T b, order {w}");
+            for (accum, start, alpha) in [(Accum::Add, 0.5, -1.0), (Accum::Replace, 0.0, 1.0)] {
+                let (mut faer_p, mut p) = (vec![start; rows], vec![start; rows]);
+                let col = column(&b);
+                matmul(
+                    column_mut(&mut faer_p),
+                    accum,
+                    a.as_ref(),
+                    col,
+                    alpha,
+                    Par::Seq,
+                );
+                mul_add(&mut p, accum, a.as_ref(), &b, alpha);
+                assert_eq!(p, faer_p, "A b, {rows} x {w}, {accum:?}");
+            }
+            let (mut faer_q, mut q) = (b.clone(), b.clone());
+            let at = a.as_ref().transpose();
+            matmul(
+                column_mut(&mut faer_q),
+                Accum::Add,
+                at,
+                column(&c),
+                -1.0,
+                Par::Seq,
+            );
+            mul_transposed_add(&mut q, a.as_ref(), &c, -1.0);
+            assert_eq!(q, faer_q, "A^T c, {rows} x {w}");
+        }
     }
 }
