@@ -1,6 +1,6 @@
 //! Slap events: each skirt side's contact episodes grouped into impacts, taken from every
-//! committed step (the slap sub-steps included), so that a slap's force is its largest value
-//! at the sub-step resolution, not the nearest base-step sample.
+//! committed step (the slap sub-steps included), so that a slap's force is its peak between
+//! the sub-steps, not the nearest base-step sample.
 //!
 //! An event on side s (thrust, anti-thrust) of a cylinder begins at a contact onset of that
 //! side (its summed slice force turns positive) after the side has been apart for more than
@@ -9,7 +9,11 @@
 //! - `crank_angle_deg`: the cylinder's own crank angle at the onset (the impact);
 //! - `force_n`: the largest dynamic slap force of the side over the event,
 //!   s (F_thrust - F_anti - F_side), s = +1 thrust, -1 anti-thrust (the contact force beyond
-//!   the quasi-static side force F_side, as the per-cycle slap-force peak has always been);
+//!   the quasi-static side force F_side, as the per-cycle slap-force peak has always been),
+//!   its peak interpolated between the samples ([`parabola_peak`], the samples being unevenly
+//!   spaced where sub-steps begin and end: a sampled maximum alone
+//!   misses a smooth peak by up to h^2 |F''| / 8, about 2 % on the default engine's 1/12 deg
+//!   slap sub-steps, and by how much depends on where the step grid falls);
 //! - `impact_velocity_m_s`: the velocity of the side's deepest slice toward the wall at its
 //!   contact onset, row . v (the piston's; the wall's own motion, a few percent of it, is not
 //!   subtracted);
@@ -25,6 +29,7 @@
 //! a cycle's largest in a group counts), and each group reports the means over the cycles it
 //! occurs in, with standard errors s / sqrt(n).
 
+use crate::transient::signal::parabola_peak;
 use serde::Serialize;
 
 /// A side apart for more than this crank angle begins a new event at its next contact \[deg\]
@@ -115,6 +120,10 @@ pub(super) struct SideSample {
 struct SideState {
     open: Option<SlapEvent>,
     last_contact_deg: f64,
+    /// The side's last two contact samples of the open event, oldest first, as (global
+    /// crank angle \[deg\], own crank angle \[deg\], dynamic force \[N\]); cleared by a step
+    /// without contact, so that three consecutive samples never straddle a separation.
+    recent: Vec<(f64, f64, f64)>,
 }
 
 /// The events of a run, per cylinder.
@@ -144,6 +153,7 @@ impl EventRecorder {
             };
             let side = &mut self.sides[c][k];
             if force <= 0.0 {
+                side.recent.clear();
                 // the step that separates still carries the contact's last impulse
                 if let Some(e) = side.open.as_mut() {
                     if s.global_deg - side.last_contact_deg <= EVENT_SEPARATION_DEG {
@@ -159,6 +169,7 @@ impl EventRecorder {
                 if let Some(e) = side.open.take() {
                     self.done[c].push(e);
                 }
+                side.recent.clear();
                 side.open = Some(SlapEvent {
                     cycle: (s.global_deg / 720.0).floor().max(0.0) as usize,
                     thrust,
@@ -178,6 +189,18 @@ impl EventRecorder {
                 e.force_n = f;
                 e.force_crank_angle_deg = s.own_deg;
             }
+            // the previous sample a local maximum: the peak between its neighbours
+            if let [(g0, _, f0), (g1, o1, f1)] = side.recent[..] {
+                if f1 >= f0 && f1 >= f {
+                    let (x, peak) = parabola_peak((g0, f0), (g1, f1), (s.global_deg, f));
+                    if peak > e.force_n {
+                        e.force_n = peak;
+                        e.force_crank_angle_deg = o1 + (x - g1);
+                    }
+                }
+                side.recent.remove(0);
+            }
+            side.recent.push((s.global_deg, s.own_deg, f));
         }
     }
 

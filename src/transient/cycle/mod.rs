@@ -571,7 +571,7 @@ impl<'a> EngineRun<'a> {
 
     /// A cycle's peaks from its series: the filtered point accelerations' peaks located
     /// between the samples ([`sampled_peak`]), the side force's largest sample, and the slap
-    /// force of the cycle's largest slap event ([`events`], at the sub-step resolution).
+    /// force of the cycle's largest slap event ([`events`], interpolated between the sub-steps).
     fn peaks(&self, series: &Series, cycle: usize) -> CyclePeaks {
         let nc = series.cylinders.len();
         let np = series

@@ -165,7 +165,7 @@ impl Peak {
 pub struct CylinderPeaks {
     pub cylinder: usize,
     /// The largest slap event's force (the dynamic slap, the contact force beyond the
-    /// quasi-static side force, at the sub-step resolution: [`SlapEvent`]) \[N\], at the
+    /// quasi-static side force, interpolated between the sub-steps: [`SlapEvent`]) \[N\], at the
     /// crank angle of its largest force.
     pub slap_force: Peak,
     /// Largest quasi-static side force toward thrust \[N\].
