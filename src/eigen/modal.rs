@@ -265,14 +265,7 @@ fn lanczos(
             let solve = move |x: &mut [f64]| llt.solve_vec(x);
             let modes = solve_modes(n, &settings, |x, y| mass.matvec(x, y), solve)?;
             t_eigen += t.elapsed().as_secs_f64();
-            log::info!(
-                "Lanczos: {} solves ({:.2} s), {} M products ({:.2} s), ARPACK {:.2} s",
-                modes.solves,
-                modes.seconds_solve,
-                modes.mass_products,
-                modes.seconds_mass,
-                modes.seconds_arpack,
-            );
+            log::info!("{}", modes.work_summary());
             Ok(Ok(modes))
         })??;
         match solved {

@@ -75,6 +75,17 @@ pub struct Modes {
 }
 
 impl Modes {
+    /// What the iteration cost, for the log: "Lanczos: N solves (s), M products (s), ARPACK s".
+    pub fn work_summary(&self) -> String {
+        format!(
+            "Lanczos: {} solves ({:.2} s), {} M products ({:.2} s), ARPACK {:.2} s",
+            self.solves,
+            self.seconds_solve,
+            self.mass_products,
+            self.seconds_mass,
+            self.seconds_arpack,
+        )
+    }
     pub fn count(&self) -> usize {
         self.eigenvalues.len()
     }

@@ -2,8 +2,8 @@
 //! elimination tree.
 //!
 //! A single right-hand side is bound by reading the factor (each entry is used once), and
-//! one core reads memory at about half the rate two do (9.7 against 19 GB/s measured on the
-//! 2-core machine), so a solve that reads the factor from two threads at once runs up to twice
+//! one core reads memory at about half the rate two do (8-10 against 16-19 GB/s measured on
+//! the 2-core machine, on different days), so a solve that reads the factor from two threads at once runs up to twice
 //! as fast. The elimination tree of a nested-dissection order makes that possible: the
 //! subtrees below the top separators are independent.
 //!
@@ -18,7 +18,8 @@
 //! liner), are each split in turn: their products L_ps y and L_ps^T x by halves of rows or
 //! columns, their triangles L_ss recursively into [A 0; B C] where faer's triangular solve
 //! splits them, with the product by B in halves (`lower_solve`, `lower_transposed_solve`),
-//! the halves run by `rayon::join`; every entry is still summed by faer's kernel in faer's
+//! the halves run by `rayon::join` (the tasks' supernodes use the same kernels, which
+//! are faer's single call below the split sizes); every entry is still summed by faer's kernel in faer's
 //! order, so the top gives the bits it gave on one core. The split depends on the factor's
 //! structure only, and every sum runs in the same order on any number of threads, so the
 //! result is the same to the last bit on 1 or 2 cores (the property the ROM builds rely on;
@@ -195,13 +196,22 @@ impl TreePlan {
                 x[row] += buffer[self.local[row]];
             }
         }
+        // the top on the whole vector: every row it updates is in x
+        let mut tmp = Vec::new();
         for &s in &self.top {
-            node(s).forward_split(x, begin[s]);
+            let node = node(s);
+            node.forward(&mut x[begin[s]..begin[s] + node.width()], &mut tmp);
+            for (&row, &v) in node.pattern.iter().zip(&tmp) {
+                x[row] -= v;
+            }
         }
 
         // backward: the top, then the tasks reading the top's final values
         for &s in self.top.iter().rev() {
-            node(s).backward_split(x, begin[s]);
+            let node = node(s);
+            tmp.clear();
+            tmp.extend(node.pattern.iter().map(|&row| x[row]));
+            node.backward(&mut x[begin[s]..begin[s] + node.width()], &tmp);
         }
         let done: Vec<Vec<f64>> = (0..self.tasks.len())
             .into_par_iter()
@@ -269,56 +279,21 @@ impl<'a> Supernode<'a> {
     }
 
     /// Forward step: y_s = L_ss^-1 b_s in place (`y` holds b_s), and `tmp` = L_ps y_s, the
-    /// amounts to subtract from the rows `pattern` below.
+    /// amounts to subtract from the rows `pattern` below; the triangle and the product split
+    /// on both cores where they are large ([`lower_solve`], [`mul_add`]: the top separators),
+    /// faer's single call otherwise, with the same bits either way.
     fn forward(&self, y: &mut [f64], tmp: &mut Vec<f64>) {
-        solve_lower_triangular_in_place(self.l_ss, column_mut(y), Par::Seq);
+        lower_solve(self.l_ss, y);
         tmp.clear();
         tmp.resize(self.pattern.len(), 0.0);
-        matmul(
-            column_mut(tmp),
-            Accum::Replace,
-            self.l_ps,
-            column(y),
-            1.0,
-            Par::Seq,
-        );
+        mul_add(tmp, Accum::Replace, self.l_ps, y, 1.0);
     }
 
     /// Backward step: x_s = L_ss^-T (y_s - L_ps^T x_p) in place (`x` holds y_s), `above` the
-    /// final x_p of the rows `pattern`.
+    /// final x_p of the rows `pattern`; split as [`Supernode::forward`].
     fn backward(&self, x: &mut [f64], above: &[f64]) {
-        matmul(
-            column_mut(x),
-            Accum::Add,
-            self.l_ps.transpose(),
-            column(above),
-            -1.0,
-            Par::Seq,
-        );
-        solve_upper_triangular_in_place(self.l_ss.transpose(), column_mut(x), Par::Seq);
-    }
-}
-
-impl Supernode<'_> {
-    /// [`Supernode::forward`] on the whole vector `x` (a top supernode: every row it updates
-    /// is in `x`), its triangle and product split in halves on both cores.
-    fn forward_split(&self, x: &mut [f64], at: usize) {
-        let width = self.l_ss.ncols();
-        lower_solve(self.l_ss, &mut x[at..at + width]);
-        let mut tmp = vec![0.0; self.pattern.len()];
-        mul_add(&mut tmp, Accum::Replace, self.l_ps, &x[at..at + width], 1.0);
-        for (&row, v) in self.pattern.iter().zip(tmp) {
-            x[row] -= v;
-        }
-    }
-
-    /// [`Supernode::backward`] on the whole vector `x`, split as [`Supernode::forward_split`].
-    fn backward_split(&self, x: &mut [f64], at: usize) {
-        let width = self.l_ss.ncols();
-        let tmp: Vec<f64> = self.pattern.iter().map(|&row| x[row]).collect();
-        let xs = &mut x[at..at + width];
-        mul_transposed_add(xs, self.l_ps, &tmp, -1.0);
-        lower_transposed_solve(self.l_ss, xs);
+        mul_transposed_add(x, self.l_ps, above, -1.0);
+        lower_transposed_solve(self.l_ss, x);
     }
 }
 

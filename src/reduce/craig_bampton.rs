@@ -358,14 +358,7 @@ fn fixed_interface_modes(
             part: part.to_string(),
             source,
         })?;
-        log::info!(
-            "[{part}] Lanczos: {} solves ({:.2} s), {} M products ({:.2} s), ARPACK {:.2} s",
-            modes.solves,
-            modes.seconds_solve,
-            modes.mass_products,
-            modes.seconds_mass,
-            modes.seconds_arpack,
-        );
+        log::info!("[{part}] {}", modes.work_summary());
         let below = modes
             .eigenvalues
             .iter()
