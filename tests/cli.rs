@@ -471,7 +471,9 @@ fn contract_simulate_rank_decides_or_names_the_budget() {
     // at 120 um the first realisation leaves the pair open; whether a second is pooled
     // depends on the machine's speed: the budget's room is counted in realisations of the
     // time the first's step check took, and under the other tests' load that is a few, too
-    // few to shrink the scatter below the step error (then the run stops and says so)
+    // few to shrink the scatter below the step error (then the run stops and says so); the
+    // rule itself, pooling included, is checked apart from the machine's speed by
+    // `api::rank`'s `verification_rank_stop_rule_pools_until_decided_budget_or_step_error`
     for (budget, clearance) in [("0.001", "80"), ("20", "80"), ("20", "120")] {
         let mut a = base.to_vec();
         let set = format!("transient.max_seconds={budget}");

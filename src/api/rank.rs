@@ -53,26 +53,8 @@ pub fn decided_ranking(
             .iter()
             .filter(|d| d.verdict == Verdict::Undecided)
             .collect();
-        // what the realisations the budget still allows could do: the scatter shrinks as
-        // 1 / sqrt(R), the step error does not
         let r = runs.len();
-        let more = ((budget - spent) / next).floor().max(0.0);
-        let shrink = (r as f64 / (r as f64 + more)).sqrt();
-        let hopeless = open.iter().all(|d| !d.decidable_with(shrink, resolution));
-        if open.is_empty() || more < 1.0 || hopeless {
-            let n = open.len();
-            let stopped = if n == 0 {
-                format!("every neighbour pair decided after {r} realisation(s), {spent:.0} s")
-            } else if more < 1.0 {
-                format!(
-                    "{n} pair(s) undecided: the time budget transient.max_seconds = {budget:.0} s reached after {r} realisation(s), {spent:.0} s (the next takes about {next:.0} s)"
-                )
-            } else {
-                let e = open.iter().map(|d| d.step_error).fold(0.0, f64::max);
-                format!(
-                    "{n} pair(s) undecided after {r} realisation(s), {spent:.0} s: their step error (up to {e:.0} m/s^2, the change from the step to half of it) keeps them open, which the realisations left in the time budget transient.max_seconds = {budget:.0} s cannot change; a finer transient.step_deg can"
-                )
-            };
+        if let Some((stopped, n)) = stop_rule(&open, r, (spent, next, budget), resolution) {
             return Ok(DecidedRanking {
                 order,
                 pairs,
@@ -109,5 +91,109 @@ pub fn decided_ranking(
         let took = t.elapsed().as_secs_f64();
         spent += took;
         next = took;
+    }
+}
+
+/// Where pooling stops, or None to pool another realisation: with the undecided pairs `open`
+/// after `r` realisations, `spent` seconds of the `budget` used and `next` the expected cost
+/// of one more, the realisations left are R' = floor((budget - spent) / next), and pooling
+/// them shrinks the scatter by sqrt(r / (r + R')) (the step error stays). It stops when no
+/// pair is open, when R' < 1 (the budget), or when no open pair is decidable even with that
+/// shrink (`Decision::decidable_with`: the step error keeps it open). Returns the user's
+/// sentence and the number of pairs left open.
+fn stop_rule(
+    open: &[&Decision],
+    r: usize,
+    (spent, next, budget): (f64, f64, f64),
+    resolution: f64,
+) -> Option<(String, usize)> {
+    let more = ((budget - spent) / next).floor().max(0.0);
+    let shrink = (r as f64 / (r as f64 + more)).sqrt();
+    let hopeless = open.iter().all(|d| !d.decidable_with(shrink, resolution));
+    let n = open.len();
+    if n == 0 {
+        Some((
+            format!("every neighbour pair decided after {r} realisation(s), {spent:.0} s"),
+            n,
+        ))
+    } else if more < 1.0 {
+        Some((
+            format!(
+                "{n} pair(s) undecided: the time budget transient.max_seconds = {budget:.0} s reached after {r} realisation(s), {spent:.0} s (the next takes about {next:.0} s)"
+            ),
+            n,
+        ))
+    } else if hopeless {
+        let e = open.iter().map(|d| d.step_error).fold(0.0, f64::max);
+        Some((
+            format!(
+                "{n} pair(s) undecided after {r} realisation(s), {spent:.0} s: their step error (up to {e:.0} m/s^2, the change from the step to half of it) keeps them open, which the realisations left in the time budget transient.max_seconds = {budget:.0} s cannot change; a finer transient.step_deg can"
+            ),
+            n,
+        ))
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An undecided pair with difference `d`, scatter `s`, step error `e` and that error's own
+    /// scatter `se` (u = sqrt(s^2 + e^2)).
+    fn pair(d: f64, s: f64, e: f64, se: f64) -> Decision {
+        Decision {
+            upper: 1,
+            lower: 2,
+            difference: d,
+            uncertainty: (s * s + e * e).sqrt(),
+            scatter: s,
+            step_error: e,
+            step_error_scatter: se,
+            verdict: Verdict::Undecided,
+        }
+    }
+
+    /// Verification of the stop rule against hand-computed verdicts, independent of the
+    /// machine's speed: at resolution 20 a pair
+    /// D = 30, s = 20, e = 2 (2u = 40.2) pools on while the budget holds one more
+    /// realisation (one more alone, shrink sqrt(1/2), separates it: 2u = 28.6 < 30), stops
+    /// on the budget when it holds none, and a pair whose step error alone keeps it open
+    /// (e = 20: 2u >= 40 > 30 at any shrink) stops the run at once, naming the step, unless
+    /// that error is mostly its estimate's own noise (u(e) = 19.9) or another pair can still
+    /// be decided.
+    #[test]
+    fn verification_rank_stop_rule_pools_until_decided_budget_or_step_error() {
+        let res = 20.0;
+        let noisy = pair(30.0, 20.0, 2.0, 0.0);
+        let stepped = pair(30.0, 20.0, 20.0, 0.0);
+        let noisy_step = pair(30.0, 20.0, 20.0, 19.9);
+        // room for exactly one more: pool
+        assert_eq!(stop_rule(&[&noisy], 1, (10.0, 10.0, 20.0), res), None);
+        assert_eq!(
+            stop_rule(&[&noisy, &stepped], 1, (10.0, 10.0, 100.0), res),
+            None
+        );
+        assert_eq!(stop_rule(&[&noisy_step], 1, (10.0, 10.0, 100.0), res), None);
+        // no room
+        let (text, n) = stop_rule(&[&noisy], 1, (10.0, 10.0, 19.9), res).unwrap();
+        assert_eq!(n, 1);
+        assert!(
+            text.contains("the time budget transient.max_seconds = 20 s"),
+            "{text}"
+        );
+        // the step error
+        let (text, n) = stop_rule(&[&stepped], 3, (10.0, 1.0, 1e6), res).unwrap();
+        assert_eq!(n, 1);
+        assert!(text.contains("a finer transient.step_deg can"), "{text}");
+        assert!(text.contains("up to 20 m/s^2") && text.contains("after 3 realisation(s)"));
+        // decided
+        let (text, n) = stop_rule(&[], 2, (10.0, 10.0, 100.0), res).unwrap();
+        assert_eq!(n, 0);
+        assert!(
+            text.starts_with("every neighbour pair decided after 2"),
+            "{text}"
+        );
     }
 }
