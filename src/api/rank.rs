@@ -156,9 +156,8 @@ mod tests {
     }
 
     /// Verification of the stop rule against hand-computed verdicts, independent of the
-    /// machine's speed: at resolution 20 a pair
-    /// D = 30, s = 20, e = 2 (2u = 40.2) pools on while the budget holds one more
-    /// realisation (one more alone, shrink sqrt(1/2), separates it: 2u = 28.6 < 30), stops
+    /// machine's speed: at resolution 20 a pair D = 30, s = 20, e = 2 (2u = 40.2) pools on
+    /// while the budget holds one more realisation (one more alone, shrink sqrt(1/2), separates it: 2u = 28.6 < 30), stops
     /// on the budget when it holds none, and a pair whose step error alone keeps it open
     /// (e = 20: 2u >= 40 > 30 at any shrink) stops the run at once, naming the step, unless
     /// that error is mostly its estimate's own noise (u(e) = 19.9) or another pair can still
