@@ -17,7 +17,7 @@ pub fn available_memory_from() -> (u64, &'static str) {
         (system_memory(), "the machine"),
         (
             address_space_left(address_space_limit()),
-            "the address-space limit (ulimit -v, prlimit --as)",
+            ADDRESS_SPACE_BOUND,
         ),
         (
             cgroup_available(&|p| std::fs::read_to_string(p).ok()),
@@ -29,27 +29,39 @@ pub fn available_memory_from() -> (u64, &'static str) {
     .expect("three bounds")
 }
 
-/// The resident memory a cap `limit` on the address space leaves room for \[bytes\]: the
-/// limit less [`ADDRESS_SPACE_HEADROOM`] (the binary's mappings, thread stacks), divided by
-/// [`VIRTUAL_PER_RESIDENT`], since the estimates are of resident memory and the address space a
-/// run maps is larger (the allocator's reserved arenas, freed memory it keeps mapped). Under a
-/// 700 MB cap an estimate of 0.32 GB against the bare limit aborted in an allocation; under an
-/// 8 GB cap `modes --assembly --full` of the default engine (estimate 5 GB) aborted.
+/// The label of the address-space bound in [`available_memory_from`].
+pub const ADDRESS_SPACE_BOUND: &str = "the address-space limit (ulimit -v, prlimit --as)";
+
+/// The resident memory a cap `limit` on the address space leaves room for \[bytes\]:
+///   (limit - [`ADDRESS_SPACE_HEADROOM`]) / ([`VIRTUAL_PER_RESIDENT_PERCENT`] / 100),
+/// the headroom for what every run maps whatever its size (the binary and its libraries,
+/// thread stacks, the allocators' first arenas), the ratio for the address space a run maps
+/// per byte of its resident estimate beyond that. Under a 700 MB cap an estimate of 0.32 GB
+/// against the bare limit aborted in an allocation. Before the command line fitted its
+/// allocator to a cap (`fit_allocator_to_address_space` in `main.rs`), mimalloc's arenas
+/// made the default engine's `modes --assembly --full` map 13.2 GB for 4.6 GB resident.
 pub fn address_space_left(limit: u64) -> u64 {
     if limit == u64::MAX {
         return u64::MAX;
     }
-    limit.saturating_sub(ADDRESS_SPACE_HEADROOM) / VIRTUAL_PER_RESIDENT
+    limit.saturating_sub(ADDRESS_SPACE_HEADROOM) / VIRTUAL_PER_RESIDENT_PERCENT * 100
 }
 
-/// Address space kept free under a cap for mappings the estimates do not count \[bytes\].
-pub const ADDRESS_SPACE_HEADROOM: u64 = 512 << 20;
+/// Address space every run maps under a cap beyond its estimate \[bytes\]: the default
+/// liner's `modes` (estimate 0.74 GB, 0.63 GB resident) peaked at 1.55 GB of address space.
+pub const ADDRESS_SPACE_HEADROOM: u64 = 1 << 30;
 
-/// Address space mapped per byte resident, rounded up from the largest ratio measured: peak
-/// VmPeak / VmHWM of `modes models/engine.toml --assembly --full` 13.0 / 6.0 GB = 2.17
-/// (0.8 of what is left is the limit, [`crate::scene::budget::Limits`], so 2 with that margin
-/// covers it).
-pub const VIRTUAL_PER_RESIDENT: u64 = 2;
+/// Address space mapped per byte of the resident estimate, beyond the headroom, in percent:
+/// 125, a quarter above the largest ratio measured under an 8 GB cap, (VmPeak - headroom) /
+/// estimate: the default engine's `modes --assembly --full` (VmPeak 6.27 GB, estimate
+/// 5.29 GB) 0.98, the 754k-DOF casting's `modes` (5.86 GB, estimate 5.49 GB) 0.87, the
+/// default liner's 0.65. Both large runs fit under 8 GB. The casting was refused there
+/// before: the old rule counted twice the estimate plus 0.5 GB of address space and let a
+/// run take 80 % of what was left. The estimates
+/// themselves lie above the resident peaks (`crate::scene::budget::modal_solve`), and under a
+/// cap the limit is the whole of what is left (the 80 % margin is the machine's, which other
+/// processes share, [`crate::scene::budget::Limits`]).
+pub const VIRTUAL_PER_RESIDENT_PERCENT: u64 = 125;
 
 /// What the process's memory cgroup still allows \[bytes\]: limit - usage of its cgroup (v2
 /// `memory.max` - `memory.current`; v1 `memory.limit_in_bytes` - `memory.usage_in_bytes`), as a
@@ -91,7 +103,12 @@ pub fn cgroup_available(read: &dyn Fn(&str) -> Option<String>) -> u64 {
     best
 }
 
-/// RLIMIT_AS of the process [bytes] (u64::MAX when unlimited or unknown).
+/// Whether the process runs under an address-space limit (`ulimit -v`, `prlimit --as`).
+pub fn address_space_capped() -> bool {
+    address_space_limit() != u64::MAX
+}
+
+/// RLIMIT_AS of the process \[bytes\] (u64::MAX when unlimited or unknown).
 fn address_space_limit() -> u64 {
     let mut r = libc::rlimit {
         rlim_cur: 0,
@@ -143,7 +160,7 @@ pub fn release_memory() {
 #[cfg(test)]
 mod tests {
     use super::{
-        address_space_left, cgroup_available, ADDRESS_SPACE_HEADROOM, VIRTUAL_PER_RESIDENT,
+        address_space_left, cgroup_available, ADDRESS_SPACE_HEADROOM, VIRTUAL_PER_RESIDENT_PERCENT,
     };
 
     /// Regression (issue 40): under a 700 MB address-space cap an estimate of 0.32 GB was
@@ -155,7 +172,12 @@ mod tests {
         assert_eq!(address_space_left(u64::MAX), u64::MAX);
         assert_eq!(
             address_space_left(700_000_000),
-            (700_000_000 - ADDRESS_SPACE_HEADROOM) / VIRTUAL_PER_RESIDENT
+            0,
+            "700 MB is below the headroom"
+        );
+        assert_eq!(
+            address_space_left(8_000_000_000),
+            (8_000_000_000 - ADDRESS_SPACE_HEADROOM) / VIRTUAL_PER_RESIDENT_PERCENT * 100
         );
         assert_eq!(address_space_left(ADDRESS_SPACE_HEADROOM / 2), 0);
     }

@@ -22,6 +22,49 @@ fn release_freed_memory() {
     unsafe { libmimalloc_sys::mi_collect(true) }
 }
 
+/// mimalloc (v3) options `arena_reserve` and `arena_max_object_size` (their places in
+/// `mi_option_t`; values in KiB) and their defaults (1 and 2 GiB), by which their places are
+/// checked before they are set.
+const MI_ARENA_RESERVE: (libmimalloc_sys::mi_option_t, std::os::raw::c_long) = (23, 1 << 20);
+const MI_ARENA_MAX_OBJECT_SIZE: (libmimalloc_sys::mi_option_t, std::os::raw::c_long) =
+    (45, 2 << 20);
+
+/// Under an address-space limit (`ulimit -v`, `prlimit --as`), blocks of 64 MiB and more come
+/// straight from the operating system and go back to it when freed, and arenas are reserved
+/// 64 MiB at a time: mimalloc's arenas stay reserved once made (1 GiB at a time, growing), so
+/// the address space the default engine's `modes --assembly --full` mapped was 2.9 times its
+/// peak resident memory (13.2 against 4.6 GB), and a cap checked against the resident
+/// estimate could abort a run in an allocation. Without a limit nothing changes: the limit on
+/// resident memory (the machine's, a cgroup's) does not count reserved address space.
+///
+/// It runs from the ELF constructors (`.init_array`), before the Rust runtime's first
+/// allocation: called from `main` it came after mimalloc had reserved its first 1 GiB arena,
+/// and a run of the default liner mapped 2.0 GB for 0.6 GB resident.
+extern "C" fn fit_allocator_to_address_space() {
+    if !linercav::machine::address_space_capped() {
+        return;
+    }
+    // SAFETY: mi_option_get and mi_option_set read and write one option's value; called
+    // before any other thread exists.
+    unsafe {
+        let options = [MI_ARENA_RESERVE, MI_ARENA_MAX_OBJECT_SIZE];
+        // another mimalloc, or the options set by the environment: leave them
+        if options
+            .iter()
+            .any(|&(o, default)| libmimalloc_sys::mi_option_get(o) != default)
+        {
+            return;
+        }
+        for (o, _) in options {
+            libmimalloc_sys::mi_option_set(o, 64 << 10);
+        }
+    }
+}
+
+#[used]
+#[link_section = ".init_array"]
+static FIT_ALLOCATOR: extern "C" fn() = fit_allocator_to_address_space;
+
 #[derive(Parser)]
 #[command(
     name = "linercav",

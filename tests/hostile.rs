@@ -818,15 +818,44 @@ fn contract_doubtful_values_are_warned_about() {
 /// in an allocation; it is refused up front, exit 2, naming the estimate.
 #[test]
 fn regression_an_address_space_limit_is_respected() {
+    let o = under_address_space_cap(2_000_000_000, &["rom", "models/engine.toml", "--no-cache"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("needs about") && err.contains("GB"), "{err}");
+}
+
+/// Regression (session 59): a run the memory check lets through under an address-space cap
+/// completes. The default liner's `modes` (estimate 0.74 GB) fits a 2.1 GB cap by the rule
+/// (1 GiB of headroom + 1.25 times the estimate: `machine::address_space_left`). Under that
+/// cap the old rule refused it, and without the allocator fitted to the cap it mapped
+/// 1.98 GB; now 1.55 GB.
+#[test]
+fn regression_a_run_let_through_under_an_address_space_cap_completes() {
+    let args = [
+        "modes",
+        "models/engine.toml",
+        "--part",
+        "liner",
+        "--count",
+        "20",
+    ];
+    let o = under_address_space_cap(2_100_000_000, &args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("no mode missed"));
+}
+
+/// Runs the command line `args` with RLIMIT_AS set to `cap` bytes.
+fn under_address_space_cap(cap: u64, args: &[&str]) -> std::process::Output {
     use std::os::unix::process::CommandExt;
     let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_linercav"));
-    c.args(["rom", "models/engine.toml", "--no-cache"]);
+    c.args(args);
     // SAFETY: setrlimit is async-signal-safe; the struct lives for the call
     unsafe {
-        c.pre_exec(|| {
+        c.pre_exec(move || {
             let r = libc::rlimit {
-                rlim_cur: 2_000_000_000,
-                rlim_max: 2_000_000_000,
+                rlim_cur: cap,
+                rlim_max: cap,
             };
             if libc::setrlimit(libc::RLIMIT_AS, &r) != 0 {
                 return Err(std::io::Error::last_os_error());
@@ -834,8 +863,5 @@ fn regression_an_address_space_limit_is_respected() {
             Ok(())
         });
     }
-    let o = c.output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("needs about") && err.contains("GB"), "{err}");
+    c.output().unwrap()
 }

@@ -60,15 +60,25 @@ pub struct Limits {
 }
 
 impl Limits {
-    /// The machine's limits without a scene (a bare `--mesh`): 80 % of the available memory,
-    /// 24 h.
+    /// The machine's limits without a scene (a bare `--mesh`): 80 % of the available memory
+    /// (all of it under an address-space limit, the process's own, whose share already
+    /// carries its margin: [`crate::machine::address_space_left`]), 24 h.
     pub fn machine() -> Self {
         let (bytes, bound) = crate::machine::available_memory_from();
         Self {
-            memory: 0.8 * bytes as f64,
+            memory: Self::share(bound) * bytes as f64,
             seconds: 24.0 * 3600.0,
             memory_from_scene: false,
             memory_bound: bound,
+        }
+    }
+
+    /// The part of the memory available under `bound` that a run may take.
+    fn share(bound: &str) -> f64 {
+        if bound == crate::machine::ADDRESS_SPACE_BOUND {
+            1.0
+        } else {
+            0.8
         }
     }
 
@@ -103,10 +113,16 @@ impl Limits {
                 if self.memory_from_scene {
                     format!("limits.max_memory_gb allows {}", gb(self.memory))
                 } else {
+                    let share = Self::share(self.memory_bound);
+                    let of_it = if share < 1.0 {
+                        format!(" ({:.0} % of it is the limit)", 100.0 * share)
+                    } else {
+                        String::new()
+                    };
                     format!(
-                        "{} leaves {} available (80 % of it is the limit)",
+                        "{} leaves {} available{of_it}",
                         self.memory_bound,
-                        gb(self.memory / 0.8)
+                        gb(self.memory / share)
                     )
                 },
             )
