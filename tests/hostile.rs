@@ -826,7 +826,7 @@ fn regression_an_address_space_limit_is_respected() {
 
 /// Regression (session 59): a run the memory check lets through under an address-space cap
 /// completes. The default liner's `modes` (estimate 0.74 GB) fits a 2.1 GB cap by the rule
-/// (1 GiB of headroom + 1.25 times the estimate: `machine::address_space_left`). Under that
+/// (768 MiB of headroom + 1.25 times the estimate: `machine::address_space_left`). Under that
 /// cap the old rule refused it, and without the allocator fitted to the cap it mapped
 /// 1.98 GB; now 1.55 GB.
 #[test]
