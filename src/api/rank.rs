@@ -54,7 +54,8 @@ pub fn decided_ranking(
             .filter(|d| d.verdict == Verdict::Undecided)
             .collect();
         let r = runs.len();
-        if let Some((stopped, n)) = stop_rule(&open, r, (spent, next, budget), resolution) {
+        if let Some(stopped) = stop_rule(&open, r, (spent, next, budget), resolution) {
+            let n = open.len();
             return Ok(DecidedRanking {
                 order,
                 pairs,
@@ -100,36 +101,29 @@ pub fn decided_ranking(
 /// them shrinks the scatter by sqrt(r / (r + R')) (the step error stays). It stops when no
 /// pair is open, when R' < 1 (the budget), or when no open pair is decidable even with that
 /// shrink (`Decision::decidable_with`: the step error keeps it open). Returns the user's
-/// sentence and the number of pairs left open.
+/// sentence.
 fn stop_rule(
     open: &[&Decision],
     r: usize,
     (spent, next, budget): (f64, f64, f64),
     resolution: f64,
-) -> Option<(String, usize)> {
+) -> Option<String> {
     let more = ((budget - spent) / next).floor().max(0.0);
     let shrink = (r as f64 / (r as f64 + more)).sqrt();
     let hopeless = open.iter().all(|d| !d.decidable_with(shrink, resolution));
     let n = open.len();
     if n == 0 {
-        Some((
-            format!("every neighbour pair decided after {r} realisation(s), {spent:.0} s"),
-            n,
+        Some(format!(
+            "every neighbour pair decided after {r} realisation(s), {spent:.0} s"
         ))
     } else if more < 1.0 {
-        Some((
-            format!(
-                "{n} pair(s) undecided: the time budget transient.max_seconds = {budget:.0} s reached after {r} realisation(s), {spent:.0} s (the next takes about {next:.0} s)"
-            ),
-            n,
+        Some(format!(
+            "{n} pair(s) undecided: the time budget transient.max_seconds = {budget:.0} s reached after {r} realisation(s), {spent:.0} s (the next takes about {next:.0} s)"
         ))
     } else if hopeless {
         let e = open.iter().map(|d| d.step_error).fold(0.0, f64::max);
-        Some((
-            format!(
-                "{n} pair(s) undecided after {r} realisation(s), {spent:.0} s: their step error (up to {e:.0} m/s^2, the change from the step to half of it) keeps them open, which the realisations left in the time budget transient.max_seconds = {budget:.0} s cannot change; a finer transient.step_deg can"
-            ),
-            n,
+        Some(format!(
+            "{n} pair(s) undecided after {r} realisation(s), {spent:.0} s: their step error (up to {e:.0} m/s^2, the change from the step to half of it) keeps them open, which the realisations left in the time budget transient.max_seconds = {budget:.0} s cannot change; a finer transient.step_deg can"
         ))
     } else {
         None
@@ -157,8 +151,8 @@ mod tests {
 
     /// Verification of the stop rule against hand-computed verdicts, independent of the
     /// machine's speed: at resolution 20 a pair D = 30, s = 20, e = 2 (2u = 40.2) pools on
-    /// while the budget holds one more realisation (one more alone, shrink sqrt(1/2), separates it: 2u = 28.6 < 30), stops
-    /// on the budget when it holds none, and a pair whose step error alone keeps it open
+    /// while the budget holds one more realisation (one more alone, shrink sqrt(1/2),
+    /// separates it: 2u = 28.6 < 30), stops on the budget when it holds none, and a pair whose step error alone keeps it open
     /// (e = 20: 2u >= 40 > 30 at any shrink) stops the run at once, naming the step, unless
     /// that error is mostly its estimate's own noise (u(e) = 19.9) or another pair can still
     /// be decided.
@@ -176,20 +170,19 @@ mod tests {
         );
         assert_eq!(stop_rule(&[&noisy_step], 1, (10.0, 10.0, 100.0), res), None);
         // no room
-        let (text, n) = stop_rule(&[&noisy], 1, (10.0, 10.0, 19.9), res).unwrap();
-        assert_eq!(n, 1);
+        let text = stop_rule(&[&noisy], 1, (10.0, 10.0, 19.9), res).unwrap();
+        assert!(text.starts_with("1 pair(s) undecided"), "{text}");
         assert!(
             text.contains("the time budget transient.max_seconds = 20 s"),
             "{text}"
         );
         // the step error
-        let (text, n) = stop_rule(&[&stepped], 3, (10.0, 1.0, 1e6), res).unwrap();
-        assert_eq!(n, 1);
+        let text = stop_rule(&[&stepped], 3, (10.0, 1.0, 1e6), res).unwrap();
+        assert!(text.starts_with("1 pair(s) undecided"), "{text}");
         assert!(text.contains("a finer transient.step_deg can"), "{text}");
         assert!(text.contains("up to 20 m/s^2") && text.contains("after 3 realisation(s)"));
         // decided
-        let (text, n) = stop_rule(&[], 2, (10.0, 10.0, 100.0), res).unwrap();
-        assert_eq!(n, 0);
+        let text = stop_rule(&[], 2, (10.0, 10.0, 100.0), res).unwrap();
         assert!(
             text.starts_with("every neighbour pair decided after 2"),
             "{text}"

@@ -10,10 +10,10 @@
 //! - `force_n`: the largest dynamic slap force of the side over the event,
 //!   s (F_thrust - F_anti - F_side), s = +1 thrust, -1 anti-thrust (the contact force beyond
 //!   the quasi-static side force F_side, as the per-cycle slap-force peak has always been),
-//!   its peak interpolated between the samples ([`parabola_peak`], the samples being unevenly
-//!   spaced where sub-steps begin and end: a sampled maximum alone
-//!   misses a smooth peak by up to h^2 |F''| / 8, about 2 % on the default engine's 1/12 deg
-//!   slap sub-steps, and by how much depends on where the step grid falls);
+//!   its peak interpolated between the samples ([`parabola_peak`]; the samples are unevenly
+//!   spaced where sub-steps begin and end). A sampled maximum alone misses a smooth peak by
+//!   up to h^2 |F''| / 8, about 2 % on the default engine's 1/12 deg slap sub-steps, by an
+//!   amount that depends on where the step grid falls;
 //! - `impact_velocity_m_s`: the velocity of the side's deepest slice toward the wall at its
 //!   contact onset, row . v (the piston's; the wall's own motion, a few percent of it, is not
 //!   subtracted);
