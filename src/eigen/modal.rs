@@ -250,10 +250,15 @@ fn lanczos(
             let llt = analysis.llt(&pattern, &values)?;
             drop((values, pattern));
             crate::machine::release_memory();
+            let t_llt = t.elapsed().as_secs_f64();
             let better = (checks > 0)
                 .then(|| placed_shift(&mass, &llt, nev, sigma))
                 .flatten();
             t_factor += t.elapsed().as_secs_f64();
+            log::info!(
+                "factorised in {t_llt:.2} s; shift check {:.2} s",
+                t.elapsed().as_secs_f64() - t_llt
+            );
             // the check's block goes back to the system before ARPACK's basis is allocated
             crate::machine::release_memory();
             if let Some(better) = better {

@@ -136,8 +136,8 @@ impl Assembler {
     /// carries a deck's ([`Mesh::material_of`]), else with `mat`.
     pub fn assemble(&self, mesh: &Mesh, mat: &Elastic) -> Result<StiffnessMass, AssemblyError> {
         let nnz = self.pattern.nnz();
-        let mut k = vec![0.0; nnz];
-        let mut m = vec![0.0; nnz];
+        let mut k = crate::linalg::touch::zeros(nnz);
+        let mut m = crate::linalg::touch::zeros(nnz);
         let elems: Vec<(crate::scene::spec::ElementKind, &[usize])> = mesh.elements().collect();
         const CHUNK: usize = 512;
         for (c, chunk) in elems

@@ -100,7 +100,7 @@ impl Analysis {
 
     /// L L^T factorisation of the matrix with `values` on `pattern`.
     pub fn llt(&self, pattern: &Pattern, values: &[f64]) -> Result<Llt<'_>, FactorError> {
-        let mut l = vec![0.0; self.symbolic.len_val()];
+        let mut l = super::touch::zeros(self.symbolic.len_val());
         let req = self
             .symbolic
             .factorize_numeric_llt_scratch::<f64>(par(), Spec::<LltParams, f64>::default());
@@ -128,7 +128,7 @@ impl Analysis {
     /// Number of negative pivots of the L D L^T factorisation of the matrix with `values`:
     /// the inertia count (number of eigenvalues below the shift).
     pub fn negative_pivots(&self, pattern: &Pattern, values: &[f64]) -> Result<usize, FactorError> {
-        let mut l = vec![0.0; self.symbolic.len_val()];
+        let mut l = super::touch::zeros(self.symbolic.len_val());
         let req = self
             .symbolic
             .factorize_numeric_ldlt_scratch::<f64>(par(), Spec::<LdltParams, f64>::default());

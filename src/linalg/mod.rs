@@ -7,6 +7,7 @@ pub mod kernels;
 pub mod ordering;
 pub mod sparse;
 pub mod spill;
+pub mod touch;
 pub mod tree_solve;
 
 /// Makes faer's dense operations that take no explicit parallelism (products by `*`, dense

@@ -211,7 +211,7 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
     let nm = lambdas.len();
     // one dense block holds the basis as it is built: [Phi_c | Phi_n | U], U the attachment
     // candidates, later replaced in place by the kept, M-orthonormal Phi_a
-    let mut phi = Mat::<f64>::zeros(na, nc + nm + nl + nc);
+    let mut phi = crate::linalg::touch::zeros_mat(na, nc + nm + nl + nc);
     let interface_cols = constraint_modes(p, &interior, phi.as_mut().subcols_mut(0, nc));
     tick(&format!("{nc} constraint modes"));
     for j in 0..nm {
@@ -823,10 +823,12 @@ fn lower_gram(pattern: &Pattern, values: &[f64], x: MatRef<'_, f64>) -> Mat<f64>
     c
 }
 
-/// With info logging: the extreme eigenvalues of K_r and M_r scaled by M_r's diagonal (a
-/// conditioning diagnostic of the basis).
+/// With debug logging: the extreme eigenvalues of K_r and M_r scaled by M_r's diagonal (a
+/// conditioning diagnostic of the basis). Computed only then: two dense eigenvalue solves of
+/// the reduced size (0.5 s for the default crankcase), which `-v` (info) used to pay for a
+/// line it did not print.
 fn log_conditioning(part: &str, k: &Mat<f64>, m: &Mat<f64>) {
-    if !log::log_enabled!(log::Level::Info) {
+    if !log::log_enabled!(log::Level::Debug) {
         return;
     }
     let nr = k.nrows();
