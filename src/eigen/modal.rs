@@ -2,6 +2,7 @@
 //! residuals, M-orthogonality, and a Sturm count at a shift in a spectral gap.
 
 use super::certify::{self, SturmCheck};
+use super::shift_invert::{solve_modes_watched, Watch, Watched};
 use super::{solve_modes, EigenError, EigenSettings, Modes};
 use crate::fem::model::{FeModel, Timings};
 use crate::linalg::factor::{Analysis, FactorError};
@@ -223,10 +224,18 @@ fn certify_with_recovery(
     ))
 }
 
-/// One shift-invert Lanczos solve of `nev` modes: factorises K - sigma M (with `place`, moves
-/// the shift first when [`placed_shift`] finds it far below the wanted modes, and factorises
-/// again), runs ARPACK with the start vector of `seed`, lets the factor go. K and M wait on
-/// disk meanwhile when the factor is large ([`with_shifted`]). Returns the modes, the shift
+/// One shift-invert Lanczos solve of `nev` modes: factorises K - sigma M, runs ARPACK with the
+/// start vector of `seed`, lets the factor go. K and M wait on disk meanwhile when the factor
+/// is large ([`with_shifted`]). With `place`, a shift far below the wanted modes is moved to
+/// them and the solve starts again on a new factor (up to [`PLACEMENT_ROUNDS`] times). The
+/// caller's shift is watched: at the iteration's first restart its Ritz values bound
+/// lambda_nev from above ([`ritz_bound`]); a bound that leaves the shift in doubt
+/// ([`shift_in_doubt`]) stops the iteration and the block check [`placed_shift`] decides on
+/// the same factor (a shift it keeps is solved there afresh); an iteration that converges
+/// before its first restart is judged by its eigenvalues ([`moved_shift`]). A moved shift is
+/// checked by the block check before its iteration, as every shift was before session 60. A
+/// shift near the band so costs no check (the block check took 7 s of the 754k-DOF casting's
+/// 67 s); a far one costs the first restart's ncv + 1 solves more. Returns the modes, the shift
 /// used and (factorisation, eigen) seconds.
 fn lanczos(
     km: &mut StiffnessMass,
@@ -250,28 +259,63 @@ fn lanczos(
             let llt = analysis.llt(&pattern, &values)?;
             drop((values, pattern));
             crate::machine::release_memory();
-            let t_llt = t.elapsed().as_secs_f64();
-            let better = (checks > 0)
-                .then(|| placed_shift(&mass, &llt, nev, sigma))
-                .flatten();
             t_factor += t.elapsed().as_secs_f64();
-            log::info!(
-                "factorised in {t_llt:.2} s; shift check {:.2} s",
-                t.elapsed().as_secs_f64() - t_llt
-            );
-            // the check's block goes back to the system before ARPACK's basis is allocated
-            crate::machine::release_memory();
-            if let Some(better) = better {
-                return Ok::<_, ModalError>(Err(better));
+            // the caller's shift is watched; one this solve moved is checked before the
+            // iteration (its bound refined on the new factor)
+            let watching = checks == PLACEMENT_ROUNDS;
+            if checks > 0 && !watching {
+                let t = Instant::now();
+                let better = placed_shift(&mass, &llt, nev, sigma);
+                t_factor += t.elapsed().as_secs_f64();
+                log::info!("shift check {:.2} s", t.elapsed().as_secs_f64());
+                crate::machine::release_memory();
+                if let Some(better) = better {
+                    return Ok::<_, ModalError>(Err(better));
+                }
             }
             let t = Instant::now();
-            // the solve owns the factor: it goes when the iteration ends, before the Ritz
-            // vectors are formed beside ARPACK's basis
-            let solve = move |x: &mut [f64]| llt.solve_vec(x);
-            let modes = solve_modes(n, &settings, |x, y| mass.matvec(x, y), solve)?;
+            // the iteration lets the factor go once converged, before the Ritz vectors are
+            // formed beside ARPACK's basis; one stopped to check the shift leaves it
+            let factor = std::cell::RefCell::new(Some(llt));
+            let (mut bound, mut watched) = (f64::INFINITY, false);
+            let watch = Watch {
+                ritz: |ritz: &[f64]| {
+                    watched = true;
+                    bound = ritz_bound(ritz, nev, sigma);
+                    watching && shift_in_doubt(bound, sigma)
+                },
+                done: || drop(factor.borrow_mut().take()),
+            };
+            let solve = |x: &mut [f64]| {
+                if let Some(llt) = factor.borrow().as_ref() {
+                    llt.solve_vec(x);
+                }
+            };
+            let run = solve_modes_watched(n, &settings, |x, y| mass.matvec(x, y), solve, watch)?;
             t_eigen += t.elapsed().as_secs_f64();
+            let Watched::Done(modes) = run else {
+                // the first restart's bound leaves the shift in doubt: the block check decides
+                let Some(llt) = factor.into_inner() else {
+                    unreachable!("a stopped iteration keeps its factor")
+                };
+                log::info!(
+                    "Lanczos stopped at its first restart (lambda_{nev} <= {bound:.4e}, shift {sigma:.4e})"
+                );
+                let (result, (tf, te)) = check_then_solve(&mass, llt, &settings)?;
+                t_factor += tf;
+                t_eigen += te;
+                return Ok(result);
+            };
             log::info!("{}", modes.work_summary());
-            Ok(Ok(modes))
+            // converged before its first restart: its own eigenvalues judge the shift
+            let top = modes.eigenvalues.get(nev.saturating_sub(1)).copied();
+            match top
+                .filter(|_| watching && !watched)
+                .and_then(|top| moved_shift(top, sigma))
+            {
+                Some(better) => Ok(Err(better)),
+                None => Ok(Ok(modes)),
+            }
         })??;
         match solved {
             Ok(modes) => return Ok((modes, sigma, (t_factor, t_eigen))),
@@ -288,6 +332,30 @@ fn lanczos(
             }
         }
     }
+}
+
+/// The block shift check ([`placed_shift`]) on the factor `llt` of K - sigma M, then, when it
+/// keeps the shift, a fresh Lanczos solve on that factor: the modes, or the better shift; with
+/// (check, solve) seconds.
+fn check_then_solve(
+    mass: &crate::linalg::sparse::SymCsc,
+    llt: crate::linalg::factor::Llt<'_>,
+    settings: &EigenSettings,
+) -> Result<(Result<Modes, f64>, (f64, f64)), ModalError> {
+    let (nev, sigma, n) = (settings.count, settings.sigma, mass.pattern.n);
+    let t = Instant::now();
+    let better = placed_shift(mass, &llt, nev, sigma);
+    let t_check = t.elapsed().as_secs_f64();
+    log::info!("shift check {t_check:.2} s");
+    crate::machine::release_memory();
+    if let Some(better) = better {
+        return Ok((Err(better), (t_check, 0.0)));
+    }
+    let t = Instant::now();
+    let solve = move |x: &mut [f64]| llt.solve_vec(x);
+    let modes = solve_modes(n, settings, |x, y| mass.matvec(x, y), solve)?;
+    log::info!("{}", modes.work_summary());
+    Ok((Ok(modes), (t_check, t.elapsed().as_secs_f64())))
 }
 
 /// Runs `work` on the lower triangle of K - sigma M (what the lower-side factorisations read,
@@ -326,6 +394,38 @@ pub const SHIFT_REACH: f64 = 2.0;
 /// Where [`placed_shift`] puts the shift: this fraction of the estimated highest wanted
 /// eigenvalue, below zero.
 pub const SHIFT_FRACTION: f64 = 0.25;
+
+/// A Ritz bound (an upper bound of lambda_nev, [`ritz_bound`]) below this many times -sigma
+/// leaves a shift below zero in doubt, to be checked ([`placed_shift`]). Far shifts give
+/// bounds below -sigma (the 754k-DOF casting at -(2 pi 20 kHz)^2: 0.87 times -sigma), shifts
+/// near the band bounds hundreds to thousands of times -sigma (the casting and the liner at
+/// the default 100 Hz).
+pub const SHIFT_DOUBT: f64 = 16.0;
+
+/// Whether the Ritz bound `bound` of lambda_nev leaves the shift `sigma` in doubt: below zero
+/// and `bound` < [`SHIFT_DOUBT`] (-sigma).
+pub fn shift_in_doubt(bound: f64, sigma: f64) -> bool {
+    sigma < 0.0 && bound < SHIFT_DOUBT * -sigma
+}
+
+/// An upper bound of lambda_nev from the Ritz values `ritz` of the operator
+/// (K - sigma M)^-1 M on a Lanczos basis: sigma + 1 / theta_nev, theta_nev the nev-th largest.
+/// By Cauchy interlacing theta_nev <= 1 / (lambda_nev - sigma) for sigma below the spectrum,
+/// so the bound is at least lambda_nev; infinite when fewer than nev Ritz values are positive.
+pub fn ritz_bound(ritz: &[f64], nev: usize, sigma: f64) -> f64 {
+    let mut theta: Vec<f64> = ritz.iter().copied().filter(|t| *t > 0.0).collect();
+    theta.sort_by(|a, b| b.total_cmp(a));
+    match nev.checked_sub(1).and_then(|k| theta.get(k)) {
+        Some(&t) => sigma + 1.0 / t,
+        None => f64::INFINITY,
+    }
+}
+
+/// The shift [`placed_shift`] moves to, given `top`, an estimate or upper bound of the highest
+/// wanted eigenvalue: -[`SHIFT_FRACTION`] top when -sigma > [`SHIFT_REACH`] top, else None.
+pub fn moved_shift(top: f64, sigma: f64) -> Option<f64> {
+    (sigma < 0.0 && top > 0.0 && -sigma > SHIFT_REACH * top).then_some(-SHIFT_FRACTION * top)
+}
 
 /// A better shift when `sigma` lies far below the lowest `nev` eigenvalues, else None.
 ///
@@ -385,8 +485,7 @@ pub fn placed_shift(
         let theta_max = ritz[nev - 1];
         log::debug!("shift check pass {pass}: lambda_{nev} <= {theta_max:.4e} (shift {sigma:.4e})");
         if pass == SHIFT_CHECK_PASSES {
-            return (theta_max > 0.0 && -sigma > SHIFT_REACH * theta_max)
-                .then_some(-SHIFT_FRACTION * theta_max);
+            return moved_shift(theta_max, sigma);
         }
         if let Some(prev) = last {
             // the passes left, each lowering the bound by the last pass's ratio, cannot

@@ -153,15 +153,56 @@ pub fn solve_modes(
     mass: impl FnMut(&[f64], &mut [f64]),
     solve: impl FnMut(&mut [f64]),
 ) -> Result<Modes, EigenError> {
+    let watch = Watch {
+        ritz: |_: &[f64]| false,
+        done: || (),
+    };
+    match solve_modes_watched(n, settings, mass, solve, watch)? {
+        Watched::Done(modes) => Ok(modes),
+        Watched::Stopped => unreachable!("a watcher that never stops stopped"),
+    }
+}
+
+/// How a watched solve ended.
+pub enum Watched {
+    Done(Modes),
+    /// The watcher stopped the iteration at its first restart.
+    Stopped,
+}
+
+/// What a watched solve calls: `ritz` with the Ritz values of its first restart (true stops
+/// the iteration there), `done` when the iteration has converged, before the Ritz vectors are
+/// formed (where a caller lets its factor go).
+pub struct Watch<R, D> {
+    pub ritz: R,
+    pub done: D,
+}
+
+/// As [`solve_modes`], watched ([`Watch`]): the Ritz values theta of the operator
+/// (K - sigma M)^-1 M at the first restart (the ncv-step Lanczos factorisation's, in ARPACK's
+/// workl at `ipntr(6)` as dsaupd documents it) are shown to `watch.ritz`, which may stop the
+/// iteration there. By Cauchy interlacing the k-th largest Ritz value is at most the k-th
+/// largest eigenvalue of the operator, so sigma + 1 / theta_k bounds lambda_k from above (sigma
+/// below the spectrum). An iteration that converges before its first restart is not shown.
+pub fn solve_modes_watched(
+    n: usize,
+    settings: &EigenSettings,
+    mass: impl FnMut(&[f64], &mut [f64]),
+    solve: impl FnMut(&mut [f64]),
+    watch: Watch<impl FnMut(&[f64]) -> bool, impl FnOnce()>,
+) -> Result<Watched, EigenError> {
     let mut ws = Workspace::new(n, settings)?;
     let _guard = ARPACK_LOCK.lock().unwrap_or_else(|p| p.into_inner());
     super::arpack::single_threaded_blas();
     take_lapack_error();
-    let work = ws.iterate(settings, mass, solve)?;
+    let Some(work) = ws.iterate(settings, mass, solve, watch.ritz)? else {
+        return Ok(Watched::Stopped);
+    };
+    (watch.done)();
     let t0 = std::time::Instant::now();
     let (eigenvalues, vectors) = ws.extract(settings)?;
     drop(_guard);
-    Ok(Modes {
+    Ok(Watched::Done(Modes {
         eigenvalues,
         vectors,
         n,
@@ -172,7 +213,7 @@ pub fn solve_modes(
         seconds_solve: work.seconds_solve,
         seconds_mass: work.seconds_mass,
         seconds_arpack: work.seconds_arpack + t0.elapsed().as_secs_f64(),
-    })
+    }))
 }
 
 /// The LAPACK argument error recorded inside ARPACK since the last check, as an error.
@@ -244,13 +285,16 @@ impl Workspace {
 
     /// dsaupd's reverse-communication loop: y = A^{-1} M x (ido -1), y = A^{-1} (M x) with M x
     /// given (ido 1), y = M x (ido 2), until it is done (99); then its info and the number of
-    /// converged Ritz values checked.
+    /// converged Ritz values checked. Before the first solve past the ncv + 1 of the first
+    /// Lanczos factorisation (the start vector's and ncv steps), `ritz` sees the Ritz values
+    /// of that factorisation; None when it stops the loop there.
     fn iterate(
         &mut self,
         settings: &EigenSettings,
         mut mass: impl FnMut(&[f64], &mut [f64]),
         mut solve: impl FnMut(&mut [f64]),
-    ) -> Result<Work, EigenError> {
+        mut ritz: impl FnMut(&[f64]) -> bool,
+    ) -> Result<Option<Work>, EigenError> {
         let (n, nev, ncv) = (self.n, self.nev, self.ncv);
         let mut work = Work {
             solves: 0,
@@ -311,6 +355,12 @@ impl Workspace {
                 }
                 other => unreachable!("ARPACK asked for unknown ido = {other}"),
             }
+            if ido != 2 && work.solves == ncv + 1 {
+                let r0 = self.ipntr[5] as usize - 1;
+                if ritz(&self.workl[r0..r0 + ncv]) {
+                    return Ok(None);
+                }
+            }
             if ido != 2 {
                 let t = clock();
                 solve(&mut tmp);
@@ -335,7 +385,7 @@ impl Workspace {
                 msg: saupd_message(info),
             });
         }
-        Ok(work)
+        Ok(Some(work))
     }
 
     /// dseupd's Ritz values and vectors of a converged loop, ascending: (eigenvalues, vectors
