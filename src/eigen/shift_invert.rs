@@ -356,8 +356,12 @@ impl Workspace {
                 other => unreachable!("ARPACK asked for unknown ido = {other}"),
             }
             if ido != 2 && work.solves == ncv + 1 {
-                let r0 = self.ipntr[5] as usize - 1;
-                if ritz(&self.workl[r0..r0 + ncv]) {
+                // ipntr(6) is 1-based; an out-of-range pointer (not set) is not watched
+                let r0 = usize::try_from(self.ipntr[5])
+                    .ok()
+                    .and_then(|p| p.checked_sub(1));
+                let values = r0.and_then(|r| self.workl.get(r..r + ncv));
+                if values.is_some_and(&mut ritz) {
                     return Ok(None);
                 }
             }
