@@ -334,6 +334,10 @@ fn lanczos(
     }
 }
 
+/// The modes solved at the shift, or the better shift the check found; with (check, solve)
+/// seconds ([`check_then_solve`]).
+type Checked = (Result<Modes, f64>, (f64, f64));
+
 /// The block shift check ([`placed_shift`]) on the factor `llt` of K - sigma M, then, when it
 /// keeps the shift, a fresh Lanczos solve on that factor: the modes, or the better shift; with
 /// (check, solve) seconds.
@@ -341,7 +345,7 @@ fn check_then_solve(
     mass: &crate::linalg::sparse::SymCsc,
     llt: crate::linalg::factor::Llt<'_>,
     settings: &EigenSettings,
-) -> Result<(Result<Modes, f64>, (f64, f64)), ModalError> {
+) -> Result<Checked, ModalError> {
     let (nev, sigma, n) = (settings.count, settings.sigma, mass.pattern.n);
     let t = Instant::now();
     let better = placed_shift(mass, &llt, nev, sigma);

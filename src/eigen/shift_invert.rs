@@ -355,15 +355,8 @@ impl Workspace {
                 }
                 other => unreachable!("ARPACK asked for unknown ido = {other}"),
             }
-            if ido != 2 && work.solves == ncv + 1 {
-                // ipntr(6) is 1-based; an out-of-range pointer (not set) is not watched
-                let r0 = usize::try_from(self.ipntr[5])
-                    .ok()
-                    .and_then(|p| p.checked_sub(1));
-                let values = r0.and_then(|r| self.workl.get(r..r + ncv));
-                if values.is_some_and(&mut ritz) {
-                    return Ok(None);
-                }
+            if ido != 2 && work.solves == ncv + 1 && self.ritz_values().is_some_and(&mut ritz) {
+                return Ok(None);
             }
             if ido != 2 {
                 let t = clock();
@@ -390,6 +383,13 @@ impl Workspace {
             });
         }
         Ok(Some(work))
+    }
+
+    /// The ncv Ritz values of the last Lanczos factorisation in workl (at `ipntr(6)`, 1-based;
+    /// None for a pointer out of range, not set).
+    fn ritz_values(&self) -> Option<&[f64]> {
+        let r0 = usize::try_from(self.ipntr[5]).ok()?.checked_sub(1)?;
+        self.workl.get(r0..r0 + self.ncv)
     }
 
     /// dseupd's Ritz values and vectors of a converged loop, ascending: (eigenvalues, vectors
