@@ -233,8 +233,8 @@ fn certify_with_recovery(
 /// ([`shift_in_doubt`]) stops the iteration and the block check [`placed_shift`] decides on
 /// the same factor (a shift it keeps is solved there afresh); an iteration that converges
 /// before its first restart is judged by its eigenvalues ([`moved_shift`]). A moved shift is
-/// checked by the block check before its iteration, as every shift was before session 60. A
-/// shift near the band so costs no check (the block check took 7 s of the 754k-DOF casting's
+/// checked by the block check before its iteration ([`check_then_solve`]). A shift near the
+/// band so costs no check (the block check took 7 s of the 754k-DOF casting's
 /// 67 s); a far one costs the first restart's ncv + 1 solves more. Returns the modes, the shift
 /// used and (factorisation, eigen) seconds.
 fn lanczos(
@@ -264,14 +264,10 @@ fn lanczos(
             // iteration (its bound refined on the new factor)
             let watching = checks == PLACEMENT_ROUNDS;
             if checks > 0 && !watching {
-                let t = Instant::now();
-                let better = placed_shift(&mass, &llt, nev, sigma);
-                t_factor += t.elapsed().as_secs_f64();
-                log::info!("shift check {:.2} s", t.elapsed().as_secs_f64());
-                crate::machine::release_memory();
-                if let Some(better) = better {
-                    return Ok::<_, ModalError>(Err(better));
-                }
+                let (result, (tf, te)) = check_then_solve(&mass, llt, &settings)?;
+                t_factor += tf;
+                t_eigen += te;
+                return Ok::<_, ModalError>(result);
             }
             let t = Instant::now();
             // the iteration lets the factor go once converged, before the Ritz vectors are
@@ -287,9 +283,10 @@ fn lanczos(
                 done: || drop(factor.borrow_mut().take()),
             };
             let solve = |x: &mut [f64]| {
-                if let Some(llt) = factor.borrow().as_ref() {
-                    llt.solve_vec(x);
-                }
+                let llt = factor.borrow();
+                llt.as_ref()
+                    .expect("the factor lives until the iteration has converged")
+                    .solve_vec(x);
             };
             let run = solve_modes_watched(n, &settings, |x, y| mass.matvec(x, y), solve, watch)?;
             t_eigen += t.elapsed().as_secs_f64();
