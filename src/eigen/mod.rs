@@ -7,5 +7,6 @@ pub mod dense_lanczos;
 pub mod modal;
 pub mod shift_invert;
 pub mod subspace;
+pub mod trial;
 
 pub use shift_invert::{solve_modes, EigenError, EigenSettings, Modes};

@@ -4,6 +4,7 @@
 use super::certify::{self, SturmCheck};
 use super::shift_invert::{solve_modes_watched, Watch, Watched};
 use super::{solve_modes, EigenError, EigenSettings, Modes};
+use crate::fem::fields::{monomial_count, SmoothFields};
 use crate::fem::model::{FeModel, Timings};
 use crate::linalg::factor::{Analysis, FactorError};
 use crate::linalg::sparse::{Pattern, StiffnessMass, SymCsc};
@@ -57,8 +58,9 @@ impl FeModel {
         self.modes_at(count, sigma, guard, true)
     }
 
-    /// As [`FeModel::modes`]; `place`: move a shift far below the wanted modes to them
-    /// ([`placed_shift`]), else solve at `sigma` as given.
+    /// As [`FeModel::modes`]; `place`: move a shift far below the wanted modes to them (first
+    /// judged on the model's smooth trial fields, [`crate::fem::fields`], then
+    /// [`placed_shift`]), else solve at `sigma` as given.
     pub fn modes_at(
         &mut self,
         count: usize,
@@ -66,7 +68,11 @@ impl FeModel {
         guard: usize,
         place: bool,
     ) -> Result<ModalSolution, ModalError> {
-        let (sol, t) = certified_modes(&mut self.km, &self.analysis, count, sigma, guard, place)?;
+        let nev = count + guard;
+        let trial = (place && 3 * monomial_count(TRIAL_DEGREE) >= 2 * nev)
+            .then(|| SmoothFields::new(&self.mesh, &self.dofs, TRIAL_DEGREE));
+        let (km, analysis) = (&mut self.km, &self.analysis);
+        let (sol, t) = certified_modes(km, analysis, count, sigma, guard, place, trial)?;
         self.timings.factorisation = t.factorisation;
         self.timings.eigen = t.eigen;
         self.timings.certification = t.certification;
@@ -103,6 +109,11 @@ impl FeModel {
     }
 }
 
+/// Degree of the smooth trial fields that judge a shift before the first factorisation
+/// ([`FeModel::modes_at`]): 60 fields, used for up to 30 wanted modes (a bound of lambda_nev
+/// from at least twice nev fields).
+pub const TRIAL_DEGREE: usize = 3;
+
 /// Re-solves after a Sturm count that finds more eigenvalues below its shift than were
 /// computed (modes the Lanczos iteration missed): at most this many times.
 const RECOVERY_ATTEMPTS: usize = 2;
@@ -124,19 +135,78 @@ pub fn certified_modes(
     sigma: f64,
     guard: usize,
     place: bool,
+    trial: Option<SmoothFields>,
 ) -> Result<(ModalSolution, Timings), ModalError> {
-    // the shift is checked on the first solve; re-solves keep the one it chose
+    // the shift is checked on the first solve; re-solves keep the one it chose. The trial
+    // block is let go before the first factorisation.
+    let mut trial = trial;
     let solve = |km: &mut StiffnessMass, nev: usize, attempt: usize, sigma: f64| {
-        lanczos(
-            km,
-            analysis,
-            nev,
-            sigma,
-            attempt as u64,
-            place && attempt == 0,
-        )
+        let placement = match place && attempt == 0 {
+            true => Placement::of(km, trial.take(), nev, sigma),
+            false => Placement::none(sigma),
+        };
+        lanczos(km, analysis, nev, attempt as u64, placement)
     };
     certify_with_recovery(km, analysis, count, sigma, guard, solve)
+}
+
+/// How [`lanczos`] treats the shift it is given.
+#[derive(Clone, Copy, Debug)]
+struct Placement {
+    /// The shift to start from.
+    sigma: f64,
+    /// Block checks of the shift left ([`placed_shift`]), each on a new factor.
+    checks: usize,
+    /// The first iteration is watched ([`ritz_bound`]) rather than checked before it starts.
+    watch: bool,
+    /// Seconds spent placing the shift before any factorisation.
+    seconds: f64,
+}
+
+impl Placement {
+    /// The shift solved as given.
+    fn none(sigma: f64) -> Self {
+        Self {
+            sigma,
+            checks: 0,
+            watch: false,
+            seconds: 0.0,
+        }
+    }
+
+    /// The shift `sigma` placed for `nev` modes: first judged by the Rayleigh-Ritz bound of
+    /// lambda_nev on the trial vectors `trial` when given ([`super::trial::trial_bound`], no
+    /// factorisation); a shift that bound proves far ([`moved_shift`]) is moved before the
+    /// first factorisation and then block-checked before its iteration, any other is watched.
+    fn of(km: &StiffnessMass, trial: Option<SmoothFields>, nev: usize, sigma: f64) -> Self {
+        let t = Instant::now();
+        let bound = trial.and_then(|x| super::trial::trial_bound(km, &x, nev));
+        let moved = bound.and_then(|b| moved_shift(b, sigma));
+        log::info!(
+            "smooth trial fields: lambda_{nev} <= {:.4e} ({:.2} s)",
+            bound.unwrap_or(f64::INFINITY),
+            t.elapsed().as_secs_f64()
+        );
+        if let (Some(b), Some(better)) = (bound, moved) {
+            log::info!(
+                "the shift {:.1} Hz lies far below the lowest {nev} modes (up to at most {:.1} Hz by smooth trial fields): solving at {:.1} Hz instead",
+                shift_hz(sigma),
+                b.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
+                shift_hz(better)
+            );
+        }
+        Self {
+            sigma: moved.unwrap_or(sigma),
+            checks: PLACEMENT_ROUNDS,
+            watch: moved.is_none(),
+            seconds: t.elapsed().as_secs_f64(),
+        }
+    }
+}
+
+/// The frequency of a shift below zero, -(2 pi f)^2 = sigma \[Hz\] (0 for a shift above zero).
+fn shift_hz(sigma: f64) -> f64 {
+    (-sigma).max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
 }
 
 /// [`certified_modes`] with the Lanczos solve given: `solve(km, nev, attempt, sigma)` returns
@@ -226,30 +296,30 @@ fn certify_with_recovery(
 
 /// One shift-invert Lanczos solve of `nev` modes: factorises K - sigma M, runs ARPACK with the
 /// start vector of `seed`, lets the factor go. K and M wait on disk meanwhile when the factor
-/// is large ([`with_shifted`]). With `place`, a shift far below the wanted modes is moved to
-/// them and the solve starts again on a new factor (up to [`PLACEMENT_ROUNDS`] times). The
-/// caller's shift is watched: at the iteration's first restart its Ritz values bound
+/// is large ([`with_shifted`]). With checks in `placement`, a shift far below the wanted modes
+/// is moved to them and the solve starts again on a new factor (up to [`PLACEMENT_ROUNDS`]
+/// times). A watched shift: at the iteration's first restart its Ritz values bound
 /// lambda_nev from above ([`ritz_bound`]); a bound that leaves the shift in doubt
 /// ([`shift_in_doubt`]) stops the iteration and the block check [`placed_shift`] decides on
 /// the same factor (a shift it keeps is solved there afresh); an iteration that converges
-/// before its first restart is judged by its eigenvalues ([`moved_shift`]). A moved shift is
-/// checked by the block check before its iteration ([`check_then_solve`]). A shift near the
-/// band so costs no check (the block check took 7 s of the 754k-DOF casting's
-/// 67 s); a far one costs the first restart's ncv + 1 solves more. Returns the modes, the shift
+/// before its first restart is judged by its eigenvalues ([`moved_shift`]). A shift moved
+/// (here or by the smooth trial fields, [`Placement::of`]) is checked by the block check
+/// before its iteration ([`check_then_solve`]). A shift near the band so costs no check (the
+/// block check took 7 s of the 754k-DOF casting's 67 s); a far one costs the first restart's
+/// ncv + 1 solves more unless the trial fields prove it far. Returns the modes, the shift
 /// used and (factorisation, eigen) seconds.
 fn lanczos(
     km: &mut StiffnessMass,
     analysis: &Analysis,
     nev: usize,
-    sigma: f64,
     seed: u64,
-    place: bool,
+    placement: Placement,
 ) -> Result<(Modes, f64, (f64, f64)), ModalError> {
     let mass = km.pattern.compress(&km.m);
-    let (mut sigma, mut t_factor, mut t_eigen) = (sigma, 0.0, 0.0);
+    let (mut sigma, mut t_factor, mut t_eigen) = (placement.sigma, 0.0, placement.seconds);
     // checks of the shift left: a second check on the new factor refines a first estimate
     // that the far shift kept coarse
-    let mut checks = if place { PLACEMENT_ROUNDS } else { 0 };
+    let (mut checks, mut watching) = (placement.checks, placement.watch);
     loop {
         let mut settings = EigenSettings::new(nev, sigma);
         settings.seed = seed;
@@ -260,9 +330,8 @@ fn lanczos(
             drop((values, pattern));
             crate::machine::release_memory();
             t_factor += t.elapsed().as_secs_f64();
-            // the caller's shift is watched; one this solve moved is checked before the
-            // iteration (its bound refined on the new factor)
-            let watching = checks == PLACEMENT_ROUNDS;
+            // the caller's shift is watched; a moved one is checked before the iteration
+            // (its bound refined on the new factor)
             if checks > 0 && !watching {
                 let (result, (tf, te)) = check_then_solve(&mass, llt, &settings)?;
                 t_factor += tf;
@@ -310,22 +379,26 @@ fn lanczos(
                 .filter(|_| watching && !watched)
                 .and_then(|top| moved_shift(top, sigma))
             {
-                Some(better) => Ok(Err(better)),
+                // converged eigenvalues: the new shift needs no check
+                Some(sigma) => Ok(Err(Moved {
+                    sigma,
+                    settled: true,
+                })),
                 None => Ok(Ok(modes)),
             }
         })??;
         match solved {
             Ok(modes) => return Ok((modes, sigma, (t_factor, t_eigen))),
             Err(better) => {
-                let hz = |s: f64| (-s).max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
                 log::info!(
                     "the shift {:.1} Hz lies far below the lowest {nev} modes (up to about {:.1} Hz): solving at {:.1} Hz instead",
-                    hz(sigma),
-                    hz(better / SHIFT_FRACTION),
-                    hz(better)
+                    shift_hz(sigma),
+                    shift_hz(better.sigma / SHIFT_FRACTION),
+                    shift_hz(better.sigma)
                 );
-                sigma = better;
-                checks -= 1;
+                sigma = better.sigma;
+                checks = if better.settled { 0 } else { checks - 1 };
+                watching = false;
             }
         }
     }
@@ -333,7 +406,7 @@ fn lanczos(
 
 /// The modes solved at the shift, or the better shift the check found; with (check, solve)
 /// seconds ([`check_then_solve`]).
-type Checked = (Result<Modes, f64>, (f64, f64));
+type Checked = (Result<Modes, Moved>, (f64, f64));
 
 /// The block shift check ([`placed_shift`]) on the factor `llt` of K - sigma M, then, when it
 /// keeps the shift, a fresh Lanczos solve on that factor: the modes, or the better shift; with
@@ -428,6 +501,37 @@ pub fn moved_shift(top: f64, sigma: f64) -> Option<f64> {
     (sigma < 0.0 && top > 0.0 && -sigma > SHIFT_REACH * top).then_some(-SHIFT_FRACTION * top)
 }
 
+/// A shift [`placed_shift`] moved to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Moved {
+    /// The new shift \[rad^2/s^2\].
+    pub sigma: f64,
+    /// The estimate it was placed from had settled ([`settled`]): the new shift is solved
+    /// without a further check.
+    pub settled: bool,
+}
+
+/// Whether the bounds `values` of lambda_nev, one per pass of the block check, have settled:
+/// with d_p the last decrease and r = d_p / d_(p-1) its ratio to the one before, the limit of
+/// a linearly converging sequence (Aitken's extrapolation) v_p - d_p r / (1 - r) is at least
+/// [`SETTLED_FRACTION`] v_p. An extrapolation, not a proof: a shift wrongly taken as settled
+/// costs Lanczos solves, never a wrong answer (the Sturm count certifies the result).
+pub fn settled(values: &[f64]) -> bool {
+    let [.., a, b, c] = values else {
+        return false;
+    };
+    let (d_before, d_last) = (a - b, b - c);
+    if d_before <= 0.0 || d_last < 0.0 {
+        return false;
+    }
+    let r = d_last / d_before;
+    r < 1.0 && c - d_last * r / (1.0 - r) >= SETTLED_FRACTION * c
+}
+
+/// The extrapolated limit of the check's bounds must be at least this fraction of the last
+/// bound for the estimate to count as settled ([`settled`]).
+pub const SETTLED_FRACTION: f64 = 0.5;
+
 /// A better shift when `sigma` lies far below the lowest `nev` eigenvalues, else None.
 ///
 /// Shift-invert maps lambda to theta = 1 / (lambda - sigma); a shift far below the wanted
@@ -457,7 +561,7 @@ pub fn placed_shift(
     llt: &crate::linalg::factor::Llt<'_>,
     nev: usize,
     sigma: f64,
-) -> Option<f64> {
+) -> Option<Moved> {
     let n = mass.pattern.n;
     let nev = nev.min(n.saturating_sub(1));
     let b = (2 * nev).min(n.saturating_sub(1));
@@ -479,14 +583,20 @@ pub fn placed_shift(
             .for_each(|(v, &old)| *v = column[old]);
     }
     drop(column);
-    let mut last: Option<f64> = None;
+    let mut bounds = Vec::with_capacity(SHIFT_CHECK_PASSES);
     for pass in 1..=SHIFT_CHECK_PASSES {
         let (next, ritz) = checked_pass(mass, llt, x, sigma)?;
         x = next;
         let theta_max = ritz[nev - 1];
         log::debug!("shift check pass {pass}: lambda_{nev} <= {theta_max:.4e} (shift {sigma:.4e})");
+        let last = bounds.last().copied();
+        bounds.push(theta_max);
+        let moved = |settled| moved_shift(theta_max, sigma).map(|sigma| Moved { sigma, settled });
         if pass == SHIFT_CHECK_PASSES {
-            return moved_shift(theta_max, sigma);
+            return moved(settled(&bounds));
+        }
+        if settled(&bounds) && moved(true).is_some() {
+            return moved(true);
         }
         if let Some(prev) = last {
             // the passes left, each lowering the bound by the last pass's ratio, cannot
@@ -497,7 +607,6 @@ pub fn placed_shift(
                 return None;
             }
         }
-        last = Some(theta_max);
     }
     None
 }
@@ -688,7 +797,7 @@ mod tests {
         let sigma = -1e4;
         let mut model = model;
         let (km, an) = (&mut model.km, &model.analysis);
-        let (direct, _) = certified_modes(km, an, 8, sigma, 2, true).unwrap();
+        let (direct, _) = certified_modes(km, an, 8, sigma, 2, true, None).unwrap();
         let drop_mode = |mut m: Modes, j: usize| {
             let n = m.n;
             m.eigenvalues.remove(j);
@@ -698,7 +807,7 @@ mod tests {
         let mut calls = Vec::new();
         let (sol, _) = certify_with_recovery(km, an, 8, sigma, 2, |km, nev, attempt, sigma| {
             calls.push(nev);
-            let (m, used, t) = lanczos(km, an, nev, sigma, attempt as u64, false)?;
+            let (m, used, t) = lanczos(km, an, nev, attempt as u64, Placement::none(sigma))?;
             Ok((if attempt == 0 { drop_mode(m, 3) } else { m }, used, t))
         })
         .unwrap();
@@ -710,7 +819,7 @@ mod tests {
         }
         // every solve misses one: two re-solves, then the failed certificate is returned
         let (sol, _) = certify_with_recovery(km, an, 8, sigma, 2, |km, nev, attempt, sigma| {
-            let (m, used, t) = lanczos(km, an, nev, sigma, attempt as u64, false)?;
+            let (m, used, t) = lanczos(km, an, nev, attempt as u64, Placement::none(sigma))?;
             Ok((drop_mode(m, 3), used, t))
         })
         .unwrap();
@@ -728,7 +837,7 @@ mod tests {
                 }
                 .into());
             }
-            let (m, used, t) = lanczos(km, an, nev, sigma, 0, false)?;
+            let (m, used, t) = lanczos(km, an, nev, 0, Placement::none(sigma))?;
             Ok((drop_mode(m, 3), used, t))
         })
         .unwrap();
@@ -749,9 +858,9 @@ mod tests {
         let before = model.km.clone();
         let sigma = -(2.0 * std::f64::consts::PI * 100.0_f64).powi(2);
         let (km, an) = (&mut model.km, &model.analysis);
-        let (memory, _) = certified_modes(km, an, 10, sigma, 4, true).unwrap();
+        let (memory, _) = certified_modes(km, an, 10, sigma, 4, true, None).unwrap();
         crate::linalg::spill::set_spill_threshold(0);
-        let (disk, _) = certified_modes(km, an, 10, sigma, 4, true).unwrap();
+        let (disk, _) = certified_modes(km, an, 10, sigma, 4, true, None).unwrap();
         crate::linalg::spill::set_spill_threshold(crate::linalg::spill::SPILL_FACTOR_BYTES);
         assert!(memory.sigma > sigma, "the test needs the shift moved");
         let top = memory.modes.eigenvalues[9];
@@ -765,6 +874,25 @@ mod tests {
         assert_eq!(model.km.pattern, before.pattern);
         assert_eq!(bits(&model.km.k), bits(&before.k));
         assert_eq!(bits(&model.km.m), bits(&before.m));
+    }
+
+    /// Verification of Aitken's test: a geometric sequence v_p = lambda + e r^p is
+    /// extrapolated exactly, so it has settled when lambda >= SETTLED_FRACTION v_p (fast
+    /// convergence, r = 0.1) and not when the last bound is still far above its limit
+    /// (r = 0.9); a rising or flat-then-falling sequence, or fewer than three bounds, has not.
+    #[test]
+    fn verification_settled_bounds_extrapolate_a_geometric_sequence() {
+        let seq = |lambda: f64, e: f64, r: f64| -> Vec<f64> {
+            (1..=3).map(|p| lambda + e * r.powi(p)).collect()
+        };
+        assert!(settled(&seq(1.0, 10.0, 0.1)));
+        assert!(!settled(&seq(1.0, 10.0, 0.9)));
+        // the limit is exactly half the last bound at r = 0.5 and e = 8: 1 vs 0.5 * 2
+        assert!(settled(&seq(1.0, 8.0, 0.5)));
+        assert!(!settled(&seq(1.0, 9.0, 0.5)));
+        assert!(!settled(&[1.0, 2.0, 1.5]));
+        assert!(!settled(&[2.0, 2.0, 1.5]));
+        assert!(!settled(&[2.0, 1.5]));
     }
 
     /// The shift check's pass, formed in place from the halves of the solve: on a free-free
@@ -781,7 +909,7 @@ mod tests {
         let sigma = -(2.0 * std::f64::consts::PI * 100.0_f64).powi(2);
         let (km, an) = (&mut model.km, &model.analysis);
         let b = 24;
-        let (exact, _) = certified_modes(km, an, b + 1, sigma, 4, false).unwrap();
+        let (exact, _) = certified_modes(km, an, b + 1, sigma, 4, false, None).unwrap();
         let lambda = &exact.modes.eigenvalues;
         // a shift just below zero: the check's case of a shift near the wanted modes
         let sigma = -0.01 * lambda[6];

@@ -4,6 +4,7 @@
 pub mod assembly;
 pub mod dofs;
 pub mod element;
+pub mod fields;
 pub mod material;
 pub mod model;
 pub mod quadrature;

@@ -629,6 +629,7 @@ pub fn full_modes(scene: &Scene, count: usize) -> Result<SceneFullModes> {
         scene.solver.sigma(),
         scene.solver.guard_modes,
         true,
+        None,
     )?;
     let modes = super::full::FullModes {
         frequencies_hz: (0..sol.modes.count())
