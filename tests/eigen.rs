@@ -66,7 +66,8 @@ fn verification_free_free_block_has_six_rigid_modes() {
 }
 
 /// The Sturm check can fail: a count that includes a mode the solver did not return is seen.
-/// Remove one computed eigenvalue from the list and the inertia count disagrees.
+/// Remove one computed eigenvalue from the list and the inertia count disagrees. The count is
+/// the same when written into a recycled factor array full of NaN (`negative_pivots_in`).
 #[test]
 fn verification_sturm_count_detects_a_missed_mode() {
     use linercav::eigen::certify::sturm_shift;
@@ -85,6 +86,17 @@ fn verification_sturm_count_detects_a_missed_mode() {
         expected + 1,
         "the inertia count must reveal the missing mode"
     );
+    // the count written into an earlier factor's value array (`negative_pivots_in`), here
+    // filled with garbage, is the same: no entry of it is read before it is set
+    let shifted = model.km.shifted(SIGMA);
+    let llt = model.analysis.llt(&model.km.pattern, &shifted).unwrap();
+    let mut spare = llt.into_values();
+    spare.iter_mut().for_each(|v| *v = f64::NAN);
+    let again = model
+        .analysis
+        .negative_pivots_in(&model.km.pattern, &model.km.shifted(sigma_c), Some(spare))
+        .unwrap();
+    assert_eq!(again, found);
 }
 
 /// Bad requests are refused with typed errors, not panics: 24 modes of a one-element hex8

@@ -210,20 +210,16 @@ fn shift_hz(sigma: f64) -> f64 {
 }
 
 /// [`certified_modes`] with the Lanczos solve given: `solve(km, nev, attempt, sigma)` returns
-/// `nev` modes, the shift it used (which later attempts are given) and its (factorisation,
-/// eigen) seconds; `attempt` numbers the solves from 0.
+/// `nev` modes, the shift it used (which later attempts are given), its (factorisation,
+/// eigen) seconds and a spare factor array for the Sturm count ([`Solved`]); `attempt`
+/// numbers the solves from 0.
 fn certify_with_recovery(
     km: &mut StiffnessMass,
     analysis: &Analysis,
     count: usize,
     sigma: f64,
     guard: usize,
-    mut solve: impl FnMut(
-        &mut StiffnessMass,
-        usize,
-        usize,
-        f64,
-    ) -> Result<(Modes, f64, (f64, f64)), ModalError>,
+    mut solve: impl FnMut(&mut StiffnessMass, usize, usize, f64) -> Result<Solved, ModalError>,
 ) -> Result<(ModalSolution, Timings), ModalError> {
     let mut sigma = sigma;
     let mut timings = Timings::default();
@@ -233,10 +229,10 @@ fn certify_with_recovery(
     let mut recovered = 0;
     let mut previous: Option<(Modes, Option<SturmCheck>)> = None;
     let (all, sturm) = loop {
-        let (all, t) = match (solve(km, nev, attempt, sigma), previous.take()) {
-            (Ok((modes, used, t)), _) => {
-                sigma = used;
-                (modes, t)
+        let (all, t, spare) = match (solve(km, nev, attempt, sigma), previous.take()) {
+            (Ok(solved), _) => {
+                sigma = solved.sigma;
+                (solved.modes, solved.seconds, solved.spare)
             }
             // a re-solve that fails leaves the first result with its failed certificate
             (Err(e), Some(prev)) => {
@@ -249,7 +245,7 @@ fn certify_with_recovery(
         timings.eigen += t.1;
         let t = Instant::now();
         let mut all = all;
-        let sturm = sturm_check(km, analysis, &mut all, count)?;
+        let sturm = sturm_check(km, analysis, (&mut all, spare), count)?;
         timings.certification += t.elapsed().as_secs_f64();
         let retry = match &sturm {
             Some(st) if st.found > st.expected && attempt < RECOVERY_ATTEMPTS => {
@@ -314,18 +310,20 @@ fn lanczos(
     nev: usize,
     seed: u64,
     placement: Placement,
-) -> Result<(Modes, f64, (f64, f64)), ModalError> {
+) -> Result<Solved, ModalError> {
     let mass = km.pattern.compress(&km.m);
     let (mut sigma, mut t_factor, mut t_eigen) = (placement.sigma, 0.0, placement.seconds);
     // checks of the shift left: a second check on the new factor refines a first estimate
     // that the far shift kept coarse
     let (mut checks, mut watching) = (placement.checks, placement.watch);
+    // a factor small enough to stay resident leaves its value array for the Sturm count
+    let recycle = analysis.factor_nnz().saturating_mul(8) < spill_threshold();
+    let mut spare = None;
     loop {
         let mut settings = EigenSettings::new(nev, sigma);
         settings.seed = seed;
         let solved = with_shifted((km, &mut Vec::new()), analysis, sigma, |pattern, values| {
             let t = Instant::now();
-            let n = pattern.n;
             let llt = analysis.llt(&pattern, &values)?;
             drop((values, pattern));
             crate::machine::release_memory();
@@ -339,56 +337,23 @@ fn lanczos(
                 return Ok::<_, ModalError>(result);
             }
             let t = Instant::now();
-            // the iteration lets the factor go once converged, before the Ritz vectors are
-            // formed beside ARPACK's basis; one stopped to check the shift leaves it
-            let factor = std::cell::RefCell::new(Some(llt));
-            let (mut bound, mut watched) = (f64::INFINITY, false);
-            let watch = Watch {
-                ritz: |ritz: &[f64]| {
-                    watched = true;
-                    bound = ritz_bound(ritz, nev, sigma);
-                    watching && shift_in_doubt(bound, sigma)
-                },
-                done: || drop(factor.borrow_mut().take()),
-            };
-            let solve = |x: &mut [f64]| {
-                let llt = factor.borrow();
-                llt.as_ref()
-                    .expect("the factor lives until the iteration has converged")
-                    .solve_vec(x);
-            };
-            let run = solve_modes_watched(n, &settings, |x, y| mass.matvec(x, y), solve, watch)?;
-            t_eigen += t.elapsed().as_secs_f64();
-            let Watched::Done(modes) = run else {
-                // the first restart's bound leaves the shift in doubt: the block check decides
-                let Some(llt) = factor.into_inner() else {
-                    unreachable!("a stopped iteration keeps its factor")
-                };
-                log::info!(
-                    "Lanczos stopped at its first restart (lambda_{nev} <= {bound:.4e}, shift {sigma:.4e})"
-                );
-                let (result, (tf, te)) = check_then_solve(&mass, llt, &settings)?;
-                t_factor += tf;
-                t_eigen += te;
-                return Ok(result);
-            };
-            log::info!("{}", modes.work_summary());
-            // converged before its first restart: its own eigenvalues judge the shift
-            let top = modes.eigenvalues.get(nev.saturating_sub(1)).copied();
-            match top
-                .filter(|_| watching && !watched)
-                .and_then(|top| moved_shift(top, sigma))
-            {
-                // converged eigenvalues: the new shift needs no check
-                Some(sigma) => Ok(Err(Moved {
-                    sigma,
-                    settled: true,
-                })),
-                None => Ok(Ok(modes)),
-            }
+            let ((result, spent), values) =
+                watched_solve(&mass, llt, &settings, watching, recycle)?;
+            // a block check's seconds count with the factorisation's, as above
+            t_eigen += t.elapsed().as_secs_f64() - spent.0;
+            t_factor += spent.0;
+            spare = values.or(spare.take());
+            Ok(result)
         })??;
         match solved {
-            Ok(modes) => return Ok((modes, sigma, (t_factor, t_eigen))),
+            Ok(modes) => {
+                return Ok(Solved {
+                    modes,
+                    sigma,
+                    seconds: (t_factor, t_eigen),
+                    spare,
+                })
+            }
             Err(better) => {
                 log::info!(
                     "the shift {:.1} Hz lies far below the lowest {nev} modes (up to about {:.1} Hz): solving at {:.1} Hz instead",
@@ -402,6 +367,81 @@ fn lanczos(
             }
         }
     }
+}
+
+/// A Lanczos solve's modes, the shift used, its (factorisation, eigen) seconds and, when its
+/// factor was small enough to stay resident, the factor's value array for the Sturm count to
+/// write into ([`Analysis::negative_pivots_in`]).
+struct Solved {
+    modes: Modes,
+    sigma: f64,
+    seconds: (f64, f64),
+    spare: Option<Vec<f64>>,
+}
+
+/// The watched Lanczos iteration on the factor `llt` ([`lanczos`]): the modes, or the better
+/// shift; the seconds of a block check it ran (check, solve; included in the whole); and,
+/// with `recycle`, the factor's value array once converged. With `watching`, a first
+/// restart's bound that leaves the shift in doubt stops the iteration and the block check
+/// decides on the same factor ([`check_then_solve`]); an iteration that converges before its
+/// first restart is judged by its eigenvalues ([`moved_shift`]).
+fn watched_solve(
+    mass: &SymCsc,
+    llt: crate::linalg::factor::Llt<'_>,
+    settings: &EigenSettings,
+    watching: bool,
+    recycle: bool,
+) -> Result<(Checked, Option<Vec<f64>>), ModalError> {
+    let (nev, sigma, n) = (settings.count, settings.sigma, mass.pattern.n);
+    // the iteration lets the factor go once converged, before the Ritz vectors are formed
+    // beside ARPACK's basis (keeping a resident one's values); one stopped to check the
+    // shift leaves it
+    let factor = std::cell::RefCell::new(Some(llt));
+    let spare = std::cell::RefCell::new(None);
+    let (mut bound, mut watched) = (f64::INFINITY, false);
+    let watch = Watch {
+        ritz: |ritz: &[f64]| {
+            watched = true;
+            bound = ritz_bound(ritz, nev, sigma);
+            watching && shift_in_doubt(bound, sigma)
+        },
+        done: || {
+            let llt = factor.borrow_mut().take();
+            *spare.borrow_mut() = llt.filter(|_| recycle).map(|l| l.into_values());
+        },
+    };
+    let solve = |x: &mut [f64]| {
+        let llt = factor.borrow();
+        llt.as_ref()
+            .expect("the factor lives until the iteration has converged")
+            .solve_vec(x);
+    };
+    let run = solve_modes_watched(n, settings, |x, y| mass.matvec(x, y), solve, watch)?;
+    let Watched::Done(modes) = run else {
+        // the first restart's bound leaves the shift in doubt: the block check decides
+        let Some(llt) = factor.into_inner() else {
+            unreachable!("a stopped iteration keeps its factor")
+        };
+        log::info!(
+            "Lanczos stopped at its first restart (lambda_{nev} <= {bound:.4e}, shift {sigma:.4e})"
+        );
+        return Ok((check_then_solve(mass, llt, settings)?, None));
+    };
+    log::info!("{}", modes.work_summary());
+    // converged before its first restart: its own eigenvalues judge the shift
+    let top = modes.eigenvalues.get(nev.saturating_sub(1)).copied();
+    let result = match top
+        .filter(|_| watching && !watched)
+        .and_then(|top| moved_shift(top, sigma))
+    {
+        // converged eigenvalues: the new shift needs no check
+        Some(sigma) => Err(Moved {
+            sigma,
+            settled: true,
+        }),
+        None => Ok(modes),
+    };
+    Ok(((result, (0.0, 0.0)), spare.into_inner()))
 }
 
 /// The modes solved at the shift, or the better shift the check found; with (check, solve)
@@ -727,7 +767,7 @@ fn rayleigh_ritz(
 fn sturm_check(
     km: &mut StiffnessMass,
     analysis: &Analysis,
-    modes: &mut Modes,
+    (modes, spare): (&mut Modes, Option<Vec<f64>>),
     count: usize,
 ) -> Result<Option<SturmCheck>, ModalError> {
     let Some((sigma_c, expected)) = certify::sturm_shift(&modes.eigenvalues, count, 1e-4) else {
@@ -736,7 +776,7 @@ fn sturm_check(
     // the mode shapes wait on disk with K and M while the L D L^T lives
     let aside = (km, &mut modes.vectors);
     let found = with_shifted(aside, analysis, sigma_c, |pattern, values| {
-        analysis.negative_pivots(&pattern, &values)
+        analysis.negative_pivots_in(&pattern, &values, spare)
     })??;
     Ok(Some(SturmCheck {
         shift_hz: sigma_c.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
@@ -807,8 +847,11 @@ mod tests {
         let mut calls = Vec::new();
         let (sol, _) = certify_with_recovery(km, an, 8, sigma, 2, |km, nev, attempt, sigma| {
             calls.push(nev);
-            let (m, used, t) = lanczos(km, an, nev, attempt as u64, Placement::none(sigma))?;
-            Ok((if attempt == 0 { drop_mode(m, 3) } else { m }, used, t))
+            let mut solved = lanczos(km, an, nev, attempt as u64, Placement::none(sigma))?;
+            if attempt == 0 {
+                solved.modes = drop_mode(solved.modes, 3);
+            }
+            Ok(solved)
         })
         .unwrap();
         assert_eq!(sol.recovered, 1);
@@ -819,8 +862,9 @@ mod tests {
         }
         // every solve misses one: two re-solves, then the failed certificate is returned
         let (sol, _) = certify_with_recovery(km, an, 8, sigma, 2, |km, nev, attempt, sigma| {
-            let (m, used, t) = lanczos(km, an, nev, attempt as u64, Placement::none(sigma))?;
-            Ok((drop_mode(m, 3), used, t))
+            let mut solved = lanczos(km, an, nev, attempt as u64, Placement::none(sigma))?;
+            solved.modes = drop_mode(solved.modes, 3);
+            Ok(solved)
         })
         .unwrap();
         assert!(!sol.sturm.unwrap().ok);
@@ -837,8 +881,9 @@ mod tests {
                 }
                 .into());
             }
-            let (m, used, t) = lanczos(km, an, nev, 0, Placement::none(sigma))?;
-            Ok((drop_mode(m, 3), used, t))
+            let mut solved = lanczos(km, an, nev, 0, Placement::none(sigma))?;
+            solved.modes = drop_mode(solved.modes, 3);
+            Ok(solved)
         })
         .unwrap();
         assert!(!sol.sturm.unwrap().ok);

@@ -128,7 +128,24 @@ impl Analysis {
     /// Number of negative pivots of the L D L^T factorisation of the matrix with `values`:
     /// the inertia count (number of eigenvalues below the shift).
     pub fn negative_pivots(&self, pattern: &Pattern, values: &[f64]) -> Result<usize, FactorError> {
-        let mut l = super::touch::zeros(self.symbolic.len_val());
+        self.negative_pivots_in(pattern, values, None)
+    }
+
+    /// [`Analysis::negative_pivots`] with the factor's values written into `spare` when it has
+    /// the analysis's size (the value array of an earlier factorisation on this analysis,
+    /// [`Llt::into_values`]: its pages are already the process's, where a new array's are
+    /// first touched; faer sets every entry before use).
+    pub fn negative_pivots_in(
+        &self,
+        pattern: &Pattern,
+        values: &[f64],
+        spare: Option<Vec<f64>>,
+    ) -> Result<usize, FactorError> {
+        let len = self.symbolic.len_val();
+        let mut l = match spare {
+            Some(v) if v.len() == len => v,
+            _ => super::touch::zeros(len),
+        };
         let req = self
             .symbolic
             .factorize_numeric_ldlt_scratch::<f64>(par(), Spec::<LdltParams, f64>::default());
@@ -181,6 +198,12 @@ pub struct Llt<'a> {
 }
 
 impl Llt<'_> {
+    /// The factor's value array, let go of as a factor, for a later factorisation on the same
+    /// analysis to write into ([`Analysis::negative_pivots_in`]).
+    pub fn into_values(self) -> Vec<f64> {
+        self.l
+    }
+
     /// Solves A X = B in place for the columns of `rhs` (n x k, column-major), on the calling
     /// thread: faer's parallel supernodal solve sums in an order that depends on the number of
     /// threads (a ROM built on 1 core differed from one built on 2 in the last bits, and a
