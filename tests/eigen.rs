@@ -435,3 +435,28 @@ fn verification_smooth_trial_fields_bound_the_eigenvalues_from_above() {
         );
     }
 }
+
+/// Regression (session 61's review): when every wanted mode is a rigid-body mode (a free-free
+/// part, count + guard <= 6), the bounds of the top wanted eigenvalue are roundoff around
+/// zero; a shift "moved" to a quarter of such a bound sits at zero, where K - sigma M is
+/// singular and the solve failed (an error from the factorisation). The shift may move toward
+/// the band on a bound clearly above roundoff (the block check's, from a block not yet
+/// converged to the rigid-body modes), never to zero: the solve returns the rigid-body modes
+/// (eigenvalues within 1e-6 of the shift's size of zero) at a shift at least 1e-6 of the one
+/// asked for below zero (a move on roundoff lands at 1e-8 of the scale or closer). The
+/// certificate is not asserted: a count inside the six-fold zero eigenvalue offers the Sturm
+/// count no gap to stand in, with or without this fix.
+#[test]
+fn regression_a_rigid_body_band_does_not_move_the_shift_to_zero() {
+    let mesh = box_mesh(ElementKind::Hex20, [3, 2, 1], [0.3, 0.2, 0.1], 0.1);
+    let mut model = FeModel::build(mesh, &STEEL, &[]).unwrap();
+    let far = -(2.0 * std::f64::consts::PI * 1e5_f64).powi(2);
+    let sol = model.modes(2, far, 4).unwrap();
+    println!("shift {far:e} -> {:e}", sol.sigma);
+    assert!(sol.sigma < 1e-6 * far, "{} vs {far}", sol.sigma);
+    assert!(
+        sol.modes.eigenvalues.iter().all(|l| l.abs() < 1e-6 * -far),
+        "{:?}",
+        sol.modes.eigenvalues
+    );
+}

@@ -18,7 +18,8 @@ pub struct ModesRequest {
     pub vtu: Option<PathBuf>,
     /// Overrides the scene's shift frequency \[Hz\].
     pub shift_hz: Option<f64>,
-    /// Solve at the shift as given (`eigen::modal::placed_shift` not asked).
+    /// Solve at the shift as given (neither the smooth trial fields nor
+    /// `eigen::modal::placed_shift` asked).
     pub keep_shift: bool,
 }
 
@@ -41,8 +42,8 @@ pub struct ModesReport {
     /// recovered; 0 when none was missed.
     pub recovered_modes: usize,
     /// The shift frequency the modes were solved at \[Hz\]: the one asked for, or where the
-    /// solver moved a shift far below the wanted modes (`eigen::modal::placed_shift`; a
-    /// warning says so).
+    /// solver moved a shift far below the wanted modes (the smooth trial fields or
+    /// `eigen::modal::placed_shift`; a warning says so).
     pub shift_hz: f64,
     pub factor_nnz: usize,
     /// The solve's memory as estimated before it started, from the factor's size

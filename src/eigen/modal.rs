@@ -39,8 +39,8 @@ pub struct ModalSolution {
     pub residuals: Vec<f64>,
     pub m_orthogonality: f64,
     pub sturm: Option<SturmCheck>,
-    /// The shift the modes were solved at: the one asked for, or the one [`placed_shift`]
-    /// moved it to.
+    /// The shift the modes were solved at: the one asked for, or the one the smooth trial
+    /// fields or [`placed_shift`] moved it to.
     pub sigma: f64,
     /// Modes the first Lanczos solve missed and a second one found (0: none missed).
     pub recovered: usize,
@@ -69,7 +69,8 @@ impl FeModel {
         place: bool,
     ) -> Result<ModalSolution, ModalError> {
         let nev = count + guard;
-        let trial = (place && 3 * monomial_count(TRIAL_DEGREE) >= 2 * nev)
+        // the fields can only move a shift below zero
+        let trial = (place && sigma < 0.0 && 3 * monomial_count(TRIAL_DEGREE) >= 2 * nev)
             .then(|| SmoothFields::new(&self.mesh, &self.dofs, TRIAL_DEGREE));
         let (km, analysis) = (&mut self.km, &self.analysis);
         let (sol, t) = certified_modes(km, analysis, count, sigma, guard, place, trial)?;
@@ -128,6 +129,9 @@ const RECOVERY_ATTEMPTS: usize = 2;
 /// certified anew; `recovered` tells how many modes the first solve had missed. A count below
 /// the computed number (spurious eigenvalues) is reported, not retried; a re-solve that fails
 /// (not converged) leaves the previous result with its failed certificate.
+///
+/// `place`: move a shift far below the wanted modes toward them ([`lanczos`]), judged first
+/// on the smooth trial fields `trial` when given (let go before the first factorisation).
 pub fn certified_modes(
     km: &mut StiffnessMass,
     analysis: &Analysis,
@@ -155,7 +159,8 @@ pub fn certified_modes(
 struct Placement {
     /// The shift to start from.
     sigma: f64,
-    /// Block checks of the shift left ([`placed_shift`]), each on a new factor.
+    /// Block checks of the shift left ([`placed_shift`]): one on the factor of each shift
+    /// solved at, until a check keeps its shift or its bounds settle.
     checks: usize,
     /// The first iteration is watched ([`ritz_bound`]) rather than checked before it starts.
     watch: bool,
@@ -175,18 +180,21 @@ impl Placement {
     }
 
     /// The shift `sigma` placed for `nev` modes: first judged by the Rayleigh-Ritz bound of
-    /// lambda_nev on the trial vectors `trial` when given ([`super::trial::trial_bound`], no
-    /// factorisation); a shift that bound proves far ([`moved_shift`]) is moved before the
-    /// first factorisation and then block-checked before its iteration, any other is watched.
+    /// lambda_nev on the trial fields `trial` when given ([`super::trial::trial_bound`], no
+    /// factorisation). A shift that bound proves far ([`moved_shift`]) is moved before the
+    /// first factorisation and block-checked before its iteration; one it leaves in doubt
+    /// ([`shift_in_doubt`], as a first restart's bound would) is block-checked before its
+    /// iteration where it stands; any other is watched.
     fn of(km: &StiffnessMass, trial: Option<SmoothFields>, nev: usize, sigma: f64) -> Self {
         let t = Instant::now();
         let bound = trial.and_then(|x| super::trial::trial_bound(km, &x, nev));
         let moved = bound.and_then(|b| moved_shift(b, sigma));
-        log::info!(
-            "smooth trial fields: lambda_{nev} <= {:.4e} ({:.2} s)",
-            bound.unwrap_or(f64::INFINITY),
-            t.elapsed().as_secs_f64()
-        );
+        if let Some(b) = bound {
+            log::info!(
+                "smooth trial fields: lambda_{nev} <= {b:.4e} ({:.2} s)",
+                t.elapsed().as_secs_f64()
+            );
+        }
         if let (Some(b), Some(better)) = (bound, moved) {
             log::info!(
                 "the shift {:.1} Hz lies far below the lowest {nev} modes (up to at most {:.1} Hz by smooth trial fields): solving at {:.1} Hz instead",
@@ -195,10 +203,11 @@ impl Placement {
                 shift_hz(better)
             );
         }
+        let in_doubt = bound.is_some_and(|b| shift_in_doubt(b, sigma));
         Self {
             sigma: moved.unwrap_or(sigma),
             checks: PLACEMENT_ROUNDS,
-            watch: moved.is_none(),
+            watch: moved.is_none() && !in_doubt,
             seconds: t.elapsed().as_secs_f64(),
         }
     }
@@ -294,7 +303,8 @@ fn certify_with_recovery(
 /// start vector of `seed`, lets the factor go. K and M wait on disk meanwhile when the factor
 /// is large ([`with_shifted`]). With checks in `placement`, a shift far below the wanted modes
 /// is moved to them and the solve starts again on a new factor (up to [`PLACEMENT_ROUNDS`]
-/// times). A watched shift: at the iteration's first restart its Ritz values bound
+/// times, after the move the trial fields may have made before any factorisation,
+/// [`Placement::of`]). A watched shift: at the iteration's first restart its Ritz values bound
 /// lambda_nev from above ([`ritz_bound`]); a bound that leaves the shift in doubt
 /// ([`shift_in_doubt`]) stops the iteration and the block check [`placed_shift`] decides on
 /// the same factor (a shift it keeps is solved there afresh); an iteration that converges
@@ -302,8 +312,9 @@ fn certify_with_recovery(
 /// (here or by the smooth trial fields, [`Placement::of`]) is checked by the block check
 /// before its iteration ([`check_then_solve`]). A shift near the band so costs no check (the
 /// block check took 7 s of the 754k-DOF casting's 67 s); a far one costs the first restart's
-/// ncv + 1 solves more unless the trial fields prove it far. Returns the modes, the shift
-/// used and (factorisation, eigen) seconds.
+/// ncv + 1 solves more unless the trial fields prove it far or leave it in doubt. Returns the
+/// modes, the shift used, (factorisation, eigen) seconds and a resident factor's value array
+/// ([`Solved`]).
 fn lanczos(
     km: &mut StiffnessMass,
     analysis: &Analysis,
@@ -362,8 +373,14 @@ fn lanczos(
                     shift_hz(better.sigma)
                 );
                 sigma = better.sigma;
-                checks = if better.settled { 0 } else { checks - 1 };
+                checks = if better.settled {
+                    0
+                } else {
+                    checks.saturating_sub(1)
+                };
                 watching = false;
+                // the next factorisation allocates its own array
+                spare = None;
             }
         }
     }
@@ -431,7 +448,7 @@ fn watched_solve(
     // converged before its first restart: its own eigenvalues judge the shift
     let top = modes.eigenvalues.get(nev.saturating_sub(1)).copied();
     let result = match top
-        .filter(|_| watching && !watched)
+        .filter(|&t| watching && !watched && above_roundoff(t, -sigma))
         .and_then(|top| moved_shift(top, sigma))
     {
         // converged eigenvalues: the new shift needs no check
@@ -535,6 +552,18 @@ pub fn ritz_bound(ritz: &[f64], nev: usize, sigma: f64) -> f64 {
     }
 }
 
+/// Bounds or eigenvalues at or below this fraction of their scale are roundoff around zero
+/// ([`above_roundoff`]): the rigid-body modes'.
+pub const ROUNDOFF: f64 = 1e-8;
+
+/// Whether `value` is clearly above zero against `scale` (the largest value of its kind at
+/// hand): above [`ROUNDOFF`] `scale`. A shift is never moved on a value that is not: when
+/// every wanted mode is a rigid-body mode its bound is roundoff, and a shift moved to a quarter
+/// of it would sit at zero, where K - sigma M is singular.
+pub fn above_roundoff(value: f64, scale: f64) -> bool {
+    value > ROUNDOFF * scale.abs()
+}
+
 /// The shift [`placed_shift`] moves to, given `top`, an estimate or upper bound of the highest
 /// wanted eigenvalue: -[`SHIFT_FRACTION`] top when -sigma > [`SHIFT_REACH`] top, else None.
 pub fn moved_shift(top: f64, sigma: f64) -> Option<f64> {
@@ -546,8 +575,8 @@ pub fn moved_shift(top: f64, sigma: f64) -> Option<f64> {
 pub struct Moved {
     /// The new shift \[rad^2/s^2\].
     pub sigma: f64,
-    /// The estimate it was placed from had settled ([`settled`]): the new shift is solved
-    /// without a further check.
+    /// The estimate it was placed from had settled ([`settled`]), or was a converged
+    /// eigenvalue: the new shift is solved without a further check.
     pub settled: bool,
 }
 
@@ -561,6 +590,11 @@ pub fn settled(values: &[f64]) -> bool {
         return false;
     };
     let (d_before, d_last) = (a - b, b - c);
+    // a last change at roundoff: converged (a converged bound may rise by roundoff)
+    let tiny = 1e-12 * c.abs();
+    if d_last.abs() <= tiny {
+        return d_before >= -tiny && *c > 0.0;
+    }
     if d_before <= 0.0 || d_last < 0.0 {
         return false;
     }
@@ -631,7 +665,12 @@ pub fn placed_shift(
         log::debug!("shift check pass {pass}: lambda_{nev} <= {theta_max:.4e} (shift {sigma:.4e})");
         let last = bounds.last().copied();
         bounds.push(theta_max);
-        let moved = |settled| moved_shift(theta_max, sigma).map(|sigma| Moved { sigma, settled });
+        // a bound at roundoff (every wanted mode a rigid-body mode) moves nothing
+        let top = Some(theta_max).filter(|&t| above_roundoff(t, ritz[ritz.len() - 1]));
+        let moved = |settled| {
+            top.and_then(|t| moved_shift(t, sigma))
+                .map(|sigma| Moved { sigma, settled })
+        };
         if pass == SHIFT_CHECK_PASSES {
             return moved(settled(&bounds));
         }
@@ -924,7 +963,8 @@ mod tests {
     /// Verification of Aitken's test: a geometric sequence v_p = lambda + e r^p is
     /// extrapolated exactly, so it has settled when lambda >= SETTLED_FRACTION v_p (fast
     /// convergence, r = 0.1) and not when the last bound is still far above its limit
-    /// (r = 0.9); a rising or flat-then-falling sequence, or fewer than three bounds, has not.
+    /// (r = 0.9); a rising or flat-then-falling sequence, or fewer than three bounds, has not;
+    /// a converged one whose last bound moves by roundoff only has.
     #[test]
     fn verification_settled_bounds_extrapolate_a_geometric_sequence() {
         let seq = |lambda: f64, e: f64, r: f64| -> Vec<f64> {
@@ -938,6 +978,9 @@ mod tests {
         assert!(!settled(&[1.0, 2.0, 1.5]));
         assert!(!settled(&[2.0, 2.0, 1.5]));
         assert!(!settled(&[2.0, 1.5]));
+        // converged: the last bound rises by roundoff (1e-15 of it), or does not move
+        assert!(settled(&[3.0, 1.0, 1.0 + 1e-15]));
+        assert!(settled(&[1.0, 1.0, 1.0]));
     }
 
     /// The shift check's pass, formed in place from the halves of the solve: on a free-free

@@ -22,20 +22,33 @@ pub const DEPENDENT: f64 = 1e-10;
 
 /// The `nev`-th Ritz value of (K, M) on the span of the smooth trial fields `x` (module
 /// docs): an upper bound of lambda_nev. None when the span has fewer than `nev` independent
-/// directions or its projection is not finite.
+/// directions, its projection is not finite, or the value is roundoff around zero (every
+/// wanted mode a rigid-body mode, [`TRIAL_ROUNDOFF`]).
 pub fn trial_bound(km: &StiffnessMass, x: &SmoothFields, nev: usize) -> Option<f64> {
     if nev == 0 || x.count() < nev {
         return None;
     }
     let ritz = ritz_values(km, x)?;
-    ritz.get(nev - 1).copied().filter(|b| b.is_finite())
+    let top = ritz[ritz.len() - 1];
+    // a value at roundoff (a rigid-body field's) bounds nothing a shift could move to
+    ritz.get(nev - 1)
+        .copied()
+        .filter(|&b| b > TRIAL_ROUNDOFF * top.abs())
 }
+
+/// Ritz values at or below this fraction of the largest are roundoff around zero (the
+/// rigid-body fields'): [`trial_bound`] gives none.
+pub const TRIAL_ROUNDOFF: f64 = 1e-8;
 
 /// The Ritz values of (K, M) on the span of `x`, ascending, over its independent directions
 /// (module docs); None when X^T M X has no positive finite spectrum.
 pub fn ritz_values(km: &StiffnessMass, x: &SmoothFields) -> Option<Vec<f64>> {
     let p = x.count();
     let (xkx, xmx) = (gram(&km.pattern, &km.k, x), gram(&km.pattern, &km.m, x));
+    let finite = |a: &Mat<f64>| (0..p).all(|j| a.col(j).iter().all(|v| v.is_finite()));
+    if !(finite(&xkx) && finite(&xmx)) {
+        return None;
+    }
     let evd = xmx.self_adjoint_eigen(faer::Side::Lower).ok()?;
     let (d, v) = (evd.S().column_vector(), evd.U());
     let top = (0..p).map(|i| d[i]).fold(0.0, f64::max);
@@ -50,6 +63,9 @@ pub fn ritz_values(km: &StiffnessMass, x: &SmoothFields) -> Option<Vec<f64>> {
         0.5 * (reduced[(i, j)] + reduced[(j, i)])
     });
     let mut ritz = sym.self_adjoint_eigenvalues(faer::Side::Lower).ok()?;
+    if ritz.is_empty() || !ritz.iter().all(|v| v.is_finite()) {
+        return None;
+    }
     ritz.sort_by(f64::total_cmp);
     Some(ritz)
 }
@@ -57,10 +73,11 @@ pub fn ritz_values(km: &StiffnessMass, x: &SmoothFields) -> Option<Vec<f64>> {
 /// X^T A X for A = `values` on `pattern` (both triangles) and the fields X = `x`, without
 /// forming X: row r of A X is sum_c A_rc X_c, where row X_c holds the q monomials of c's node
 /// in the columns of c's direction, so q multiply-adds per stored entry; then
-/// X^T A X += X_r^T (A X)_r, row by row, rows on both cores.
+/// X^T A X += X_r^T (A X)_r, row by row, rows on both cores in fixed blocks of
+/// [`ROWS_PER_TASK`] whose sums are added in order (the same bits on any number of threads).
 pub fn gram(pattern: &Pattern, values: &[f64], x: &SmoothFields) -> Mat<f64> {
     let (q, p) = (x.per_node, x.count());
-    let sum = (0..pattern.n)
+    let partial: Vec<Vec<f64>> = (0..pattern.n)
         .into_par_iter()
         .step_by(ROWS_PER_TASK)
         .map(|r0| {
@@ -88,12 +105,10 @@ pub fn gram(pattern: &Pattern, values: &[f64], x: &SmoothFields) -> Mat<f64> {
             }
             g
         })
-        .reduce(
-            || vec![0.0; p * p],
-            |mut a, b| {
-                a.iter_mut().zip(&b).for_each(|(a, b)| *a += b);
-                a
-            },
-        );
+        .collect();
+    let mut sum = vec![0.0; p * p];
+    for g in &partial {
+        sum.iter_mut().zip(g).for_each(|(s, v)| *s += v);
+    }
     Mat::from_fn(p, p, |i, j| sum[i * p + j])
 }
