@@ -130,7 +130,7 @@ const RECOVERY_ATTEMPTS: usize = 2;
 /// the computed number (spurious eigenvalues) is reported, not retried; a re-solve that fails
 /// (not converged) leaves the previous result with its failed certificate.
 ///
-/// `place`: move a shift far below the wanted modes toward them ([`lanczos`]), judged first
+/// `place`: move a shift far below the wanted modes toward them ([`placed_shift`]), judged first
 /// on the smooth trial fields `trial` when given (let go before the first factorisation).
 pub fn certified_modes(
     km: &mut StiffnessMass,

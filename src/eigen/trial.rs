@@ -14,7 +14,7 @@ use faer::Mat;
 use rayon::prelude::*;
 
 /// Rows of A X formed per task by [`gram`].
-const ROWS_PER_TASK: usize = 4096;
+pub const ROWS_PER_TASK: usize = 4096;
 
 /// Directions of X^T M X below this fraction of its largest eigenvalue are dropped
 /// (numerically dependent trial vectors: their Ritz values would be roundoff).
