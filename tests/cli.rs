@@ -533,3 +533,32 @@ fn contract_simulate_rank_decides_or_names_the_budget() {
         }
     }
 }
+
+/// Regression (session 61): the block shift check's bounds fell slowly at a shift far below a
+/// free block's modes (1.89e12, 1.65e12, 1.46e12, 1.31e12 for a true 0), Aitken's
+/// extrapolation called them settled, the shift was moved once only (to 91 kHz) and the run
+/// failed its certificate (exit 1). With a settled sequence required to fall fast (each
+/// decrease at most half the one before) the shift moves twice and the solve is certified.
+#[test]
+fn regression_a_slowly_falling_shift_check_is_not_settled() {
+    let out = linercav(&[
+        "modes",
+        "--mesh",
+        "tests/fixtures/block_tet10.msh",
+        "--youngs",
+        "2.1e11",
+        "--poisson",
+        "0.3",
+        "--density",
+        "7850",
+        "--count",
+        "1",
+        "--shift-hz",
+        "1e6",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{out:?}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["sturm_count_ok"], true, "{v}");
+    assert!(v["shift_hz"].as_f64().unwrap() < 5e4, "{v}");
+}
