@@ -318,7 +318,7 @@ fn verification_the_lower_triangle_factorises_the_same_matrix() {
 /// bound must leave the shift in no doubt, so the block check is skipped.
 #[test]
 fn verification_first_restart_ritz_bound_is_an_upper_bound() {
-    use linercav::eigen::modal::{ritz_bound, shift_in_doubt};
+    use linercav::eigen::placement::{ritz_bound, shift_in_doubt};
     use linercav::eigen::shift_invert::{solve_modes_watched, Watch, Watched};
     use linercav::eigen::EigenSettings;
     let mesh = box_mesh(ElementKind::Hex20, [6, 3, 2], [0.3, 0.15, 0.1], 0.1);

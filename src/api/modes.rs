@@ -19,7 +19,7 @@ pub struct ModesRequest {
     /// Overrides the scene's shift frequency \[Hz\].
     pub shift_hz: Option<f64>,
     /// Solve at the shift as given (neither the smooth trial fields nor
-    /// `eigen::modal::placed_shift` asked).
+    /// `eigen::placement::placed_shift` asked).
     pub keep_shift: bool,
 }
 
@@ -43,7 +43,7 @@ pub struct ModesReport {
     pub recovered_modes: usize,
     /// The shift frequency the modes were solved at \[Hz\]: the one asked for, or where the
     /// solver moved a shift far below the wanted modes (the smooth trial fields or
-    /// `eigen::modal::placed_shift`; a warning says so).
+    /// `eigen::placement::placed_shift`; a warning says so).
     pub shift_hz: f64,
     pub factor_nnz: usize,
     /// The solve's memory as estimated before it started, from the factor's size

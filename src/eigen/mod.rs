@@ -5,6 +5,7 @@ pub mod arpack;
 pub mod certify;
 pub mod dense_lanczos;
 pub mod modal;
+pub mod placement;
 pub mod shift_invert;
 pub mod subspace;
 pub mod trial;
