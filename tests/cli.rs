@@ -541,24 +541,10 @@ fn contract_simulate_rank_decides_or_names_the_budget() {
 /// decrease at most half the one before) the shift moves twice and the solve is certified.
 #[test]
 fn regression_a_slowly_falling_shift_check_is_not_settled() {
-    let out = linercav(&[
-        "modes",
-        "--mesh",
-        "tests/fixtures/block_tet10.msh",
-        "--youngs",
-        "2.1e11",
-        "--poisson",
-        "0.3",
-        "--density",
-        "7850",
-        "--count",
-        "1",
-        "--shift-hz",
-        "1e6",
-        "--json",
-    ]);
-    assert_eq!(out.status.code(), Some(0), "{out:?}");
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mut args = vec!["modes", "--mesh", "tests/fixtures/block_tet10.msh"];
+    args.extend(STEEL);
+    args.extend(["--count", "1", "--shift-hz", "1e6", "--json"]);
+    let v = json(&linercav(&args));
     assert_eq!(v["sturm_count_ok"], true, "{v}");
     assert!(v["shift_hz"].as_f64().unwrap() < 5e4, "{v}");
 }

@@ -203,7 +203,7 @@ impl Placement {
             log::info!(
                 "the shift {:.1} Hz lies far below the lowest {nev} modes (up to at most {:.1} Hz by smooth trial fields): solving at {:.1} Hz instead",
                 shift_hz(sigma),
-                b.max(0.0).sqrt() / (2.0 * std::f64::consts::PI),
+                shift_hz(-b),
                 shift_hz(better)
             );
         }
@@ -357,7 +357,8 @@ fn lanczos(
             // a block check's seconds count with the factorisation's, as above
             t_eigen += t.elapsed().as_secs_f64() - spent.0;
             t_factor += spent.0;
-            spare = values.or(spare.take());
+            // (every move above leaves `spare` empty)
+            spare = values;
             Ok(result)
         })??;
         match solved {
