@@ -348,6 +348,25 @@ fn integrate_with<'a>(q: &'a [[f64; 3]], v: &'a [f64]) -> impl Iterator<Item = f
     })
 }
 
+/// v <- s Q v in place: the integration weights `q` ([`Line::integration_weights`]) applied to
+/// `v` (p = 0 beyond the ends) and scaled by `s`.
+fn integrate_in_place(q: &[[f64; 3]], v: &mut [f64], s: f64) {
+    let n = v.len();
+    let mut prev = 0.0;
+    for i in 0..n {
+        let (cur, next) = (v[i], if i + 1 < n { v[i + 1] } else { 0.0 });
+        v[i] = s * (q[i][0] * prev + q[i][1] * cur + q[i][2] * next);
+        prev = cur;
+    }
+}
+
+/// y <- y + a x.
+fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += a * xi;
+    }
+}
+
 /// A tridiagonal system factored once (Thomas; the system is diagonally dominant), solved for
 /// several right-hand sides.
 struct Factored {
@@ -395,14 +414,34 @@ impl Factored {
         }
     }
 
-    /// A^-1, column-major (column j at `j n..(j + 1) n`): each column the solve of the unit
-    /// vector e_j, its forward sweep started at j, in one buffer.
+    /// A^-1, column-major (column j at `j n..(j + 1) n`; A is symmetric, so row-major too):
+    /// the solves of all unit vectors at once, row by row, each row's update a vector
+    /// operation over the n columns (the same operations per entry as [`Factored::sweep`],
+    /// without its chain of dependent divisions).
     fn inverse(&self) -> Vec<f64> {
         let n = self.den.len();
         let mut inv = vec![0.0; n * n];
-        for (j, y) in inv.chunks_exact_mut(n).enumerate() {
-            y[j] = 1.0;
-            self.sweep(y, j);
+        // forward: row i of L^-1 (the rows of the identity eliminated in turn)
+        for i in 0..n {
+            let (done, rest) = inv.split_at_mut(i * n);
+            let row = &mut rest[..n];
+            row[i] = 1.0;
+            let (l, d) = (self.lower[i], self.den[i]);
+            if i == 0 {
+                row.iter_mut().for_each(|y| *y /= d);
+            } else {
+                for (y, &p) in row.iter_mut().zip(&done[(i - 1) * n..]) {
+                    *y = (*y - l * p) / d;
+                }
+            }
+        }
+        // backward: row i -= c_i row i+1
+        for i in (0..n.saturating_sub(1)).rev() {
+            let (head, tail) = inv.split_at_mut((i + 1) * n);
+            let c = self.c[i];
+            for (y, &next) in head[i * n..].iter_mut().zip(&tail[..n]) {
+                *y -= c * next;
+            }
         }
         inv
     }
@@ -607,11 +646,19 @@ impl Film {
     /// and dh/dg: h = g to within d e^(-(g - f) / d) above the floor (1e-4 of it 3 um above
     /// a 3 um floor), h = f + d ln 2 at the floor, and no kink for the step's Newton iteration
     /// to cycle on.
+    ///
+    /// Above z = (g - f) / d = 15, ln(1 + e^z) = z + ln(1 + e^-z) is taken as z + e^-z (its
+    /// error below e^-2z / 2 = 5e-14 of d) and dh/dg = 1 / (1 + e^-z) as 1 - e^-z: one
+    /// exponential, no logarithm, for the gaps of a film well clear of the floor.
     pub fn floored(&self, g: f64) -> (f64, f64) {
         let d = self.floor / FLOOR_SMOOTHING;
         let z = (g - self.floor) / d;
         if z > 40.0 {
             return (g, 1.0);
+        }
+        if z > 15.0 {
+            let e = (-z).exp();
+            return (self.floor + d * (z + e), 1.0 - e);
         }
         let e = z.exp();
         (self.floor + d * e.ln_1p(), e / (1.0 + e))
@@ -635,9 +682,14 @@ impl Film {
 
     /// Adds one sample line's cavitated pressure force and (with `derivatives`) its
     /// derivatives to `out`: the source S_i = w_i raw_i (w the wetted fraction, raw = dh/dt +
-    /// (U/2) dh/dx), the pressure A P = m S, and dP = A^-1 (m dS - dA P) for every penetration
-    /// and rate, as combinations of the columns of A^-1 (dS and dA P of one penetration touch
-    /// three nodes at most).
+    /// (U/2) dh/dx), the pressure A P = m S, the force F = a Q diag(w) p+(P) (a = R dpsi cos psi,
+    /// Q the slices' integration weights), and for a change dr = m dS - dA P of the system's
+    /// right-hand side by one penetration or rate (three nodes at most)
+    ///
+    ///   dF = B dr,   B = a Q diag(w p+'(P)) A^-1,
+    ///
+    /// B formed once per line, column j from A^-1's column j (three multiplications per entry),
+    /// so that each derivative is a sum of at most three of B's columns.
     fn add_sample(
         &self,
         line: &Line<'_>,
@@ -656,44 +708,42 @@ impl Film {
         // none, so a line's pressure rises from zero as the skirt closes in)
         let cav: Vec<(f64, f64)> = p.iter().map(|&v| cavitation(v)).collect();
         let clip: Vec<f64> = cav.iter().zip(wt).map(|(c, w)| w.0 * c.0).collect();
-        let keep: Vec<f64> = cav.iter().zip(wt).map(|(c, w)| w.0 * c.1).collect();
         let w = self.arc * c;
         for (i, f) in integrate_with(q, &clip).enumerate() {
             out.force[i] += w * f;
         }
-        let inv = lu.inverse();
-        let mut dp = vec![0.0; n];
-        // target[:, k] += w Q diag(keep) sum_j inv_j r_j over the sparse r
-        let mut column = |k: usize, r: &[(usize, f64)], target: &mut DMatrix<f64>| {
-            dp.iter_mut().for_each(|v| *v = 0.0);
-            for &(j, rj) in r {
-                if rj != 0.0 {
-                    for (v, a) in dp.iter_mut().zip(&inv[j * n..(j + 1) * n]) {
-                        *v += a * rj;
-                    }
-                }
+        // B, column-major: column j = a Q (keep o A^-1 e_j), keep_i = w_i p+'(P_i)
+        let mut b = lu.inverse();
+        for col in b.chunks_exact_mut(n) {
+            for ((v, c), wt) in col.iter_mut().zip(&cav).zip(wt) {
+                *v *= wt.0 * c.1;
             }
-            for (v, kp) in dp.iter_mut().zip(&keep) {
-                *v *= kp;
-            }
-            for (i, f) in integrate_with(q, &dp).enumerate() {
-                target[(i, k)] += w * f;
-            }
-        };
+            integrate_in_place(q, col, w);
+        }
+        let column = |j: usize| &b[j * n..(j + 1) * n];
         for k in 0..n {
             if wt[k].0 > 0.0 {
-                column(k, &[(k, t.m[k] * (-c) * wt[k].0)], &mut out.d_rate);
+                axpy(
+                    out.d_rate.column_mut(k).as_mut_slice(),
+                    t.m[k] * (-c) * wt[k].0,
+                    column(k),
+                );
             }
             if derivatives == Derivatives::All {
-                let r = self.pen_rhs(k, line, (&t, &p), sample, (slope, dz));
-                column(k, &r, &mut out.d_pen);
+                let mut target = out.d_pen.column_mut(k);
+                let target = target.as_mut_slice();
+                for (j, rj) in self.pen_rhs(k, line, (&t, &p), sample, (slope, dz)) {
+                    if rj != 0.0 {
+                        axpy(target, rj, column(j));
+                    }
+                }
                 // the wetted fraction's own change at node k: p+(P_k) dw_k/dh (-c), integrated
                 // by the rows of Q that reach node k
                 if wt[k].1 != 0.0 {
                     let e = cav[k].0 * wt[k].1 * (-c);
                     for i in k.saturating_sub(1)..(k + 2).min(n) {
                         let weight = q[i][1 + k - i];
-                        out.d_pen[(i, k)] += w * (weight * e);
+                        target[i] += w * (weight * e);
                     }
                 }
             }
@@ -782,6 +832,40 @@ impl Film {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Verification: the floored gap and its slope against the softplus they stand for,
+    /// f + d ln(1 + e^z) and 1 / (1 + e^-z) evaluated directly, across the switch to the
+    /// one-exponential form at z = 15 and the plain gap above z = 40. Tolerance: that form's
+    /// truncation, e^-2z / 2 <= 5e-14 of d, plus a few roundings of h (4 eps |h|).
+    #[test]
+    fn verification_floored_gap_is_the_softplus() {
+        let f = 3e-6;
+        let d = f / FLOOR_SMOOTHING;
+        let film = Film {
+            model: Lubrication::Squeeze,
+            x: vec![0.0],
+            length: 1.0,
+            gaps: vec![0.0],
+            mu: vec![1.0],
+            ovality: 0.0,
+            arc: 1.0,
+            supply: 1.0,
+            floor: f,
+            asperity: None,
+        };
+        for i in 0..=600 {
+            let z = -10.0 + 0.1 * i as f64;
+            let g = f + d * z;
+            let (h, dh) = film.floored(g);
+            let (h_ref, dh_ref) = (f + d * z.exp().ln_1p(), 1.0 / (1.0 + (-z).exp()));
+            let tol = 5e-14 * d + 4.0 * f64::EPSILON * h_ref;
+            assert!((h - h_ref).abs() <= tol, "z {z}: h {h:e} against {h_ref:e}");
+            assert!(
+                (dh - dh_ref).abs() <= 1e-13,
+                "z {z}: dh/dg {dh} against {dh_ref}"
+            );
+        }
+    }
 
     #[test]
     fn verification_factored_thomas_solves_a_small_system() {
