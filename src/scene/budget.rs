@@ -28,9 +28,10 @@ const REF_BUILD_SECONDS: f64 = 93.0;
 const STEP_SECONDS_PER_CYLINDER: f64 = 15e-6;
 /// A lubricated skirt's step costs this many times [`STEP_SECONDS_PER_CYLINDER`]: the film's
 /// Newton iteration and all cylinders in one contact step (default engine, squeeze, 4 cycles
-/// at 1/4 deg: 29 s against the dry estimate's 1.24 s, 23 times; the small test engine: 4.4 s
-/// against 0.41 s, 11 times; session 53). The larger, rounded up.
-const FILM_STEP_FACTOR: f64 = 24.0;
+/// at 1/4 deg: 15.8-17.0 s against the dry estimate's 1.24 s, 13-14 times; the small test
+/// engine: 2.4 s against 0.41 s, 6 times; session 62, after the film's derivatives were
+/// formed from one matrix per line; 23 and 11 times in session 53). The larger, rounded up.
+const FILM_STEP_FACTOR: f64 = 15.0;
 
 /// An estimate of one piece of work.
 #[derive(Clone, Debug, PartialEq)]

@@ -53,7 +53,7 @@ pub struct RawReport {
     /// clearance and pin-offset sweeps at the same values, with that skirt as well (the oil
     /// film's data from `[piston.oil]`), and adds the section "Skirt models compared" to
     /// summary.md, `skirt_comparison` to summary.json and `skirt_comparison.png`. A
-    /// lubricated run costs about 14 dry ones (docs/validation.md); a run that stops (a
+    /// lubricated run costs about 13 dry ones (docs/validation.md); a run that stops (a
     /// starved film's, exit 1) stops the report, as any of its runs does. Default: none.
     #[serde(default)]
     pub compare_lubrication: Option<RawLubrication>,
@@ -506,7 +506,7 @@ pub struct RawPiston {
     /// model), "squeeze" (the Reynolds squeeze and sliding film, half-Sommerfeld) or "mixed"
     /// (the film plus Greenwood-Tripp asperity contact). The film's data: `[piston.oil]`.
     /// The lubricated transient is experimental: verified and converged with the step, about
-    /// 14 times the cost of a dry run (docs/validation.md).
+    /// 13 times the cost of a dry run (docs/validation.md).
     #[serde(default)]
     pub lubrication: RawLubrication,
     /// Oil film data (used when `lubrication` is not "dry"; every key has a default).
