@@ -426,6 +426,50 @@ fn contract_bad_oil_input_names_the_key() {
     }
 }
 
+/// Contract: a starved film (oil supply 1 um, which stops the small engine's run at 22 deg,
+/// docs/validation.md) is warned of before the run, and the run's failure (exit 1) says that
+/// the oil film did not settle, names the supply's key and the crank angle, and points to the
+/// way out; no JSON is printed.
+#[test]
+fn contract_a_starved_film_is_warned_of_and_its_failure_names_the_film() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = format!("{}", dir.path().join("cache").display());
+    let out = linercav(&[
+        "simulate",
+        "tests/fixtures/engine_small.toml",
+        "--set",
+        "piston.lubrication=squeeze",
+        "--set",
+        "piston.oil.supply_um=1",
+        "--set",
+        "transient.cycles=2",
+        "--set",
+        "transient.averaged_cycles=1",
+        "--cache-dir",
+        &cache,
+        "--json",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(out.stdout.is_empty());
+    assert!(
+        err.contains("warning") && err.contains("a starved film"),
+        "{err}"
+    );
+    let failure = err
+        .lines()
+        .find(|l| l.starts_with("error"))
+        .expect("an error line");
+    for needle in [
+        "crank angle",
+        "oil film",
+        "piston.oil.supply_um = 1",
+        "dry skirt",
+    ] {
+        assert!(failure.contains(needle), "{needle}: {failure}");
+    }
+}
+
 /// The small test engine's scene with `sets` applied.
 fn small_scene(sets: &[&str]) -> linercav::scene::Scene {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();

@@ -535,7 +535,8 @@ pub enum RawLubrication {
 #[serde(deny_unknown_fields)]
 pub struct RawOil {
     /// Oil available on the liner \[um\], in (0, 1000]: a gap larger than it is not wetted
-    /// (partial flooding; a large value floods the skirt). Default 20.
+    /// (partial flooding; a large value floods the skirt). Below 5 a starved film, warned of:
+    /// it may stop the run (exit 1; docs/validation.md). Default 20.
     #[serde(default = "default_supply")]
     pub supply_um: f64,
     /// Vogel viscosity mu = a exp(b / (T + c)) at the film temperature T \[deg C\] (the mean of

@@ -3,12 +3,14 @@
 /// Where and when the transient failed.
 #[derive(Debug, thiserror::Error)]
 pub enum TransientError {
-    #[error("contact iteration did not converge at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s) after {iterations} iterations even with the step halved {halvings} times")]
+    #[error("contact iteration did not converge at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s) after {iterations} iterations even with the step halved {halvings} times{}", film_hint(*.film_supply_um))]
     NoConvergence {
         crank_angle_deg: f64,
         time_s: f64,
         iterations: usize,
         halvings: usize,
+        /// A lubricated skirt's oil supply \[um\] (None: a dry skirt).
+        film_supply_um: Option<f64>,
     },
     #[error("deep penetration: cylinder {cylinder}, {side} side, slice {slice} (height {height_mm:.1} mm on the liner): {} um > {} um at crank angle {crank_angle_deg:.2} deg (t = {time_s:.6} s); the contact stiffness is too low for the load, or the step too large", crate::text::num(*.penetration_um), crate::text::num(*.limit_um))]
     DeepPenetration {
@@ -47,4 +49,17 @@ pub enum TransientError {
     },
     #[error("the liner maps stopped: {0}")]
     MapsStopped(String),
+}
+
+/// What a lubricated run that stopped in its contact iteration tells the user: the oil film's
+/// Newton iteration did not settle, as a starved film's is known not to (supplies of 1-4 um on
+/// the test engine, docs/validation.md).
+fn film_hint(supply_um: Option<f64>) -> String {
+    match supply_um {
+        None => String::new(),
+        Some(s) => format!(
+            "; the skirt's oil film (piston.oil.supply_um = {}) did not settle: a starved film (a supply of a few um) is known to stop so (docs/validation.md, \"A starved film does not always run\"): a larger supply (5 um or more ran on the test engine) or the dry skirt",
+            crate::text::num(s)
+        ),
+    }
 }

@@ -157,7 +157,7 @@ pub fn run(
             window.scheme,
             window.max_newton,
         )
-        .map_err(|f| step_failure(f, deg, time_s))?;
+        .map_err(|f| step_failure(f, deg, time_s, piston))?;
         let b = checked_body(window, &res, &meta, deg, time_s)?;
         let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
         liner.commit(&locs, &res.forces);
@@ -207,14 +207,15 @@ pub fn run(
 }
 
 /// A failed contact step of the window as the transient's error, with its crank angle and
-/// time (a fixed step: never halved).
-fn step_failure(f: contact::StepFailure, deg: f64, time_s: f64) -> TransientError {
+/// time (a fixed step: never halved) and the piston's oil supply.
+fn step_failure(f: contact::StepFailure, deg: f64, time_s: f64, piston: &Piston) -> TransientError {
     match f {
         contact::StepFailure::NoConvergence { iterations } => TransientError::NoConvergence {
             crank_angle_deg: deg,
             time_s,
             iterations,
             halvings: 0,
+            film_supply_um: piston.film.as_ref().map(|f| f.supply * 1e6),
         },
         contact::StepFailure::Singular => TransientError::Singular {
             crank_angle_deg: deg,
