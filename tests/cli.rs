@@ -548,3 +548,25 @@ fn regression_a_slowly_falling_shift_check_is_not_settled() {
     assert_eq!(v["sturm_count_ok"], true, "{v}");
     assert!(v["shift_hz"].as_f64().unwrap() < 5e4, "{v}");
 }
+
+/// Regression (session 62): fewer modes than a free body's six rigid-body modes (`--count 1`
+/// to 5 at the default shift) were all rigid, their computed eigenvalues round-off around
+/// zero, and the Sturm check was placed inside that cluster (at 0.0 Hz: "found 2 eigenvalues
+/// below, 1 were computed", exit 1). The rigid cluster is now judged against the model's
+/// eigenvalue scale trace(K) / trace(M) and the solve extended past it: certified, with the
+/// check above the six rigid modes, and the modes asked for returned (rigid: below 1 Hz, the
+/// block's first elastic mode being 3.9 kHz).
+#[test]
+fn regression_fewer_modes_than_a_free_body_has_rigid_modes_are_certified() {
+    for count in ["1", "2", "5"] {
+        let mut args = vec!["modes", "--mesh", "tests/fixtures/block_tet10.msh"];
+        args.extend(STEEL);
+        args.extend(["--count", count, "--json"]);
+        let v = json(&linercav(&args));
+        assert_eq!(v["sturm_count_ok"], true, "--count {count}: {v}");
+        assert_eq!(v["sturm"]["expected"], 6, "--count {count}: {v}");
+        let f = v["frequencies_hz"].as_array().unwrap();
+        assert_eq!(f.len().to_string(), count, "{v}");
+        assert!(f.iter().all(|x| x.as_f64().unwrap().abs() < 1.0), "{v}");
+    }
+}

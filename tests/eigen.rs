@@ -76,7 +76,7 @@ fn verification_sturm_count_detects_a_missed_mode() {
     let sol = model.modes(12, SIGMA, 0).unwrap();
     let mut ev = sol.modes.eigenvalues.clone();
     ev.remove(3); // pretend mode 4 was missed
-    let (sigma_c, expected) = sturm_shift(&ev, 7, 1e-4).unwrap();
+    let (sigma_c, expected) = sturm_shift(&ev, 7, 1e-4, 0.0).unwrap();
     let found = model
         .analysis
         .negative_pivots(&model.km.pattern, &model.km.shifted(sigma_c))

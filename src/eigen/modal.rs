@@ -123,6 +123,10 @@ pub const TRIAL_DEGREE: usize = 3;
 /// computed (modes the Lanczos iteration missed): at most this many times.
 const RECOVERY_ATTEMPTS: usize = 2;
 
+/// A free body's rigid-body modes (three translations, three rotations): how many more a
+/// solve whose modes were all rigid asks for.
+const RIGID_MODES: usize = 6;
+
 /// The lowest `count` modes of (K, M) on an analysed pattern, certified: shift-invert ARPACK
 /// with K - sigma M = L L^T, residuals, M-orthogonality, and a Sturm count at a shift placed in
 /// a spectral gap found among `guard` extra modes.
@@ -238,6 +242,7 @@ fn certify_with_recovery(
     let mut timings = Timings::default();
     let n = km.pattern.n;
     let mut nev = (count + guard).min(n.saturating_sub(1)).max(count);
+    let zero = certify::RIGID_FRACTION * km.eigenvalue_scale();
     let mut attempt = 0;
     let mut recovered = 0;
     let mut previous: Option<(Modes, Option<SturmCheck>)> = None;
@@ -256,6 +261,13 @@ fn certify_with_recovery(
         };
         timings.factorisation += t.0;
         timings.eigen += t.1;
+        // a set that ends among the rigid-body modes has no gap to certify at: the whole
+        // cluster and the first elastic mode are solved for
+        if all.eigenvalues.last().is_some_and(|&l| l <= zero) && nev + 1 < n {
+            nev = (nev + RIGID_MODES).min(n - 1);
+            log::info!("the computed eigenvalues are all rigid-body modes: solving for {nev}");
+            continue;
+        }
         let t = Instant::now();
         let mut all = all;
         let sturm = sturm_check(km, analysis, (&mut all, spare), count)?;
@@ -529,7 +541,9 @@ fn sturm_check(
     (modes, spare): (&mut Modes, Option<Vec<f64>>),
     count: usize,
 ) -> Result<Option<SturmCheck>, ModalError> {
-    let Some((sigma_c, expected)) = certify::sturm_shift(&modes.eigenvalues, count, 1e-4) else {
+    let zero = certify::RIGID_FRACTION * km.eigenvalue_scale();
+    let Some((sigma_c, expected)) = certify::sturm_shift(&modes.eigenvalues, count, 1e-4, zero)
+    else {
         return Ok(None);
     };
     // the mode shapes wait on disk with K and M while the L D L^T lives

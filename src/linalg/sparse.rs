@@ -267,6 +267,19 @@ impl StiffnessMass {
         }
     }
 
+    /// The eigenvalues' scale trace(K) / trace(M) (their mean when M is a multiple of the
+    /// identity; the order of the mesh's highest eigenvalues otherwise).
+    pub fn eigenvalue_scale(&self) -> f64 {
+        let diag = |v: &[f64]| {
+            self.pattern
+                .lower_entries(v)
+                .filter(|e| e.0 == e.1)
+                .map(|e| e.2)
+                .sum::<f64>()
+        };
+        diag(&self.k) / diag(&self.m)
+    }
+
     /// Values of K - sigma M on the shared pattern.
     pub fn shifted(&self, sigma: f64) -> Vec<f64> {
         self.k

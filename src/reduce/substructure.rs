@@ -311,14 +311,7 @@ fn cut_shapes(p: &Part<'_>, slab: &Slab, count: usize) -> Result<Mat<f64>, Reduc
     }
     // a shift below the slab's lowest elastic mode: 1e-6 of its mean eigenvalue trace(K)/trace(M)
     let km = &model.km;
-    let diag = |v: &[f64]| {
-        km.pattern
-            .lower_entries(v)
-            .filter(|e| e.0 == e.1)
-            .map(|e| e.2)
-            .sum::<f64>()
-    };
-    let sigma = -1e-6 * diag(&km.k) / diag(&km.m);
+    let sigma = -1e-6 * km.eigenvalue_scale();
     let t = Instant::now();
     let n = model.n_free();
     let llt = model
