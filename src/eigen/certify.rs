@@ -65,8 +65,8 @@ pub fn m_orthogonality_error(km: &StiffnessMass, modes: &Modes) -> f64 {
 /// Where to place the Sturm shift: the middle of the first gap at or after index `count`
 /// whose width exceeds `rel_gap` times max(|lambda_hi|, 1e-6 scale), scale the largest
 /// |lambda| computed. Eigenvalues below max(1e-6 scale, `zero`) (rigid-body modes: round-off
-/// around zero; `zero` from the model, [`RIGID_FRACTION`]) count as one cluster, so the shift
-/// never falls inside it (where the inertia count is decided by round-off: `modes --count 5`
+/// around zero; `zero` from the model, [`RIGID_FRACTION`]) count as one cluster, and the
+/// shift lies above `zero`, so it never falls inside it (where the inertia count is decided by round-off: `modes --count 5`
 /// on a free body reported a false mismatch). Returns (sigma_c, number of computed
 /// eigenvalues below it) or None when the computed spectrum offers no such gap.
 pub fn sturm_shift(
@@ -79,16 +79,17 @@ pub fn sturm_shift(
     let floor = (1e-6 * scale).max(zero);
     (count.max(1)..eigenvalues.len()).find_map(|i| {
         let (lo, hi) = (eigenvalues[i - 1], eigenvalues[i]);
-        (hi > floor && hi - lo > rel_gap * hi.abs().max(floor)).then_some((0.5 * (lo + hi), i))
+        (hi > zero && hi - lo > rel_gap * hi.abs().max(floor)).then_some((0.5 * (lo + hi), i))
     })
 }
 
 /// Eigenvalues below this fraction of the model's scale trace(K) / trace(M)
 /// ([`crate::linalg::sparse::StiffnessMass::eigenvalue_scale`]) are rigid-body modes: their
-/// computed values are round-off (about 1e-16 of the largest eigenvalues), while a mesh's
+/// computed values are round-off, about 1e-16 of the largest eigenvalues (which a mesh of
+/// poorly shaped elements may put 1e4 times above the scale: 1e-12 of it), while a mesh's
 /// lowest elastic eigenvalue lies near (h / L)^2 of the scale (h the element size, L the
-/// body's), 1e-8 for 1e4 elements along a body.
-pub const RIGID_FRACTION: f64 = 1e-12;
+/// body's), 1e-8 for 1e4 elements along a body: a factor 100 either side.
+pub const RIGID_FRACTION: f64 = 1e-10;
 
 /// Outcome of the Sturm check, as reported.
 #[derive(Clone, Debug, Serialize, PartialEq)]

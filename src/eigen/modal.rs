@@ -89,7 +89,15 @@ impl FeModel {
     /// solve that cannot fit is refused before its factorisation starts.
     pub fn modal_solve_sizes(&self, count: usize, guard: usize) -> SolveSizes {
         let n = self.n_free();
-        let nev = (count + guard).min(n.saturating_sub(1)).max(count);
+        // a solve that finds only rigid-body modes is extended (`certify_with_recovery`)
+        let wanted = count + guard;
+        let rigid = RIGID_MODES * RIGID_ROUNDS;
+        let wanted = if wanted <= rigid {
+            wanted + rigid
+        } else {
+            wanted
+        };
+        let nev = wanted.min(n.saturating_sub(1)).max(count);
         let ncv = EigenSettings::new(nev, 0.0).basis_size(n);
         let factor_entries = self.analysis.factor_nnz();
         let nnz = self.km.pattern.nnz();
@@ -126,6 +134,10 @@ const RECOVERY_ATTEMPTS: usize = 2;
 /// A free body's rigid-body modes (three translations, three rotations): how many more a
 /// solve whose modes were all rigid asks for.
 const RIGID_MODES: usize = 6;
+
+/// How many times a first solve whose modes were all rigid is extended by [`RIGID_MODES`]
+/// (two free bodies); beyond, the certificate says what is missing.
+const RIGID_ROUNDS: usize = 2;
 
 /// The lowest `count` modes of (K, M) on an analysed pattern, certified: shift-invert ARPACK
 /// with K - sigma M = L L^T, residuals, M-orthogonality, and a Sturm count at a shift placed in
@@ -243,6 +255,7 @@ fn certify_with_recovery(
     let n = km.pattern.n;
     let mut nev = (count + guard).min(n.saturating_sub(1)).max(count);
     let zero = certify::RIGID_FRACTION * km.eigenvalue_scale();
+    let mut extended = 0;
     let mut attempt = 0;
     let mut recovered = 0;
     let mut previous: Option<(Modes, Option<SturmCheck>)> = None;
@@ -263,7 +276,12 @@ fn certify_with_recovery(
         timings.eigen += t.1;
         // a set that ends among the rigid-body modes has no gap to certify at: the whole
         // cluster and the first elastic mode are solved for
-        if all.eigenvalues.last().is_some_and(|&l| l <= zero) && nev + 1 < n {
+        if attempt == 0
+            && extended < RIGID_ROUNDS
+            && all.eigenvalues.last().is_some_and(|&l| l <= zero)
+            && nev + 1 < n
+        {
+            extended += 1;
             nev = (nev + RIGID_MODES).min(n - 1);
             log::info!("the computed eigenvalues are all rigid-body modes: solving for {nev}");
             continue;

@@ -33,9 +33,6 @@ const MAX_CLEARANCE: f64 = 0.02;
 const WIDE_PIN_OFFSET: f64 = 0.05;
 /// Young's moduli of structural metals and composites lie within this range [Pa].
 const YOUNG_RANGE: (f64, f64) = (1e9, 1e12);
-/// An oil supply below this \[m\] is a starved film, which may stop a lubricated run
-/// (docs/validation.md: on the test engine 1, 3 and 4 um stop, 2, 5, 10, 15 and 20 um run).
-const STARVED_SUPPLY: f64 = 5e-6;
 
 /// Refuses the absurd and lists the doubtful.
 pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
@@ -162,7 +159,7 @@ fn piston(
             "piston.lubrication = \"{}\" is experimental: the film is verified against closed forms and the lubricated answer converges with the step on the test and the default engine, with the cylinders solved in one contact step, but a run costs about 13 times a dry one at the same step on the default engine; the dry skirt (the reference study's model) is the conservative answer (docs/validation.md)",
             oil.model.name()
         ));
-        if oil.supply < STARVED_SUPPLY {
+        if crate::scene::spec::starved(oil.supply) {
             warnings.push(format!(
                 "piston.oil.supply_um = {}: a starved film; on the test engine supplies of 1, 3 and 4 um stop with \"contact iteration did not converge\" (exit 1) in the first two cycles, 2 um and 5 um or more run (docs/validation.md, \"A starved film does not always run\")",
                 num(oil.supply * 1e6)

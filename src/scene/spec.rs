@@ -197,6 +197,17 @@ pub struct AsperitySpec {
     pub modulus: f64,
 }
 
+/// An oil supply below this \[um\] is a starved film, which may stop a lubricated run
+/// (docs/validation.md: on the test engine 1, 3 and 4 um stop, 2, 5, 10, 15 and 20 um run);
+/// the scene is warned of it and a stopped run's error says so.
+pub const STARVED_SUPPLY_UM: f64 = 5.0;
+
+/// Whether an oil supply of `supply` \[m\] is starved ([`STARVED_SUPPLY_UM`]; compared in um
+/// with a margin for the unit's rounding, so 5 um is not).
+pub fn starved(supply: f64) -> bool {
+    supply * 1e6 < STARVED_SUPPLY_UM - 1e-9
+}
+
 /// The skirt's oil film, SI (see [`crate::scene::raw::RawOil`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct OilSpec {
@@ -294,5 +305,18 @@ impl MeshUnit {
             Self::M => "m",
             Self::Mm => "mm",
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// Contract: the starved-film threshold is read in um as the scene gives it: 5 um (stored
+    /// as 5 x 1e-6 m, one rounding below 5e-6) is not starved, 4.99 um is.
+    #[test]
+    fn contract_five_um_of_oil_is_not_starved() {
+        assert!(!super::starved(5.0 * 1e-6));
+        assert!(!super::starved(20.0 * 1e-6));
+        assert!(super::starved(4.99 * 1e-6));
+        assert!(super::starved(1.0 * 1e-6));
     }
 }
