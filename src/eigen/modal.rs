@@ -288,7 +288,7 @@ fn certify_with_recovery(
         }
         let t = Instant::now();
         let mut all = all;
-        let sturm = sturm_check(km, analysis, (&mut all, spare), count)?;
+        let sturm = sturm_check(km, analysis, (&mut all, spare), (count, zero))?;
         timings.certification += t.elapsed().as_secs_f64();
         let retry = match &sturm {
             Some(st) if st.found > st.expected && attempt < RECOVERY_ATTEMPTS => {
@@ -551,15 +551,14 @@ fn with_shifted<R>(
 }
 
 /// The Sturm certificate of computed eigenvalues: the negative pivots of K - sigma_c M at a
-/// shift in the first spectral gap at or above mode `count` ([`certify::sturm_shift`]); None
-/// when the computed spectrum offers no gap.
+/// shift in the first spectral gap at or above mode `count` and above the rigid-body cluster's
+/// bound `zero` ([`certify::sturm_shift`]); None when the computed spectrum offers no gap.
 fn sturm_check(
     km: &mut StiffnessMass,
     analysis: &Analysis,
     (modes, spare): (&mut Modes, Option<Vec<f64>>),
-    count: usize,
+    (count, zero): (usize, f64),
 ) -> Result<Option<SturmCheck>, ModalError> {
-    let zero = certify::RIGID_FRACTION * km.eigenvalue_scale();
     let Some((sigma_c, expected)) = certify::sturm_shift(&modes.eigenvalues, count, 1e-4, zero)
     else {
         return Ok(None);

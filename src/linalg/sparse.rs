@@ -270,14 +270,16 @@ impl StiffnessMass {
     /// The eigenvalues' scale trace(K) / trace(M) (their mean when M is a multiple of the
     /// identity; the order of the mesh's highest eigenvalues otherwise).
     pub fn eigenvalue_scale(&self) -> f64 {
-        let diag = |v: &[f64]| {
-            self.pattern
-                .lower_entries(v)
-                .filter(|e| e.0 == e.1)
-                .map(|e| e.2)
-                .sum::<f64>()
-        };
-        diag(&self.k) / diag(&self.m)
+        let p = &self.pattern;
+        let (mut k, mut m) = (0.0, 0.0);
+        for c in 0..p.n {
+            let range = p.col_ptr[c]..p.col_ptr[c + 1];
+            if let Some(q) = range.clone().find(|&q| p.row_idx[q] == c) {
+                k += self.k[q];
+                m += self.m[q];
+            }
+        }
+        k / m
     }
 
     /// Values of K - sigma M on the shared pattern.
