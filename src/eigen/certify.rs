@@ -66,9 +66,10 @@ pub fn m_orthogonality_error(km: &StiffnessMass, modes: &Modes) -> f64 {
 /// whose width exceeds `rel_gap` times max(|lambda_hi|, 1e-6 scale), scale the largest
 /// |lambda| computed. Eigenvalues below max(1e-6 scale, `zero`) (rigid-body modes: round-off
 /// around zero; `zero` from the model, [`RIGID_FRACTION`]) count as one cluster, and the
-/// shift lies above `zero`, so it never falls inside it (where the inertia count is decided by round-off: `modes --count 5`
-/// on a free body reported a false mismatch). Returns (sigma_c, number of computed
-/// eigenvalues below it) or None when the computed spectrum offers no such gap.
+/// shift lies above `zero`, so it never falls inside it (where the inertia count is decided
+/// by round-off: `modes --count 5` on a free body reported a false mismatch). Returns
+/// (sigma_c, number of computed eigenvalues below it) or None when the computed spectrum
+/// offers no such gap.
 pub fn sturm_shift(
     eigenvalues: &[f64],
     count: usize,

@@ -101,6 +101,12 @@ pub struct PistonLoads {
 }
 
 impl Piston {
+    /// The oil supply on the liner \[um\] of a lubricated skirt (None: dry), as the scene
+    /// gives it (what a stopped run's error names).
+    pub fn film_supply_um(&self) -> Option<f64> {
+        self.film.as_ref().map(|f| f.supply * 1e6)
+    }
+
     /// The 2 x 2 mass matrix of (y, phi), row-major.
     pub fn mass_matrix(&self) -> [[f64; 2]; 2] {
         let ma = self.mass * self.cg_above_pin;

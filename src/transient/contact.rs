@@ -820,31 +820,22 @@ impl<'s, 'a> Step<'s, 'a> {
                 .expect("a film's slices are active")
         };
         for blk in &self.blocks {
-            // the block's slices sit side by side in the active set (a side's slices are
-            // consecutive): its rows of W gain D G_b + C G_v,b in two matrix products
+            // a side's slices are consecutive (`bore::film_groups`) and all active, so they sit
+            // side by side in the active set: its rows of W gain D G_b + C G_v,b in two
+            // matrix products
             let (n, r0) = (blk.slices.len(), pos(blk.slices[0]));
-            let together = blk
+            debug_assert!(blk
                 .slices
                 .iter()
                 .enumerate()
-                .all(|(a, &i)| pos(i) == r0 + a);
-            if together {
-                let mut rows = wt.columns_mut(r0, n);
-                rows.gemm(1.0, &g.columns(r0, n), &blk.d.transpose(), 1.0);
-                rows.gemm(1.0, &gv.columns(r0, n), &blk.c.transpose(), 1.0);
-            }
-            for (a, &i) in blk.slices.iter().enumerate() {
-                let r = pos(i);
+                .all(|(a, &i)| pos(i) == r0 + a));
+            let mut rows = wt.columns_mut(r0, n);
+            rows.gemm(1.0, &g.columns(r0, n), &blk.d.transpose(), 1.0);
+            rows.gemm(1.0, &gv.columns(r0, n), &blk.c.transpose(), 1.0);
+            for a in 0..n {
+                let r = r0 + a;
                 rhs[(r, 0)] += blk.f0[a];
                 let mut term = |c: usize, kk: f64, cc: f64, shift: f64| {
-                    let rc = pos(c);
-                    if !together {
-                        add_row(
-                            wt.column_mut(r).as_mut_slice(),
-                            (kk, g.column(rc).as_slice()),
-                            (cc, gv.column(rc).as_slice()),
-                        );
-                    }
                     let s = &self.slices[c];
                     let b = s.body;
                     let (u, du) = pred.exact(c);

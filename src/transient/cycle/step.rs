@@ -572,7 +572,7 @@ impl Failure {
                     time_s: t,
                     iterations,
                     halvings,
-                    film_supply_um: run.setup.piston.film.as_ref().map(|f| f.supply * 1e6),
+                    film_supply_um: run.setup.piston.film_supply_um(),
                 }
             }
             Failure::Step(StepFailure::Singular) => TransientError::Singular {
