@@ -132,9 +132,13 @@ pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
 }
 
 /// Reads a whole regular text file of at most `limit` bytes (UTF-8; the error names the line
-/// of the first byte that is not).
+/// of the first byte that is not), without a leading byte-order mark (spreadsheets' "CSV
+/// UTF-8" and some editors write one; left in, it would stick to the first header name).
 pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
-    let bytes = read_regular(path, limit)?;
+    let mut bytes = read_regular(path, limit)?;
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let bytes = e.as_bytes();

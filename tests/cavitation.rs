@@ -106,6 +106,30 @@ fn synthetic(path: &Path, neg_lo: f64, neg_hi: f64, n: usize) -> (f64, f64, f64)
     (onset, high, mean_k)
 }
 
+/// Regression: rig data saved with a byte-order mark and CRLF line ends (a spreadsheet's "CSV
+/// UTF-8") were refused with "missing column 'time_s'" while the message listed it; they read
+/// as the plain file does.
+#[test]
+fn regression_a_byte_order_mark_and_crlf_read_as_plain_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = dir.path().join("plain.csv");
+    synthetic(&plain, 300.0, 2000.0, 40);
+    let text = std::fs::read_to_string(&plain).unwrap();
+    let marked = dir.path().join("marked.csv");
+    std::fs::write(&marked, format!("\u{feff}{}", text.replace('\n', "\r\n"))).unwrap();
+    let (c1, out1, e1) = calibrate_reference(&plain, &dir.path().join("a.png"));
+    let (c2, out2, e2) = calibrate_reference(&marked, &dir.path().join("b.png"));
+    assert_eq!((c1, c2), (0, 0), "{e1} {e2}");
+    let (v1, v2): (serde_json::Value, serde_json::Value) = (
+        serde_json::from_str(&out1).unwrap(),
+        serde_json::from_str(&out2).unwrap(),
+    );
+    for key in ["events", "onset_m_s2", "high_risk_m_s2", "k_p_pa_per_m_s2"] {
+        assert_eq!(v1[key], v2[key], "{key}");
+        assert!(!v1[key].is_null(), "{key} in the output");
+    }
+}
+
 /// Tolerance 5 % (the floor): amplitudes step by 4.9 m/s^2 and a given k_i recurs every 7
 /// events, so the nearest event with the extreme k_i is within 34 m/s^2 (< 3.5 %) of each
 /// true threshold; peak sampling at 27 samples per period (< 0.7 %) and noise (< 0.3 %) add

@@ -174,6 +174,51 @@ fn regression_hostile_scene_values_are_refused_before_work() {
             "solver.guard_modes",
         ),
         ("rom", vec!["limits.max_hours=0.000001"], "limits.max_hours"),
+        // an oil whose viscosity overflowed or vanished ran and then blamed the supply (exit 1)
+        (
+            "simulate",
+            vec!["piston.lubrication=squeeze", "piston.oil.vogel_b_c=1e6"],
+            "piston.oil.vogel_a_mpa_s / vogel_b_c / vogel_c_c",
+        ),
+        (
+            "simulate",
+            vec![
+                "piston.lubrication=squeeze",
+                "piston.oil.vogel_a_mpa_s=1e-300",
+            ],
+            "outside the 0.1 to 100000 mPa s of engine oils",
+        ),
+        (
+            "simulate",
+            vec![
+                "piston.lubrication=mixed",
+                "piston.oil.asperity_modulus_gpa=1e300",
+            ],
+            "piston.oil.asperity_modulus_gpa",
+        ),
+        // oil data of a dry skirt were not read (a report may compare it with a film)
+        (
+            "simulate",
+            vec!["piston.oil.supply_um=-3"],
+            "piston.oil.supply_um",
+        ),
+        // a friction coefficient of 50 ended in "deep penetration" (exit 1)
+        (
+            "simulate",
+            vec!["piston.pin_friction=50"],
+            "piston.pin_friction",
+        ),
+        ("simulate", vec!["piston.friction=1e300"], "piston.friction"),
+        (
+            "simulate",
+            vec!["piston.pin_slip_rad_s=1e-300"],
+            "piston.pin_slip_rad_s",
+        ),
+        (
+            "simulate",
+            vec!["piston.pin_diameter_mm=1e-300"],
+            "piston.pin_diameter_mm",
+        ),
     ];
     for (cmd, sets, needle) in cases {
         let mut args = vec![cmd, SMALL, "--cache-dir", cache_dir];

@@ -441,6 +441,55 @@ fn regression_an_inverted_tet4_is_refused_naming_the_file_and_element() {
     assert!(err.contains("#2") && err.contains("inverted"), "{err}");
 }
 
+/// Regression: a flat element was reported as a mid-edge node lying 0.33 edge lengths off, and
+/// a hex20 with a corner node given twice as one lying "inf" edge lengths off; both are named
+/// degenerate, with what makes them so.
+#[test]
+fn regression_a_flat_or_collapsed_element_is_named_degenerate() {
+    let dir = tempfile::tempdir().unwrap();
+    let flat = dir.path().join("flat.bdf");
+    // element 1's fourth node lies in the plane of the other three
+    std::fs::write(
+        &flat,
+        "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,1.,1.,0.\nGRID,5,,0.,0.,1.\n\
+         CTETRA,1,1,1,2,3,4\nCTETRA,2,1,1,2,3,5\nPSOLID,1,1\nMAT1,1,2.1e11,,0.3,7850.\nENDDATA\n",
+    )
+    .unwrap();
+    let err = refused(
+        &["modes", "--mesh", flat.to_str().unwrap(), "--count", "2"],
+        2,
+        "flat.bdf",
+    );
+    assert!(err.contains("#1") && err.contains("no volume"), "{err}");
+    // the fixture's hex20 #1 with its second corner node replaced by its first
+    let text = std::fs::read_to_string("tests/fixtures/block_hex20.inp").unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let at = 1 + lines
+        .iter()
+        .position(|l| l.starts_with("*ELEMENT"))
+        .unwrap();
+    let mut ids: Vec<String> = lines[at].split(',').map(str::to_string).collect();
+    ids[2] = ids[1].clone();
+    let twice = ids[1].trim().to_string();
+    lines[at] = ids.join(",");
+    let collapsed = dir.path().join("collapsed.inp");
+    std::fs::write(&collapsed, lines.join("\n")).unwrap();
+    let args = ["--youngs", "210e9", "--poisson", "0.3", "--density", "7850"];
+    let mut cmd = vec![
+        "modes",
+        "--mesh",
+        collapsed.to_str().unwrap(),
+        "--count",
+        "2",
+    ];
+    cmd.extend(args);
+    let err = refused(&cmd, 2, "collapsed.inp");
+    assert!(
+        err.contains("degenerate") && err.contains(&format!("node #{twice} to node #{twice}")),
+        "{err}"
+    );
+}
+
 /// Regression: parts of two samples with different seeds were refused with a Rust debug dump
 /// of the designs; now the designs are printed as their command-line options.
 #[test]

@@ -14,12 +14,18 @@ pub enum MeshError {
         kind: String,
         ratio: f64,
     },
-    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements): mid-edge node {node} lies {offset:.2} edge lengths from the midpoint of its edge (wrong node order or badly curved edge)")]
+    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements): mid-edge node #{node} (1-based, in the file's order of nodes) lies {offset:.2} edge lengths from the midpoint of its edge (wrong node order or badly curved edge)")]
     MidNode {
         element: usize,
         kind: String,
         node: usize,
         offset: f64,
+    },
+    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements) is degenerate: {what}")]
+    Degenerate {
+        element: usize,
+        kind: String,
+        what: String,
     },
     #[error("the mesh has no solid elements")]
     Empty,
@@ -56,34 +62,7 @@ pub fn check_and_compact(
     }
     let mut report = CheckReport::default();
     for (e, (kind, nodes)) in mesh.elements().enumerate() {
-        let x = mesh.coords_of(nodes);
-        let nc = kind.num_corners();
-        for (m, &(a, b)) in kind.mid_edges().iter().enumerate() {
-            let len = (0..3)
-                .map(|i| (x[a][i] - x[b][i]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            let off = (0..3)
-                .map(|i| (x[nc + m][i] - 0.5 * (x[a][i] + x[b][i])).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            if off > 0.25 * len {
-                return Err(MeshError::MidNode {
-                    element: e + 1,
-                    kind: format!("{kind:?}"),
-                    node: nodes[nc + m],
-                    offset: off / len,
-                });
-            }
-        }
-        let ratio = min_jacobian_ratio(kind, &x);
-        if ratio.partial_cmp(&1e-6) != Some(std::cmp::Ordering::Greater) {
-            return Err(MeshError::Inverted {
-                element: e + 1,
-                kind: format!("{kind:?}"),
-                ratio,
-            });
-        }
+        check_element(e, (kind, nodes), &mesh.coords_of(nodes), min_jacobian_ratio)?;
     }
     // unused nodes
     let mut used = vec![false; mesh.nodes.len()];
@@ -141,4 +120,60 @@ pub fn check_and_compact(
         ));
     }
     Ok(report)
+}
+
+/// The shape of solid element `e` (0-based) with its `nodes` at `x`: it has volume, no edge of
+/// zero length, its mid-edge nodes near their edges' midpoints, and a positive Jacobian.
+fn check_element(
+    e: usize,
+    (kind, nodes): (ElementKind, &[usize]),
+    x: &[[f64; 3]],
+    min_jacobian_ratio: JacobianRatio,
+) -> Result<(), MeshError> {
+    let nc = kind.num_corners();
+    let ratio = min_jacobian_ratio(kind, x);
+    let degenerate = |what: String| MeshError::Degenerate {
+        element: e + 1,
+        kind: format!("{kind:?}"),
+        what,
+    };
+    // an element without volume (a flat one) is degenerate whatever its mid-edge nodes
+    if ratio.is_nan() || ratio.abs() <= 1e-6 {
+        return Err(degenerate(
+            "it has no volume (its nodes lie in a plane or on a line)".into(),
+        ));
+    }
+    for (m, &(a, b)) in kind.mid_edges().iter().enumerate() {
+        let len = (0..3)
+            .map(|i| (x[a][i] - x[b][i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if len == 0.0 {
+            return Err(degenerate(format!(
+                "its edge from node #{} to node #{} (1-based, in the file's order of nodes) has zero length (a node given twice?)",
+                nodes[a] + 1,
+                nodes[b] + 1
+            )));
+        }
+        let off = (0..3)
+            .map(|i| (x[nc + m][i] - 0.5 * (x[a][i] + x[b][i])).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if off > 0.25 * len {
+            return Err(MeshError::MidNode {
+                element: e + 1,
+                kind: format!("{kind:?}"),
+                node: nodes[nc + m] + 1,
+                offset: off / len,
+            });
+        }
+    }
+    if ratio < 0.0 {
+        return Err(MeshError::Inverted {
+            element: e + 1,
+            kind: format!("{kind:?}"),
+            ratio,
+        });
+    }
+    Ok(())
 }

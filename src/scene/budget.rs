@@ -135,10 +135,19 @@ impl Limits {
         } else {
             return Ok(());
         };
+        // a limit of the process's address space is a hard one: no key lifts it
+        let capped = est.memory > self.memory
+            && !self.memory_from_scene
+            && self.memory_bound == crate::machine::ADDRESS_SPACE_BOUND;
+        let or_else = if capped {
+            "or run under a higher address-space limit"
+        } else {
+            "or raise limits.max_memory_gb / limits.max_hours if the estimate is known to be pessimistic"
+        };
         Err(SceneError::TooLarge {
             path: path.to_path_buf(),
             msg: format!(
-                "{} {over} ({}), {limit_text}: change {}, or raise limits.max_memory_gb / limits.max_hours if the estimate is known to be pessimistic",
+                "{} {over} ({}), {limit_text}: change {}, {or_else}",
                 est.what, est.detail, est.keys
             ),
         })

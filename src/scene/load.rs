@@ -42,7 +42,7 @@ impl Scene {
             serde_path_to_error::deserialize(de).map_err(|e| SceneError::Field {
                 path: path.to_path_buf(),
                 key: e.path().to_string(),
-                msg: e.inner().to_string(),
+                msg: plain_message(&e.inner().to_string()),
             })?;
         let mut scene = validate(path, raw)?;
         scene.warnings = sanity::review(&scene)?;
@@ -58,6 +58,16 @@ impl Scene {
             "liner" => Some(&self.liner),
             _ => None,
         }
+    }
+}
+
+/// A deserialiser's message for a user: its first line (the key is named already), with the
+/// code's type names said as what they are in the scene ("struct RawOil": a table).
+fn plain_message(msg: &str) -> String {
+    let first = msg.lines().next().unwrap_or(msg).trim();
+    match first.find("expected struct Raw") {
+        Some(at) => format!("{}expected a table", &first[..at]),
+        None => first.to_string(),
     }
 }
 
@@ -95,6 +105,23 @@ impl Checker<'_> {
             Ok(v)
         } else {
             Err(self.err(key, format!("must be a finite number, got {}", num(v))))
+        }
+    }
+    /// A finite value in [lo, hi] (a bound the physics of this engine class sets; the message
+    /// gives the range).
+    pub(super) fn within(
+        &self,
+        key: &str,
+        v: f64,
+        (lo, hi): (f64, f64),
+    ) -> Result<f64, SceneError> {
+        if v.is_finite() && (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(self.err(
+                key,
+                format!("must lie in [{}, {}], got {}", num(lo), num(hi), num(v)),
+            ))
         }
     }
     pub(super) fn mm(&self, key: &str, v: f64) -> Result<f64, SceneError> {

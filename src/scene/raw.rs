@@ -483,23 +483,23 @@ pub struct RawPiston {
     pub contact_stiffness_n_per_m: f64,
     /// Contact damping per slice [N s/m], >= 0.
     pub contact_damping_n_s_per_m: f64,
-    /// Coulomb friction coefficient of the skirt, >= 0 (0: no friction).
+    /// Coulomb friction coefficient of the skirt, in [0, 1] (0: no friction).
     #[serde(default)]
     pub friction: f64,
-    /// Friction coefficient of the pin journal, >= 0 (0: no pin friction, the reference
+    /// Friction coefficient of the pin journal, in [0, 1] (0: no pin friction, the reference
     /// study's model; 0.02-0.08 for a lubricated pin \[assumption\]). The joint's torque
     /// mu r_pin F_pin tanh((beta' - phi') / w_s) drags the piston's tilt toward the rod's
     /// rotation (docs/physics.md).
     #[serde(default)]
     pub pin_friction: f64,
-    /// Pin diameter \[mm\], > 0 and less than the bore; none: 0.4 x bore (heavy-duty diesels
-    /// use 0.38-0.42). Used by `pin_friction` only.
+    /// Pin diameter \[mm\], from a tenth of the bore to less than the bore; none: 0.4 x bore
+    /// (heavy-duty diesels use 0.38-0.42). Used by `pin_friction` only.
     #[serde(default)]
     pub pin_diameter_mm: Option<f64>,
-    /// Slip rate w_s over which the pin's torque reverses [rad/s], > 0: at a relative rate of
-    /// w_s it reaches tanh(1) = 76 % of its Coulomb value (the journal's boundary friction at
-    /// near-zero sliding; the rod turns at up to r omega / l, 64 rad/s on the default engine).
-    /// Default 1.
+    /// Slip rate w_s over which the pin's torque reverses [rad/s], in [1e-4, 1e4]: at a
+    /// relative rate of w_s it reaches tanh(1) = 76 % of its Coulomb value (the journal's
+    /// boundary friction at near-zero sliding; the rod turns at up to r omega / l, 64 rad/s on
+    /// the default engine). Default 1.
     #[serde(default = "default_pin_slip")]
     pub pin_slip_rad_s: f64,
     /// The skirt's oil film: "dry" (default: the penalty contact alone, the reference study's
@@ -519,14 +519,29 @@ fn default_pin_slip() -> f64 {
     1.0
 }
 
-/// `piston.lubrication`.
+/// `piston.lubrication`: a name (read from a string, so that another type is told what is
+/// expected).
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
+#[serde(try_from = "String")]
 pub enum RawLubrication {
     #[default]
     Dry,
     Squeeze,
     Mixed,
+}
+
+impl TryFrom<String> for RawLubrication {
+    type Error = String;
+    fn try_from(name: String) -> Result<Self, String> {
+        match name.as_str() {
+            "dry" => Ok(Self::Dry),
+            "squeeze" => Ok(Self::Squeeze),
+            "mixed" => Ok(Self::Mixed),
+            other => Err(format!(
+                "unknown model `{other}`, expected one of `dry`, `squeeze`, `mixed`"
+            )),
+        }
+    }
 }
 
 /// The skirt's oil film (`[piston.oil]`), defaults of a heavy-duty diesel with a 15W-40 class
@@ -541,18 +556,21 @@ pub struct RawOil {
     pub supply_um: f64,
     /// Vogel viscosity mu = a exp(b / (T + c)) at the film temperature T \[deg C\] (the mean of
     /// the skirt's, linear from its top to its bottom, and the liner's bore temperature):
-    /// a \[mPa s\] > 0, b \[deg C\] > 0, c \[deg C\] with T + c > 0. Defaults 0.1366, 826.9,
-    /// 85.3: 100 mPa s at 40 deg C, 11.8 at 100, 6.4 at 130.
+    /// a \[mPa s\] > 0, b \[deg C\] > 0, c \[deg C\] with T + c > 0, giving between 0.1 and
+    /// 100,000 mPa s over the skirt's and liner's temperatures (checked also for a dry skirt,
+    /// as is all of `[piston.oil]`). Defaults 0.1366, 826.9, 85.3: 100 mPa s at 40 deg C, 11.8
+    /// at 100, 6.4 at 130.
     #[serde(default = "default_vogel_a")]
     pub vogel_a_mpa_s: f64,
     #[serde(default = "default_vogel_b")]
     pub vogel_b_c: f64,
     #[serde(default = "default_vogel_c")]
     pub vogel_c_c: f64,
-    /// Greenwood-Tripp (`mixed` only): composite roughness sigma \[um\] > 0 (default 1.0), the
-    /// roughness parameter eta beta sigma > 0 (default 0.04), the slope parameter sigma / beta
-    /// > 0 (default 0.001) and the composite modulus E' \[GPa\] > 0, 1 / E' = (1 - nu_1^2) / E_1
-    /// + (1 - nu_2^2) / E_2 (default 82: a steel skirt on a cast-iron liner).
+    /// Greenwood-Tripp (`mixed` only): composite roughness sigma \[um\] in [0.001, 100]
+    /// (default 1.0), the roughness parameter eta beta sigma in [1e-4, 1] (default 0.04), the
+    /// slope parameter sigma / beta in [1e-6, 1] (default 0.001) and the composite modulus E'
+    /// \[GPa\] in [1, 1000], 1 / E' = (1 - nu_1^2) / E_1 + (1 - nu_2^2) / E_2 (default 82: a
+    /// steel skirt on a cast-iron liner).
     #[serde(default = "default_roughness")]
     pub roughness_um: f64,
     #[serde(default = "default_ebs")]

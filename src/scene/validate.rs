@@ -664,10 +664,10 @@ pub(super) fn validate_piston(
             "piston.contact_damping_n_s_per_m",
             p.contact_damping_n_s_per_m,
         )?,
-        friction: c.nonneg("piston.friction", p.friction)?,
-        pin_friction: c.nonneg("piston.pin_friction", p.pin_friction)?,
+        friction: c.within("piston.friction", p.friction, FRICTION_RANGE)?,
+        pin_friction: c.within("piston.pin_friction", p.pin_friction, FRICTION_RANGE)?,
         pin_radius: pin_radius(c, p, engine)?,
-        pin_slip_rate: c.positive("piston.pin_slip_rad_s", p.pin_slip_rad_s)?,
+        pin_slip_rate: c.within("piston.pin_slip_rad_s", p.pin_slip_rad_s, PIN_SLIP_RANGE)?,
         oil: validate_oil(c, p)?,
     };
     let offset = (piston.pin_offset - piston.crank_offset).abs();
@@ -680,12 +680,37 @@ pub(super) fn validate_piston(
     Ok(piston)
 }
 
+/// Coulomb coefficients of the skirt and the pin (`piston.friction`, `piston.pin_friction`):
+/// lubricated steel on cast iron or bronze lies near 0.01-0.15 and even clean dry metal pairs
+/// stay below 1; a larger value is a typing error (50 stopped a run with "deep penetration").
+const FRICTION_RANGE: (f64, f64) = (0.0, 1.0);
+
+/// `piston.pin_slip_rad_s` [rad/s]: below 1e-4 the torque's reversal is a step on the
+/// transient's time scale (the rod turns at tens of rad/s), above 1e4 the torque never builds.
+const PIN_SLIP_RANGE: (f64, f64) = (1e-4, 1e4);
+
+/// Film viscosities the Vogel data may give at the film's temperatures [Pa s]: engine oils lie
+/// between about 2 mPa s (hot, thin grades) and a few Pa s (cold start); a value outside
+/// [1e-4, 100] is a unit slip (mPa s read as Pa s) or an overflow (b / (T + c) large).
+const VISCOSITY_RANGE_PA_S: (f64, f64) = (1e-4, 100.0);
+
 /// `piston.pin_diameter_mm`: the pin's radius \[m\], 0.2 x bore when not given.
 fn pin_radius(c: &Checker<'_>, p: &raw::RawPiston, engine: &Engine) -> Result<f64, SceneError> {
     let Some(d) = p.pin_diameter_mm else {
         return Ok(0.2 * engine.bore);
     };
     let d = c.positive("piston.pin_diameter_mm", d)? * 1e-3;
+    // a pin thinner than a tenth of the bore could not carry the gas force
+    if d < 0.1 * engine.bore {
+        return Err(c.err(
+            "piston.pin_diameter_mm",
+            format!(
+                "must be at least a tenth of the bore ({:.1} mm; heavy-duty pins are 0.38-0.42 of it), got {}",
+                engine.bore * 1e2,
+                num(d * 1e3)
+            ),
+        ));
+    }
     if d >= engine.bore {
         return Err(c.err(
             "piston.pin_diameter_mm",
@@ -699,9 +724,19 @@ fn pin_radius(c: &Checker<'_>, p: &raw::RawPiston, engine: &Engine) -> Result<f6
 fn validate_oil(c: &Checker<'_>, p: &raw::RawPiston) -> Result<Option<spec::OilSpec>, SceneError> {
     use spec::Lubrication;
     let model = lubrication_of(p.lubrication);
-    if model == Lubrication::Dry {
-        return Ok(None);
-    }
+    // checked for a dry skirt too: a report may compare it with a lubricated one, and a value
+    // given is a value meant
+    let oil = film_data(c, p, model)?;
+    Ok((model != Lubrication::Dry).then_some(oil))
+}
+
+/// `[piston.oil]`, SI, for the film model `model` (the asperity data checked whatever the
+/// model, kept for `mixed`).
+fn film_data(
+    c: &Checker<'_>,
+    p: &raw::RawPiston,
+    model: spec::Lubrication,
+) -> Result<spec::OilSpec, SceneError> {
     let o = &p.oil;
     let supply = c.positive("piston.oil.supply_um", o.supply_um)?;
     if supply > 1000.0 {
@@ -730,22 +765,53 @@ fn validate_oil(c: &Checker<'_>, p: &raw::RawPiston) -> Result<Option<spec::OilS
             ),
         ));
     }
-    let asperity = if model == Lubrication::Mixed {
-        Some(spec::AsperitySpec {
-            sigma: c.positive("piston.oil.roughness_um", o.roughness_um)? * 1e-6,
-            eta_beta_sigma: c.positive("piston.oil.eta_beta_sigma", o.eta_beta_sigma)?,
-            sigma_over_beta: c.positive("piston.oil.sigma_over_beta", o.sigma_over_beta)?,
-            modulus: c.positive("piston.oil.asperity_modulus_gpa", o.asperity_modulus_gpa)? * 1e9,
-        })
-    } else {
-        None
+    let hottest = th
+        .skirt_bottom_temp_c
+        .max(th.skirt_top_temp_c)
+        .max(th.liner_temp_c);
+    check_viscosity(c, vogel, (coldest, hottest))?;
+    // Greenwood-Tripp's data: roughness of honed liners and ground skirts 0.1-5 um, eta beta
+    // sigma 0.03-0.07, sigma / beta 1e-4 - 0.1, E' of metal pairs 50-250 GPa
+    let asperity = spec::AsperitySpec {
+        sigma: c.within("piston.oil.roughness_um", o.roughness_um, (1e-3, 100.0))? * 1e-6,
+        eta_beta_sigma: c.within("piston.oil.eta_beta_sigma", o.eta_beta_sigma, (1e-4, 1.0))?,
+        sigma_over_beta: c.within("piston.oil.sigma_over_beta", o.sigma_over_beta, (1e-6, 1.0))?,
+        modulus: c.within(
+            "piston.oil.asperity_modulus_gpa",
+            o.asperity_modulus_gpa,
+            (1.0, 1000.0),
+        )? * 1e9,
     };
-    Ok(Some(spec::OilSpec {
+    Ok(spec::OilSpec {
         model,
         supply: supply * 1e-6,
         vogel,
-        asperity,
-    }))
+        asperity: (model == spec::Lubrication::Mixed).then_some(asperity),
+    })
+}
+
+/// The Vogel viscosity mu = a exp(b / (T + c)) (`vogel` SI: a \[Pa s\], b, c \[deg C\]) at the
+/// film's coldest and hottest temperatures (`range`, deg C) lies in [`VISCOSITY_RANGE_PA_S`]
+/// (it falls with T, so the two ends bound it).
+fn check_viscosity(c: &Checker<'_>, vogel: [f64; 3], range: (f64, f64)) -> Result<(), SceneError> {
+    let mu = |t: f64| vogel[0] * (vogel[1] / (t + vogel[2])).exp();
+    let (cold, hot) = (mu(range.0), mu(range.1));
+    let (lo, hi) = VISCOSITY_RANGE_PA_S;
+    if cold.is_finite() && cold <= hi && hot >= lo {
+        return Ok(());
+    }
+    Err(c.err(
+        "piston.oil.vogel_a_mpa_s / vogel_b_c / vogel_c_c",
+        format!(
+            "give a viscosity of {} to {} mPa s between the film's surfaces' temperatures ({} to {} deg C), outside the {} to {} mPa s of engine oils",
+            num(hot * 1e3),
+            num(cold * 1e3),
+            num(range.0),
+            num(range.1),
+            num(lo * 1e3),
+            num(hi * 1e3)
+        ),
+    ))
 }
 
 /// `[operating]`: load, combustion model (Wiebe) or measured pressure curve.
