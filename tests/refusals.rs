@@ -490,6 +490,24 @@ fn regression_a_flat_or_collapsed_element_is_named_degenerate() {
     );
 }
 
+/// Regression: a Nastran deck cut short inside a CTETRA card was refused with "element 1 has 6
+/// nodes", which did not say why; the message now points at the missing continuation.
+#[test]
+fn regression_a_deck_cut_inside_a_card_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string("tests/fixtures/block_tet10.bdf").unwrap();
+    let first = text.find("\nCTETRA").expect("the fixture has CTETRA cards") + 1;
+    let end = first + text[first..].find('\n').unwrap();
+    let cut = dir.path().join("cut.bdf");
+    std::fs::write(&cut, &text[..end]).unwrap();
+    let err = refused(
+        &["modes", "--mesh", cut.to_str().unwrap(), "--count", "2"],
+        2,
+        "cut.bdf",
+    );
+    assert!(err.contains("continuation line missing"), "{err}");
+}
+
 /// Regression: parts of two samples with different seeds were refused with a Rust debug dump
 /// of the designs; now the designs are printed as their command-line options.
 #[test]

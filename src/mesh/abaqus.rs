@@ -1146,7 +1146,10 @@ impl Reader {
             .unwrap_or(0)
             .checked_add(1);
         let (Some(next_node), Some(next_element)) = (next_node, next_element) else {
-            let msg = "ids too large to number the instances after them".into();
+            let msg = format!(
+                "a node or element id is {} (the largest an id can be): the parts' instances are numbered after the largest id, so ids must stay below it",
+                i64::MAX
+            );
             return Err(self.err(Loc::main(0), msg));
         };
         c.nodes = model.nodes;

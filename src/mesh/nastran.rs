@@ -841,11 +841,18 @@ fn element(card: &Card, m: &mut Model, c: &mut Collected) -> R<()> {
         ("CHEXA", 8) => (ElementKind::Hex8, "CHEXA"),
         ("CHEXA", 20) => (ElementKind::Hex20, "CHEXA"),
         (n, k) => {
+            let most = if n == "CTETRA" { 10 } else { 20 };
+            // a card cut short lost its continuation lines
+            let cut = if k < most {
+                " (a continuation line missing, or the file cut short?)"
+            } else {
+                ""
+            };
             return Err(format!(
-                "element {eid} has {k} nodes; {n} is read with {}",
+                "element {eid} has {k} nodes; {n} is read with {}{cut}",
                 if n == "CTETRA" { "4 or 10" } else { "8 or 20" }
             )
-            .into())
+            .into());
         }
     };
     let ids = match kind {
