@@ -150,6 +150,22 @@ pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
     })
 }
 
+/// Feeds every file of `paths` (each at most `limit` bytes) into `h` as its length (8 bytes,
+/// little-endian) and its bytes, so that a digest tells files apart by content and by where
+/// one ends; the error names the file that could not be read.
+pub fn hash_files(
+    h: &mut blake3::Hasher,
+    paths: &[PathBuf],
+    limit: u64,
+) -> Result<(), (PathBuf, ReadError)> {
+    for p in paths {
+        let bytes = read_regular(p, limit).map_err(|e| (p.clone(), e))?;
+        h.update(&(bytes.len() as u64).to_le_bytes());
+        h.update(&bytes);
+    }
+    Ok(())
+}
+
 fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()

@@ -202,6 +202,12 @@ fn regression_hostile_scene_values_are_refused_before_work() {
             vec!["piston.oil.supply_um=-3"],
             "piston.oil.supply_um",
         ),
+        // 50,000 rpm (235 m/s of mean piston speed) ended in "deep penetration" (exit 1)
+        (
+            "simulate",
+            vec!["engine.speed_rpm=50000"],
+            "mean piston speed of 235 m/s",
+        ),
         // a friction coefficient of 50 ended in "deep penetration" (exit 1)
         (
             "simulate",

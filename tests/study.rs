@@ -22,6 +22,16 @@ fn sweep(extra: &[&str], out: &Path) -> (i32, String, String) {
     linercav(&args)
 }
 
+/// `sweep-merge` of the part directories `parts` into `out`, refused (exit 2): its stderr.
+fn refused_merge(parts: &[&Path], out: &Path) -> String {
+    let mut args = vec!["sweep-merge"];
+    args.extend(parts.iter().map(|p| p.to_str().unwrap()));
+    args.extend(["--out", out.to_str().unwrap()]);
+    let (code, _, err) = linercav(&args);
+    assert_eq!(code, 2, "{err}");
+    err
+}
+
 /// sweep.json without what legitimately differs between runs of the same study: wall times
 /// and the written file names.
 fn json_without_timing(p: &Path) -> serde_json::Value {
@@ -107,14 +117,7 @@ fn contract_parts_of_different_studies_are_refused() {
     let mut two = GRID.to_vec();
     two.extend_from_slice(&["--shard", "2/2", "--set", "operating.load=0.8"]);
     assert_eq!(sweep(&two, &b).0, 0);
-    let (code, _, err) = linercav(&[
-        "sweep-merge",
-        a.to_str().unwrap(),
-        b.to_str().unwrap(),
-        "--out",
-        dir.path().join("m").to_str().unwrap(),
-    ]);
-    assert_eq!(code, 2, "{err}");
+    let err = refused_merge(&[&a, &b], &dir.path().join("m"));
     assert!(err.contains("--set overrides"), "{err}");
     // the same shard twice
     let (code, _, err) = linercav(&[
@@ -157,6 +160,50 @@ fn contract_parts_of_different_studies_are_refused() {
         assert_eq!(code, 2, "{forge}: {err}");
         assert!(err.contains(needle), "{forge}: {err}");
     }
+}
+
+/// Regression: shards run on different pressure curves (the scene's text the same, the file it
+/// reads changed between them) were merged as one study, and the merged trend was the curves'
+/// difference; a part now carries a digest of the files its scenes read.
+#[test]
+fn regression_shards_on_different_input_files_are_not_merged() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("pressure.csv");
+    let curve = |peak_bar: f64| -> String {
+        let rows: String = (0..=720)
+            .step_by(6)
+            .map(|a| {
+                let x = f64::from(a) - 370.0;
+                format!("{a},{}\n", 1.0 + peak_bar * (-x * x / 800.0).exp())
+            })
+            .collect();
+        format!("crank_angle_deg,pressure_bar\n{rows}")
+    };
+    let set = format!("operating.pressure_file=\"{}\"", csv.display());
+    let study = |shard: &str, out: &Path| {
+        let args = [
+            "--vary",
+            "piston.clearance_um=60,100",
+            "--set",
+            &set,
+            "--set",
+            "transient.cycles=2",
+            "--set",
+            "transient.averaged_cycles=1",
+            "--shard",
+            shard,
+        ];
+        let (code, _, err) = sweep(&args, out);
+        assert_eq!(code, 0, "{err}");
+    };
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    std::fs::write(&csv, curve(150.0)).unwrap();
+    study("1/2", &a);
+    std::fs::write(&csv, curve(60.0)).unwrap();
+    study("2/2", &b);
+    let err = refused_merge(&[&a, &b], &dir.path().join("m"));
+    assert!(err.contains("files the scene reads"), "{err}");
+    assert!(!dir.path().join("m").exists());
 }
 
 #[test]
@@ -303,6 +350,16 @@ fn contract_bad_designs_are_refused_before_any_run() {
         (
             vec!["--vary", "piston.clearance_um=60,100", "--shard", "3/2"],
             "--shard '3/2'",
+        ),
+        // regression: the same value twice ran the same point twice without a word, and a
+        // range in --vary was "invalid type: string, expected f64" without a hint
+        (
+            vec!["--vary", "piston.clearance_um=60,60"],
+            "the value '60' is given twice",
+        ),
+        (
+            vec!["--vary", "piston.clearance_um=40:120"],
+            "ranges belong to --sample",
         ),
     ] {
         let (code, _, err) = sweep(&args, &out);

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Format tag of a shard's part file.
-pub const PART_FORMAT: &str = "linercav-sweep-part 2";
+pub const PART_FORMAT: &str = "linercav-sweep-part 3";
 
 /// A shard's part file.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -22,6 +22,9 @@ pub struct Part {
     /// The scene's path and the BLAKE3 hash of its text.
     pub scene: String,
     pub scene_blake3: String,
+    /// BLAKE3 of what the scenes read beside their text (pressure curve, calibration, mesh
+    /// decks; `api::sweep`).
+    pub inputs_blake3: String,
     /// The `--set` overrides of the study.
     pub sets: Vec<String>,
     pub design: Design,
@@ -112,6 +115,13 @@ pub fn same_study(path: &Path, p: &Part, first_path: &Path, first: &Part) -> Res
             "scene text (BLAKE3)",
             p.scene_blake3.clone(),
             first.scene_blake3.clone(),
+        ));
+    }
+    if p.inputs_blake3 != first.inputs_blake3 {
+        return Err(differ(
+            "files the scene reads (pressure curve, calibration, mesh; BLAKE3)",
+            p.inputs_blake3.clone(),
+            first.inputs_blake3.clone(),
         ));
     }
     if p.sets != first.sets {

@@ -35,6 +35,10 @@ pub fn run(
             msg: "cut-off factors must be numbers >= 1".into(),
         });
     }
+    // an output place that cannot be written stops the command before its solves
+    if let Some(dir) = out {
+        crate::files::check_output_names(dir, &OUTPUTS)?;
+    }
     let base = super::load_scene(scene_path, sets)?;
     let band = base.rom.band_hz;
     // validate every factor's scene before the long solves
@@ -97,6 +101,9 @@ pub fn run(
     }
     Ok(report)
 }
+
+/// The files `--out` receives.
+const OUTPUTS: [&str; 3] = ["rom_tradeoff.png", "rom_tradeoff.json", "rom_tradeoff.txt"];
 
 fn write_files(t: &RomTradeoff, dir: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|e| {

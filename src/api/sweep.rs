@@ -23,6 +23,7 @@ use crate::report::study::{
     csv, draw_key, draw_statistics, label, line_of, numeric, probabilities_csv, sweep_run,
 };
 use crate::scene::design::{Design, PartError, Shard};
+use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -89,7 +90,7 @@ fn part_name(s: Shard) -> String {
 fn write_part(
     path: &Path,
     report: &SweepReport,
-    (req, s, scene_text): (&SweepRequest, Shard, &[u8]),
+    (req, s, (scene_text, inputs)): (&SweepRequest, Shard, (&[u8], String)),
     started: Instant,
 ) -> Result<()> {
     let part = Part {
@@ -97,6 +98,7 @@ fn write_part(
         tool: tool_version(),
         scene: report.scene.clone(),
         scene_blake3: blake3::hash(scene_text).to_hex().to_string(),
+        inputs_blake3: inputs,
         sets: req.sets.clone(),
         design: report.design.clone(),
         shard: s,
@@ -172,7 +174,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         _ => (None, None),
     };
     let all = design.runs();
-    let (lines, runs, roms) = execute(req, &design, &all, &indices)?;
+    let (lines, runs, roms, inputs) = execute(req, &design, &all, &indices)?;
     let mut report = SweepReport {
         scene: req.scene.display().to_string(),
         keys: design.keys(),
@@ -189,7 +191,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     };
     if let (Some(s), Some(dir)) = (shard, &req.out) {
         let path = dir.join(part_name(s));
-        write_part(&path, &report, (req, s, &scene_text), started)?;
+        write_part(&path, &report, (req, s, (&scene_text, inputs)), started)?;
         if let Some(made) = part_dir {
             made.keep();
         }
@@ -220,12 +222,42 @@ fn tool_version() -> String {
 }
 
 /// Runs `indices` of the design's runs `all`: their lines, full results and the ROMs used.
+/// BLAKE3 of what `scenes` read beside the scene's text: their thresholds (a calibration
+/// file's values), pressure curves and mesh decks with their includes (each file once, in
+/// the order found), so that shards run on different files are not merged as one study.
+fn inputs_digest(scenes: &[Scene]) -> Result<String> {
+    use crate::scene::{CrankcaseSource, MeshSource, PressureSource};
+    let mut h = blake3::Hasher::new();
+    let mut files: Vec<PathBuf> = Vec::new();
+    for s in scenes {
+        h.update(format!("{:?}", s.cavitation.thresholds).as_bytes());
+        if let Some(PressureSource::File(p)) = s.simulation.as_ref().map(|m| &m.operating.pressure)
+        {
+            files.push(p.clone());
+        }
+        if let MeshSource::File(p) = &s.liner.source {
+            files.extend(crate::mesh::deck_files(p));
+        }
+        if let Some(CrankcaseSource::File(p)) = s.crankcase.as_ref().map(|c| &c.source) {
+            files.extend(crate::mesh::deck_files(p));
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    files.retain(|p| seen.insert(p.clone()));
+    crate::files::hash_files(&mut h, &files, crate::files::LIMIT_MESH)
+        .map_err(|(path, source)| crate::scene::SceneError::Io { path, source })?;
+    Ok(h.finalize().to_hex().to_string())
+}
+
+/// The runs' lines, full results, ROMs used and [`inputs_digest`].
+type Executed = (Vec<RunLine>, Vec<serde_json::Value>, Vec<String>, String);
+
 fn execute(
     req: &SweepRequest,
     design: &Design,
     all: &[Vec<String>],
     indices: &[usize],
-) -> Result<(Vec<RunLine>, Vec<serde_json::Value>, Vec<String>)> {
+) -> Result<Executed> {
     let keys = design.keys();
     let extra: Vec<Vec<String>> = indices
         .iter()
@@ -244,6 +276,8 @@ fn execute(
     let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache, &|m| {
         rom_progress.phase(m)
     })?;
+    // the base design's files: every shard runs it (a design's own values are in the design)
+    let inputs = inputs_digest(&variants.scenes[extra.len() - 1..])?;
     let bar = super::progress::Progress::counter(indices.len() as u64 + 1);
     let mut labels: Vec<String> = indices.iter().map(|&k| label(&keys, &all[k])).collect();
     labels.push("the base design".into());
@@ -272,6 +306,7 @@ fn execute(
         lines,
         runs,
         variants.roms.iter().map(|r| r.cache.to_string()).collect(),
+        inputs,
     ))
 }
 

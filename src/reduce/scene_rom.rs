@@ -110,16 +110,9 @@ pub struct LoadedRom {
 /// BLAKE3 of a mesh file and of every file it includes (in the order found).
 fn file_digest(path: &Path) -> Result<String> {
     let mut h = blake3::Hasher::new();
-    for p in crate::mesh::deck_files(path) {
-        let bytes = crate::files::read_regular(&p, crate::files::LIMIT_MESH).map_err(|source| {
-            SceneRomError::MeshFile {
-                path: p.clone(),
-                source,
-            }
-        })?;
-        h.update(&(bytes.len() as u64).to_le_bytes());
-        h.update(&bytes);
-    }
+    let files = crate::mesh::deck_files(path);
+    crate::files::hash_files(&mut h, &files, crate::files::LIMIT_MESH)
+        .map_err(|(path, source)| SceneRomError::MeshFile { path, source })?;
     Ok(h.finalize().to_hex().to_string())
 }
 

@@ -139,6 +139,21 @@ pub fn parse_vary(arg: &str) -> Result<Vary, DesignError> {
     if values.iter().any(|s| s.is_empty()) {
         return Err(bad("empty value"));
     }
+    // the same run twice is a typing error (60,60 for 60,80); a range belongs to --range
+    let mut seen = std::collections::HashSet::new();
+    if let Some(twice) = values.iter().find(|x| !seen.insert(x.as_str())) {
+        return Err(bad(&format!("the value '{twice}' is given twice")));
+    }
+    let numeric_range = |x: &str| {
+        x.split_once(':').is_some_and(|(lo, hi)| {
+            lo.trim().parse::<f64>().is_ok() && hi.trim().parse::<f64>().is_ok()
+        })
+    };
+    if values.iter().any(|x| numeric_range(x)) {
+        return Err(bad(
+            "a value is a range LO:HI (ranges belong to --sample's --range KEY=LO:HI)",
+        ));
+    }
     Ok(Vary {
         key: key.to_string(),
         values,

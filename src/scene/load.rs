@@ -32,7 +32,7 @@ impl Scene {
             text.parse()
                 .map_err(|e: toml::de::Error| SceneError::Syntax {
                     path: path.to_path_buf(),
-                    msg: e.to_string(),
+                    msg: clipped(&e.to_string()),
                 })?;
         for s in sets {
             overrides::apply(&mut table, s)?;
@@ -59,6 +59,18 @@ impl Scene {
             _ => None,
         }
     }
+}
+
+/// A parser's message with each line cut to 200 characters (it quotes the offending line,
+/// which may be a megabyte long).
+fn clipped(msg: &str) -> String {
+    msg.lines()
+        .map(|l| match l.char_indices().nth(200) {
+            Some((at, _)) => format!("{} ...", &l[..at]),
+            None => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// A deserialiser's message for a user: its first line (the key is named already), with the
@@ -132,6 +144,7 @@ impl Checker<'_> {
 /// The analysis points must fit on the liner: first + (n - 1) spacing < length, checked before
 /// their depths are listed (a count of 9e18 was allocated).
 pub(super) fn check_analysis_points(c: &Checker<'_>, l: &raw::RawLiner) -> Result<(), SceneError> {
+    c.positive("liner.length_mm", l.length_mm)?;
     let spacing = c.positive("liner.analysis_spacing_mm", l.analysis_spacing_mm)?;
     let first = c.positive("liner.analysis_first_depth_mm", l.analysis_first_depth_mm)?;
     let fit = ((l.length_mm - first) / spacing).floor() + 1.0;

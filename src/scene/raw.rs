@@ -308,7 +308,7 @@ pub struct RawEngine {
     pub rod_length_mm: f64,
     /// Distance between neighbouring bore axes \[mm\]; larger than the liner flange diameter.
     pub cylinder_pitch_mm: f64,
-    /// Engine speed \[rpm\], > 0.
+    /// Engine speed \[rpm\], > 0, with a mean piston speed 2 stroke n / 60 of at most 30 m/s.
     pub speed_rpm: f64,
 }
 

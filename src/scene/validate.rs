@@ -135,6 +135,21 @@ pub(super) fn validate_engine(c: &Checker<'_>, e: &raw::RawEngine) -> Result<Eng
             ),
         ));
     }
+    // the mean piston speed 2 s n / 60: heavy-duty diesels run at 8-12 m/s and racing engines
+    // peak near 25 m/s; at 50,000 rpm the test engine ran into "deep penetration" (exit 1)
+    let mean_piston_speed = 2.0 * engine.stroke * engine.speed_rpm / 60.0;
+    if mean_piston_speed > MAX_MEAN_PISTON_SPEED {
+        return Err(c.err(
+            "engine.speed_rpm",
+            format!(
+                "{} rpm gives a mean piston speed of {} m/s with a {} mm stroke, beyond any piston engine (at most {} m/s)",
+                num(engine.speed_rpm),
+                num(mean_piston_speed),
+                num(engine.stroke * 1e3),
+                num(MAX_MEAN_PISTON_SPEED)
+            ),
+        ));
+    }
     if engine.rod_length <= engine.stroke / 2.0 {
         return Err(c.err(
             "engine.rod_length_mm",
@@ -420,8 +435,16 @@ pub(super) fn validate_cavitation(
     r: &raw::RawCavitation,
 ) -> Result<CavitationSpec, SceneError> {
     use crate::coolant::Coolant;
-    let coolant = Coolant::new(r.coolant_temp_c, r.glycol, r.static_pressure_kpa * 1e3)
-        .map_err(|e| c.err("cavitation", e.to_string()))?;
+    let coolant =
+        Coolant::new(r.coolant_temp_c, r.glycol, r.static_pressure_kpa * 1e3).map_err(|e| {
+            use crate::coolant::CoolantError as E;
+            let key = match e {
+                E::Temperature(_) => "cavitation.coolant_temp_c",
+                E::Glycol(_) => "cavitation.glycol",
+                E::Pressure(_) | E::Boiling { .. } => "cavitation.static_pressure_kpa",
+            };
+            c.err(key, e.to_string())
+        })?;
     let gap = c.mm("cavitation.gap_mm", r.gap_mm)?;
     let thresholds = if let Some(f) = &r.calibration_file {
         if r.k_p_pa_per_m_s2.is_some() || r.onset_m_s2.is_some() || r.high_risk_m_s2.is_some() {
@@ -679,6 +702,9 @@ pub(super) fn validate_piston(
     }
     Ok(piston)
 }
+
+/// Mean piston speed above which a speed is refused [m/s]: racing engines peak near 25 m/s.
+const MAX_MEAN_PISTON_SPEED: f64 = 30.0;
 
 /// Coulomb coefficients of the skirt and the pin (`piston.friction`, `piston.pin_friction`):
 /// lubricated steel on cast iron or bronze lies near 0.01-0.15 and even clean dry metal pairs
