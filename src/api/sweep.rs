@@ -153,6 +153,13 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         Some(s) => s.runs(total),
         None => (0..total).collect(),
     };
+    if let Some(s) = shard.filter(|_| indices.is_empty()) {
+        log::warn!(
+            "shard {}/{} of a design of {total} runs has no runs of its own (more shards than runs)",
+            s.index,
+            s.count
+        );
+    }
     let scene_text =
         crate::files::read_regular(&req.scene, crate::files::LIMIT_TEXT).map_err(|source| {
             crate::scene::SceneError::Io {
@@ -453,7 +460,9 @@ pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepRe
     };
     add_statistics(&mut report);
     finish(&mut report, stage)?;
-    report.seconds = started.elapsed().as_secs_f64();
+    // the study's time: its shards' (which ran elsewhere, maybe at once) and the merge's
+    let shards: f64 = parts.iter().map(|(_, p)| p.seconds).sum();
+    report.seconds = shards + started.elapsed().as_secs_f64();
     Ok(report)
 }
 
