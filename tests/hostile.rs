@@ -186,7 +186,7 @@ fn regression_hostile_scene_values_are_refused_before_work() {
                 "piston.lubrication=squeeze",
                 "piston.oil.vogel_a_mpa_s=1e-300",
             ],
-            "outside the 0.1 to 100000 mPa s of engine oils",
+            "outside the 0.1 to 1e7 mPa s of engine oils",
         ),
         (
             "simulate",

@@ -484,8 +484,10 @@ fn regression_a_flat_or_collapsed_element_is_named_degenerate() {
     ];
     cmd.extend(args);
     let err = refused(&cmd, 2, "collapsed.inp");
+    // the fixture numbers its nodes 1..N in order: the place as read is the id
     assert!(
-        err.contains("degenerate") && err.contains(&format!("node #{twice} to node #{twice}")),
+        err.contains("degenerate")
+            && err.contains(&format!("node #{twice} as read) is given twice")),
         "{err}"
     );
 }

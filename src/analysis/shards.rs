@@ -23,7 +23,8 @@ pub struct Part {
     pub scene: String,
     pub scene_blake3: String,
     /// BLAKE3 of what the scenes read beside their text (pressure curve, calibration, mesh
-    /// decks; `api::sweep`).
+    /// decks; `api::sweep`). Absent from an older format's part, which its format refuses.
+    #[serde(default)]
     pub inputs_blake3: String,
     /// The `--set` overrides of the study.
     pub sets: Vec<String>,

@@ -181,7 +181,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
         _ => (None, None),
     };
     let all = design.runs();
-    let (lines, runs, roms, inputs) = execute(req, &design, &all, &indices)?;
+    let (lines, runs, roms, inputs) = execute(req, &design, (&all, &indices), shard.is_some())?;
     let mut report = SweepReport {
         scene: req.scene.display().to_string(),
         keys: design.keys(),
@@ -198,6 +198,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     };
     if let (Some(s), Some(dir)) = (shard, &req.out) {
         let path = dir.join(part_name(s));
+        let inputs = inputs.expect("a shard's digest");
         write_part(&path, &report, (req, s, (&scene_text, inputs)), started)?;
         if let Some(made) = part_dir {
             made.keep();
@@ -228,7 +229,6 @@ fn tool_version() -> String {
     format!("linercav {}", env!("CARGO_PKG_VERSION"))
 }
 
-/// Runs `indices` of the design's runs `all`: their lines, full results and the ROMs used.
 /// BLAKE3 of what `scenes` read beside the scene's text: their thresholds (a calibration
 /// file's values), pressure curves and mesh decks with their includes (each file once, in
 /// the order found), so that shards run on different files are not merged as one study.
@@ -256,14 +256,21 @@ fn inputs_digest(scenes: &[Scene]) -> Result<String> {
     Ok(h.finalize().to_hex().to_string())
 }
 
-/// The runs' lines, full results, ROMs used and [`inputs_digest`].
-type Executed = (Vec<RunLine>, Vec<serde_json::Value>, Vec<String>, String);
+/// The runs' lines, full results, ROMs used and, for a shard, [`inputs_digest`].
+type Executed = (
+    Vec<RunLine>,
+    Vec<serde_json::Value>,
+    Vec<String>,
+    Option<String>,
+);
 
+/// Runs `indices` of the design's runs `all`: their lines, full results and the ROMs used, and
+/// for a shard (`sharded`) the digest of the files the base design reads.
 fn execute(
     req: &SweepRequest,
     design: &Design,
-    all: &[Vec<String>],
-    indices: &[usize],
+    (all, indices): (&[Vec<String>], &[usize]),
+    sharded: bool,
 ) -> Result<Executed> {
     let keys = design.keys();
     let extra: Vec<Vec<String>> = indices
@@ -284,7 +291,10 @@ fn execute(
         rom_progress.phase(m)
     })?;
     // the base design's files: every shard runs it (a design's own values are in the design)
-    let inputs = inputs_digest(&variants.scenes[extra.len() - 1..])?;
+    let inputs = match sharded {
+        true => Some(inputs_digest(&variants.scenes[extra.len() - 1..])?),
+        false => None,
+    };
     let bar = super::progress::Progress::counter(indices.len() as u64 + 1);
     let mut labels: Vec<String> = indices.iter().map(|&k| label(&keys, &all[k])).collect();
     labels.push("the base design".into());

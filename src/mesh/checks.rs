@@ -14,7 +14,7 @@ pub enum MeshError {
         kind: String,
         ratio: f64,
     },
-    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements): mid-edge node #{node} (1-based, in the file's order of nodes) lies {offset:.2} edge lengths from the midpoint of its edge (wrong node order or badly curved edge)")]
+    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements): mid-edge node (the mesh's node #{node} as read) lies {offset:.2} edge lengths from the midpoint of its edge (wrong node order or badly curved edge)")]
     MidNode {
         element: usize,
         kind: String,
@@ -122,8 +122,10 @@ pub fn check_and_compact(
     Ok(report)
 }
 
-/// The shape of solid element `e` (0-based) with its `nodes` at `x`: it has volume, no edge of
-/// zero length, its mid-edge nodes near their edges' midpoints, and a positive Jacobian.
+/// The shape of solid element `e` (0-based) with its `nodes` at `x`: no node given twice, it has
+/// volume, no edge of zero length, its mid-edge nodes near their edges' midpoints, and a
+/// positive Jacobian. Nodes are named by their place in the mesh as read (counted from 1;
+/// the file's own ids are not kept).
 fn check_element(
     e: usize,
     (kind, nodes): (ElementKind, &[usize]),
@@ -137,6 +139,17 @@ fn check_element(
         kind: format!("{kind:?}"),
         what,
     };
+    if let Some((k, &n)) = nodes
+        .iter()
+        .enumerate()
+        .find(|(k, n)| nodes[..*k].contains(n))
+    {
+        return Err(degenerate(format!(
+            "its node {} (the mesh's node #{} as read) is given twice",
+            k + 1,
+            n + 1
+        )));
+    }
     // an element without volume (a flat one) is degenerate whatever its mid-edge nodes
     if ratio.is_nan() || ratio.abs() <= 1e-6 {
         return Err(degenerate(
@@ -150,7 +163,7 @@ fn check_element(
             .sqrt();
         if len == 0.0 {
             return Err(degenerate(format!(
-                "its edge from node #{} to node #{} (1-based, in the file's order of nodes) has zero length (a node given twice?)",
+                "its edge from the mesh's node #{} to node #{} (as read) has zero length (two nodes at one place)",
                 nodes[a] + 1,
                 nodes[b] + 1
             )));

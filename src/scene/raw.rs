@@ -556,17 +556,18 @@ pub struct RawOil {
     pub supply_um: f64,
     /// Vogel viscosity mu = a exp(b / (T + c)) at the film temperature T \[deg C\] (the mean of
     /// the skirt's, linear from its top to its bottom, and the liner's bore temperature):
-    /// a \[mPa s\] > 0, b \[deg C\] > 0, c \[deg C\] with T + c > 0, giving between 0.1 and
-    /// 100,000 mPa s over the skirt's and liner's temperatures (checked also for a dry skirt,
-    /// as is all of `[piston.oil]`). Defaults 0.1366, 826.9, 85.3: 100 mPa s at 40 deg C, 11.8
-    /// at 100, 6.4 at 130.
+    /// a \[mPa s\] > 0, b \[deg C\] > 0, c \[deg C\] with T + c > 0 (`[piston.oil]` is read
+    /// for a dry skirt too), and for a film between 0.1 mPa s and 10^7 mPa s at the film's
+    /// temperatures. Defaults 0.1366, 826.9, 85.3: 100 mPa s at 40 deg C, 11.8 at 100, 6.4 at
+    /// 130.
     #[serde(default = "default_vogel_a")]
     pub vogel_a_mpa_s: f64,
     #[serde(default = "default_vogel_b")]
     pub vogel_b_c: f64,
     #[serde(default = "default_vogel_c")]
     pub vogel_c_c: f64,
-    /// Greenwood-Tripp (`mixed` only): composite roughness sigma \[um\] in [0.001, 100]
+    /// Greenwood-Tripp (used by `mixed`, checked for any skirt): composite roughness sigma
+    /// \[um\] in [0.001, 100]
     /// (default 1.0), the roughness parameter eta beta sigma in [1e-4, 1] (default 0.04), the
     /// slope parameter sigma / beta in [1e-6, 1] (default 0.001) and the composite modulus E'
     /// \[GPa\] in [1, 1000], 1 / E' = (1 - nu_1^2) / E_1 + (1 - nu_2^2) / E_2 (default 82: a

@@ -716,9 +716,10 @@ const FRICTION_RANGE: (f64, f64) = (0.0, 1.0);
 const PIN_SLIP_RANGE: (f64, f64) = (1e-4, 1e4);
 
 /// Film viscosities the Vogel data may give at the film's temperatures [Pa s]: engine oils lie
-/// between about 2 mPa s (hot, thin grades) and a few Pa s (cold start); a value outside
-/// [1e-4, 100] is a unit slip (mPa s read as Pa s) or an overflow (b / (T + c) large).
-const VISCOSITY_RANGE_PA_S: (f64, f64) = (1e-4, 100.0);
+/// between about 2 mPa s (hot, thin grades) and hundreds of Pa s (the Vogel fit of a 15W-40
+/// extrapolated to -30 deg C: 430 Pa s); a value outside [1e-4, 1e4] is a unit slip or an
+/// overflow (b / (T + c) large).
+const VISCOSITY_RANGE_PA_S: (f64, f64) = (1e-4, 1e4);
 
 /// `piston.pin_diameter_mm`: the pin's radius \[m\], 0.2 x bore when not given.
 fn pin_radius(c: &Checker<'_>, p: &raw::RawPiston, engine: &Engine) -> Result<f64, SceneError> {
@@ -757,7 +758,7 @@ fn validate_oil(c: &Checker<'_>, p: &raw::RawPiston) -> Result<Option<spec::OilS
 }
 
 /// `[piston.oil]`, SI, for the film model `model` (the asperity data checked whatever the
-/// model, kept for `mixed`).
+/// model, kept for `mixed`; the viscosity over the film's temperatures for a film only).
 fn film_data(
     c: &Checker<'_>,
     p: &raw::RawPiston,
@@ -776,12 +777,12 @@ fn film_data(
         c.positive("piston.oil.vogel_b_c", o.vogel_b_c)?,
         c.finite("piston.oil.vogel_c_c", o.vogel_c_c)?,
     ];
-    // the film is no colder than the coolest surface it touches
+    // the film's temperature is the mean of the skirt's (linear from its top to its bottom)
+    // and the liner's ([`crate::piston::lubrication`])
     let th = &p.thermal;
-    let coldest = th
-        .skirt_bottom_temp_c
-        .min(th.skirt_top_temp_c)
-        .min(th.liner_temp_c);
+    let film = |skirt: f64| 0.5 * (skirt + th.liner_temp_c);
+    let coldest = film(th.skirt_bottom_temp_c.min(th.skirt_top_temp_c));
+    let hottest = film(th.skirt_bottom_temp_c.max(th.skirt_top_temp_c));
     if coldest + vogel[2] <= 0.0 {
         return Err(c.err(
             "piston.oil.vogel_c_c",
@@ -791,11 +792,11 @@ fn film_data(
             ),
         ));
     }
-    let hottest = th
-        .skirt_bottom_temp_c
-        .max(th.skirt_top_temp_c)
-        .max(th.liner_temp_c);
-    check_viscosity(c, vogel, (coldest, hottest))?;
+    // a dry skirt's oil data need only be numbers: a cold-start scene may lie outside what a
+    // film is checked for
+    if model != spec::Lubrication::Dry {
+        check_viscosity(c, vogel, (coldest, hottest))?;
+    }
     // Greenwood-Tripp's data: roughness of honed liners and ground skirts 0.1-5 um, eta beta
     // sigma 0.03-0.07, sigma / beta 1e-4 - 0.1, E' of metal pairs 50-250 GPa
     let asperity = spec::AsperitySpec {
@@ -818,7 +819,7 @@ fn film_data(
 
 /// The Vogel viscosity mu = a exp(b / (T + c)) (`vogel` SI: a \[Pa s\], b, c \[deg C\]) at the
 /// film's coldest and hottest temperatures (`range`, deg C) lies in [`VISCOSITY_RANGE_PA_S`]
-/// (it falls with T, so the two ends bound it).
+/// (it falls with T, so the two ends bound it). Checked for a lubricated skirt only.
 fn check_viscosity(c: &Checker<'_>, vogel: [f64; 3], range: (f64, f64)) -> Result<(), SceneError> {
     let mu = |t: f64| vogel[0] * (vogel[1] / (t + vogel[2])).exp();
     let (cold, hot) = (mu(range.0), mu(range.1));
@@ -829,7 +830,7 @@ fn check_viscosity(c: &Checker<'_>, vogel: [f64; 3], range: (f64, f64)) -> Resul
     Err(c.err(
         "piston.oil.vogel_a_mpa_s / vogel_b_c / vogel_c_c",
         format!(
-            "give a viscosity of {} to {} mPa s between the film's surfaces' temperatures ({} to {} deg C), outside the {} to {} mPa s of engine oils",
+            "give a viscosity of {} to {} mPa s at the film's temperatures ({} to {} deg C), outside the {} to {} mPa s of engine oils",
             num(hot * 1e3),
             num(cold * 1e3),
             num(range.0),
