@@ -77,10 +77,19 @@ fn clipped(msg: &str) -> String {
 /// code's type names said as what they are in the scene ("struct RawOil": a table).
 fn plain_message(msg: &str) -> String {
     let first = msg.lines().next().unwrap_or(msg).trim();
-    match first.find("expected struct Raw") {
+    let first = match first.find("expected struct Raw") {
         Some(at) => format!("{}expected a table", &first[..at]),
         None => first.to_string(),
-    }
+    };
+    [
+        ("expected f64", "expected a number"),
+        ("expected usize", "expected a whole number >= 0"),
+        ("expected u64", "expected a whole number >= 0"),
+        ("expected u32", "expected a whole number >= 0"),
+        ("expected i64", "expected a whole number"),
+    ]
+    .iter()
+    .fold(first, |m, (code, plain)| m.replace(code, plain))
 }
 
 pub(super) struct Checker<'a> {
