@@ -3,7 +3,7 @@
 //! part/instance liner, a Nastran crankcase over nested INCLUDEs with MAT1/PSOLID) and back in.
 
 mod common;
-use common::{json, linercav, linercav_output};
+use common::{json, linercav, linercav_output, refused};
 
 use linercav::api::load_scene;
 use linercav::mesh::find::LinerShape;
@@ -261,6 +261,39 @@ fn verification_small_engine_as_mm_decks_gives_the_parametric_frequencies() {
     // the liner instance was moved by (100, 50, 300) mm: placing it back is what the equal
     // frequencies above show; the generated engine reports nothing found
     assert!(param["interfaces"].is_null());
+}
+
+/// Regression: a crankcase deck with a stray element (a second piece, joined to nothing)
+/// failed in the factorisation ("not positive definite", exit 1, no file named), and a liner
+/// with one was placed with a wrong bore; a part in pieces is refused naming the file.
+#[test]
+fn regression_a_part_in_two_pieces_is_refused_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_engine_as_decks(dir.path());
+    let sp = dir.path().join("engine.toml");
+    std::fs::write(&sp, scene).unwrap();
+    let more = dir.path().join("sub/more.bdf");
+    let text = std::fs::read_to_string(&more).unwrap();
+    let first = text.lines().find(|l| l.starts_with('C')).unwrap();
+    let pid = first[16..24].trim().to_string();
+    let mut stray = String::new();
+    for (k, (x, y, z)) in [(0, 0, 0), (10, 0, 0), (0, 10, 0), (0, 0, 10)]
+        .iter()
+        .enumerate()
+    {
+        stray += &format!("GRID,{},,{x}.,{y}.,{}.\n", 9_000_001 + k, 1000 + z);
+    }
+    stray += &format!("CTETRA,9000001,{pid},9000001,9000002,9000003,9000004\n");
+    std::fs::write(&more, text + &stray).unwrap();
+    let err = refused(
+        &["rom", sp.to_str().unwrap(), "--no-cache"],
+        2,
+        "crankcase.bdf",
+    );
+    assert!(
+        err.contains("2 disconnected pieces") && err.contains(", 1 elements"),
+        "{err}"
+    );
 }
 
 /// Verification: `modes --mesh liner.inp --unit mm` without material flags takes the deck's

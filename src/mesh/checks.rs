@@ -47,6 +47,28 @@ fn find(parent: &mut [usize], mut x: usize) -> usize {
     x
 }
 
+/// The mesh's connected pieces (elements joined through shared nodes): the number of
+/// elements of each, largest first.
+pub fn piece_sizes(mesh: &Mesh) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..mesh.nodes.len()).collect();
+    for (_, nodes) in mesh.elements() {
+        let r0 = find(&mut parent, nodes[0]);
+        for &n in &nodes[1..] {
+            let r = find(&mut parent, n);
+            if r != r0 {
+                parent[r] = r0;
+            }
+        }
+    }
+    let mut count = std::collections::BTreeMap::new();
+    for (_, nodes) in mesh.elements() {
+        *count.entry(find(&mut parent, nodes[0])).or_insert(0usize) += 1;
+    }
+    let mut sizes: Vec<usize> = count.into_values().collect();
+    sizes.sort_unstable_by(|a, b| b.cmp(a));
+    sizes
+}
+
 /// Smallest Jacobian determinant of an element relative to its mean (the FE stage's
 /// `fem::element::min_jacobian_ratio`, which knows the shape functions).
 pub type JacobianRatio = fn(ElementKind, &[[f64; 3]]) -> f64;
@@ -99,20 +121,7 @@ pub fn check_and_compact(
             "{unused} node(s) belong to no solid element and were removed"
         ));
     }
-    // connected pieces
-    let mut parent: Vec<usize> = (0..mesh.nodes.len()).collect();
-    for (_, nodes) in mesh.elements() {
-        let r0 = find(&mut parent, nodes[0]);
-        for &n in &nodes[1..] {
-            let r = find(&mut parent, n);
-            if r != r0 {
-                parent[r] = r0;
-            }
-        }
-    }
-    let pieces = (0..mesh.nodes.len())
-        .filter(|&n| find(&mut parent, n) == n)
-        .count();
+    let pieces = piece_sizes(mesh).len();
     report.pieces = pieces;
     if pieces > 1 {
         report.warnings.push(format!(

@@ -117,7 +117,12 @@ pub fn resolve_material(
     for m in &mesh.materials {
         m.elastic
             .validate()
-            .map_err(|e| bad(format!("material '{}': {e}", m.name)))?;
+            .map_err(|e| {
+                bad(format!(
+                    "the deck's material '{}': {e} (after the unit conversion: a deck in mm gives E in MPa and the density in t/mm^3; or give {key} to override it)",
+                    m.name
+                ))
+            })?;
     }
     Ok((mesh.materials[0].elastic, MaterialSource::Deck))
 }

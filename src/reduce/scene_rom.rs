@@ -67,8 +67,31 @@ pub enum SceneRomError {
     Modal(#[from] crate::eigen::modal::ModalError),
     #[error("{}: the engine has no mode below the cut-off {} Hz (rom.band_hz x rom.cutoff_factor): raise rom.band_hz", path.display(), crate::text::num(*cutoff_hz))]
     NoSystemMode { path: PathBuf, cutoff_hz: f64 },
+    #[error("{}: the {part} mesh is in {} disconnected pieces ({sizes} elements): an engine part must be one piece (a separate body is held by nothing, and it throws off where the part is found); join the pieces (shared nodes) or remove the stray elements", file.display(), sizes.split(", ").count())]
+    Pieces {
+        file: PathBuf,
+        part: &'static str,
+        sizes: String,
+    },
     #[error("{}: the built ROM is inconsistent: {msg}", path.display())]
     Inconsistent { path: PathBuf, msg: String },
+}
+
+/// Refuses a part's mesh file (`file`, read into `mesh`) that is not one connected piece.
+fn one_piece(mesh: &Mesh, file: Option<&Path>, part: &'static str) -> Result<()> {
+    let Some(file) = file else {
+        return Ok(());
+    };
+    let sizes = crate::mesh::checks::piece_sizes(mesh);
+    if sizes.len() <= 1 {
+        return Ok(());
+    }
+    let sizes: Vec<String> = sizes.iter().map(|n| n.to_string()).collect();
+    Err(SceneRomError::Pieces {
+        file: file.to_path_buf(),
+        part,
+        sizes: sizes.join(", "),
+    })
 }
 
 impl SceneRomError {
@@ -282,6 +305,8 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
         cc.material,
         &scene.path,
     )?;
+    one_piece(&lm, lfile, "liner")?;
+    one_piece(&cm, cfile, "crankcase")?;
     let mut boxes = Vec::new();
     for (name, b) in &cc.box_sets {
         boxes.push(find::box_set(&mut cm, "crankcase", name, b));
