@@ -296,6 +296,23 @@ fn regression_a_part_in_two_pieces_is_refused_naming_the_file() {
     );
 }
 
+/// Regression: a missing INCLUDE file of a scene's deck was reported as "cannot read mesh
+/// file" by the cache key, naming the missing file but not the file and line that include it.
+#[test]
+fn regression_a_missing_include_names_the_including_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_engine_as_decks(dir.path());
+    let sp = dir.path().join("engine.toml");
+    std::fs::write(&sp, scene).unwrap();
+    std::fs::remove_file(dir.path().join("sub/more.bdf")).unwrap();
+    let err = refused(
+        &["rom", sp.to_str().unwrap(), "--no-cache"],
+        2,
+        "elems.bdf:",
+    );
+    assert!(err.contains("INCLUDE") && err.contains("more.bdf"), "{err}");
+}
+
 /// Verification: `modes --mesh liner.inp --unit mm` without material flags takes the deck's
 /// material and gives the modes of the scene's liner (same mesh, same material: 1e-6 relative
 /// is the issue's bound, roundoff is far below it); the same deck read in metres is refused

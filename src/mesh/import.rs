@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 pub enum ImportError {
     #[error(transparent)]
     Msh(#[from] super::collect::DeckError),
-    #[error("{}: {msg} (unit from {key})", path.display())]
+    #[error("{}: {msg} (length unit: {key}, metres when not given)", path.display())]
     Implausible {
         path: PathBuf,
         key: String,

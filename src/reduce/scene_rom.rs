@@ -133,7 +133,10 @@ pub struct LoadedRom {
 /// BLAKE3 of a mesh file and of every file it includes (in the order found).
 fn file_digest(path: &Path) -> Result<String> {
     let mut h = blake3::Hasher::new();
-    let files = crate::mesh::deck_files(path);
+    // an include that is not there is the reader's to report, with the file and line that
+    // name it (the key of a deck that cannot be read is never used)
+    let mut files = crate::mesh::deck_files(path);
+    files.retain(|p| p == path || p.exists());
     crate::files::hash_files(&mut h, &files, crate::files::LIMIT_MESH)
         .map_err(|(path, source)| SceneRomError::MeshFile { path, source })?;
     Ok(h.finalize().to_hex().to_string())
