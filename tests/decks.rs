@@ -207,6 +207,13 @@ fn small_engine_as_decks(dir: &Path) -> String {
     out
 }
 
+/// [`small_engine_as_decks`] written into `dir` with its scene, `dir/engine.toml`: its path.
+fn decks_scene(dir: &Path) -> std::path::PathBuf {
+    let sp = dir.join("engine.toml");
+    std::fs::write(&sp, small_engine_as_decks(dir)).unwrap();
+    sp
+}
+
 fn frequencies(v: &serde_json::Value) -> Vec<f64> {
     v["first_frequencies_hz"]
         .as_array()
@@ -228,9 +235,7 @@ fn frequencies(v: &serde_json::Value) -> Vec<f64> {
 #[test]
 fn verification_small_engine_as_mm_decks_gives_the_parametric_frequencies() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = small_engine_as_decks(dir.path());
-    let sp = dir.path().join("engine.toml");
-    std::fs::write(&sp, scene).unwrap();
+    let sp = decks_scene(dir.path());
     let sp = sp.display().to_string();
     let param = json(&linercav_output(&["rom", SMALL, "--json", "--no-cache"]));
     let decks = json(&linercav_output(&["rom", &sp, "--json", "--no-cache"]));
@@ -269,9 +274,7 @@ fn verification_small_engine_as_mm_decks_gives_the_parametric_frequencies() {
 #[test]
 fn regression_a_part_in_two_pieces_is_refused_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = small_engine_as_decks(dir.path());
-    let sp = dir.path().join("engine.toml");
-    std::fs::write(&sp, scene).unwrap();
+    let sp = decks_scene(dir.path());
     let more = dir.path().join("sub/more.bdf");
     let text = std::fs::read_to_string(&more).unwrap();
     let first = text.lines().find(|l| l.starts_with('C')).unwrap();
@@ -301,9 +304,7 @@ fn regression_a_part_in_two_pieces_is_refused_naming_the_file() {
 #[test]
 fn regression_a_missing_include_names_the_including_line() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = small_engine_as_decks(dir.path());
-    let sp = dir.path().join("engine.toml");
-    std::fs::write(&sp, scene).unwrap();
+    let sp = decks_scene(dir.path());
     std::fs::remove_file(dir.path().join("sub/more.bdf")).unwrap();
     let err = refused(
         &["rom", sp.to_str().unwrap(), "--no-cache"],

@@ -229,28 +229,23 @@ fn tool_version() -> String {
     format!("linercav {}", env!("CARGO_PKG_VERSION"))
 }
 
-/// BLAKE3 of what `scenes` read beside the scene's text: their thresholds (a calibration
-/// file's values), pressure curves and mesh decks with their includes (each file once, in
-/// the order found), so that shards run on different files are not merged as one study.
-fn inputs_digest(scenes: &[Scene]) -> Result<String> {
+/// BLAKE3 of what scene `s` reads beside its text: its thresholds (a calibration file's
+/// values), pressure curve and mesh decks with their includes (in the order found), so that
+/// shards run on different files are not merged as one study.
+fn inputs_digest(s: &Scene) -> Result<String> {
     use crate::scene::{CrankcaseSource, MeshSource, PressureSource};
     let mut h = blake3::Hasher::new();
+    h.update(format!("{:?}", s.cavitation.thresholds).as_bytes());
     let mut files: Vec<PathBuf> = Vec::new();
-    for s in scenes {
-        h.update(format!("{:?}", s.cavitation.thresholds).as_bytes());
-        if let Some(PressureSource::File(p)) = s.simulation.as_ref().map(|m| &m.operating.pressure)
-        {
-            files.push(p.clone());
-        }
-        if let MeshSource::File(p) = &s.liner.source {
-            files.extend(crate::mesh::deck_files(p));
-        }
-        if let Some(CrankcaseSource::File(p)) = s.crankcase.as_ref().map(|c| &c.source) {
-            files.extend(crate::mesh::deck_files(p));
-        }
+    if let Some(PressureSource::File(p)) = s.simulation.as_ref().map(|m| &m.operating.pressure) {
+        files.push(p.clone());
     }
-    let mut seen = std::collections::HashSet::new();
-    files.retain(|p| seen.insert(p.clone()));
+    if let MeshSource::File(p) = &s.liner.source {
+        files.extend(crate::mesh::deck_files(p));
+    }
+    if let Some(CrankcaseSource::File(p)) = s.crankcase.as_ref().map(|c| &c.source) {
+        files.extend(crate::mesh::deck_files(p));
+    }
     crate::files::hash_files(&mut h, &files, crate::files::LIMIT_MESH)
         .map_err(|(path, source)| crate::scene::SceneError::Io { path, source })?;
     Ok(h.finalize().to_hex().to_string())
@@ -292,7 +287,7 @@ fn execute(
     })?;
     // the base design's files: every shard runs it (a design's own values are in the design)
     let inputs = match sharded {
-        true => Some(inputs_digest(&variants.scenes[extra.len() - 1..])?),
+        true => Some(inputs_digest(&variants.scenes[extra.len() - 1])?),
         false => None,
     };
     let bar = super::progress::Progress::counter(indices.len() as u64 + 1);

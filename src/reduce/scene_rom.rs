@@ -67,10 +67,11 @@ pub enum SceneRomError {
     Modal(#[from] crate::eigen::modal::ModalError),
     #[error("{}: the engine has no mode below the cut-off {} Hz (rom.band_hz x rom.cutoff_factor): raise rom.band_hz", path.display(), crate::text::num(*cutoff_hz))]
     NoSystemMode { path: PathBuf, cutoff_hz: f64 },
-    #[error("{}: the {part} mesh is in {} disconnected pieces ({sizes} elements): an engine part must be one piece (a separate body is held by nothing, and it throws off where the part is found); join the pieces (shared nodes) or remove the stray elements", file.display(), sizes.split(", ").count())]
+    #[error("{}: the {part} mesh is in {pieces} disconnected pieces ({sizes} elements): an engine part must be one piece (a separate body is held by nothing, and it throws off where the part is found); join the pieces (shared nodes) or remove the stray elements", file.display())]
     Pieces {
         file: PathBuf,
         part: &'static str,
+        pieces: usize,
         sizes: String,
     },
     #[error("{}: the built ROM is inconsistent: {msg}", path.display())]
@@ -86,11 +87,12 @@ fn one_piece(mesh: &Mesh, file: Option<&Path>, part: &'static str) -> Result<()>
     if sizes.len() <= 1 {
         return Ok(());
     }
-    let sizes: Vec<String> = sizes.iter().map(|n| n.to_string()).collect();
+    let listed: Vec<String> = sizes.iter().map(|n| n.to_string()).collect();
     Err(SceneRomError::Pieces {
         file: file.to_path_buf(),
         part,
-        sizes: sizes.join(", "),
+        pieces: sizes.len(),
+        sizes: listed.join(", "),
     })
 }
 
