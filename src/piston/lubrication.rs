@@ -463,12 +463,13 @@ pub fn cavitation(p: f64) -> (f64, f64) {
     (0.5 * (p + r), 0.5 * (1.0 + p / r))
 }
 
-/// One sample line's data for the pressure and its derivatives: cos psi, the unweighted source
-/// dh/dt + (U/2) dh/dx, the wetted fraction and its slope (w, dw/dh), and dh/dp (0 where the
-/// gap is floored) per node.
+/// One sample line's data for the pressure and its derivatives: cos psi, how many sample lines
+/// it stands for (1 or 2, [`mirrored_samples`]), the unweighted source dh/dt + (U/2) dh/dx, the
+/// wetted fraction and its slope (w, dw/dh), and dh/dp (0 where the gap is floored) per node.
 #[derive(Clone, Copy)]
 struct Sample<'a> {
     c: f64,
+    count: f64,
     raw: &'a [f64],
     wt: &'a [(f64, f64)],
     dh: &'a [f64],
@@ -477,6 +478,17 @@ struct Sample<'a> {
 /// Per node, the three-point weights (node, weight) of the gap's slope dh/dx
 /// ([`Line::slope_weights`]).
 type Slopes = [[(usize, f64); 3]];
+
+/// The distinct sample angles psi >= 0 of [`SAMPLE_DEG`] with the number of sample lines each
+/// stands for: the lines at +psi and -psi have the same gap (h depends on cos psi and sin^2
+/// psi), source and weight cos psi, hence the same pressure and force, so each pair is solved
+/// once and counted twice.
+fn mirrored_samples() -> impl Iterator<Item = (f64, f64)> {
+    SAMPLE_DEG.iter().filter(|&&d| d >= 0.0).map(|&d| {
+        let mirrored = d > 0.0 && SAMPLE_DEG.contains(&-d);
+        (d, if mirrored { 2.0 } else { 1.0 })
+    })
+}
 
 /// Which derivatives a film evaluation forms.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -597,13 +609,13 @@ impl Film {
             d_rate: DMatrix::zeros(n, n),
             engaged: false,
         };
-        for deg in SAMPLE_DEG.iter() {
+        for (deg, count) in mirrored_samples() {
             let (s, c) = deg.to_radians().sin_cos();
             let geo: Vec<f64> = (0..n)
                 .map(|i| self.gaps[first + i] * (1.0 - c) + 0.5 * self.ovality * s * s - c * pen[i])
                 .collect();
             if let Some(gt) = &self.asperity {
-                out.engaged |= self.asperity_sample(gt, (c, &geo), &mut out);
+                out.engaged |= self.asperity_sample(gt, (c, count, &geo), &mut out);
             }
             let wt: Vec<(f64, f64)> = geo.iter().map(|&h| self.wetting(h)).collect();
             if wt.iter().all(|w| w.0 == 0.0) {
@@ -632,6 +644,7 @@ impl Film {
                 .collect();
             let sample = Sample {
                 c,
+                count,
                 raw: &raw,
                 wt: &wt,
                 dh: &dh,
@@ -698,7 +711,9 @@ impl Film {
         out: &mut SideFilm,
         derivatives: Derivatives,
     ) {
-        let Sample { c, raw, wt, .. } = *sample;
+        let Sample {
+            c, count, raw, wt, ..
+        } = *sample;
         let n = raw.len();
         let t = line.system();
         let lu = Factored::new(&t);
@@ -708,7 +723,7 @@ impl Film {
         // none, so a line's pressure rises from zero as the skirt closes in)
         let cav: Vec<(f64, f64)> = p.iter().map(|&v| cavitation(v)).collect();
         let clip: Vec<f64> = cav.iter().zip(wt).map(|(c, w)| w.0 * c.0).collect();
-        let w = self.arc * c;
+        let w = self.arc * c * count;
         for (i, f) in integrate_with(q, &clip).enumerate() {
             out.force[i] += w * f;
         }
@@ -761,7 +776,7 @@ impl Film {
         sample: &Sample<'_>,
         (slope, dz): (&[[(usize, f64); 3]], f64),
     ) -> [(usize, f64); 3] {
-        let Sample { c, raw, wt, dh } = *sample;
+        let Sample { c, raw, wt, dh, .. } = *sample;
         let n = raw.len();
         let lo = k.saturating_sub(1);
         let hi = (k + 1).min(n - 1);
@@ -805,7 +820,7 @@ impl Film {
     fn asperity_sample(
         &self,
         gt: &GreenwoodTripp,
-        (c, geo): (f64, &[f64]),
+        (c, count, geo): (f64, f64, &[f64]),
         out: &mut SideFilm,
     ) -> bool {
         let n = geo.len();
@@ -816,7 +831,7 @@ impl Film {
                 continue;
             }
             any = true;
-            let w = self.arc * c * self.slice_height();
+            let w = self.arc * c * count * self.slice_height();
             out.force[i] += w * pc;
             out.d_pen[(i, i)] += w * dpc * (-c);
         }
@@ -864,6 +879,17 @@ mod tests {
                 (dh - dh_ref).abs() <= 1e-13,
                 "z {z}: dh/dg {dh} against {dh_ref}"
             );
+        }
+    }
+
+    /// Verification: the mirrored samples stand for every sample line once (the contact law's
+    /// angles are symmetric about the thrust line).
+    #[test]
+    fn verification_mirrored_samples_cover_every_line() {
+        let total: f64 = mirrored_samples().map(|(_, k)| k).sum();
+        assert_eq!(total, SAMPLE_DEG.len() as f64);
+        for d in SAMPLE_DEG {
+            assert!(SAMPLE_DEG.contains(&-d), "{d} deg has no mirror");
         }
     }
 

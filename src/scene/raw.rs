@@ -506,7 +506,7 @@ pub struct RawPiston {
     /// model), "squeeze" (the Reynolds squeeze and sliding film, half-Sommerfeld) or "mixed"
     /// (the film plus Greenwood-Tripp asperity contact). The film's data: `[piston.oil]`.
     /// The lubricated transient is experimental: verified and converged with the step, about
-    /// 13 times the cost of a dry run (docs/validation.md).
+    /// 10 times the cost of a dry run (docs/validation.md).
     #[serde(default)]
     pub lubrication: RawLubrication,
     /// Oil film data (used when `lubrication` is not "dry"; every key has a default).

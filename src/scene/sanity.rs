@@ -156,7 +156,7 @@ fn piston(
     }
     if let Some(oil) = &sim.piston.oil {
         warnings.push(format!(
-            "piston.lubrication = \"{}\" is experimental: the film is verified against closed forms and the lubricated answer converges with the step on the test and the default engine, with the cylinders solved in one contact step, but a run costs about 13 times a dry one at the same step on the default engine; the dry skirt (the reference study's model) is the conservative answer (docs/validation.md)",
+            "piston.lubrication = \"{}\" is experimental: the film is verified against closed forms and the lubricated answer converges with the step on the test and the default engine, with the cylinders solved in one contact step, but a run costs about 10 times a dry one at the same step on the default engine; the dry skirt (the reference study's model) is the conservative answer (docs/validation.md)",
             oil.model.name()
         ));
         if crate::scene::spec::starved(oil.supply) {
