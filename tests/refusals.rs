@@ -438,7 +438,11 @@ fn regression_an_inverted_tet4_is_refused_naming_the_file_and_element() {
         2,
         "inverted.bdf",
     );
-    assert!(err.contains("#2") && err.contains("inverted"), "{err}");
+    // CTETRA 2 is the deck's eighth line
+    assert!(
+        err.contains("inverted.bdf:8") && err.contains("inverted"),
+        "{err}"
+    );
 }
 
 /// Regression: a flat element was reported as a mid-edge node lying 0.33 edge lengths off, and
@@ -460,7 +464,11 @@ fn regression_a_flat_or_collapsed_element_is_named_degenerate() {
         2,
         "flat.bdf",
     );
-    assert!(err.contains("#1") && err.contains("no volume"), "{err}");
+    // CTETRA 1 is the deck's seventh line
+    assert!(
+        err.contains("flat.bdf:7") && err.contains("no volume"),
+        "{err}"
+    );
     // the fixture's hex20 #1 with its second corner node replaced by its first
     let text = std::fs::read_to_string("tests/fixtures/block_hex20.inp").unwrap();
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
@@ -470,7 +478,6 @@ fn regression_a_flat_or_collapsed_element_is_named_degenerate() {
         .unwrap();
     let mut ids: Vec<String> = lines[at].split(',').map(str::to_string).collect();
     ids[2] = ids[1].clone();
-    let twice = ids[1].trim().to_string();
     lines[at] = ids.join(",");
     let collapsed = dir.path().join("collapsed.inp");
     std::fs::write(&collapsed, lines.join("\n")).unwrap();
@@ -484,12 +491,61 @@ fn regression_a_flat_or_collapsed_element_is_named_degenerate() {
     ];
     cmd.extend(args);
     let err = refused(&cmd, 2, "collapsed.inp");
-    // the fixture numbers its nodes 1..N in order: the place as read is the id
+    // named by its file and line (`at` is the 0-based index of its line), the node by where
+    // it is
     assert!(
         err.contains("degenerate")
-            && err.contains(&format!("node #{twice} as read) is given twice")),
+            && err.contains(&format!("collapsed.inp:{}", at + 1))
+            && err.contains(") m is given twice"),
         "{err}"
     );
+}
+
+/// Regression: in a deck that mixes element kinds the mesh check counted elements per kind
+/// (all tetrahedra, then all hexahedra) and named a bad element by that count as if it were
+/// its place in the file; it names the file and line that define it, also in an included
+/// file.
+#[test]
+fn regression_a_bad_element_of_a_mixed_deck_is_named_by_its_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let main = dir.path().join("mixed.bdf");
+    // a unit cube (CHEXA 1) with a flat tetrahedron (CTETRA 2, its fourth node in the plane
+    // z = 0) in an included file; hexahedra come after tetrahedra in the mesh's own order
+    std::fs::write(
+        &main,
+        "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,1.,1.,0.\nGRID,4,,0.,1.,0.\n\
+         GRID,5,,0.,0.,1.\nGRID,6,,1.,0.,1.\nGRID,7,,1.,1.,1.\nGRID,8,,0.,1.,1.\n\
+         CHEXA,1,1,1,2,3,4,5,6,+\n+,7,8\nINCLUDE 'tets.bdf'\nPSOLID,1,1\nMAT1,1,2.1e11,,0.3,7850.\nENDDATA\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("tets.bdf"),
+        "$ tetrahedra\nCTETRA,2,1,1,2,3,4\n",
+    )
+    .unwrap();
+    let err = refused(
+        &["modes", "--mesh", main.to_str().unwrap(), "--count", "2"],
+        2,
+        "no volume",
+    );
+    assert!(err.contains("tets.bdf:2"), "{err}");
+    // an element no section reaches is named the same way (it was "number 2, counted in
+    // kind order")
+    let bare = dir.path().join("bare.inp");
+    std::fs::write(
+        &bare,
+        "*NODE\n1, 0., 0., 0.\n2, 1., 0., 0.\n3, 0., 1., 0.\n4, 0., 0., 1.\n5, 1., 1., 1.\n\
+         *ELEMENT, TYPE=C3D4, ELSET=A\n1, 1, 2, 3, 4\n*ELEMENT, TYPE=C3D4\n2, 2, 3, 5, 4\n\
+         *MATERIAL, NAME=STEEL\n*ELASTIC\n2.1e11, 0.3\n*DENSITY\n7850.\n\
+         *SOLID SECTION, ELSET=A, MATERIAL=STEEL\n",
+    )
+    .unwrap();
+    let err = refused(
+        &["modes", "--mesh", bare.to_str().unwrap(), "--count", "2"],
+        2,
+        "has no material",
+    );
+    assert!(err.contains("bare.inp:10"), "{err}");
 }
 
 /// Regression: a Nastran deck cut short inside a CTETRA card was refused with "element 1 has 6

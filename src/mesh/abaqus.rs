@@ -1713,8 +1713,12 @@ mod tests {
         )
         .unwrap();
         std::fs::write(sub.join("b.inp"), &nodes[nodes.find("3, 0.").unwrap()..]).unwrap();
-        let m = read(&dir.path().join("main.inp")).unwrap();
-        assert_eq!(m, parse(Path::new("t.inp"), TET).unwrap());
+        // the same mesh; only where its elements were defined differs
+        let mut m = read(&dir.path().join("main.inp")).unwrap();
+        let mut flat = parse(Path::new("t.inp"), TET).unwrap();
+        m.element_lines = None;
+        flat.element_lines = None;
+        assert_eq!(m, flat);
     }
 
     #[test]

@@ -8,22 +8,22 @@ use crate::scene::spec::ElementKind;
 /// A mesh defect that makes the model unusable.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements) is inverted or degenerate: smallest Jacobian {ratio:.3e} of its mean size (must be > 0; negative: the corner nodes are ordered the wrong way round)")]
+    #[error("solid element {element} ({kind}) is inverted or degenerate: smallest Jacobian {ratio:.3e} of its mean size (must be > 0; negative: the corner nodes are ordered the wrong way round)")]
     Inverted {
-        element: usize,
+        element: String,
         kind: String,
         ratio: f64,
     },
-    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements): mid-edge node (the mesh's node #{node} as read) lies {offset:.2} edge lengths from the midpoint of its edge (wrong node order or badly curved edge)")]
+    #[error("solid element {element} ({kind}): its mid-edge node ({node}) lies {offset:.2} edge lengths from the midpoint of its edge (wrong node order or badly curved edge)")]
     MidNode {
-        element: usize,
+        element: String,
         kind: String,
-        node: usize,
+        node: String,
         offset: f64,
     },
-    #[error("solid element #{element} ({kind}; 1-based, in the order of the file's solid elements) is degenerate: {what}")]
+    #[error("solid element {element} ({kind}) is degenerate: {what}")]
     Degenerate {
-        element: usize,
+        element: String,
         kind: String,
         what: String,
     },
@@ -84,7 +84,8 @@ pub fn check_and_compact(
     }
     let mut report = CheckReport::default();
     for (e, (kind, nodes)) in mesh.elements().enumerate() {
-        check_element(e, (kind, nodes), &mesh.coords_of(nodes), min_jacobian_ratio)?;
+        check_element((kind, nodes), &mesh.coords_of(nodes), min_jacobian_ratio)
+            .map_err(|f| f.name(mesh, e, kind))?;
     }
     // unused nodes
     let mut used = vec![false; mesh.nodes.len()];
@@ -131,39 +132,71 @@ pub fn check_and_compact(
     Ok(report)
 }
 
-/// The shape of solid element `e` (0-based) with its `nodes` at `x`: no node given twice, it has
+/// What is wrong with one element, before it is named ([`Flaw::name`]); node numbers are
+/// the mesh's node indices.
+enum Flaw {
+    Inverted(f64),
+    MidNode(usize, f64),
+    Twice(usize),
+    Flat,
+    ZeroEdge(usize, usize),
+}
+
+impl Flaw {
+    /// The error for element `e` of `mesh`, named as [`Mesh::element_name`] and
+    /// [`Mesh::node_name`] do.
+    fn name(self, mesh: &Mesh, e: usize, kind: ElementKind) -> MeshError {
+        let (element, kind) = (mesh.element_name(e), format!("{kind:?}"));
+        let degenerate = |what: String| MeshError::Degenerate {
+            element: element.clone(),
+            kind: kind.clone(),
+            what,
+        };
+        match self {
+            Flaw::Inverted(ratio) => MeshError::Inverted {
+                element,
+                kind,
+                ratio,
+            },
+            Flaw::MidNode(n, offset) => MeshError::MidNode {
+                element,
+                kind,
+                node: mesh.node_name(n),
+                offset,
+            },
+            Flaw::Twice(n) => degenerate(format!("{} is given twice", mesh.node_name(n))),
+            Flaw::Flat => {
+                degenerate("it has no volume (its nodes lie in a plane or on a line)".into())
+            }
+            Flaw::ZeroEdge(a, b) => degenerate(format!(
+                "its edge from {} to {} has zero length (two nodes at one place)",
+                mesh.node_name(a),
+                mesh.node_name(b)
+            )),
+        }
+    }
+}
+
+/// The shape of one solid element with its `nodes` at `x`: no node given twice, it has
 /// volume, no edge of zero length, its mid-edge nodes near their edges' midpoints, and a
-/// positive Jacobian. Nodes are named by their place in the mesh as read (counted from 1;
-/// the file's own ids are not kept).
+/// positive Jacobian.
 fn check_element(
-    e: usize,
     (kind, nodes): (ElementKind, &[usize]),
     x: &[[f64; 3]],
     min_jacobian_ratio: JacobianRatio,
-) -> Result<(), MeshError> {
+) -> Result<(), Flaw> {
     let nc = kind.num_corners();
     let ratio = min_jacobian_ratio(kind, x);
-    let degenerate = |what: String| MeshError::Degenerate {
-        element: e + 1,
-        kind: format!("{kind:?}"),
-        what,
-    };
-    if let Some((k, &n)) = nodes
+    if let Some((_, &n)) = nodes
         .iter()
         .enumerate()
         .find(|(k, n)| nodes[..*k].contains(n))
     {
-        return Err(degenerate(format!(
-            "its node {} (the mesh's node #{} as read) is given twice",
-            k + 1,
-            n + 1
-        )));
+        return Err(Flaw::Twice(n));
     }
     // an element without volume (a flat one) is degenerate whatever its mid-edge nodes
     if ratio.is_nan() || ratio.abs() <= 1e-6 {
-        return Err(degenerate(
-            "it has no volume (its nodes lie in a plane or on a line)".into(),
-        ));
+        return Err(Flaw::Flat);
     }
     for (m, &(a, b)) in kind.mid_edges().iter().enumerate() {
         let len = (0..3)
@@ -171,31 +204,18 @@ fn check_element(
             .sum::<f64>()
             .sqrt();
         if len == 0.0 {
-            return Err(degenerate(format!(
-                "its edge from the mesh's node #{} to node #{} (as read) has zero length (two nodes at one place)",
-                nodes[a] + 1,
-                nodes[b] + 1
-            )));
+            return Err(Flaw::ZeroEdge(nodes[a], nodes[b]));
         }
         let off = (0..3)
             .map(|i| (x[nc + m][i] - 0.5 * (x[a][i] + x[b][i])).powi(2))
             .sum::<f64>()
             .sqrt();
         if off > 0.25 * len {
-            return Err(MeshError::MidNode {
-                element: e + 1,
-                kind: format!("{kind:?}"),
-                node: nodes[nc + m] + 1,
-                offset: off / len,
-            });
+            return Err(Flaw::MidNode(nodes[nc + m], off / len));
         }
     }
     if ratio < 0.0 {
-        return Err(MeshError::Inverted {
-            element: e + 1,
-            kind: format!("{kind:?}"),
-            ratio,
-        });
+        return Err(Flaw::Inverted(ratio));
     }
     Ok(())
 }

@@ -2,7 +2,13 @@
 //! and element ids, and its assembly into a [`Mesh`] (ids to indices, element node order to
 //! ours, sets to node and element sets).
 
-use super::{DeckMaterial, ElementBlock, Mesh, NO_MATERIAL};
+use super::{DeckMaterial, ElementBlock, ElementLines, Mesh, NO_MATERIAL};
+
+/// A file index or line number as stored per element (saturating at u32::MAX: a deck's
+/// size is bounded far below).
+pub(crate) fn small(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
 use crate::scene::spec::ElementKind;
 
 /// Why a mesh file could not be read: the file, the line and what was expected.
@@ -231,7 +237,7 @@ impl Collected {
                 )
             })
         };
-        let mut by_kind: BTreeMap<ElementKind, Vec<(i64, Vec<usize>)>> = BTreeMap::new();
+        let mut by_kind: BTreeMap<ElementKind, Vec<(i64, Vec<usize>, Loc)>> = BTreeMap::new();
         let mut seen = HashMap::new();
         for (eid, kind, ids, line) in &self.elements {
             if *eid <= 0 {
@@ -247,24 +253,30 @@ impl Collected {
                 .iter()
                 .map(|&n| node(n, *line, &format!("element {eid}")))
                 .collect::<Result<Vec<_>, _>>()?;
-            by_kind.entry(*kind).or_default().push((*eid, conn));
+            by_kind.entry(*kind).or_default().push((*eid, conn, *line));
         }
         // global element index of each element id (blocks in kind order)
         let mut element_index: HashMap<i64, usize> = HashMap::new();
         let mut blocks = Vec::new();
+        let mut lines = Vec::with_capacity(self.elements.len());
         let mut acc = 0;
         for (kind, list) in by_kind {
             let mut conn = Vec::with_capacity(list.len() * kind.num_nodes());
-            for (eid, c) in list {
+            for (eid, c, loc) in list {
                 element_index.insert(eid, acc);
                 acc += 1;
                 conn.extend(c);
+                lines.push((small(loc.file), small(loc.line)));
             }
             blocks.push(ElementBlock { kind, conn });
         }
         let mut mesh = Mesh {
             nodes,
             blocks,
+            element_lines: Some(ElementLines {
+                files: self.files.clone(),
+                at: lines,
+            }),
             ..Default::default()
         };
         self.assign_materials(&mut mesh, &element_index)?;

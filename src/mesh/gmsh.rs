@@ -137,6 +137,8 @@ struct Block {
     gmsh_type: u32,
     conn: Vec<usize>,
     nodes_per: usize,
+    /// The line of each element (solid blocks only).
+    lines: Vec<u32>,
 }
 
 /// Parses MSH 4.1 ASCII text; `path` is used in messages only.
@@ -181,7 +183,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, DeckError> {
     if !s.saw_nodes || !s.saw_elements {
         return Err(whole("the file needs both $Nodes and $Elements sections"));
     }
-    Ok(assemble(s))
+    Ok(assemble(s, path))
 }
 
 fn read_format(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
@@ -322,8 +324,12 @@ fn read_elements(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
             )));
         }
         let mut conn = Vec::with_capacity(count * nn);
+        let mut at = Vec::with_capacity(if dim == 3 { count } else { 0 });
         for _ in 0..count {
             let v = lines.numbers::<usize>("element record")?;
+            if dim == 3 {
+                at.push(super::collect::small(lines.line));
+            }
             if v.len() != nn + 1 {
                 return Err(lines.err(format!(
                     "element of type {et} needs a tag and {nn} node tags, found {} numbers",
@@ -343,6 +349,7 @@ fn read_elements(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
             gmsh_type: et,
             conn,
             nodes_per: nn,
+            lines: at,
         });
     }
     lines.expect("$EndElements")?;
@@ -352,7 +359,7 @@ fn read_elements(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
 
 /// The mesh of the sections: solid blocks grouped by kind (global element numbering in kind
 /// order), every physical group a node set, volume groups also element sets.
-fn assemble(s: Sections) -> Mesh {
+fn assemble(s: Sections, path: &Path) -> Mesh {
     let Sections {
         names,
         entity_phys,
@@ -367,6 +374,7 @@ fn assemble(s: Sections) -> Mesh {
             .unwrap_or_else(|| format!("{dim}:{p}"))
     };
     let mut by_kind: BTreeMap<ElementKind, Vec<usize>> = BTreeMap::new();
+    let mut lines_by_kind: BTreeMap<ElementKind, Vec<u32>> = BTreeMap::new();
     let mut set_nodes: BTreeMap<String, BTreeSet<usize>> = BTreeMap::new();
     let mut vol_blocks: Vec<(ElementKind, i32, usize, usize)> = Vec::new(); // kind, entity, start, count
     for b in &blocks {
@@ -390,6 +398,10 @@ fn assemble(s: Sections) -> Mesh {
                 b.conn.len() / b.nodes_per,
             ));
             list.extend_from_slice(&b.conn);
+            lines_by_kind
+                .entry(kind)
+                .or_default()
+                .extend_from_slice(&b.lines);
         }
     }
     let mut offset: BTreeMap<ElementKind, usize> = BTreeMap::new();
@@ -400,6 +412,14 @@ fn assemble(s: Sections) -> Mesh {
     }
     let mut mesh = Mesh {
         nodes,
+        element_lines: Some(super::ElementLines {
+            files: vec![path.to_path_buf()],
+            at: lines_by_kind
+                .into_values()
+                .flatten()
+                .map(|line| (0, line))
+                .collect(),
+        }),
         ..Default::default()
     };
     for (kind, ent, start, count) in vol_blocks {

@@ -110,8 +110,8 @@ pub fn resolve_material(
     }
     if let Some(e) = mesh.element_without_material() {
         return Err(bad(format!(
-            "solid element number {} (counted in kind order) has no material: assign it a section/property, or give a material",
-            e + 1
+            "solid element {} has no material: assign it a section/property, or give a material",
+            mesh.element_name(e)
         )));
     }
     for m in &mesh.materials {

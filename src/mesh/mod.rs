@@ -137,6 +137,18 @@ pub struct Mesh {
     /// Index into `materials` of every element (global index in block order), or
     /// [`NO_MATERIAL`]; empty when `materials` is.
     pub element_material: Vec<u32>,
+    /// Where each element was defined in the file(s) read, for messages; `None` for a
+    /// generated mesh.
+    pub element_lines: Option<ElementLines>,
+}
+
+/// The file and line of every element of a mesh read from files.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ElementLines {
+    /// The files read, the main file first.
+    pub files: Vec<std::path::PathBuf>,
+    /// Per element (global index in block order): index into `files` and 1-based line.
+    pub at: Vec<(u32, u32)>,
 }
 
 /// An element of a deck that no section or property gives a material.
@@ -182,6 +194,33 @@ impl Mesh {
         match self.element_material.get(e) {
             Some(&k) if k != NO_MATERIAL => &self.materials[k as usize].elastic,
             _ => fallback,
+        }
+    }
+    /// How messages name element `e` (global index in block order): the file and line that
+    /// define it when the mesh was read from files, else its place among the solid elements.
+    pub fn element_name(&self, e: usize) -> String {
+        let place = self
+            .element_lines
+            .as_ref()
+            .and_then(|l| Some((l.at.get(e)?, l)));
+        match place {
+            Some((&(f, line), l)) => match l.files.get(f as usize) {
+                Some(file) => format!("defined at {}:{line}", file.display()),
+                None => format!("defined on line {line}"),
+            },
+            None => format!(
+                "#{} (1-based, in the order of the mesh's solid elements)",
+                e + 1
+            ),
+        }
+    }
+    /// How messages name node `n`: its place in the mesh for a generated mesh, its
+    /// coordinates (SI) for a mesh read from files (whose node ids may be renumbered, as an
+    /// Abaqus instance's are).
+    pub fn node_name(&self, n: usize) -> String {
+        match (&self.element_lines, self.nodes.get(n)) {
+            (Some(_), Some(x)) => format!("the node at ({:.6}, {:.6}, {:.6}) m", x[0], x[1], x[2]),
+            _ => format!("the mesh's node #{}", n + 1),
         }
     }
     /// The first element (global index) without a deck material, if the deck has materials.

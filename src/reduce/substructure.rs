@@ -87,12 +87,13 @@ fn element_slabs(mesh: &Mesh, cuts_x: &[f64]) -> Vec<usize> {
 
 /// The sub-mesh of the elements `keep` (global element indices, ascending): nodes renumbered
 /// in the part's order, node sets restricted (order kept, empty ones dropped), element sets
-/// and materials carried. Returns the mesh and its nodes' part indices.
+/// materials and element lines carried. Returns the mesh and its nodes' part indices.
 fn sub_mesh(mesh: &Mesh, keep: &[bool]) -> (Mesh, Vec<usize>) {
     let mut used = vec![false; mesh.nodes.len()];
     let mut blocks = Vec::new();
     let mut element_map = vec![usize::MAX; keep.len()];
     let mut element_material = Vec::new();
+    let mut lines = Vec::new();
     let (mut e, mut next_e) = (0, 0);
     for b in &mesh.blocks {
         let nn = b.kind.num_nodes();
@@ -105,6 +106,9 @@ fn sub_mesh(mesh: &Mesh, keep: &[bool]) -> (Mesh, Vec<usize>) {
                 next_e += 1;
                 if let Some(&m) = mesh.element_material.get(e) {
                     element_material.push(m);
+                }
+                if let Some(&at) = mesh.element_lines.as_ref().and_then(|l| l.at.get(e)) {
+                    lines.push(at);
                 }
             }
             e += 1;
@@ -139,6 +143,13 @@ fn sub_mesh(mesh: &Mesh, keep: &[bool]) -> (Mesh, Vec<usize>) {
         element_sets: restrict(&mesh.element_sets, &element_map),
         materials: mesh.materials.clone(),
         element_material,
+        element_lines: mesh
+            .element_lines
+            .as_ref()
+            .map(|l| crate::mesh::ElementLines {
+                files: l.files.clone(),
+                at: lines,
+            }),
     };
     (sub, nodes)
 }
