@@ -451,3 +451,33 @@ fn regression_empty_mesh_file_is_refused_by_key() {
         "{err}"
     );
 }
+
+/// Regression: a material given on the command line (or in the scene) over a deck that
+/// defines other constants replaced them silently (noted in the log only); it is warned of,
+/// naming the deck's material, and the same constants as the deck's are not.
+#[test]
+fn regression_a_given_material_over_a_different_deck_material_is_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = dir.path().join("steel.bdf");
+    std::fs::write(
+        &deck,
+        "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\nGRID,5,,1.,1.,1.\n\
+         CTETRA,1,1,1,2,3,4\nCTETRA,2,1,2,3,4,5\nPSOLID,1,1\nMAT1,1,2.1e11,,0.3,7850.\nENDDATA\n",
+    )
+    .unwrap();
+    let run = |e: &str, nu: &str, rho: &str| {
+        let args = ["modes", "--mesh", deck.to_str().unwrap(), "--count", "2"];
+        let mut args = args.to_vec();
+        args.extend(["--youngs", e, "--poisson", nu, "--density", rho]);
+        let (code, _, err) = common::linercav(&args);
+        assert_eq!(code, 0, "{err}");
+        err
+    };
+    let err = run("1.2e11", "0.26", "7200");
+    assert!(
+        err.contains("replaces the deck's material") && err.contains("210.0000 GPa"),
+        "{err}"
+    );
+    let err = run("2.1e11", "0.3", "7850");
+    assert!(!err.contains("replaces the deck's material"), "{err}");
+}

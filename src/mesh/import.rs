@@ -97,6 +97,9 @@ pub fn resolve_material(
     key: &str,
 ) -> Result<(Elastic, MaterialSource), ImportError> {
     if let Some(m) = given {
+        if let Some(w) = overridden(mesh, &m, path, key) {
+            log::warn!("{w}");
+        }
         mesh.clear_materials();
         return Ok((m, MaterialSource::Given));
     }
@@ -125,6 +128,43 @@ pub fn resolve_material(
             })?;
     }
     Ok((mesh.materials[0].elastic, MaterialSource::Deck))
+}
+
+/// The warning for a given material `m` that replaces deck materials of `mesh` with other
+/// constants (relative difference above 1e-6 in E, nu or rho; a deck that states the same
+/// material as the scene is not warned of).
+fn overridden(mesh: &Mesh, m: &Elastic, path: &Path, key: &str) -> Option<String> {
+    let differs = |a: f64, b: f64| (a - b).abs() > 1e-6 * a.abs().max(b.abs());
+    let other: Vec<String> = mesh
+        .materials
+        .iter()
+        .filter(|d| {
+            let e = &d.elastic;
+            differs(e.young, m.young)
+                || differs(e.poisson, m.poisson)
+                || differs(e.density, m.density)
+        })
+        .map(|d| {
+            let e = &d.elastic;
+            format!(
+                "'{}' (E {:.4} GPa, nu {}, rho {:.1} kg/m^3)",
+                d.name,
+                e.young * 1e-9,
+                e.poisson,
+                e.density
+            )
+        })
+        .collect();
+    (!other.is_empty()).then(|| {
+        format!(
+            "{}: {key} (E {:.4} GPa, nu {}, rho {:.1} kg/m^3) replaces the deck's material {}: every element takes {key}; leave {key} out to use the deck's",
+            path.display(),
+            m.young * 1e-9,
+            m.poisson,
+            m.density,
+            other.join(", ")
+        )
+    })
 }
 
 /// The liner's place and the crankcase's targets, from the scene.

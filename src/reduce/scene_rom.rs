@@ -201,9 +201,13 @@ fn part_mesh(
         return Ok((generated(), m, format!("{part}: scene")));
     };
     let mut mesh = import::read_si(p, unit, &format!("{part}.mesh_unit"))?;
+    let deck_has = !mesh.materials.is_empty();
     let (m, src) = import::resolve_material(&mut mesh, given, p, &key)?;
     let note = match src {
-        import::MaterialSource::Given => format!("{part}: scene (overrides the deck's)"),
+        import::MaterialSource::Given if deck_has => {
+            format!("{part}: scene (overrides the deck's)")
+        }
+        import::MaterialSource::Given => format!("{part}: scene"),
         import::MaterialSource::Deck => format!(
             "{part}: deck ({})",
             mesh.materials
