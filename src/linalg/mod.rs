@@ -1,9 +1,10 @@
 //! Linear algebra: the shared sparse K/M pattern, METIS ordering, faer factorisations, and the
-//! dense vector kernels of the transient.
+//! dense vector kernels and small dense LU of the transient.
 
 pub mod dense;
 pub mod factor;
 pub mod kernels;
+pub mod lu;
 pub mod ordering;
 pub mod sparse;
 pub mod spill;

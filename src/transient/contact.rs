@@ -34,6 +34,7 @@
 //! ([`Body::applied`]) on its right-hand side; alpha = 0 is Newmark exactly.
 
 use super::scheme::Scheme;
+use crate::linalg::lu::Lu;
 use crate::piston::lubrication::Film;
 use nalgebra::{DMatrix, DVector};
 
@@ -784,12 +785,13 @@ impl<'s, 'a> Step<'s, 'a> {
             self.add_films(active, (g, gv), pred, (&mut wt, &mut rhs));
         }
         let sol = if na > 0 {
-            wt.transpose()
-                .lu()
-                .solve(&rhs)
-                .ok_or(StepFailure::Singular)?
+            let lu = Lu::new(wt.transpose().as_slice().to_vec(), na);
+            let mut sol = rhs;
+            lu.solve(sol.as_mut_slice(), 1 + nq)
+                .ok_or(StepFailure::Singular)?;
+            sol
         } else {
-            rhs.clone()
+            rhs
         };
         let q = self.solve_bodies(active, &sol)?;
         // forces of the active slices
