@@ -202,8 +202,50 @@ fn regression_shards_on_different_input_files_are_not_merged() {
     std::fs::write(&csv, curve(60.0)).unwrap();
     study("2/2", &b);
     let err = refused_merge(&[&a, &b], &dir.path().join("m"));
-    assert!(err.contains("files the scene reads"), "{err}");
+    assert!(err.contains("files the study's scenes read"), "{err}");
     assert!(!dir.path().join("m").exists());
+    // a design that varies the file: each shard runs one curve, and the other's file changing
+    // between the shards was not seen (the digest held the base scene's files only)
+    let (one, two) = (dir.path().join("one.csv"), dir.path().join("two.csv"));
+    let vary = format!(
+        "operating.pressure_file={},{}",
+        one.display(),
+        two.display()
+    );
+    let varied = |shard: &str, out: &Path| {
+        let args = [
+            "--vary",
+            &vary,
+            "--set",
+            "transient.cycles=2",
+            "--set",
+            "transient.averaged_cycles=1",
+            "--shard",
+            shard,
+        ];
+        let (code, _, err) = sweep(&args, out);
+        assert_eq!(code, 0, "{err}");
+    };
+    let (c, d) = (dir.path().join("c"), dir.path().join("d"));
+    std::fs::write(&one, curve(150.0)).unwrap();
+    std::fs::write(&two, curve(60.0)).unwrap();
+    varied("1/2", &c);
+    std::fs::write(&two, curve(90.0)).unwrap();
+    varied("2/2", &d);
+    let err = refused_merge(&[&c, &d], &dir.path().join("n"));
+    assert!(err.contains("files the study's scenes read"), "{err}");
+    // the same files again: the shards merge
+    std::fs::write(&two, curve(60.0)).unwrap();
+    let e = dir.path().join("e");
+    varied("2/2", &e);
+    let (code, _, err) = linercav(&[
+        "sweep-merge",
+        c.to_str().unwrap(),
+        e.to_str().unwrap(),
+        "--out",
+        dir.path().join("n").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
 }
 
 #[test]

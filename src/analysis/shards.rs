@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Format tag of a shard's part file.
-pub const PART_FORMAT: &str = "linercav-sweep-part 3";
+pub const PART_FORMAT: &str = "linercav-sweep-part 4";
 
 /// A shard's part file.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -22,8 +22,9 @@ pub struct Part {
     /// The scene's path and the BLAKE3 hash of its text.
     pub scene: String,
     pub scene_blake3: String,
-    /// BLAKE3 of what the scenes read beside their text (pressure curve, calibration, mesh
-    /// decks; `api::sweep`). Absent from an older format's part, which its format refuses.
+    /// BLAKE3 of what the study's scenes (the base design's and every run's) read beside their
+    /// text (pressure curves, calibration, mesh decks; `api::sweep`). Absent from an older
+    /// format's part, which its format refuses.
     #[serde(default)]
     pub inputs_blake3: String,
     /// The `--set` overrides of the study.
@@ -120,7 +121,7 @@ pub fn same_study(path: &Path, p: &Part, first_path: &Path, first: &Part) -> Res
     }
     if p.inputs_blake3 != first.inputs_blake3 {
         return Err(differ(
-            "files the scene reads (pressure curve, calibration, mesh; BLAKE3)",
+            "files the study's scenes read (pressure curves, calibration, mesh decks; BLAKE3)",
             p.inputs_blake3.clone(),
             first.inputs_blake3.clone(),
         ));

@@ -229,13 +229,44 @@ fn tool_version() -> String {
     format!("linercav {}", env!("CARGO_PKG_VERSION"))
 }
 
-/// BLAKE3 of what scene `s` reads beside its text: its thresholds (a calibration file's
-/// values), pressure curve and mesh decks with their includes (in the order found), so that
-/// shards run on different files are not merged as one study.
-fn inputs_digest(s: &Scene) -> Result<String> {
-    use crate::scene::{CrankcaseSource, MeshSource, PressureSource};
+/// BLAKE3 of what the study's scenes read beside their text: the thresholds (a calibration
+/// file's values), pressure curves and mesh decks with their includes of the base design's
+/// scene `base` and of every run's (`runs`: each run's `KEY=VALUE` settings over the request's;
+/// a design may vary a file-valued key, `--vary liner.mesh_file=a.inp,b.inp`), each distinct
+/// file once in the order found, so that shards run on different files are not merged as one
+/// study.
+fn inputs_digest(req: &SweepRequest, base: &Scene, runs: &[Vec<String>]) -> Result<String> {
     let mut h = blake3::Hasher::new();
-    h.update(format!("{:?}", s.cavitation.thresholds).as_bytes());
+    let mut files: Vec<PathBuf> = Vec::new();
+    let mut thresholds: Vec<String> = Vec::new();
+    let mut add = |s: &Scene| {
+        let t = format!("{:?}", s.cavitation.thresholds);
+        if !thresholds.contains(&t) {
+            thresholds.push(t);
+        }
+        for f in scene_files(s) {
+            if !files.contains(&f) {
+                files.push(f);
+            }
+        }
+    };
+    add(base);
+    for run in runs {
+        let sets: Vec<String> = req.sets.iter().chain(run).cloned().collect();
+        add(&super::load_scene(&req.scene, &sets)?);
+    }
+    for t in &thresholds {
+        h.update(t.as_bytes());
+    }
+    crate::files::hash_files(&mut h, &files, crate::files::LIMIT_MESH)
+        .map_err(|(path, source)| crate::scene::SceneError::Io { path, source })?;
+    Ok(h.finalize().to_hex().to_string())
+}
+
+/// The files scene `s` reads beside its text: its pressure curve and its mesh decks with their
+/// includes.
+fn scene_files(s: &Scene) -> Vec<PathBuf> {
+    use crate::scene::{CrankcaseSource, MeshSource, PressureSource};
     let mut files: Vec<PathBuf> = Vec::new();
     if let Some(PressureSource::File(p)) = s.simulation.as_ref().map(|m| &m.operating.pressure) {
         files.push(p.clone());
@@ -246,9 +277,7 @@ fn inputs_digest(s: &Scene) -> Result<String> {
     if let Some(CrankcaseSource::File(p)) = s.crankcase.as_ref().map(|c| &c.source) {
         files.extend(crate::mesh::deck_files(p));
     }
-    crate::files::hash_files(&mut h, &files, crate::files::LIMIT_MESH)
-        .map_err(|(path, source)| crate::scene::SceneError::Io { path, source })?;
-    Ok(h.finalize().to_hex().to_string())
+    files
 }
 
 /// The runs' lines, full results, ROMs used and, for a shard, [`inputs_digest`].
@@ -260,7 +289,7 @@ type Executed = (
 );
 
 /// Runs `indices` of the design's runs `all`: their lines, full results and the ROMs used, and
-/// for a shard (`sharded`) the digest of the files the base design reads.
+/// for a shard (`sharded`) the digest of the files the base design and the design's runs read.
 fn execute(
     req: &SweepRequest,
     design: &Design,
@@ -285,9 +314,24 @@ fn execute(
     let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache, &|m| {
         rom_progress.phase(m)
     })?;
-    // the base design's files: every shard runs it (a design's own values are in the design)
+    // the files of the base design and of every run of the design, the other shards' too
     let inputs = match sharded {
-        true => Some(inputs_digest(&variants.scenes[extra.len() - 1])?),
+        true => {
+            let runs: Vec<Vec<String>> = all
+                .iter()
+                .map(|v| {
+                    keys.iter()
+                        .zip(v)
+                        .map(|(k, x)| format!("{k}={x}"))
+                        .collect()
+                })
+                .collect();
+            Some(inputs_digest(
+                req,
+                &variants.scenes[extra.len() - 1],
+                &runs,
+            )?)
+        }
         false => None,
     };
     let bar = super::progress::Progress::counter(indices.len() as u64 + 1);
