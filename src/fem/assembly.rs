@@ -139,6 +139,7 @@ impl Assembler {
         let mut k = crate::linalg::touch::zeros(nnz);
         let mut m = crate::linalg::touch::zeros(nnz);
         let elems: Vec<(crate::scene::spec::ElementKind, &[usize])> = mesh.elements().collect();
+        let (split, offset) = self.halves(mesh.nodes.len());
         const CHUNK: usize = 512;
         for (c, chunk) in elems
             .chunks(CHUNK * rayon::current_num_threads().max(1))
@@ -154,17 +155,77 @@ impl Assembler {
                         .map_err(|source| AssemblyError { element, source })
                 })
                 .collect();
-            for ((_, nodes), km) in chunk.iter().zip(mats) {
-                let (ke, me) = km?;
-                self.scatter(nodes, &ke, &mut k);
-                self.scatter(nodes, &me, &mut m);
-            }
+            let mats = mats.into_iter().collect::<Result<Vec<_>, _>>()?;
+            // each half of the columns on its own core: every entry still gets its elements'
+            // terms in element order (the same sums as one pass)
+            let (k_lo, k_hi) = k.split_at_mut(offset);
+            let (m_lo, m_hi) = m.split_at_mut(offset);
+            rayon::join(
+                || self.scatter_pair(chunk, &mats, (0..split, 0), (k_lo, m_lo)),
+                || self.scatter_pair(chunk, &mats, (split..usize::MAX, offset), (k_hi, m_hi)),
+            );
         }
         Ok(StiffnessMass {
             pattern: self.pattern.clone(),
             k,
             m,
         })
+    }
+
+    /// Where the values split into two halves of about equal size at a node: the first node
+    /// of the second half and the index of its first value (the free DOFs are numbered in
+    /// node order, a node's columns side by side).
+    fn halves(&self, nodes: usize) -> (usize, usize) {
+        let (ptr, d) = (&self.pattern.col_ptr, &self.dofs.dof);
+        let half = self.pattern.nnz() / 2;
+        (0..nodes)
+            .find_map(|a| {
+                let c = (0..3).map(|i| d[3 * a + i]).find(|&c| c != FIXED)?;
+                (ptr[c] >= half).then_some((a, ptr[c]))
+            })
+            .unwrap_or((nodes, self.pattern.nnz()))
+    }
+
+    /// Adds the element matrices `mats` (K and M of each element of `chunk`, 3n x 3n,
+    /// node-major) into the columns of the nodes in `nodes`, whose values start at `offset`
+    /// of the whole arrays: `k` and `m` hold the values from there on. Per entry, the terms
+    /// are added in element order, as [`Assembler::scatter`] adds them.
+    fn scatter_pair(
+        &self,
+        chunk: &[(crate::scene::spec::ElementKind, &[usize])],
+        mats: &[ElementPair],
+        (nodes, offset): (std::ops::Range<usize>, usize),
+        (k, m): (&mut [f64], &mut [f64]),
+    ) {
+        let d = &self.dofs.dof;
+        for ((_, el), (ke, me)) in chunk.iter().zip(mats) {
+            let nd = 3 * el.len();
+            for (la, &a) in el.iter().enumerate() {
+                if !nodes.contains(&a) {
+                    continue;
+                }
+                for (lb, &b) in el.iter().enumerate() {
+                    let base = self.slot_offset[self.graph.slot(a, b)];
+                    let mut jl = 0;
+                    for j in 0..3 {
+                        if d[3 * b + j] == FIXED {
+                            continue;
+                        }
+                        for i in 0..3 {
+                            let c = d[3 * a + i];
+                            if c == FIXED {
+                                continue;
+                            }
+                            let pos = self.pattern.col_ptr[c] + base + jl - offset;
+                            let e = (3 * lb + j) * nd + 3 * la + i;
+                            k[pos] += ke[e];
+                            m[pos] += me[e];
+                        }
+                        jl += 1;
+                    }
+                }
+            }
+        }
     }
 
     /// Adds a dense element matrix (3n x 3n, node-major) into `values`.
