@@ -48,7 +48,9 @@ pub struct ModalStructure {
     /// blocks, S and T are formed on the diagonal blocks only (zero elsewhere).
     pub blocks: Option<Vec<std::ops::Range<usize>>>,
     /// Per step size and static-correction flag (key: dt bits, flag): S = Phi D Phi^T over
-    /// the contact DOFs and T = S + R (T = S without the static correction).
+    /// the contact DOFs and T = S + R (T = S without the static correction), each stored
+    /// transposed (row e holds column e), so that a response G F is a sum of whole rows
+    /// ([`ModalStructure::apply_step_matrix`]).
     step_compliance: Vec<(u64, bool, StepMatrices)>,
     /// Index into `step_compliance` of the current step.
     current: usize,
@@ -147,7 +149,8 @@ impl ModalStructure {
         if self.step_compliance.len() >= 8 {
             self.step_compliance.remove(0);
         }
-        let s = from_faer(&s);
+        // transposed (R is exactly symmetric, so S^T + R is T^T to the bit)
+        let s = from_faer(&s.transpose().to_owned());
         let mut t = s.clone();
         if self.static_correction {
             for (tv, rv) in values_mut(&mut t).iter_mut().zip(values(&self.rflex)) {
@@ -159,12 +162,14 @@ impl ModalStructure {
         self.current = self.step_compliance.len() - 1;
     }
 
-    /// A DOF-level matrix `s` (S or T) between two locations, sum_{d,e} w_d w_e s_de.
-    fn interpolate(s: &Dense, a: &Location, b: &Location) -> f64 {
+    /// A DOF-level matrix X (S or T) between two locations, sum_{d,e} w_d w_e X_de, from its
+    /// transpose `xt` (X_de = xt_ed).
+    fn interpolate(xt: &Dense, a: &Location, b: &Location) -> f64 {
         let mut v = 0.0;
         for i in 0..2 {
-            let row = row(s, a.dofs[i]);
-            v += a.weights[i] * (b.weights[0] * row[b.dofs[0]] + b.weights[1] * row[b.dofs[1]]);
+            let d = a.dofs[i];
+            let (x0, x1) = (xt[[b.dofs[0], d]], xt[[b.dofs[1], d]]);
+            v += a.weights[i] * (b.weights[0] * x0 + b.weights[1] * x1);
         }
         v
     }
@@ -322,12 +327,14 @@ impl Structure for ModalStructure {
 
 impl ModalStructure {
     /// scale * sum_d w_id sum_e X_de F_e at every location of this step, X a DOF-level step
-    /// matrix (S or T) and the forces at `active` gathered on the DOFs. Each DOF's sum over e
-    /// is formed once (neighbouring locations share their DOFs), the same sum in the same
-    /// order as per location.
+    /// matrix (S or T, given transposed as `xt`) and the forces at `active` gathered on the
+    /// DOFs. The sums over e are formed for the span of DOFs the locations use at once,
+    /// sum_e F_e xt_e. (contiguous pieces of rows, vector operations; each DOF's terms added
+    /// in the order of the gathered DOFs, from -0.0 as a float sum starts), and shared by the
+    /// locations beside each DOF.
     fn apply_step_matrix(
         &self,
-        x: &Dense,
+        xt: &Dense,
         scale: f64,
         active: &[usize],
         forces: &[f64],
@@ -338,19 +345,25 @@ impl ModalStructure {
                 .map(|&k| &self.locs[k])
                 .zip(forces.iter().copied()),
         );
-        let mut at_dof: Vec<Option<f64>> = vec![None; x.nrows()];
-        let mut sum_at = |d: usize| -> f64 {
-            *at_dof[d].get_or_insert_with(|| {
-                let row = row(x, d);
-                gathered.iter().map(|&(e, f)| row[e] * f).sum::<f64>()
-            })
-        };
+        // only the span of DOFs the locations use (one cylinder's, for a per-cylinder step)
+        let (lo, hi) = self.locs.iter().fold((usize::MAX, 0), |(lo, hi), at| {
+            (
+                lo.min(at.dofs[0].min(at.dofs[1])),
+                hi.max(at.dofs[0].max(at.dofs[1]) + 1),
+            )
+        });
+        let mut at_dof = vec![-0.0; xt.nrows()];
+        if lo < hi {
+            for &(e, f) in &gathered {
+                axpy(&mut at_dof[lo..hi], f, &row(xt, e)[lo..hi]);
+            }
+        }
         self.locs
             .iter()
             .map(|at| {
                 let mut u = 0.0;
                 for m in 0..2 {
-                    u += at.weights[m] * sum_at(at.dofs[m]);
+                    u += at.weights[m] * at_dof[at.dofs[m]];
                 }
                 scale * u
             })
