@@ -475,8 +475,28 @@ fn regression_a_given_material_over_a_different_deck_material_is_warned_of() {
     };
     let err = run("1.2e11", "0.26", "7200");
     assert!(
-        err.contains("replaces the deck's material") && err.contains("210.0000 GPa"),
+        err.contains("replaces the deck's material 'MAT1 1'") && err.contains("210.0000 GPa"),
         "{err}"
+    );
+    // and among the run's warnings in its JSON
+    let out = linercav_output(&[
+        "modes",
+        "--mesh",
+        deck.to_str().unwrap(),
+        "--count",
+        "2",
+        "--youngs",
+        "1.2e11",
+        "--poisson",
+        "0.26",
+        "--density",
+        "7200",
+        "--json",
+    ]);
+    let warnings = json(&out)["warnings"].to_string();
+    assert!(
+        warnings.contains("replaces the deck's material"),
+        "{warnings}"
     );
     let err = run("2.1e11", "0.3", "7850");
     assert!(!err.contains("replaces the deck's material"), "{err}");

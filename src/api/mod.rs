@@ -159,13 +159,14 @@ pub struct LoadedPart {
     pub limits_file: std::path::PathBuf,
 }
 
-/// A mesh as read: the mesh, its file (None when generated), the material and where it came
-/// from.
+/// A mesh as read: the mesh, its file (None when generated), the material, where it came
+/// from, and a warning when a given material replaced the deck's different one.
 type ReadMesh = (
     Mesh,
     Option<String>,
     Elastic,
     crate::mesh::import::MaterialSource,
+    Option<String>,
 );
 
 /// A part's mesh: generated, or a file read in `unit`, with its material resolved.
@@ -188,14 +189,15 @@ fn read_mesh(
                 None,
                 m,
                 import::MaterialSource::Given,
+                None,
             ))
         }
         MeshSource::File(p) => {
             let mut mesh = import::read_si(p, unit, unit_key)
                 .map_err(crate::reduce::scene_rom::SceneRomError::from)?;
-            let (m, src) = import::resolve_material(&mut mesh, given, p, material_key)
+            let (m, src, warning) = import::resolve_material(&mut mesh, given, p, material_key)
                 .map_err(crate::reduce::scene_rom::SceneRomError::from)?;
-            Ok((mesh, Some(p.display().to_string()), m, src))
+            Ok((mesh, Some(p.display().to_string()), m, src, warning))
         }
     }
 }
@@ -244,6 +246,7 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
     // a scene's own limits (`limits.max_memory_gb`), the machine's (with `--set limits.*`) for
     // a bare mesh
     let limits;
+    let material_warning;
     let (mesh, file, material, material_source, mut fix, label, shift_hz, guard_modes) = match input
     {
         ModelInput::Scene { scene, part, sets } => {
@@ -254,7 +257,7 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
                 msg: format!("unknown; the scene has: {}", PARTS.join(", ")),
             })?;
             check_generated(&sc, &p.source, &limits)?;
-            let (mut mesh, file, material, src) = read_mesh(
+            let (mut mesh, file, material, src, warning) = read_mesh(
                 &p.source,
                 p.mesh_unit,
                 &format!("{part}.mesh_unit"),
@@ -264,6 +267,7 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
             for (name, b) in &p.box_sets {
                 crate::mesh::find::box_set(&mut mesh, part, name, b);
             }
+            material_warning = warning;
             (
                 mesh,
                 file,
@@ -283,7 +287,8 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
             sets,
         } => {
             limits = mesh_limits(sets)?;
-            let (m, file, material, src) = read_bare_mesh(mesh, *unit, *material)?;
+            let (m, file, material, src, warning) = read_bare_mesh(mesh, *unit, *material)?;
+            material_warning = warning;
             (
                 m,
                 file,
@@ -298,10 +303,11 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
     };
     fix.extend_from_slice(extra_fix);
     let mut mesh = mesh;
-    let checks = check_and_compact(&mut mesh).map_err(|source| Error::Mesh {
+    let mut checks = check_and_compact(&mut mesh).map_err(|source| Error::Mesh {
         file: file.clone(),
         source,
     })?;
+    checks.warnings.extend(material_warning);
     // the assembly, estimated on the nodes the elements use (unused GRIDs inflated it: 3M of
     // them, 355 GB); the solve is checked once its factor's size is known
     // (`crate::scene::budget::modal_solve`)

@@ -231,30 +231,51 @@ fn tool_version() -> String {
 
 /// BLAKE3 of what the study's scenes read beside their text: the thresholds (a calibration
 /// file's values), pressure curves and mesh decks with their includes of the base design's
-/// scene `base` and of every run's (`runs`: each run's `KEY=VALUE` settings over the request's;
-/// a design may vary a file-valued key, `--vary liner.mesh_file=a.inp,b.inp`), each distinct
-/// file once in the order found, so that shards run on different files are not merged as one
-/// study.
-fn inputs_digest(req: &SweepRequest, base: &Scene, runs: &[Vec<String>]) -> Result<String> {
-    let mut h = blake3::Hasher::new();
-    let mut files: Vec<PathBuf> = Vec::new();
-    let mut thresholds: Vec<String> = Vec::new();
-    let mut add = |s: &Scene| {
+/// scene and, where the design varies a file-valued key (`*_file`: `--vary
+/// liner.mesh_file=a.inp,b.inp`), of each distinct combination of the design's files (`keys`,
+/// and every run's values `all`), each file once in the order found, so that shards run on
+/// different files are not merged as one study.
+fn inputs_digest(req: &SweepRequest, keys: &[String], all: &[Vec<String>]) -> Result<String> {
+    let file_keys: Vec<usize> = (0..keys.len())
+        .filter(|&i| keys[i].ends_with("_file"))
+        .collect();
+    let mut combos: Vec<Vec<String>> = vec![Vec::new()];
+    for run in all {
+        let c: Vec<String> = file_keys
+            .iter()
+            .map(|&i| format!("{}={}", keys[i], run[i]))
+            .collect();
+        if !combos.contains(&c) {
+            combos.push(c);
+        }
+    }
+    let (mut roots, mut files, mut thresholds) = (Vec::new(), Vec::new(), Vec::new());
+    for c in combos {
+        let sets: Vec<String> = req.sets.iter().chain(&c).cloned().collect();
+        let s = super::load_scene(&req.scene, &sets)?;
         let t = format!("{:?}", s.cavitation.thresholds);
         if !thresholds.contains(&t) {
             thresholds.push(t);
         }
-        for f in scene_files(s) {
-            if !files.contains(&f) {
-                files.push(f);
+        for (root, deck) in scene_files(&s) {
+            // a deck's includes are read once per distinct deck
+            if roots.contains(&root) {
+                continue;
+            }
+            roots.push(root.clone());
+            let found = if deck {
+                crate::mesh::deck_files(&root)
+            } else {
+                vec![root]
+            };
+            for f in found {
+                if !files.contains(&f) {
+                    files.push(f);
+                }
             }
         }
-    };
-    add(base);
-    for run in runs {
-        let sets: Vec<String> = req.sets.iter().chain(run).cloned().collect();
-        add(&super::load_scene(&req.scene, &sets)?);
     }
+    let mut h = blake3::Hasher::new();
     for t in &thresholds {
         h.update(t.as_bytes());
     }
@@ -263,19 +284,19 @@ fn inputs_digest(req: &SweepRequest, base: &Scene, runs: &[Vec<String>]) -> Resu
     Ok(h.finalize().to_hex().to_string())
 }
 
-/// The files scene `s` reads beside its text: its pressure curve and its mesh decks with their
-/// includes.
-fn scene_files(s: &Scene) -> Vec<PathBuf> {
+/// The files scene `s` reads beside its text, each with whether it is a mesh deck (whose
+/// includes it reads too): its pressure curve and its mesh decks.
+fn scene_files(s: &Scene) -> Vec<(PathBuf, bool)> {
     use crate::scene::{CrankcaseSource, MeshSource, PressureSource};
-    let mut files: Vec<PathBuf> = Vec::new();
+    let mut files = Vec::new();
     if let Some(PressureSource::File(p)) = s.simulation.as_ref().map(|m| &m.operating.pressure) {
-        files.push(p.clone());
+        files.push((p.clone(), false));
     }
     if let MeshSource::File(p) = &s.liner.source {
-        files.extend(crate::mesh::deck_files(p));
+        files.push((p.clone(), true));
     }
     if let Some(CrankcaseSource::File(p)) = s.crankcase.as_ref().map(|c| &c.source) {
-        files.extend(crate::mesh::deck_files(p));
+        files.push((p.clone(), true));
     }
     files
 }
@@ -310,30 +331,16 @@ fn execute(
     // change is measured against it (each shard runs it: the runs are deterministic)
     let mut extra = extra;
     extra.push(Vec::new());
+    // the files of the base design and of every run of the design (the other shards' too),
+    // before any ROM is built
+    let inputs = match sharded {
+        true => Some(inputs_digest(req, &keys, all)?),
+        false => None,
+    };
     let rom_progress = super::rom::RomProgress::default();
     let variants = Variants::prepare(&req.scene, &req.sets, &extra, &req.cache, &|m| {
         rom_progress.phase(m)
     })?;
-    // the files of the base design and of every run of the design, the other shards' too
-    let inputs = match sharded {
-        true => {
-            let runs: Vec<Vec<String>> = all
-                .iter()
-                .map(|v| {
-                    keys.iter()
-                        .zip(v)
-                        .map(|(k, x)| format!("{k}={x}"))
-                        .collect()
-                })
-                .collect();
-            Some(inputs_digest(
-                req,
-                &variants.scenes[extra.len() - 1],
-                &runs,
-            )?)
-        }
-        false => None,
-    };
     let bar = super::progress::Progress::counter(indices.len() as u64 + 1);
     let mut labels: Vec<String> = indices.iter().map(|&k| label(&keys, &all[k])).collect();
     labels.push("the base design".into());

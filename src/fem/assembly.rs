@@ -13,9 +13,10 @@ use rayon::prelude::*;
 
 /// An element whose matrices could not be formed.
 #[derive(Debug, thiserror::Error)]
-#[error("element {element}: {source}")]
+#[error("solid element {element}: {source}")]
 pub struct AssemblyError {
-    pub element: usize,
+    /// The element as [`Mesh::element_name`] names it (file and line for a deck).
+    pub element: String,
     #[source]
     pub source: ElementError,
 }
@@ -151,8 +152,12 @@ impl Assembler {
                 .map(|(i, (kind, nodes))| {
                     let element = c * CHUNK * rayon::current_num_threads().max(1) + i;
                     let mat = mesh.material_of(element, mat);
-                    stiffness_mass(*kind, &mesh.coords_of(nodes), mat)
-                        .map_err(|source| AssemblyError { element, source })
+                    stiffness_mass(*kind, &mesh.coords_of(nodes), mat).map_err(|source| {
+                        AssemblyError {
+                            element: mesh.element_name(element),
+                            source,
+                        }
+                    })
                 })
                 .collect();
             let mats = mats.into_iter().collect::<Result<Vec<_>, _>>()?;

@@ -4,11 +4,6 @@
 
 use super::{DeckMaterial, ElementBlock, ElementLines, Mesh, NO_MATERIAL};
 
-/// A file index or line number as stored per element (saturating at u32::MAX: a deck's
-/// size is bounded far below).
-pub(crate) fn small(v: usize) -> u32 {
-    u32::try_from(v).unwrap_or(u32::MAX)
-}
 use crate::scene::spec::ElementKind;
 
 /// Why a mesh file could not be read: the file, the line and what was expected.
@@ -22,6 +17,12 @@ pub struct DeckError {
 use crate::files::{read_text, ReadError, LIMIT_MESH};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
+
+/// A file index or line number as stored per element (saturating at u32::MAX: a deck's
+/// size is bounded far below).
+pub(crate) fn small(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
 
 /// Where a record of a deck came from: an index into [`Collected::files`] and a 1-based line.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -276,6 +277,7 @@ impl Collected {
             element_lines: Some(ElementLines {
                 files: self.files.clone(),
                 at: lines,
+                unit: super::MeshUnit::M,
             }),
             ..Default::default()
         };

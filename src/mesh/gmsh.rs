@@ -421,6 +421,7 @@ fn assemble(s: Sections, path: &Path) -> Mesh {
                 .flatten()
                 .map(|line| (0, line))
                 .collect(),
+            unit: super::MeshUnit::M,
         }),
         ..Default::default()
     };

@@ -95,13 +95,11 @@ pub fn resolve_material(
     given: Option<Elastic>,
     path: &Path,
     key: &str,
-) -> Result<(Elastic, MaterialSource), ImportError> {
+) -> Result<(Elastic, MaterialSource, Option<String>), ImportError> {
     if let Some(m) = given {
-        if let Some(w) = overridden(mesh, &m, path, key) {
-            log::warn!("{w}");
-        }
+        let warning = overridden(mesh, &m, path, key);
         mesh.clear_materials();
-        return Ok((m, MaterialSource::Given));
+        return Ok((m, MaterialSource::Given, warning));
     }
     let bad = |msg: String| ImportError::Material {
         path: path.to_path_buf(),
@@ -127,7 +125,7 @@ pub fn resolve_material(
                 ))
             })?;
     }
-    Ok((mesh.materials[0].elastic, MaterialSource::Deck))
+    Ok((mesh.materials[0].elastic, MaterialSource::Deck, None))
 }
 
 /// The warning for a given material `m` that replaces deck materials of `mesh` with other

@@ -149,6 +149,8 @@ pub struct ElementLines {
     pub files: Vec<std::path::PathBuf>,
     /// Per element (global index in block order): index into `files` and 1-based line.
     pub at: Vec<(u32, u32)>,
+    /// The files' length unit (set by [`Mesh::to_si`]): messages give coordinates in it.
+    pub unit: MeshUnit,
 }
 
 /// An element of a deck that no section or property gives a material.
@@ -165,6 +167,9 @@ impl Mesh {
     /// Converts a mesh read in `unit` to SI: x_SI = s x with s the metres per unit; in the
     /// mm-t-s system E_SI = 1e6 E (MPa -> Pa) and rho_SI = 1e12 rho (t/mm^3 -> kg/m^3).
     pub fn to_si(&mut self, unit: MeshUnit) {
+        if let Some(l) = &mut self.element_lines {
+            l.unit = unit;
+        }
         if unit == MeshUnit::M {
             return;
         }
@@ -215,11 +220,18 @@ impl Mesh {
         }
     }
     /// How messages name node `n`: its place in the mesh for a generated mesh, its
-    /// coordinates (SI) for a mesh read from files (whose node ids may be renumbered, as an
-    /// Abaqus instance's are).
+    /// coordinates in the files' unit for a mesh read from files (whose node ids may be
+    /// renumbered, as an Abaqus instance's are).
     pub fn node_name(&self, n: usize) -> String {
         match (&self.element_lines, self.nodes.get(n)) {
-            (Some(_), Some(x)) => format!("the node at ({:.6}, {:.6}, {:.6}) m", x[0], x[1], x[2]),
+            (Some(l), Some(x)) => {
+                let (s, name) = match l.unit {
+                    MeshUnit::M => (1.0, "m"),
+                    MeshUnit::Mm => (1e3, "mm"),
+                };
+                let [a, b, c] = x.map(|v| v * s);
+                format!("the node at ({a:.6}, {b:.6}, {c:.6}) {name}")
+            }
             _ => format!("the mesh's node #{}", n + 1),
         }
     }

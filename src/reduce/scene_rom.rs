@@ -202,7 +202,10 @@ fn part_mesh(
     };
     let mut mesh = import::read_si(p, unit, &format!("{part}.mesh_unit"))?;
     let deck_has = !mesh.materials.is_empty();
-    let (m, src) = import::resolve_material(&mut mesh, given, p, &key)?;
+    let (m, src, warning) = import::resolve_material(&mut mesh, given, p, &key)?;
+    if let Some(w) = warning {
+        log::warn!("{w}");
+    }
     let note = match src {
         import::MaterialSource::Given if deck_has => {
             format!("{part}: scene (overrides the deck's)")

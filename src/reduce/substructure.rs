@@ -86,7 +86,7 @@ fn element_slabs(mesh: &Mesh, cuts_x: &[f64]) -> Vec<usize> {
 }
 
 /// The sub-mesh of the elements `keep` (global element indices, ascending): nodes renumbered
-/// in the part's order, node sets restricted (order kept, empty ones dropped), element sets
+/// in the part's order, node sets restricted (order kept, empty ones dropped), element sets,
 /// materials and element lines carried. Returns the mesh and its nodes' part indices.
 fn sub_mesh(mesh: &Mesh, keep: &[bool]) -> (Mesh, Vec<usize>) {
     let mut used = vec![false; mesh.nodes.len()];
@@ -149,6 +149,7 @@ fn sub_mesh(mesh: &Mesh, keep: &[bool]) -> (Mesh, Vec<usize>) {
             .map(|l| crate::mesh::ElementLines {
                 files: l.files.clone(),
                 at: lines,
+                unit: l.unit,
             }),
     };
     (sub, nodes)

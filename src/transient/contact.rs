@@ -785,7 +785,7 @@ impl<'s, 'a> Step<'s, 'a> {
             self.add_films(active, (g, gv), pred, (&mut wt, &mut rhs));
         }
         let sol = if na > 0 {
-            let lu = Lu::new(wt.transpose().as_slice().to_vec(), na);
+            let lu = Lu::new(wt.transpose().data.into(), na);
             let mut sol = rhs;
             lu.solve(sol.as_mut_slice(), 1 + nq)
                 .ok_or(StepFailure::Singular)?;

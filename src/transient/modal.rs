@@ -49,8 +49,8 @@ pub struct ModalStructure {
     pub blocks: Option<Vec<std::ops::Range<usize>>>,
     /// Per step size and static-correction flag (key: dt bits, flag): S = Phi D Phi^T over
     /// the contact DOFs and T = S + R (T = S without the static correction), each stored
-    /// transposed (row e holds column e), so that a response G F is a sum of whole rows
-    /// ([`ModalStructure::apply_step_matrix`]).
+    /// transposed (row e holds column e), so that a response G F is a sum of contiguous row
+    /// pieces ([`ModalStructure::apply_step_matrix`]).
     step_compliance: Vec<(u64, bool, StepMatrices)>,
     /// Index into `step_compliance` of the current step.
     current: usize,
@@ -328,10 +328,10 @@ impl Structure for ModalStructure {
 impl ModalStructure {
     /// scale * sum_d w_id sum_e X_de F_e at every location of this step, X a DOF-level step
     /// matrix (S or T, given transposed as `xt`) and the forces at `active` gathered on the
-    /// DOFs. The sums over e are formed for the span of DOFs the locations use at once,
-    /// sum_e F_e xt_e. (contiguous pieces of rows, vector operations; each DOF's terms added
-    /// in the order of the gathered DOFs, from -0.0 as a float sum starts), and shared by the
-    /// locations beside each DOF.
+    /// DOFs. The sums over e are formed for the span of DOFs the locations use at once, as
+    /// the sum over e of F_e times row e of `xt` (contiguous pieces of rows, vector
+    /// operations; each DOF's terms added in the order of the gathered DOFs, from -0.0 as a
+    /// float sum starts), and shared by the locations beside each DOF.
     fn apply_step_matrix(
         &self,
         xt: &Dense,
