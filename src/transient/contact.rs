@@ -492,6 +492,9 @@ pub fn step(
     let locs: Vec<Location> = slices.iter().map(|s| s.at).collect();
     structure.prepare(&locs);
     st.in_group = film_slices(films, slices.len());
+    if !films.is_empty() {
+        st.last_response = Some(std::cell::RefCell::new(None));
+    }
     let mut pred = Predictions::new(slices, &*structure, &st.in_group);
     // penetration of each slice without new contact forces: first guess of the pieces
     let mut pen: Vec<f64> = (0..slices.len())
@@ -694,7 +697,14 @@ struct Step<'s, 'a> {
     blocks: Vec<FilmBlock>,
     in_film: Vec<bool>,
     in_group: Vec<bool>,
+    /// The last structure response asked for: active slices, their forces, G F and G_v F
+    /// ([`Step::responses`]); kept for a lubricated step only (`None`: not kept).
+    last_response: Option<std::cell::RefCell<Option<Response>>>,
 }
+
+/// A structure response: active slices, their forces, the displacement and velocity at every
+/// slice.
+type Response = (Vec<usize>, Vec<f64>, Vec<f64>, Vec<f64>);
 
 fn dot2(r: [f64; 2], q: [f64; 2]) -> f64 {
     r[0] * q[0] + r[1] * q[1]
@@ -729,6 +739,7 @@ impl<'s, 'a> Step<'s, 'a> {
             blocks: Vec::new(),
             in_film: vec![false; slices.len()],
             in_group: vec![false; slices.len()],
+            last_response: None,
         }
     }
 
@@ -858,7 +869,9 @@ impl<'s, 'a> Step<'s, 'a> {
     }
 
     /// The displacement and velocity at every slice caused by the forces `fa` at `active`:
-    /// G F and G_v F (zero without forces).
+    /// G F and G_v F (zero without forces). The last call's are kept and returned again for
+    /// the same forces (a lubricated iteration asks for its accepted state's twice: in the
+    /// line search and for the slices' next pieces).
     fn responses(
         &self,
         structure: &dyn Structure,
@@ -867,13 +880,27 @@ impl<'s, 'a> Step<'s, 'a> {
     ) -> (Vec<f64>, Vec<f64>) {
         if active.is_empty() {
             let n = self.slices.len();
-            (vec![0.0; n], vec![0.0; n])
-        } else {
+            return (vec![0.0; n], vec![0.0; n]);
+        }
+        let respond = || {
             (
                 structure.response(active, fa),
                 structure.velocity_response(active, fa),
             )
+        };
+        // only a lubricated step asks twice (a dry one would pay the copies for nothing)
+        let Some(memo) = &self.last_response else {
+            return respond();
+        };
+        let mut last = memo.borrow_mut();
+        if let Some((a, f, u, v)) = last.as_ref() {
+            if a == active && f == fa {
+                return (u.clone(), v.clone());
+            }
         }
+        let (u, v) = respond();
+        *last = Some((active.to_vec(), fa.to_vec(), u.clone(), v.clone()));
+        (u, v)
     }
 
     /// The film groups' penetrations and rates (0 elsewhere) at body coordinates `q` with
