@@ -546,6 +546,31 @@ fn regression_a_bad_element_of_a_mixed_deck_is_named_by_its_file_and_line() {
         "has no material",
     );
     assert!(err.contains("bare.inp:10"), "{err}");
+    // an element of an Abaqus part is defined once for all its instances: the part and
+    // instance are named with the line
+    let inst = dir.path().join("inst.inp");
+    std::fs::write(
+        &inst,
+        "*PART, NAME=P\n*NODE\n1, 0., 0., 0.\n2, 1., 0., 0.\n3, 0., 1., 0.\n4, 1., 1., 0.\n\
+         *ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*END PART\n*ASSEMBLY, NAME=A\n\
+         *INSTANCE, NAME=first, PART=P\n*END INSTANCE\n*INSTANCE, NAME=second, PART=P\n0., 0., 5.\n\
+         *END INSTANCE\n*END ASSEMBLY\n",
+    )
+    .unwrap();
+    let mut cmd = vec!["modes", "--mesh", inst.to_str().unwrap(), "--count", "2"];
+    cmd.extend([
+        "--youngs",
+        "2.1e11",
+        "--poisson",
+        "0.3",
+        "--density",
+        "7850",
+    ]);
+    let err = refused(&cmd, 2, "no volume");
+    assert!(
+        err.contains("inst.inp:8 (part 'P', instance 'first')"),
+        "{err}"
+    );
 }
 
 /// Regression: a Nastran deck cut short inside a CTETRA card was refused with "element 1 has 6

@@ -1228,6 +1228,9 @@ impl Reader {
     ) -> Result<Ids, DeckError> {
         let mut ids = Ids::default();
         let overflow = || self.err(inst.loc, format!("*INSTANCE '{}': ids overflow", inst.name));
+        let scope = u32::try_from(c.scopes.len()).unwrap_or(u32::MAX);
+        c.scopes
+            .push(format!("part '{}', instance '{}'", part.name, inst.name));
         for &(id, x, loc) in &part.scope.nodes {
             let g = fresh(&mut next[0]).ok_or_else(overflow)?;
             if ids.nodes.insert(id, g).is_some() {
@@ -1259,6 +1262,7 @@ impl Reader {
                 ));
             }
             c.elements.push((g, *kind, conn, *loc));
+            c.element_scope.insert(g, scope);
         }
         Ok(ids)
     }

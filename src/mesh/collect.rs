@@ -55,6 +55,10 @@ pub(crate) struct Collected {
     pub materials: BTreeMap<String, (crate::scene::spec::Elastic, Loc)>,
     /// Element id -> (material name, where the assignment was made: PSOLID, *SOLID SECTION).
     pub element_material: HashMap<i64, (String, Loc)>,
+    /// What placed an element defined once for several bodies (an Abaqus part's instances):
+    /// the labels, and element id -> index into them (empty for a flat deck).
+    pub scopes: Vec<String>,
+    pub element_scope: HashMap<i64, u32>,
 }
 
 /// Reorders a quadratic element's nodes from a deck's edge convention to ours: the corners
@@ -260,6 +264,7 @@ impl Collected {
         let mut element_index: HashMap<i64, usize> = HashMap::new();
         let mut blocks = Vec::new();
         let mut lines = Vec::with_capacity(self.elements.len());
+        let mut scope = Vec::new();
         let mut acc = 0;
         for (kind, list) in by_kind {
             let mut conn = Vec::with_capacity(list.len() * kind.num_nodes());
@@ -268,6 +273,9 @@ impl Collected {
                 acc += 1;
                 conn.extend(c);
                 lines.push((small(loc.file), small(loc.line)));
+                if !self.scopes.is_empty() {
+                    scope.push(self.element_scope.get(&eid).copied().unwrap_or(u32::MAX));
+                }
             }
             blocks.push(ElementBlock { kind, conn });
         }
@@ -278,6 +286,8 @@ impl Collected {
                 files: self.files.clone(),
                 at: lines,
                 unit: super::MeshUnit::M,
+                scopes: self.scopes.clone(),
+                scope,
             }),
             ..Default::default()
         };

@@ -422,6 +422,8 @@ fn assemble(s: Sections, path: &Path) -> Mesh {
                 .map(|line| (0, line))
                 .collect(),
             unit: super::MeshUnit::M,
+            scopes: Vec::new(),
+            scope: Vec::new(),
         }),
         ..Default::default()
     };

@@ -151,6 +151,11 @@ pub struct ElementLines {
     pub at: Vec<(u32, u32)>,
     /// The files' length unit (set by [`Mesh::to_si`]): messages give coordinates in it.
     pub unit: MeshUnit,
+    /// What placed an element defined once for several bodies (an Abaqus part's instance):
+    /// the labels, and per element an index into them (`u32::MAX`: none); `scope` is empty
+    /// when the files place nothing so.
+    pub scopes: Vec<String>,
+    pub scope: Vec<u32>,
 }
 
 /// An element of a deck that no section or property gives a material.
@@ -209,10 +214,17 @@ impl Mesh {
             .as_ref()
             .and_then(|l| Some((l.at.get(e)?, l)));
         match place {
-            Some((&(f, line), l)) => match l.files.get(f as usize) {
-                Some(file) => format!("defined at {}:{line}", file.display()),
-                None => format!("defined on line {line}"),
-            },
+            Some((&(f, line), l)) => {
+                let within = l
+                    .scope
+                    .get(e)
+                    .and_then(|&k| l.scopes.get(k as usize))
+                    .map_or(String::new(), |s| format!(" ({s})"));
+                match l.files.get(f as usize) {
+                    Some(file) => format!("defined at {}:{line}{within}", file.display()),
+                    None => format!("defined on line {line}{within}"),
+                }
+            }
             None => format!(
                 "#{} (1-based, in the order of the mesh's solid elements)",
                 e + 1

@@ -93,7 +93,7 @@ fn sub_mesh(mesh: &Mesh, keep: &[bool]) -> (Mesh, Vec<usize>) {
     let mut blocks = Vec::new();
     let mut element_map = vec![usize::MAX; keep.len()];
     let mut element_material = Vec::new();
-    let mut lines = Vec::new();
+    let (mut lines, mut scope) = (Vec::new(), Vec::new());
     let (mut e, mut next_e) = (0, 0);
     for b in &mesh.blocks {
         let nn = b.kind.num_nodes();
@@ -107,8 +107,9 @@ fn sub_mesh(mesh: &Mesh, keep: &[bool]) -> (Mesh, Vec<usize>) {
                 if let Some(&m) = mesh.element_material.get(e) {
                     element_material.push(m);
                 }
-                if let Some(&at) = mesh.element_lines.as_ref().and_then(|l| l.at.get(e)) {
-                    lines.push(at);
+                if let Some(l) = &mesh.element_lines {
+                    lines.extend(l.at.get(e));
+                    scope.extend(l.scope.get(e));
                 }
             }
             e += 1;
@@ -150,6 +151,8 @@ fn sub_mesh(mesh: &Mesh, keep: &[bool]) -> (Mesh, Vec<usize>) {
                 files: l.files.clone(),
                 at: lines,
                 unit: l.unit,
+                scopes: l.scopes.clone(),
+                scope,
             }),
     };
     (sub, nodes)
