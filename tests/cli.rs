@@ -570,3 +570,53 @@ fn regression_fewer_modes_than_a_free_body_has_rigid_modes_are_certified() {
         assert!(f.iter().all(|x| x.as_f64().unwrap().abs() < 1.0), "{v}");
     }
 }
+
+/// Regression: a free mesh of two bodies (12 rigid-body modes) asked for fewer modes than
+/// that failed with exit 1, "K - sigma M is not positive definite": the shift check's block
+/// held rigid-body modes only, so its roundoff test (against the block's own largest value)
+/// let a bound of 1e-5 move the shift to zero. Roundoff is judged against the shift too.
+#[test]
+fn regression_fewer_modes_than_two_free_bodies_have_rigid_modes_are_certified() {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = dir.path().join("two.bdf");
+    let mut text = String::from("BEGIN BULK\n");
+    for (b, x0) in [(0, 0.0), (1, 1.0)] {
+        let corners = [
+            [0., 0., 0.],
+            [0.1, 0., 0.],
+            [0.1, 0.1, 0.],
+            [0., 0.1, 0.],
+            [0., 0., 0.1],
+            [0.1, 0., 0.1],
+            [0.1, 0.1, 0.1],
+            [0., 0.1, 0.1],
+        ];
+        for (k, c) in corners.iter().enumerate() {
+            let id = 8 * b + k + 1;
+            text += &format!("GRID,{id},,{},{},{}\n", x0 + c[0], c[1], c[2]);
+        }
+        let ids: Vec<String> = (1..=8).map(|k| (8 * b + k).to_string()).collect();
+        text += &format!(
+            "CHEXA,{},1,{},+\n+,{}\n",
+            b + 1,
+            ids[..6].join(","),
+            ids[6..].join(",")
+        );
+    }
+    text += "PSOLID,1,1\nMAT1,1,2.1e11,,0.3,7850.\nENDDATA\n";
+    std::fs::write(&deck, text).unwrap();
+    for count in ["1", "2", "6"] {
+        let args = [
+            "modes",
+            "--mesh",
+            deck.to_str().unwrap(),
+            "--count",
+            count,
+            "--json",
+        ];
+        let v = json(&linercav(&args));
+        assert_eq!(v["sturm_count_ok"], true, "--count {count}: {v}");
+        let f = v["frequencies_hz"].as_array().unwrap();
+        assert!(f.iter().all(|x| x.as_f64().unwrap().abs() < 1.0), "{v}");
+    }
+}

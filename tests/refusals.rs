@@ -573,6 +573,49 @@ fn regression_a_bad_element_of_a_mixed_deck_is_named_by_its_file_and_line() {
     );
 }
 
+/// Regression (hostile sweep): a Gmsh file with one solid element tag given twice was read as
+/// two elements (the Nastran and Abaqus readers refuse such a deck), and a hex8 with two
+/// distinct corner nodes at one place was said to have no volume (it has): both are named
+/// for what they are.
+#[test]
+fn regression_a_repeated_element_tag_and_coincident_corners_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let dup = dir.path().join("dup.msh");
+    std::fs::write(
+        &dup,
+        "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 5 1 5\n3 1 0 5\n1\n2\n3\n4\n5\n\
+         0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n$EndNodes\n$Elements\n1 2 1 2\n3 1 4 2\n\
+         1 1 2 3 4\n1 2 3 5 4\n$EndElements\n",
+    )
+    .unwrap();
+    let mut cmd = vec!["modes", "--mesh", dup.to_str().unwrap(), "--count", "2"];
+    cmd.extend([
+        "--youngs",
+        "2.1e11",
+        "--poisson",
+        "0.3",
+        "--density",
+        "7850",
+    ]);
+    let err = refused(&cmd, 2, "element tag 1 defined twice");
+    assert!(err.contains("dup.msh:22"), "{err}");
+    let hex = dir.path().join("hex.bdf");
+    // GRID 8 sits on GRID 7
+    std::fs::write(
+        &hex,
+        "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,1.,1.,0.\nGRID,4,,0.,1.,0.\n\
+         GRID,5,,0.,0.,1.\nGRID,6,,1.,0.,1.\nGRID,7,,1.,1.,1.\nGRID,8,,1.,1.,1.\n\
+         CHEXA,1,1,1,2,3,4,5,6,+\n+,7,8\nPSOLID,1,1\nMAT1,1,2.1e11,,0.3,7850.\nENDDATA\n",
+    )
+    .unwrap();
+    let err = refused(
+        &["modes", "--mesh", hex.to_str().unwrap(), "--count", "2"],
+        2,
+        "two of its corner nodes are at one place",
+    );
+    assert!(err.contains("hex.bdf:10"), "{err}");
+}
+
 /// Regression: a Nastran deck cut short inside a CTETRA card was refused with "element 1 has 6
 /// nodes", which did not say why; the message now points at the missing continuation.
 #[test]

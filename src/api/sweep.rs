@@ -249,7 +249,8 @@ fn inputs_digest(req: &SweepRequest, keys: &[String], all: &[Vec<String>]) -> Re
             combos.push(c);
         }
     }
-    let (mut roots, mut files, mut thresholds) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut roots, mut thresholds) = (Vec::new(), Vec::new());
+    let mut files: Vec<(PathBuf, &str)> = Vec::new();
     for c in combos {
         let sets: Vec<String> = req.sets.iter().chain(&c).cloned().collect();
         let s = super::load_scene(&req.scene, &sets)?;
@@ -257,20 +258,23 @@ fn inputs_digest(req: &SweepRequest, keys: &[String], all: &[Vec<String>]) -> Re
         if !thresholds.contains(&t) {
             thresholds.push(t);
         }
-        for (root, deck) in scene_files(&s) {
+        for (root, key, deck) in scene_files(&s) {
             // a deck's includes are read once per distinct deck
             if roots.contains(&root) {
                 continue;
             }
             roots.push(root.clone());
-            let found = if deck {
+            let mut found = if deck {
                 crate::mesh::deck_files(&root)
             } else {
-                vec![root]
+                vec![root.clone()]
             };
+            // an include that is not there is the deck reader's to report, with the file and
+            // line that name it
+            found.retain(|p| *p == root || p.exists());
             for f in found {
-                if !files.contains(&f) {
-                    files.push(f);
+                if !files.iter().any(|(g, _)| *g == f) {
+                    files.push((f, key));
                 }
             }
         }
@@ -279,24 +283,33 @@ fn inputs_digest(req: &SweepRequest, keys: &[String], all: &[Vec<String>]) -> Re
     for t in &thresholds {
         h.update(t.as_bytes());
     }
-    crate::files::hash_files(&mut h, &files, crate::files::LIMIT_MESH)
-        .map_err(|(path, source)| crate::scene::SceneError::Io { path, source })?;
+    for (f, key) in &files {
+        crate::files::hash_files(&mut h, std::slice::from_ref(f), crate::files::LIMIT_MESH)
+            .map_err(|(path, source)| crate::scene::SceneError::Field {
+                path: req.scene.clone(),
+                key: key.to_string(),
+                msg: format!(
+                    "cannot read {} (a file of the study's runs): {source}",
+                    path.display()
+                ),
+            })?;
+    }
     Ok(h.finalize().to_hex().to_string())
 }
 
-/// The files scene `s` reads beside its text, each with whether it is a mesh deck (whose
-/// includes it reads too): its pressure curve and its mesh decks.
-fn scene_files(s: &Scene) -> Vec<(PathBuf, bool)> {
+/// The files scene `s` reads beside its text, each with the key that names it and whether it
+/// is a mesh deck (whose includes it reads too): its pressure curve and its mesh decks.
+fn scene_files(s: &Scene) -> Vec<(PathBuf, &'static str, bool)> {
     use crate::scene::{CrankcaseSource, MeshSource, PressureSource};
     let mut files = Vec::new();
     if let Some(PressureSource::File(p)) = s.simulation.as_ref().map(|m| &m.operating.pressure) {
-        files.push((p.clone(), false));
+        files.push((p.clone(), "operating.pressure_file", false));
     }
     if let MeshSource::File(p) = &s.liner.source {
-        files.push((p.clone(), true));
+        files.push((p.clone(), "liner.mesh_file", true));
     }
     if let Some(CrankcaseSource::File(p)) = s.crankcase.as_ref().map(|c| &c.source) {
-        files.push((p.clone(), true));
+        files.push((p.clone(), "crankcase.mesh_file", true));
     }
     files
 }

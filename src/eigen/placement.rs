@@ -167,8 +167,12 @@ pub fn placed_shift(
         log::debug!("shift check pass {pass}: lambda_{nev} <= {theta_max:.4e} (shift {sigma:.4e})");
         let last = bounds.last().copied();
         bounds.push(theta_max);
-        // a bound at roundoff (every wanted mode a rigid-body mode) moves nothing
-        let top = Some(theta_max).filter(|&t| above_roundoff(t, ritz[ritz.len() - 1]));
+        // a bound at roundoff (every wanted mode a rigid-body mode) moves nothing; roundoff
+        // against the block's largest Ritz value and the shift (a mesh of several free bodies
+        // may fill the whole block with rigid-body modes, whose values are roundoff of the
+        // shift)
+        let scale = ritz[ritz.len() - 1].max(-sigma);
+        let top = Some(theta_max).filter(|&t| above_roundoff(t, scale));
         let moved = |settled| {
             top.and_then(|t| moved_shift(t, sigma))
                 .map(|sigma| Moved { sigma, settled })

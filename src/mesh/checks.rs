@@ -139,7 +139,7 @@ enum Flaw {
     MidNode(usize, f64),
     Twice(usize),
     Flat,
-    ZeroEdge(usize, usize),
+    Coincident(usize, usize),
 }
 
 impl Flaw {
@@ -168,8 +168,8 @@ impl Flaw {
             Flaw::Flat => {
                 degenerate("it has no volume (its nodes lie in a plane or on a line)".into())
             }
-            Flaw::ZeroEdge(a, b) => degenerate(format!(
-                "its edge from {} to {} has zero length (two nodes at one place)",
+            Flaw::Coincident(a, b) => degenerate(format!(
+                "two of its corner nodes are at one place: {} and {}",
                 mesh.node_name(a),
                 mesh.node_name(b)
             )),
@@ -177,8 +177,8 @@ impl Flaw {
     }
 }
 
-/// The shape of one solid element with its `nodes` at `x`: no node given twice, it has
-/// volume, no edge of zero length, its mid-edge nodes near their edges' midpoints, and a
+/// The shape of one solid element with its `nodes` at `x`: no node given twice, no two corner
+/// nodes at one place, it has volume, its mid-edge nodes near their edges' midpoints, and a
 /// positive Jacobian.
 fn check_element(
     (kind, nodes): (ElementKind, &[usize]),
@@ -194,6 +194,14 @@ fn check_element(
     {
         return Err(Flaw::Twice(n));
     }
+    // two distinct corner nodes at one place (a hex8 so collapsed still has volume)
+    for a in 0..nc {
+        for b in a + 1..nc {
+            if x[a] == x[b] {
+                return Err(Flaw::Coincident(nodes[a], nodes[b]));
+            }
+        }
+    }
     // an element without volume (a flat one) is degenerate whatever its mid-edge nodes
     if ratio.is_nan() || ratio.abs() <= 1e-6 {
         return Err(Flaw::Flat);
@@ -203,9 +211,6 @@ fn check_element(
             .map(|i| (x[a][i] - x[b][i]).powi(2))
             .sum::<f64>()
             .sqrt();
-        if len == 0.0 {
-            return Err(Flaw::ZeroEdge(nodes[a], nodes[b]));
-        }
         let off = (0..3)
             .map(|i| (x[nc + m][i] - 0.5 * (x[a][i] + x[b][i])).powi(2))
             .sum::<f64>()

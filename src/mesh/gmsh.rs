@@ -123,6 +123,8 @@ struct Sections {
     entity_phys: HashMap<(i32, i32), Vec<i32>>,
     /// Gmsh node tag -> our node index
     node_id: HashMap<usize, usize>,
+    /// Tags of the solid elements read (a tag given twice is refused)
+    solid_tags: std::collections::HashSet<usize>,
     nodes: Vec<[f64; 3]>,
     blocks: Vec<Block>,
     saw_format: bool,
@@ -329,6 +331,9 @@ fn read_elements(lines: &mut Lines, s: &mut Sections) -> Result<(), DeckError> {
             let v = lines.numbers::<usize>("element record")?;
             if dim == 3 {
                 at.push(super::collect::small(lines.line));
+                if !s.solid_tags.insert(v[0]) {
+                    return Err(lines.err(format!("element tag {} defined twice", v[0])));
+                }
             }
             if v.len() != nn + 1 {
                 return Err(lines.err(format!(

@@ -64,42 +64,67 @@ pub fn deck_files(path: &std::path::Path) -> Vec<std::path::PathBuf> {
     out
 }
 
-/// File names of the include lines of a deck's text: `INCLUDE 'name'` (a quoted name may go on
-/// over lines) or `INCLUDE name`, and `*INCLUDE, INPUT=name`.
+/// File names a deck's text reads beside itself: Nastran `INCLUDE 'name'` (a quoted name may
+/// go on over lines) or `INCLUDE name` in the bulk data (after `BEGIN BULK` when the file has
+/// one, before `ENDDATA`: the reader skips the executive and case control sections), and the
+/// `INPUT=name` parameter of any Abaqus keyword line (`*INCLUDE`, `*NODE`, `*ELEMENT`, ...;
+/// spaces around `=` allowed, the name quoted or not).
 fn include_names(text: &str) -> Vec<String> {
     let mut names = Vec::new();
-    let mut lines = text.lines();
+    let bulk_start = text.lines().position(|l| {
+        l.trim_start()
+            .to_ascii_uppercase()
+            .starts_with("BEGIN BULK")
+    });
+    let mut lines = text.lines().skip(bulk_start.map_or(0, |k| k + 1));
     while let Some(l) = lines.next() {
         let t = l.trim_start();
         let up = t.to_ascii_uppercase();
-        if up.starts_with("*INCLUDE") {
-            if let Some(k) = up.find("INPUT=") {
-                let v = t[k + 6..].split(',').next().unwrap_or("").trim();
-                names.push(v.trim_matches('"').trim_matches('\'').to_string());
-            }
+        if up.starts_with("ENDDATA") {
+            break;
+        }
+        if t.starts_with('*') && !t.starts_with("**") {
+            names.extend(abaqus_input(t));
         } else if up.starts_with("INCLUDE") {
-            let rest = t[7..].trim();
-            if let Some(q) = rest.strip_prefix('\'') {
-                let mut name = String::new();
-                let mut part = q.to_string();
-                loop {
-                    if let Some(end) = part.find('\'') {
-                        name.push_str(part[..end].trim());
-                        break;
-                    }
-                    name.push_str(part.trim());
-                    match lines.next() {
-                        Some(n) => part = n.to_string(),
-                        None => break,
-                    }
-                }
-                names.push(name);
-            } else if !rest.is_empty() {
-                names.push(rest.split_whitespace().next().unwrap_or("").to_string());
-            }
+            names.extend(nastran_include(t, &mut lines));
         }
     }
     names
+}
+
+/// The `INPUT=` parameter of an Abaqus keyword line, if any.
+fn abaqus_input(line: &str) -> Option<String> {
+    line.split(',').skip(1).find_map(|param| {
+        let (key, value) = param.split_once('=')?;
+        key.trim().eq_ignore_ascii_case("INPUT").then(|| {
+            let v = value.trim();
+            v.trim_matches('"').trim_matches('\'').to_string()
+        })
+    })
+}
+
+/// The file name of a Nastran `INCLUDE` line `line` (a quoted name may go on over the next
+/// of `lines`).
+fn nastran_include<'a>(line: &str, lines: &mut impl Iterator<Item = &'a str>) -> Option<String> {
+    let rest = line[7..].trim();
+    if let Some(q) = rest.strip_prefix('\'') {
+        let mut name = String::new();
+        let mut part = q.to_string();
+        loop {
+            if let Some(end) = part.find('\'') {
+                name.push_str(part[..end].trim());
+                break;
+            }
+            name.push_str(part.trim());
+            match lines.next() {
+                Some(n) => part = n.to_string(),
+                None => break,
+            }
+        }
+        Some(name)
+    } else {
+        rest.split_whitespace().next().map(str::to_string)
+    }
 }
 
 /// A block of elements of one kind, connectivity flattened (`kind.num_nodes()` per element).
@@ -283,5 +308,29 @@ impl Mesh {
     /// Names of all node sets (for error messages).
     pub fn set_names(&self) -> Vec<String> {
         self.node_sets.keys().cloned().collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression: the files a deck reads (the cache key and a study's digest hash them) missed
+    /// an Abaqus data file given as `*NODE, INPUT=` or `*ELEMENT, INPUT=` and an `INPUT = name`
+    /// with spaces, so an edited node file left a cached ROM in use; and they followed a
+    /// Nastran INCLUDE of the executive or case control section, which the reader skips.
+    #[test]
+    fn regression_include_names_are_the_files_the_readers_read() {
+        let abaqus = "*HEADING\n*NODE, INPUT = nodes.txt\n** *INCLUDE, INPUT=commented.inp\n\
+                      *ELEMENT, TYPE=C3D4, ELSET=A, INPUT=\"elements.inp\"\n*include,input=more.inp\n";
+        assert_eq!(
+            include_names(abaqus),
+            vec!["nodes.txt", "elements.inp", "more.inp"]
+        );
+        let nastran = "SOL 103\nINCLUDE 'case.dat'\nCEND\nBEGIN BULK\nINCLUDE 'grids.bdf'\n\
+                       INCLUDE 'a\n long/name.bdf'\nENDDATA\nINCLUDE 'after.bdf'\n";
+        assert_eq!(include_names(nastran), vec!["grids.bdf", "along/name.bdf"]);
+        // a file without BEGIN BULK (an included one) is bulk data throughout
+        assert_eq!(include_names("INCLUDE inner.bdf\n"), vec!["inner.bdf"]);
     }
 }
