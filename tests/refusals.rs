@@ -614,6 +614,18 @@ fn regression_a_repeated_element_tag_and_coincident_corners_are_named() {
         "two of its corner nodes are at one place",
     );
     assert!(err.contains("hex.bdf:10"), "{err}");
+    // with a flat tetrahedron after it in the file, the hexahedron is still the one named
+    // (the mesh groups tetrahedra first; the first bad element in the file is reported)
+    let text = std::fs::read_to_string(&hex)
+        .unwrap()
+        .replace("PSOLID", "GRID,9,,2.,0.,0.\nCTETRA,2,1,1,2,9,3\nPSOLID");
+    std::fs::write(&hex, text).unwrap();
+    let err = refused(
+        &["modes", "--mesh", hex.to_str().unwrap(), "--count", "2"],
+        2,
+        "two of its corner nodes are at one place",
+    );
+    assert!(err.contains("hex.bdf:10"), "{err}");
 }
 
 /// Regression: a Nastran deck cut short inside a CTETRA card was refused with "element 1 has 6

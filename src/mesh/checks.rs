@@ -83,9 +83,26 @@ pub fn check_and_compact(
         return Err(MeshError::Empty);
     }
     let mut report = CheckReport::default();
+    // the first bad element in the files' order (the mesh's own groups the kinds) for a mesh
+    // read from files, else the first in the mesh
+    let mut first: Option<((u32, u32), usize, ElementKind, Flaw)> = None;
     for (e, (kind, nodes)) in mesh.elements().enumerate() {
-        check_element((kind, nodes), &mesh.coords_of(nodes), min_jacobian_ratio)
-            .map_err(|f| f.name(mesh, e, kind))?;
+        if let Err(f) = check_element((kind, nodes), &mesh.coords_of(nodes), min_jacobian_ratio) {
+            let place = mesh
+                .element_lines
+                .as_ref()
+                .and_then(|l| l.at.get(e).copied());
+            let key = place.unwrap_or((0, u32::try_from(e).unwrap_or(u32::MAX)));
+            if first.as_ref().is_none_or(|(k, ..)| key < *k) {
+                first = Some((key, e, kind, f));
+            }
+            if place.is_none() {
+                break;
+            }
+        }
+    }
+    if let Some((_, e, kind, f)) = first {
+        return Err(f.name(mesh, e, kind));
     }
     // unused nodes
     let mut used = vec![false; mesh.nodes.len()];
