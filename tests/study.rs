@@ -180,21 +180,25 @@ fn regression_shards_on_different_input_files_are_not_merged() {
         format!("crank_angle_deg,pressure_bar\n{rows}")
     };
     let set = format!("operating.pressure_file=\"{}\"", csv.display());
-    let study = |shard: &str, out: &Path| {
-        let args = [
-            "--vary",
-            "piston.clearance_um=60,100",
-            "--set",
-            &set,
+    // shard `shard` of a two-cycle study with `design` (--vary / --set arguments) into `out`
+    let shard_of = |design: &[&str], shard: &str, out: &Path| {
+        let mut args = design.to_vec();
+        args.extend([
             "--set",
             "transient.cycles=2",
             "--set",
             "transient.averaged_cycles=1",
-            "--shard",
-            shard,
-        ];
+        ]);
+        args.extend(["--shard", shard]);
         let (code, _, err) = sweep(&args, out);
         assert_eq!(code, 0, "{err}");
+    };
+    let study = |shard: &str, out: &Path| {
+        shard_of(
+            &["--vary", "piston.clearance_um=60,100", "--set", &set],
+            shard,
+            out,
+        )
     };
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
     std::fs::write(&csv, curve(150.0)).unwrap();
@@ -212,20 +216,7 @@ fn regression_shards_on_different_input_files_are_not_merged() {
         one.display(),
         two.display()
     );
-    let varied = |shard: &str, out: &Path| {
-        let args = [
-            "--vary",
-            &vary,
-            "--set",
-            "transient.cycles=2",
-            "--set",
-            "transient.averaged_cycles=1",
-            "--shard",
-            shard,
-        ];
-        let (code, _, err) = sweep(&args, out);
-        assert_eq!(code, 0, "{err}");
-    };
+    let varied = |shard: &str, out: &Path| shard_of(&["--vary", &vary], shard, out);
     let (c, d) = (dir.path().join("c"), dir.path().join("d"));
     std::fs::write(&one, curve(150.0)).unwrap();
     std::fs::write(&two, curve(60.0)).unwrap();

@@ -202,45 +202,38 @@ impl Assembler {
         (nodes, offset): (std::ops::Range<usize>, usize),
         (k, m): (&mut [f64], &mut [f64]),
     ) {
-        let d = &self.dofs.dof;
         for ((_, el), (ke, me)) in chunk.iter().zip(mats) {
-            let nd = 3 * el.len();
-            for (la, &a) in el.iter().enumerate() {
-                if !nodes.contains(&a) {
-                    continue;
-                }
-                for (lb, &b) in el.iter().enumerate() {
-                    let base = self.slot_offset[self.graph.slot(a, b)];
-                    let mut jl = 0;
-                    for j in 0..3 {
-                        if d[3 * b + j] == FIXED {
-                            continue;
-                        }
-                        for i in 0..3 {
-                            let c = d[3 * a + i];
-                            if c == FIXED {
-                                continue;
-                            }
-                            let pos = self.pattern.col_ptr[c] + base + jl - offset;
-                            let e = (3 * lb + j) * nd + 3 * la + i;
-                            k[pos] += ke[e];
-                            m[pos] += me[e];
-                        }
-                        jl += 1;
-                    }
-                }
-            }
+            self.for_each_entry(
+                el,
+                |a| nodes.contains(&a),
+                |pos, e| {
+                    k[pos - offset] += ke[e];
+                    m[pos - offset] += me[e];
+                },
+            );
         }
     }
 
     /// Adds a dense element matrix (3n x 3n, node-major) into `values`.
     pub fn scatter(&self, nodes: &[usize], ae: &[f64], values: &mut [f64]) {
+        self.for_each_entry(nodes, |_| true, |pos, e| values[pos] += ae[e]);
+    }
+
+    /// Calls `add(pos, e)` for every free entry of the element on `nodes` whose column node
+    /// `a` passes `column`: `pos` its place in the values, `e` its index in a 3n x 3n
+    /// node-major element matrix; column node by column node, in the same order for every
+    /// caller.
+    fn for_each_entry(
+        &self,
+        nodes: &[usize],
+        column: impl Fn(usize) -> bool,
+        mut add: impl FnMut(usize, usize),
+    ) {
         let nd = 3 * nodes.len();
         let d = &self.dofs.dof;
-        for (la, &a) in nodes.iter().enumerate() {
+        for (la, &a) in nodes.iter().enumerate().filter(|(_, &a)| column(a)) {
             for (lb, &b) in nodes.iter().enumerate() {
-                let slot = self.graph.slot(a, b);
-                let base = self.slot_offset[slot];
+                let base = self.slot_offset[self.graph.slot(a, b)];
                 // local index of each free component of b among b's free DOFs
                 let mut jl = 0;
                 for j in 0..3 {
@@ -249,11 +242,12 @@ impl Assembler {
                     }
                     for i in 0..3 {
                         let c = d[3 * a + i];
-                        if c == FIXED {
-                            continue;
+                        if c != FIXED {
+                            add(
+                                self.pattern.col_ptr[c] + base + jl,
+                                (3 * lb + j) * nd + 3 * la + i,
+                            );
                         }
-                        let pos = self.pattern.col_ptr[c] + base + jl;
-                        values[pos] += ae[(3 * lb + j) * nd + 3 * la + i];
                     }
                     jl += 1;
                 }

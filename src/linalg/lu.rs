@@ -147,12 +147,13 @@ mod avx2 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use nalgebra::DMatrix;
 
-    /// Deterministic pseudo-random numbers in [-1, 1).
-    fn lcg(state: &mut u64) -> f64 {
+    /// Deterministic pseudo-random numbers in [-1, 1) (a fixed LCG: tests need spread, not
+    /// quality).
+    pub(crate) fn lcg(state: &mut u64) -> f64 {
         *state = state
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);

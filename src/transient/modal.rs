@@ -401,16 +401,8 @@ fn gather_on_dofs<'a>(loads: impl Iterator<Item = (&'a Location, f64)>) -> Vec<(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::lu::tests::lcg;
     use crate::transient::scheme::Scheme;
-
-    /// Deterministic pseudo-random numbers in [-1, 1) (a fixed LCG: the test needs spread, not
-    /// quality).
-    fn lcg(state: &mut u64) -> f64 {
-        *state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
 
     /// The interval of `predicted_bound` holds the exact prediction at every location, for
     /// modal states from rest to strongly excited, and is tight for a single mode (Cauchy-
