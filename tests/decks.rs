@@ -20,15 +20,7 @@ fn default_meshes() -> (Mesh, Mesh, LinerShape, Vec<f64>, Vec<f64>, f64) {
         panic!("the default liner is parametric")
     };
     let lm = liner::generate(geometry, meshing);
-    let cc = scene.crankcase.as_ref().unwrap();
-    let CrankcaseSource::Parametric {
-        geometry: cg,
-        meshing: cmesh,
-    } = &cc.source
-    else {
-        panic!("the default crankcase is parametric")
-    };
-    let cm = crankcase::generate(cg, cmesh);
+    let cm = generated_crankcase(&scene);
     let g = &scene.liner_geometry;
     let shape = LinerShape {
         inner_radius: g.inner_diameter / 2.0,
@@ -44,6 +36,15 @@ fn default_meshes() -> (Mesh, Mesh, LinerShape, Vec<f64>, Vec<f64>, f64) {
         .map(|c| linercav::scene::bore_axis_x(e.cylinders, e.cylinder_pitch, c))
         .collect();
     (lm, cm, shape, axis_x, g.analysis_depths.clone(), e.bore)
+}
+
+/// The generated crankcase of a scene whose crankcase is parametric, with the generator's sets.
+fn generated_crankcase(scene: &linercav::scene::Scene) -> Mesh {
+    let cc = scene.crankcase.as_ref().unwrap();
+    let CrankcaseSource::Parametric { geometry, meshing } = &cc.source else {
+        panic!("the crankcase is parametric")
+    };
+    crankcase::generate(geometry, meshing)
 }
 
 /// Verification: on the default engine moved out of its frames (the liner turned to lie along
@@ -500,4 +501,67 @@ fn regression_a_given_material_over_a_different_deck_material_is_warned_of() {
     );
     let err = run("2.1e11", "0.3", "7850");
     assert!(!err.contains("replaces the deck's material"), "{err}");
+}
+
+/// Regression: a crankcase deck that names its own guide sets, and a fixed set of the deck
+/// (`crankcase.fix`), had them left out of what `rom` lists of the imported meshes (found sets
+/// were listed, named guide sets and fixed sets were not): each is listed as the deck's, with
+/// its node count, the fixed set marked as fixed.
+#[test]
+fn regression_a_decks_own_guide_and_fixed_sets_are_listed() {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = dir.path().join("crankcase.bdf");
+    let d = deck.display().to_string();
+    let args = [
+        "export-mesh",
+        SMALL,
+        "--part",
+        "crankcase",
+        "--unit",
+        "mm",
+        "--out",
+        &d,
+    ];
+    let (code, _, err) = linercav(&args);
+    assert_eq!(code, 0, "{err}");
+    let mut scene = String::new();
+    let mut section = String::new();
+    for l in std::fs::read_to_string(SMALL).unwrap().lines() {
+        if l.starts_with('[') {
+            section = l.split('#').next().unwrap().trim().to_string();
+        }
+        let key = l.split('=').next().unwrap().trim();
+        if section == "[crankcase]" && key == "material" {
+            continue;
+        }
+        scene += l;
+        scene += "\n";
+        if l.starts_with("[crankcase]") {
+            scene += "mesh_file = \"crankcase.bdf\"\nmesh_unit = \"mm\"\n";
+        }
+    }
+    let sp = dir.path().join("engine.toml");
+    std::fs::write(&sp, scene).unwrap();
+    let out = json(&linercav_output(&[
+        "rom",
+        &sp.display().to_string(),
+        "--json",
+        "--no-cache",
+    ]));
+    let sets = out["interfaces"]["sets"].as_array().unwrap();
+    let listed = |name: &str| {
+        sets.iter()
+            .find(|s| s["part"] == "crankcase" && s["name"] == name)
+            .unwrap_or_else(|| panic!("{name} not listed: {sets:?}"))
+    };
+    let cm = generated_crankcase(&load_scene(Path::new(SMALL), &[]).unwrap());
+    for name in ["guide_1", "guide_2", "pan_rail"] {
+        let s = listed(name);
+        assert_eq!(s["source"], "deck", "{s}");
+        assert_eq!(s["nodes"], cm.node_sets[name].len(), "{s}");
+    }
+    assert!(listed("pan_rail")["detail"]
+        .as_str()
+        .unwrap()
+        .contains("fixed"));
 }

@@ -610,7 +610,9 @@ pub fn crankcase_sets(
             format!("z = {zs:.6} m, r <= {rf:.6} m"),
         ));
         let name = format!("guide_{k}");
-        if !cm.node_sets.contains_key(&name) {
+        if let Some(v) = cm.node_sets.get(&name) {
+            out.push(found("crankcase", &name, "deck", v.len(), String::new()));
+        } else {
             let [g0, g1] = guide_band(cm, xc, s).ok_or_else(|| {
                 fail("crankcase", format!("cylinder {k}: no bore surface at the liner's outer radius {ro:.6} m below the seat (the liner's guide band): name the set {name}"))
             })?;

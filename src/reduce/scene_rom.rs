@@ -352,6 +352,9 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
         f.materials = vec![lnote, cnote];
     }
     check_engine_meshes(scene, cc, (&mut lm, &mut cm), (lfile, cfile))?;
+    if let Some(f) = found.as_mut() {
+        f.sets.extend(fixed_sets(&cm, cc, cfile.is_some()));
+    }
     let shape = found
         .as_ref()
         .and_then(|f| f.liner)
@@ -370,6 +373,25 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
         guide,
         found,
     })
+}
+
+/// The listing's lines of the crankcase's fixed sets (`crankcase.fix`) that are not box sets
+/// of the scene (those are listed as boxes), with their node counts: a deck's sets, or the
+/// generator's when the crankcase is not `from_file`.
+fn fixed_sets(cm: &Mesh, cc: &crate::scene::Crankcase, from_file: bool) -> Vec<find::FoundSet> {
+    cc.fix
+        .iter()
+        .filter(|name| !cc.box_sets.iter().any(|(b, _)| b == *name))
+        .filter_map(|name| {
+            cm.node_set(name).map(|nodes| find::FoundSet {
+                part: "crankcase".into(),
+                name: name.clone(),
+                source: if from_file { "deck" } else { "generator" }.into(),
+                nodes: nodes.len(),
+                detail: "fixed (crankcase.fix)".into(),
+            })
+        })
+        .collect()
 }
 
 /// Bore axis x of every cylinder of the engine frame: x_c = (c - (N - 1) / 2) p, c 0-based.
