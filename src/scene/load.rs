@@ -61,16 +61,58 @@ impl Scene {
     }
 }
 
-/// A parser's message with each line cut to 200 characters (it quotes the offending line,
-/// which may be a megabyte long).
+/// Characters of a parser's message line that are kept ([`clipped`]).
+const CLIP: usize = 200;
+
+/// A parser's message with each line cut to [`CLIP`] characters (it quotes the offending
+/// line, which may be a megabyte long). The quoted line and the caret line under it are cut to
+/// the same window around the caret (after their "N | " gutter, the quoted line marked
+/// "... "), so that the caret still points at the column the message names.
 fn clipped(msg: &str) -> String {
-    msg.lines()
-        .map(|l| match l.char_indices().nth(200) {
-            Some((at, _)) => format!("{} ...", &l[..at]),
-            None => l.to_string(),
+    let lines: Vec<&str> = msg.lines().collect();
+    let caret = lines.iter().position(|l| is_caret_line(l));
+    let from = caret
+        .and_then(|k| lines[k].chars().position(|c| c == '^'))
+        .map_or(0, |c| c.saturating_sub(CLIP / 2));
+    lines
+        .iter()
+        .enumerate()
+        .map(|(k, l)| match caret {
+            Some(c) if k == c => window(l, from, "    "),
+            Some(c) if k + 1 == c => window(l, from, "... "),
+            _ => window(l, 0, ""),
         })
         .collect::<Vec<_>>()
         .join("\n")
+}
+
+/// A parser's caret line: a gutter "|" followed by spaces and carets only.
+fn is_caret_line(l: &str) -> bool {
+    let t = l.trim_start();
+    t.strip_prefix('|')
+        .is_some_and(|r| r.contains('^') && r.chars().all(|c| c == ' ' || c == '^'))
+}
+
+/// `l` cut to [`CLIP`] characters from character `from` on, its "N | " gutter kept when the
+/// window starts after it (`mark`, as wide on every line cut so, stands for what was left out
+/// before; " ..." marks what was left out after).
+fn window(l: &str, from: usize, mark: &str) -> String {
+    let chars: Vec<char> = l.chars().collect();
+    let gutter = l.find("| ").map_or(0, |b| l[..b + 2].chars().count());
+    let (head, start) = if from > gutter {
+        (
+            format!("{}{mark}", chars[..gutter].iter().collect::<String>()),
+            from,
+        )
+    } else {
+        (String::new(), 0)
+    };
+    let end = (start + CLIP).min(chars.len());
+    let tail = if end < chars.len() { " ..." } else { "" };
+    format!(
+        "{head}{}{tail}",
+        chars[start.min(end)..end].iter().collect::<String>()
+    )
 }
 
 /// A deserialiser's message for a user: its first line (the key is named already), with the
@@ -171,4 +213,34 @@ pub(super) fn check_analysis_points(c: &Checker<'_>, l: &raw::RawLiner) -> Resul
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// Regression: a parse error past column 200 of a long line lost its caret (each line was
+    /// cut to its first 200 characters); the quoted line and the caret line are cut to the
+    /// same window, and the caret stands under the offending text.
+    #[test]
+    fn regression_a_long_lines_caret_is_kept_under_the_error() {
+        let values = vec!["1.0"; 300].join(", ");
+        let text = format!("x = [{values}, 1.0.0, 2.0]\n");
+        let err = toml::from_str::<toml::Value>(&text)
+            .unwrap_err()
+            .to_string();
+        let out = super::clipped(&err);
+        // the text under the caret, in the parser's message and in the clipped one
+        let under = |msg: &str| {
+            let lines: Vec<&str> = msg.lines().collect();
+            let k = lines.iter().position(|l| super::is_caret_line(l)).unwrap();
+            let col = lines[k].find('^').unwrap();
+            lines[k - 1][col..col + 8].to_string()
+        };
+        assert_eq!(under(&out), under(&err), "{out}");
+        assert!(under(&out).starts_with(".0, 2.0]"), "{out}");
+        assert!(out.lines().all(|l| l.chars().count() <= 220), "{out}");
+        // a short message is left as it is
+        let short =
+            "TOML parse error at line 1, column 5\n  |\n1 | x = 1.0.0\n  |     ^\ninvalid float";
+        assert_eq!(super::clipped(short), short);
+    }
 }
