@@ -99,6 +99,9 @@ pub enum ReadError {
 pub const LIMIT_TEXT: u64 = 64 << 20;
 /// Size limit of rig-data CSVs (long acquisitions at high sample rates).
 pub const LIMIT_DATA: u64 = 2 << 30;
+/// Size limit of a sweep's part files (`sweep --shard`'s JSON: a few kB per run, so about
+/// 100,000 runs per part).
+pub const LIMIT_PART: u64 = 512 << 20;
 /// Size limit of mesh files: about 20 million nodes in ASCII MSH, beyond what a 24 GB machine
 /// can solve (the FE model, not the file, decides; see the size estimate of the scene).
 pub const LIMIT_MESH: u64 = 4 << 30;

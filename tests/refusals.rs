@@ -808,3 +808,61 @@ fn regression_a_key_set_twice_is_refused() {
     );
     assert!(err.contains("give each key once"), "{err}");
 }
+
+/// Regression: `sweep-merge` read a part with no size or file-type check (`/dev/zero` grew to
+/// 23.8 GB before the kernel killed it, a FIFO hung) and staged its output directory first
+/// (the kill left it behind). A part is a regular file of bounded size, read before anything
+/// is written.
+#[test]
+fn regression_a_sweep_part_that_is_not_a_file_is_refused_before_any_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("merged");
+    let err = refused(
+        &["sweep-merge", "/dev/zero", "--out", out.to_str().unwrap()],
+        2,
+        "/dev/zero",
+    );
+    assert!(err.contains("not a regular file"), "{err}");
+    assert!(!out.exists());
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+/// Regression: a `--set` value followed by more TOML on another line, or by a comment, was
+/// taken and the rest dropped without a word; a table and a key inside it, both set, were not
+/// refused (the flags' order decided).
+#[test]
+fn regression_set_values_that_bring_more_than_a_value_are_refused() {
+    refused(
+        &[
+            "simulate",
+            SMALL,
+            "--set",
+            "piston.clearance_um=100\n[engine]\ncylinders=3",
+        ],
+        2,
+        "a value is one line",
+    );
+    refused(
+        &[
+            "simulate",
+            SMALL,
+            "--set",
+            "piston.clearance_um=100 # was 80",
+        ],
+        2,
+        "a comment after the value",
+    );
+    refused(
+        &[
+            "simulate",
+            SMALL,
+            "--set",
+            "piston.thermal.liner_temp_c=100",
+            "--set",
+            "piston.thermal={liner_temp_c=130.0}",
+        ],
+        2,
+        "'piston.thermal.liner_temp_c' is given twice",
+    );
+}

@@ -501,17 +501,19 @@ fn part_files(inputs: &[PathBuf]) -> std::result::Result<Vec<PathBuf>, PartError
 /// outputs of the unsharded sweep into `out`.
 pub fn merge(inputs: &[PathBuf], out: &Path, started: Instant) -> Result<SweepReport> {
     let files = part_files(inputs)?;
-    let stage = OutputDir::create(out, OUTPUTS)?;
     let mut parts: Vec<(PathBuf, Part)> = Vec::new();
     for f in files {
-        let text = std::fs::read_to_string(&f).map_err(|e| PartError::Read {
-            path: f.clone(),
-            reason: e.to_string(),
-        })?;
+        let text =
+            crate::files::read_text(&f, crate::files::LIMIT_PART).map_err(|e| PartError::Read {
+                path: f.clone(),
+                reason: e.to_string(),
+            })?;
         let p = parse_part(&f, &text)?;
         parts.push((f, p));
     }
     let Merged { lines, runs, roms } = assemble(&parts)?;
+    // the output directory is staged once every part has been read and checked
+    let stage = OutputDir::create(out, OUTPUTS)?;
     let first = &parts[0].1;
     let mut report = SweepReport {
         scene: first.scene.clone(),

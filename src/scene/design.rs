@@ -271,8 +271,14 @@ impl Design {
     pub fn check_fixed(&self, sets: &[String]) -> Result<(), DesignError> {
         let keys = self.keys();
         for s in sets {
-            let key = s.split_once('=').map_or(s.as_str(), |(k, _)| k).trim();
-            if keys.iter().any(|k| k == key) {
+            let key = s.split_once('=').map_or(s.as_str(), |(k, _)| k);
+            let key = key.split('.').map(str::trim).collect::<Vec<_>>().join(".");
+            let key = key.as_str();
+            // a fixed table holding a varied key is the same conflict
+            if keys
+                .iter()
+                .any(|k| super::overrides::within(key, k) || super::overrides::within(k, key))
+            {
                 return Err(DesignError::Argument {
                     arg: "--set",
                     value: s.clone(),
@@ -556,6 +562,30 @@ mod tests {
             .map(|(k, v)| (k.to_string(), v.to_string()))
             .collect();
         move |k: &str| m.get(k).cloned()
+    }
+
+    /// Regression: `--set` of a table that holds a varied key (`--set 'a={b=1}' --vary
+    /// a.b=1,2`) passed the fixed-or-varied check, which compared whole keys only.
+    #[test]
+    fn regression_a_fixed_table_holding_a_varied_key_is_refused() {
+        let d = Design::from_args(
+            &["piston.thermal.liner_temp_c=100,110".into()],
+            None,
+            &[],
+            None,
+        )
+        .unwrap();
+        for set in [
+            "piston.thermal={liner_temp_c=130.0}",
+            "piston.thermal.liner_temp_c=1",
+            "piston=x",
+        ] {
+            let e = d.check_fixed(&[set.into()]).unwrap_err().to_string();
+            assert!(e.contains("the design varies"), "{set}: {e}");
+        }
+        assert!(d
+            .check_fixed(&["piston.thermal.liner_temp=1".into()])
+            .is_ok());
     }
 
     #[test]

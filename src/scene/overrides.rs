@@ -18,6 +18,8 @@ pub enum OverrideError {
         prefix: String,
         key: String,
     },
+    #[error("--set '{arg}': {msg}")]
+    Value { arg: String, msg: String },
     #[error("--set '{key}' is given twice ('{first}', then '{second}'): give each key once")]
     Repeated {
         key: String,
@@ -27,34 +29,62 @@ pub enum OverrideError {
 }
 
 /// Refuses a key given twice among the user's overrides: `--set K=a --set K=b` would keep the
-/// last without a word. Keys compare by their dotted parts, trimmed; an argument without `=`
-/// is left to [`apply`] to refuse.
+/// last without a word, and so would a table and a key inside it (`--set a={b=1} --set a.b=2`:
+/// which one holds depends on their order). Keys compare by their dotted parts, trimmed; an
+/// argument without `=` is left to [`apply`] to refuse.
 pub fn check_repeated(sets: &[String]) -> Result<(), OverrideError> {
-    let mut seen: std::collections::HashMap<String, &str> = std::collections::HashMap::new();
+    let mut seen: Vec<(String, &str)> = Vec::new();
     for arg in sets {
         let Some((key, value)) = arg.split_once('=') else {
             continue;
         };
         let key = key.split('.').map(str::trim).collect::<Vec<_>>().join(".");
-        if let Some(first) = seen.insert(key.clone(), value.trim()) {
+        let clash = seen
+            .iter()
+            .find(|(k, _)| within(k, &key) || within(&key, k));
+        if let Some((first_key, first)) = clash {
             return Err(OverrideError::Repeated {
-                key,
+                key: if first_key.len() <= key.len() {
+                    key.clone()
+                } else {
+                    first_key.clone()
+                },
                 first: first.to_string(),
                 second: value.trim().to_string(),
             });
         }
+        seen.push((key, value.trim()));
     }
     Ok(())
 }
 
-/// Parses the value part of an override.
-pub fn parse_value(text: &str) -> Value {
+/// Whether dotted key `inner` is `outer` or lies inside the table `outer`.
+pub fn within(outer: &str, inner: &str) -> bool {
+    inner == outer
+        || inner
+            .strip_prefix(outer)
+            .is_some_and(|r| r.starts_with('.'))
+}
+
+/// Parses the value part of an override: a TOML value, or the text as a string where it is not
+/// one. A value that brings more than itself is refused (TOML after it on another line, or a
+/// comment: `--set 'a=1\n[b]\nc=2'` set a and dropped the rest without a word).
+pub fn parse_value(text: &str) -> Result<Value, String> {
+    if text.contains(['\n', '\r']) {
+        return Err("a value is one line: give each key its own --set".into());
+    }
     let probe = format!("v = {text}");
     match probe.parse::<Table>() {
-        Ok(mut t) => t
-            .remove("v")
-            .unwrap_or_else(|| Value::String(text.to_string())),
-        Err(_) => Value::String(text.to_string()),
+        Ok(mut t) => {
+            let v = t
+                .remove("v")
+                .unwrap_or_else(|| Value::String(text.to_string()));
+            if text.contains('#') && !v.to_string().contains('#') {
+                return Err("a comment after the value (#) is not taken: remove it".into());
+            }
+            Ok(v)
+        }
+        Err(_) => Ok(Value::String(text.to_string())),
     }
 }
 
@@ -84,10 +114,11 @@ pub fn apply(root: &mut Table, arg: &str) -> Result<(), OverrideError> {
             }
         };
     }
-    table.insert(
-        parts[parts.len() - 1].to_string(),
-        parse_value(value.trim()),
-    );
+    let value = parse_value(value.trim()).map_err(|msg| OverrideError::Value {
+        arg: arg.to_string(),
+        msg,
+    })?;
+    table.insert(parts[parts.len() - 1].to_string(), value);
     Ok(())
 }
 
@@ -104,6 +135,35 @@ mod tests {
             e.to_string(),
             "--set 'a.b' is given twice ('1', then '2'): give each key once"
         );
+    }
+
+    /// Regression: a table and a key inside it, both set, were not refused (which one held
+    /// depended on the order of the flags).
+    #[test]
+    fn regression_a_table_and_a_key_inside_it_are_refused() {
+        let sets = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        for order in [["a.b.c=1", "a.b={c=2}"], ["a.b={c=2}", "a.b.c=1"]] {
+            let e = check_repeated(&sets(&order)).unwrap_err().to_string();
+            assert!(e.contains("'a.b.c' is given twice"), "{e}");
+        }
+        assert!(check_repeated(&sets(&["a.b=1", "a.bc=2"])).is_ok());
+    }
+
+    /// Regression: a value followed by more TOML (another line) or by a comment kept the value
+    /// and dropped the rest silently.
+    #[test]
+    fn regression_a_value_with_more_after_it_is_refused() {
+        let mut t: Table = "[a]\nb = 1\n".parse().unwrap();
+        for arg in ["a.b=100\n[engine]\ncylinders=3", "a.b=100 # was 80"] {
+            let e = apply(&mut t, arg).unwrap_err().to_string();
+            assert!(e.starts_with("--set '"), "{e}");
+        }
+        assert_eq!(t["a"]["b"].as_integer(), Some(1));
+        // a '#' inside a string is the string's
+        apply(&mut t, "a.s=\"x # y\"").unwrap();
+        assert_eq!(t["a"]["s"].as_str(), Some("x # y"));
+        apply(&mut t, "a.s=free text").unwrap();
+        assert_eq!(t["a"]["s"].as_str(), Some("free text"));
     }
 
     #[test]
