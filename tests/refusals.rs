@@ -866,3 +866,35 @@ fn regression_set_values_that_bring_more_than_a_value_are_refused() {
         "'piston.thermal.liner_temp_c' is given twice",
     );
 }
+
+/// Regression: the barrel's widest point off the skirt ran (the barrel became a uniform
+/// drop); a crank offset beyond the bore ran into a deep penetration (exit 1), and a crank
+/// offset too large for the rod was reported as `piston.pin_offset_mm`'s.
+#[test]
+fn regression_offsets_and_the_barrels_widest_point_are_bounded() {
+    for v in ["1e9", "-1e9", "-20.5", "45.5"] {
+        let set = format!("piston.barrel_max_below_pin_mm={v}");
+        refused(
+            &["simulate", SMALL, "--set", &set],
+            2,
+            "must lie on the skirt",
+        );
+    }
+    // the skirt's top and bottom themselves are accepted (pin 20 mm below the top of 65)
+    for v in ["-20", "45", "0"] {
+        let set = vec![format!("piston.barrel_max_below_pin_mm={v}")];
+        let scene = linercav::api::load_scene(Path::new(SMALL), &set);
+        assert!(scene.is_ok(), "{v}: {:?}", scene.err());
+    }
+    refused(
+        &["simulate", SMALL, "--set", "piston.crank_offset_mm=140"],
+        2,
+        "piston.crank_offset_mm",
+    );
+    let err = refused(
+        &["simulate", SMALL, "--set", "piston.crank_offset_mm=1e6"],
+        2,
+        "piston.crank_offset_mm",
+    );
+    assert!(!err.contains("pin_offset_mm"), "{err}");
+}

@@ -455,7 +455,8 @@ pub struct RawPiston {
     /// than the bore's radius, warned beyond 5 % of the bore (engines use 0-2 %).
     #[serde(default)]
     pub pin_offset_mm: f64,
-    /// Crankshaft axis offset from the bore axis toward thrust \[mm\].
+    /// Crankshaft axis offset from the bore axis toward thrust \[mm\]; less than the bore's
+    /// radius.
     #[serde(default)]
     pub crank_offset_mm: f64,
     /// Pin axis to crown top \[mm\].
@@ -472,6 +473,9 @@ pub struct RawPiston {
     /// pin \[mm\].
     #[serde(default)]
     pub barrel_um: f64,
+    /// Height of the barrel's widest point below the pin axis \[mm\]: on the skirt, from
+    /// -pin_below_skirt_top_mm (its top) to skirt_length_mm - pin_below_skirt_top_mm (its
+    /// bottom).
     #[serde(default)]
     pub barrel_max_below_pin_mm: f64,
     /// Ovality: thrust-axis minus pin-axis skirt diameter \[um\], >= 0.

@@ -603,9 +603,7 @@ fn validate_skirt(
         slices: p.slices,
         clearance: c.nonneg("piston.clearance_um", p.clearance_um)? * 1e-6,
         barrel: c.nonneg("piston.barrel_um", p.barrel_um)? * 1e-6,
-        barrel_max_below_pin: c
-            .finite("piston.barrel_max_below_pin_mm", p.barrel_max_below_pin_mm)?
-            * 1e-3,
+        barrel_max_below_pin: barrel_max_below_pin(c, p, skirt_length, top_above_pin)?,
         ovality: c.nonneg("piston.ovality_um", p.ovality_um)? * 1e-6,
         piston_expansion: expansion(
             "piston.thermal.piston_expansion_per_k",
@@ -679,7 +677,7 @@ pub(super) fn validate_piston(
         cg_above_pin,
         cg_lateral: c.finite("piston.cg_offset_mm", p.cg_offset_mm)? * 1e-3,
         pin_offset: c.finite("piston.pin_offset_mm", p.pin_offset_mm)? * 1e-3,
-        crank_offset: c.finite("piston.crank_offset_mm", p.crank_offset_mm)? * 1e-3,
+        crank_offset: offset(c, "piston.crank_offset_mm", p.crank_offset_mm, engine)?,
         compression_height,
         crown_depth_at_tdc: crown_depth,
         skirt,
@@ -695,12 +693,64 @@ pub(super) fn validate_piston(
     };
     let offset = (piston.pin_offset - piston.crank_offset).abs();
     if offset + engine.stroke / 2.0 >= engine.rod_length {
+        // the key the user moved: the crank's offset when the pin has none
+        let key = if piston.pin_offset == 0.0 {
+            "piston.crank_offset_mm"
+        } else {
+            "piston.pin_offset_mm"
+        };
         return Err(c.err(
-            "piston.pin_offset_mm",
-            "the offset is too large for the rod",
+            key,
+            "the offset (pin offset less crank offset) is too large for the rod",
         ));
     }
     Ok(piston)
+}
+
+/// The crank's offset \[m\] from `mm`: finite and within the bore's radius (a desaxe of a few
+/// mm; one beyond the bore ran into a deep penetration, exit 1). The pin's offset is checked
+/// with the piston's other lateral offsets (`scene::sanity`).
+fn offset(c: &Checker<'_>, key: &str, mm: f64, engine: &Engine) -> Result<f64, SceneError> {
+    let v = c.finite(key, mm)? * 1e-3;
+    if v.abs() < engine.bore / 2.0 {
+        Ok(v)
+    } else {
+        Err(c.err(
+            key,
+            format!(
+                "must lie within the bore's radius ({} mm either way), got {}",
+                num(engine.bore / 2.0 * 1e3),
+                num(mm)
+            ),
+        ))
+    }
+}
+
+/// The barrel's widest point below the pin \[m\] from `piston.barrel_max_below_pin_mm`: on the
+/// skirt, from its top (`top_above_pin` above the pin) to its bottom (a point off the skirt
+/// turned the barrel into a uniform drop without a word).
+fn barrel_max_below_pin(
+    c: &Checker<'_>,
+    p: &raw::RawPiston,
+    skirt_length: f64,
+    top_above_pin: f64,
+) -> Result<f64, SceneError> {
+    let key = "piston.barrel_max_below_pin_mm";
+    let v = c.finite(key, p.barrel_max_below_pin_mm)? * 1e-3;
+    let (lo, hi) = (-top_above_pin, skirt_length - top_above_pin);
+    if (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(c.err(
+            key,
+            format!(
+                "must lie on the skirt, from {} (its top) to {} mm (its bottom) below the pin, got {}",
+                num(lo * 1e3),
+                num(hi * 1e3),
+                num(p.barrel_max_below_pin_mm)
+            ),
+        ))
+    }
 }
 
 /// Mean piston speed above which a speed is refused [m/s]: racing engines peak near 25 m/s.
