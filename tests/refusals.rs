@@ -898,3 +898,83 @@ fn regression_offsets_and_the_barrels_widest_point_are_bounded() {
     );
     assert!(!err.contains("pin_offset_mm"), "{err}");
 }
+
+/// Regression: a sweep checked its base scene's transient only (a run of 1e8 cycles that
+/// `simulate` refuses at once was started; `limits.max_hours` was passed by a design varying
+/// `transient.cycles`), and each variant's ROM only when it came to build it (a second
+/// variant's ROM beyond `limits.max_memory_gb` was refused after the first one's build). Every
+/// run and every ROM to build is now checked before the first is built.
+#[test]
+fn regression_a_sweeps_runs_and_roms_are_checked_before_any_is_built() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let (c, o) = (cache.to_str().unwrap(), dir.path().join("o"));
+    let o = o.to_str().unwrap();
+    let sweep = |extra: &[&str]| {
+        let mut args = vec!["sweep", SMALL, "--cache-dir", c, "--out", o];
+        args.extend(["--set", "transient.averaged_cycles=1"]);
+        args.extend(extra);
+        args.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    let run = |extra: &[&str], expect: &str| {
+        let args = sweep(extra);
+        refused(
+            &args.iter().map(String::as_str).collect::<Vec<_>>(),
+            2,
+            expect,
+        );
+    };
+    run(&["--vary", "transient.cycles=2,100000000"], "2880 h");
+    run(
+        &[
+            "--set",
+            "limits.max_hours=0.001",
+            "--vary",
+            "transient.cycles=1,300",
+        ],
+        "limits.max_hours allows 0.001 h",
+    );
+    run(
+        &[
+            "--set",
+            "transient.cycles=2",
+            "--set",
+            "liner.mesh.circumferential=40",
+            "--set",
+            "limits.max_memory_gb=1.5",
+            "--vary",
+            "liner.mesh.axial_size_mm=25,2",
+        ],
+        "the ROM build needs about",
+    );
+    assert!(!cache.exists(), "a ROM was built before the refusal");
+    assert!(!Path::new(o).exists());
+}
+
+/// Regression: the built-in pressure curve had no upper bound (a compression ratio of 1e9, a
+/// heat release of 1e12 J or an intake of 1e6 bar ran into a deep penetration, exit 1), nor
+/// had the crankcase pressure; the curve's peak is bounded as a pressure table's values are.
+#[test]
+fn regression_the_built_in_pressure_curve_and_the_crankcase_pressure_are_bounded() {
+    for set in [
+        "operating.combustion.compression_ratio=1e9",
+        "operating.combustion.heat_release_j=1e12",
+        "operating.combustion.intake_bar=1e6",
+    ] {
+        refused(
+            &["simulate", SMALL, "--set", set],
+            2,
+            "the built-in pressure curve",
+        );
+    }
+    refused(
+        &[
+            "simulate",
+            SMALL,
+            "--set",
+            "operating.crankcase_pressure_bar=1e9",
+        ],
+        2,
+        "operating.crankcase_pressure_bar",
+    );
+}

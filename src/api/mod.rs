@@ -343,6 +343,49 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
     })
 }
 
+/// Refuses, before any ROM is built or any run starts, variants the limits do not allow: a run
+/// whose own transient is beyond its scene's limits (as `simulate` refuses it), and a ROM to
+/// build (not among `loaded`, the reduction inputs of the ROMs at hand) beyond them
+/// ([`crate::reduce::scene_rom::check_build`]). Before, a sweep checked its base scene only
+/// and each ROM as it came to it (a second variant's ROM was refused after the first one's
+/// build).
+fn check_variants(
+    scenes: &[Scene],
+    descriptions: &[String],
+    loaded: &[String],
+    cache: &CacheOptions,
+) -> Result<()> {
+    use crate::scene::budget::{Estimate, Limits};
+    let mut total = (0.0_f64, 0.0_f64);
+    for sc in scenes {
+        if let Some(est) = crate::scene::budget::transient(sc) {
+            Limits::of(sc).check(sc, &est)?;
+            total = (total.0 + est.seconds, total.1.max(est.memory));
+        }
+    }
+    // together: in parallel on the machine's cores, against the last scene's limits (a
+    // sweep's base design)
+    if let (Some(last), true) = (scenes.last(), scenes.len() > 1) {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+        let est = Estimate {
+            what: "the runs together",
+            memory: total.1 * cores.min(scenes.len() as f64) + scenes.len() as f64 * 50e3,
+            seconds: total.0 / cores,
+            keys: "the design (fewer values or runs, or more shards), transient.step_deg or transient.cycles",
+            detail: format!("{} runs, {} cores", scenes.len(), cores),
+        };
+        Limits::of(last).check(last, &est)?;
+    }
+    let mut seen: Vec<&String> = loaded.iter().collect();
+    for (sc, d) in scenes.iter().zip(descriptions) {
+        if !seen.contains(&d) {
+            crate::reduce::scene_rom::check_build(sc, d, cache)?;
+            seen.push(d);
+        }
+    }
+    Ok(())
+}
+
 /// Variants of one scene: each a list of `--set` overrides added to the base ones, loaded and
 /// checked before any run, with one ROM per distinct reduction input (loaded or built one
 /// after the other).
@@ -394,9 +437,13 @@ impl Variants {
                 Ok(sc)
             })
             .collect::<Result<_>>()?;
+        let descriptions: Vec<String> = scenes
+            .iter()
+            .map(key_description)
+            .collect::<std::result::Result<_, _>>()?;
+        check_variants(&scenes, &descriptions, &self.keys, cache)?;
         let mut rom_of = Vec::with_capacity(scenes.len());
-        for sc in &scenes {
-            let k = key_description(sc)?;
+        for (sc, k) in scenes.iter().zip(descriptions) {
             let idx = match self.keys.iter().position(|x| *x == k) {
                 Some(i) => i,
                 None => {

@@ -20,6 +20,8 @@ pub enum PistonSetupError {
         #[source]
         source: PressureError,
     },
+    #[error("{}: the built-in pressure curve ([operating.combustion]) peaks at {} bar, beyond the {} bar a cylinder pressure may reach: check compression_ratio, intake_bar, exhaust_over_intake_bar and heat_release_j", path.display(), crate::text::num(*peak_bar), crate::text::num(super::pressure::MAX_BAR))]
+    Curve { path: PathBuf, peak_bar: f64 },
     #[error("{}: the hot skirt is {hot_um:.1} um (diametral) larger than the bore: piston.clearance_um is too small for the temperatures in [piston.thermal] (the piston would seize)", path.display())]
     Seizure { path: PathBuf, hot_um: f64 },
 }
@@ -68,7 +70,19 @@ pub fn piston_of(scene: &Scene) -> Result<Piston, PistonSetupError> {
                 source,
             })?
         }
-        PressureSource::Wiebe(w) => PressureCurve::wiebe(w, &kinematics, area),
+        PressureSource::Wiebe(w) => {
+            let curve = PressureCurve::wiebe(w, &kinematics, area);
+            // the bound of a pressure table's values holds for the built-in curve too (a
+            // compression ratio of 1e9 ran into a deep penetration, exit 1)
+            let peak_bar = curve.peak().0 / 1e5;
+            if !(peak_bar.is_finite() && peak_bar <= super::pressure::MAX_BAR) {
+                return Err(PistonSetupError::Curve {
+                    path: scene.path.clone(),
+                    peak_bar,
+                });
+            }
+            curve
+        }
     };
     let skirt = Skirt::new(&p.skirt);
     let hot = skirt.hot_clearance();

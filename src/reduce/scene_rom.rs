@@ -518,6 +518,25 @@ pub fn rom_inputs<'a>(scene: &Scene, em: &'a EngineMeshes, keep_bases: bool) -> 
     }
 }
 
+/// Refuses, before anything is built, a ROM build of `scene` (whose reduction input is
+/// `description`, [`key_description`]) that its limits do not allow, where the build would
+/// happen: the cache is bypassed or holds no entry for it. A set of scenes checks every
+/// build it needs this way before the first.
+pub fn check_build(scene: &Scene, description: &str, opts: &CacheOptions) -> Result<()> {
+    let dir = opts
+        .dir
+        .clone()
+        .unwrap_or_else(|| scene.rom.cache_dir.clone());
+    let path = cache::path_for(&dir, &cache::key_of(description));
+    if !opts.no_cache && path.is_file() {
+        return Ok(());
+    }
+    if let Some(est) = budget::rom_build(scene) {
+        Limits::of(scene).check(scene, &est)?;
+    }
+    Ok(())
+}
+
 /// Gets the ROM of a scene: from the cache when a valid entry exists, else built (and stored);
 /// `progress` is told the build's phases.
 pub fn get_rom(scene: &Scene, opts: &CacheOptions, progress: &dyn Fn(&str)) -> Result<LoadedRom> {

@@ -657,7 +657,7 @@ pub struct RawOperating {
     /// periodically.
     #[serde(default)]
     pub pressure_file: Option<String>,
-    /// Crankcase pressure under the piston [bar absolute].
+    /// Crankcase pressure under the piston [bar absolute], in (0, 10].
     #[serde(default = "default_cc_bar")]
     pub crankcase_pressure_bar: f64,
     pub combustion: RawCombustion,

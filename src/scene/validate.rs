@@ -952,10 +952,30 @@ pub(super) fn validate_operating(
             )?)),
             None => PressureSource::Wiebe(wiebe),
         },
-        crankcase_pa: c.positive("operating.crankcase_pressure_bar", o.crankcase_pressure_bar)?
-            * 1e5,
+        crankcase_pa: crankcase_pressure(c, o.crankcase_pressure_bar)?,
     };
     Ok(operating)
+}
+
+/// Largest crankcase pressure accepted \[bar\]: a crankcase holds about 1 bar (blow-by lifts
+/// it by millibars); 1e9 bar ran into a deep penetration (exit 1).
+const MAX_CRANKCASE_BAR: f64 = 10.0;
+
+/// `operating.crankcase_pressure_bar` \[Pa\]: positive, at most [`MAX_CRANKCASE_BAR`].
+fn crankcase_pressure(c: &Checker<'_>, bar: f64) -> Result<f64, SceneError> {
+    let key = "operating.crankcase_pressure_bar";
+    let v = c.positive(key, bar)?;
+    if v > MAX_CRANKCASE_BAR {
+        return Err(c.err(
+            key,
+            format!(
+                "must be at most {} bar (a crankcase holds about 1 bar), got {}",
+                num(MAX_CRANKCASE_BAR),
+                num(bar)
+            ),
+        ));
+    }
+    Ok(v * 1e5)
 }
 
 /// `[transient]`: scheme (unset: "hht" for a `lubricated` skirt, else "newmark"), step (a
