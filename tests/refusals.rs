@@ -978,3 +978,37 @@ fn regression_the_built_in_pressure_curve_and_the_crankcase_pressure_are_bounded
         "operating.crankcase_pressure_bar",
     );
 }
+
+/// Regression: `[cavitation]` took a coolant gap of 1e9 mm, a static pressure of 1e12 kPa and
+/// a k_p of 1e30 Pa per m/s^2 without a word, and thresholds out of order from a calibration
+/// file were reported against the key 'cavitation' (not the file's key).
+#[test]
+fn regression_cavitation_values_are_bounded_and_a_calibration_file_is_named() {
+    for (set, key) in [
+        ("cavitation.gap_mm=1e9", "cavitation.gap_mm"),
+        (
+            "cavitation.static_pressure_kpa=1e12",
+            "cavitation.static_pressure_kpa",
+        ),
+        (
+            "cavitation.k_p_pa_per_m_s2=1e30",
+            "cavitation.k_p_pa_per_m_s2",
+        ),
+    ] {
+        let err = refused(&["simulate", SMALL, "--set", set], 2, key);
+        assert!(err.contains("must be at most"), "{err}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let cal = dir.path().join("cal.json");
+    std::fs::write(
+        &cal,
+        r#"{"onset_m_s2": 1300, "high_risk_m_s2": 1200, "k_p_pa_per_m_s2": 138}"#,
+    )
+    .unwrap();
+    let set = format!("cavitation.calibration_file={}", cal.display());
+    refused(
+        &["simulate", SMALL, "--set", &set],
+        2,
+        "cavitation.calibration_file",
+    );
+}

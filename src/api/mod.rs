@@ -65,9 +65,14 @@ use std::time::Instant;
 pub fn load_scene(path: &Path, sets: &[String]) -> Result<Scene> {
     let scene = Scene::load(path, sets)?;
     crate::cavitation::Setup::new(&scene.cavitation).map_err(|e| {
+        // thresholds out of order come from the calibration file when one is given
+        let key = match scene.cavitation.thresholds {
+            crate::scene::spec::ThresholdSpec::Calibrated { .. } => "cavitation.calibration_file",
+            crate::scene::spec::ThresholdSpec::Scene { .. } => "cavitation",
+        };
         crate::scene::SceneError::Field {
             path: path.to_path_buf(),
-            key: "cavitation".into(),
+            key: key.into(),
             msg: e.to_string(),
         }
     })?;

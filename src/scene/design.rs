@@ -139,9 +139,20 @@ pub fn parse_vary(arg: &str) -> Result<Vary, DesignError> {
     if values.iter().any(|s| s.is_empty()) {
         return Err(bad("empty value"));
     }
-    // the same run twice is a typing error (60,60 for 60,80); a range belongs to --range
+    // the same run twice is a typing error (60,60 for 60,80), also spelled two ways (80,8e1:
+    // values compare as the scene reads them); a range belongs to --range
     let mut seen = std::collections::HashSet::new();
-    if let Some(twice) = values.iter().find(|x| !seen.insert(x.as_str())) {
+    let same = |x: &str| {
+        super::overrides::parse_value(x).map_or_else(
+            |_| x.to_string(),
+            |v| match v {
+                toml::Value::Integer(i) => format!("{}", i as f64),
+                toml::Value::Float(f) => format!("{f}"),
+                other => other.to_string(),
+            },
+        )
+    };
+    if let Some(twice) = values.iter().find(|x| !seen.insert(same(x))) {
         return Err(bad(&format!("the value '{twice}' is given twice")));
     }
     let numeric_range = |x: &str| {
@@ -562,6 +573,16 @@ mod tests {
             .map(|(k, v)| (k.to_string(), v.to_string()))
             .collect();
         move |k: &str| m.get(k).cloned()
+    }
+
+    /// Regression: a value given twice in two spellings (80,8e1 or 80,80.0) ran twice.
+    #[test]
+    fn regression_a_value_spelled_twice_is_refused() {
+        for arg in ["k=80,8e1", "k=80,80.0", "k=a,\"a\""] {
+            let e = parse_vary(arg).unwrap_err().to_string();
+            assert!(e.contains("is given twice"), "{arg}: {e}");
+        }
+        assert!(parse_vary("k=80,81,8e0").is_ok());
     }
 
     /// Regression: `--set` of a table that holds a varied key (`--set 'a={b=1}' --vary

@@ -84,16 +84,18 @@ pub struct RawCavitation {
     /// Coolant temperature \[C\], 0-150.
     #[serde(default = "default_coolant_temp")]
     pub coolant_temp_c: f64,
-    /// Static coolant pressure at the liner [kPa absolute], above the vapour pressure.
+    /// Static coolant pressure at the liner [kPa absolute], above the vapour pressure, at most
+    /// 10000.
     #[serde(default = "default_static_kpa")]
     pub static_pressure_kpa: f64,
     /// Ethylene glycol mass fraction, 0-0.8.
     #[serde(default)]
     pub glycol: f64,
-    /// Coolant gap between liner and crankcase wall \[mm\].
+    /// Coolant gap between liner and crankcase wall \[mm\], > 0, at most 100.
     #[serde(default = "default_gap_mm")]
     pub gap_mm: f64,
-    /// Wall-pressure transfer p_r = p_s + k_p a [Pa per m/s^2]; default derived (see above).
+    /// Wall-pressure transfer p_r = p_s + k_p a [Pa per m/s^2], in [0, 1e6]; default derived (see
+    /// above).
     #[serde(default)]
     pub k_p_pa_per_m_s2: Option<f64>,
     /// Risk thresholds on the peak negative acceleration [m/s^2]; defaults derived (see above).

@@ -429,6 +429,26 @@ pub(super) struct CalibrationThresholds {
     k_p_pa_per_m_s2: f64,
 }
 
+/// Largest coolant gap accepted \[mm\] (`cavitation.gap_mm`).
+const MAX_GAP_MM: f64 = 100.0;
+/// Largest static coolant pressure accepted \[kPa\] (`cavitation.static_pressure_kpa`).
+const MAX_STATIC_KPA: f64 = 10_000.0;
+/// Largest wall-pressure transfer accepted \[Pa per m/s^2\] (`cavitation.k_p_pa_per_m_s2`): at 1000
+/// m/s^2 it would be 1 GPa.
+const MAX_K_P: f64 = 1e6;
+
+/// Refuses `v` of `key` above `max` (1e9 mm gaps and 1e12 kPa pressures gave a verdict without
+/// a word); `why` says what such values are.
+fn bounded(c: &Checker<'_>, key: &str, v: f64, max: f64, why: &str) -> Result<(), SceneError> {
+    if v > max {
+        return Err(c.err(
+            key,
+            format!("must be at most {} ({why}), got {}", num(max), num(v)),
+        ));
+    }
+    Ok(())
+}
+
 pub(super) fn validate_cavitation(
     c: &Checker<'_>,
     base: &Path,
@@ -446,6 +466,20 @@ pub(super) fn validate_cavitation(
             c.err(key, e.to_string())
         })?;
     let gap = c.mm("cavitation.gap_mm", r.gap_mm)?;
+    bounded(
+        c,
+        "cavitation.gap_mm",
+        r.gap_mm,
+        MAX_GAP_MM,
+        "a coolant jacket is a few mm wide",
+    )?;
+    bounded(
+        c,
+        "cavitation.static_pressure_kpa",
+        r.static_pressure_kpa,
+        MAX_STATIC_KPA,
+        "a cooling system holds 1-3 bar",
+    )?;
     let thresholds = if let Some(f) = &r.calibration_file {
         if r.k_p_pa_per_m_s2.is_some() || r.onset_m_s2.is_some() || r.high_risk_m_s2.is_some() {
             return Err(c.err(
@@ -468,6 +502,13 @@ pub(super) fn validate_cavitation(
                     format!("must be a finite number >= 0, got {}", num(k)),
                 ));
             }
+            bounded(
+                c,
+                "cavitation.k_p_pa_per_m_s2",
+                k,
+                MAX_K_P,
+                "the gap's coolant gives a few Pa per m/s^2, rig calibrations some hundred",
+            )?;
         }
         let high = r
             .high_risk_m_s2
