@@ -37,7 +37,8 @@ impl Scene {
         for s in sets {
             overrides::apply(&mut table, s)?;
         }
-        let de = toml::Value::Table(table);
+        // tables read strictly: a struct takes a table only (`super::strict`)
+        let de = super::strict::Strict(toml::Value::Table(table));
         let raw: RawScene =
             serde_path_to_error::deserialize(de).map_err(|e| SceneError::Field {
                 path: path.to_path_buf(),

@@ -9,6 +9,7 @@ pub mod overrides;
 pub mod raw;
 pub mod sanity;
 pub mod spec;
+mod strict;
 
 use crate::text::num;
 use raw::RawScene;
