@@ -1012,3 +1012,51 @@ fn regression_cavitation_values_are_bounded_and_a_calibration_file_is_named() {
         "cavitation.calibration_file",
     );
 }
+
+/// Regression: duplicates and conflicts taken without a word: `rom.cylinders = [1, 1]`
+/// (de-duplicated), `rom-tradeoff --factors 2,2` (the same ROM built twice), `--shards` beside
+/// `--shard` and `--shards 0` (ignored), `transient.hht_alpha = nan` under the Newmark scheme
+/// (unchecked while unused); a missing top-level table was reported against the key '.'.
+#[test]
+fn regression_duplicates_and_conflicting_flags_are_refused() {
+    refused(
+        &["rom", SMALL, "--set", "rom.cylinders=[1,1]"],
+        2,
+        "cylinder 1 is given twice",
+    );
+    refused(
+        &["rom-tradeoff", SMALL, "--factors", "2,2"],
+        2,
+        "the factor 2 is given twice",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p");
+    let out = out.to_str().unwrap();
+    let sweep = [
+        "sweep",
+        SMALL,
+        "--vary",
+        "piston.clearance_um=60,80",
+        "--out",
+        out,
+    ];
+    let mut both = sweep.to_vec();
+    both.extend(["--shards", "3", "--shard", "1/2"]);
+    refused(&both, 2, "not both");
+    let mut zero = sweep.to_vec();
+    zero.extend(["--shards", "0"]);
+    refused(&zero, 2, "--shards 0");
+    refused(
+        &["simulate", SMALL, "--set", "transient.hht_alpha=nan"],
+        2,
+        "transient.hht_alpha",
+    );
+    let scene = dir.path().join("top.toml");
+    std::fs::write(&scene, "title = \"x\"\n").unwrap();
+    let err = refused(
+        &["rom", scene.to_str().unwrap()],
+        2,
+        "missing field `engine`",
+    );
+    assert!(!err.contains("key '.'"), "{err}");
+}

@@ -35,6 +35,18 @@ pub fn run(
             msg: "cut-off factors must be numbers >= 1".into(),
         });
     }
+    // the same factor twice builds the same ROM twice
+    if let Some(f) =
+        (1..factors.len()).find_map(|i| factors[..i].contains(&factors[i]).then_some(factors[i]))
+    {
+        return Err(Error::Argument {
+            flag: format!("--factors {factors:?}"),
+            msg: format!(
+                "the factor {} is given twice: give each once",
+                crate::text::num(f)
+            ),
+        });
+    }
     // an output place that cannot be written stops the command before its solves
     if let Some(dir) = out {
         crate::files::check_output_names(dir, &OUTPUTS)?;

@@ -135,6 +135,24 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     }
     let design = Design::from_args(&req.vary, req.sample.as_deref(), &req.ranges, req.seed)?;
     design.check_fixed(&req.sets)?;
+    // --shards belongs to an Indexed Job's environment; beside --shard I/N it would be one
+    // count too many, and 0 shards are none
+    match (&req.shard, req.shards) {
+        (Some(_), Some(_)) => {
+            return Err(Error::Argument {
+                flag: "--shards".into(),
+                msg: "give either --shard I/N or --shards N (with JOB_COMPLETION_INDEX), not both"
+                    .into(),
+            })
+        }
+        (None, Some(0)) => {
+            return Err(Error::Argument {
+                flag: "--shards 0".into(),
+                msg: "must be at least 1".into(),
+            })
+        }
+        _ => {}
+    }
     let shard = match &req.shard {
         Some(s) => Some(Shard::parse("--shard", s)?),
         None => Shard::from_env(&|k| std::env::var(k).ok(), req.shards)?,

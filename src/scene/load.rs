@@ -42,7 +42,11 @@ impl Scene {
         let raw: RawScene =
             serde_path_to_error::deserialize(de).map_err(|e| SceneError::Field {
                 path: path.to_path_buf(),
-                key: e.path().to_string(),
+                // a field missing at the top level has the path "."
+                key: match e.path().to_string().as_str() {
+                    "." => "(the scene's top level)".to_string(),
+                    p => p.to_string(),
+                },
                 msg: plain_message(&e.inner().to_string()),
             })?;
         let mut scene = validate(path, raw)?;

@@ -336,7 +336,12 @@ pub(super) fn validate_rom(
         r.cylinders.clone()
     };
     cylinders.sort_unstable();
-    cylinders.dedup();
+    if let Some(w) = cylinders.windows(2).find(|w| w[0] == w[1]) {
+        return Err(c.err(
+            "rom.cylinders",
+            format!("cylinder {} is given twice: give each once", w[0]),
+        ));
+    }
     if let Some(&bad) = cylinders.iter().find(|&&k| k == 0 || k > engine.cylinders) {
         return Err(c.err(
             "rom.cylinders",
@@ -1026,18 +1031,17 @@ pub(super) fn validate_transient(
     t: &raw::RawTransient,
     lubricated: bool,
 ) -> Result<TransientSpec, SceneError> {
+    // checked whichever scheme runs: a NaN left in an unused key is still a bad value
+    if !(t.hht_alpha.is_finite() && (-1.0 / 3.0..=0.0).contains(&t.hht_alpha)) {
+        return Err(c.err(
+            "transient.hht_alpha",
+            format!("must lie in [-1/3, 0], got {}", num(t.hht_alpha)),
+        ));
+    }
     let implied = if lubricated { "hht" } else { "newmark" };
     let scheme = match t.scheme.as_deref().unwrap_or(implied) {
         "newmark" => spec::SchemeChoice::AverageAcceleration,
-        "hht" => {
-            if !(t.hht_alpha.is_finite() && (-1.0 / 3.0..=0.0).contains(&t.hht_alpha)) {
-                return Err(c.err(
-                    "transient.hht_alpha",
-                    format!("must lie in [-1/3, 0], got {}", num(t.hht_alpha)),
-                ));
-            }
-            spec::SchemeChoice::Hht { alpha: t.hht_alpha }
-        }
+        "hht" => spec::SchemeChoice::Hht { alpha: t.hht_alpha },
         other => {
             return Err(c.err(
                 "transient.scheme",
