@@ -348,6 +348,18 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
     })
 }
 
+/// `e` of the variant with the overrides `extra`, named by them (a sampled run's value is not
+/// the range the user gave: the run says which value failed); the base scene's as it is.
+fn run_named(extra: &[String], e: Error) -> Error {
+    if extra.is_empty() {
+        return e;
+    }
+    Error::Run {
+        name: extra.join(" "),
+        source: Box::new(e),
+    }
+}
+
 /// Refuses, before any ROM is built or any run starts, variants the limits do not allow: a run
 /// whose own transient is beyond its scene's limits (as `simulate` refuses it), and a ROM to
 /// build (not among `loaded`, the reduction inputs of the ROMs at hand) beyond them
@@ -355,16 +367,18 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
 /// and each ROM as it came to it (a second variant's ROM was refused after the first one's
 /// build).
 fn check_variants(
-    scenes: &[Scene],
+    (scenes, variants): (&[Scene], &[Vec<String>]),
     descriptions: &[String],
     loaded: &[String],
     cache: &CacheOptions,
 ) -> Result<()> {
     use crate::scene::budget::{Estimate, Limits};
     let mut total = (0.0_f64, 0.0_f64);
-    for sc in scenes {
+    for (sc, extra) in scenes.iter().zip(variants) {
         if let Some(est) = crate::scene::budget::transient(sc) {
-            Limits::of(sc).check(sc, &est)?;
+            Limits::of(sc)
+                .check(sc, &est)
+                .map_err(|e| run_named(extra, e.into()))?;
             total = (total.0 + est.seconds, total.1.max(est.memory));
         }
     }
@@ -437,8 +451,8 @@ impl Variants {
             .map(|extra| {
                 let mut sets = base.to_vec();
                 sets.extend(extra.iter().cloned());
-                let sc = load_scene(path, &sets)?;
-                simulation(&sc)?;
+                let sc = load_scene(path, &sets).map_err(|e| run_named(extra, e))?;
+                simulation(&sc).map_err(|e| run_named(extra, e.into()))?;
                 Ok(sc)
             })
             .collect::<Result<_>>()?;
@@ -446,7 +460,7 @@ impl Variants {
             .iter()
             .map(key_description)
             .collect::<std::result::Result<_, _>>()?;
-        check_variants(&scenes, &descriptions, &self.keys, cache)?;
+        check_variants((&scenes, variants), &descriptions, &self.keys, cache)?;
         let mut rom_of = Vec::with_capacity(scenes.len());
         for (sc, k) in scenes.iter().zip(descriptions) {
             let idx = match self.keys.iter().position(|x| *x == k) {
