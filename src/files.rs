@@ -233,6 +233,14 @@ pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
         path: dir.to_path_buf(),
         source,
     };
+    // a path that exists as something else than a directory ("File exists (os error 17)"
+    // from create_dir_all) is said as such
+    if dir.exists() && !dir.is_dir() {
+        return Err(fail(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            "exists and is not a directory: give a directory",
+        )));
+    }
     std::fs::create_dir_all(dir).map_err(fail)?;
     let probe = dir.join(format!(".probe.{}.tmp", std::process::id()));
     make_registered(&probe, |p| std::fs::File::create(p)).map_err(fail)?;

@@ -817,7 +817,7 @@ fn regression_a_key_set_twice_is_refused() {
 fn regression_a_sweep_part_that_is_not_a_file_is_refused_before_any_output() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("merged");
-    let err = refused(
+    let err = common::refused_capped(
         &["sweep-merge", "/dev/zero", "--out", out.to_str().unwrap()],
         2,
         "/dev/zero",
@@ -891,12 +891,21 @@ fn regression_offsets_and_the_barrels_widest_point_are_bounded() {
         2,
         "piston.crank_offset_mm",
     );
-    let err = refused(
-        &["simulate", SMALL, "--set", "piston.crank_offset_mm=1e6"],
-        2,
-        "piston.crank_offset_mm",
+    // too large for the rod: both offsets named when both are given, the one given otherwise
+    let rod = |sets: &[&str]| {
+        let mut args = vec!["simulate", SMALL, "--set", "engine.rod_length_mm=110"];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        refused(&args, 2, "too large for the rod")
+    };
+    let err = rod(&["piston.crank_offset_mm=50"]);
+    assert!(err.contains("key 'piston.crank_offset_mm'"), "{err}");
+    let err = rod(&["piston.crank_offset_mm=50", "piston.pin_offset_mm=0.5"]);
+    assert!(
+        err.contains("piston.pin_offset_mm and piston.crank_offset_mm"),
+        "{err}"
     );
-    assert!(!err.contains("pin_offset_mm"), "{err}");
 }
 
 /// Regression: a sweep checked its base scene's transient only (a run of 1e8 cycles that
@@ -918,7 +927,7 @@ fn regression_a_sweeps_runs_and_roms_are_checked_before_any_is_built() {
     };
     let run = |extra: &[&str], expect: &str| {
         let args = sweep(extra);
-        refused(
+        common::refused_capped(
             &args.iter().map(String::as_str).collect::<Vec<_>>(),
             2,
             expect,
@@ -950,6 +959,16 @@ fn regression_a_sweeps_runs_and_roms_are_checked_before_any_is_built() {
             "liner.mesh.axial_size_mm=25,2",
         ],
         "the ROM build needs about",
+    );
+    // a variant's piston (its pressure curve, its hot skirt) is set up before any build too
+    run(
+        &[
+            "--set",
+            "transient.cycles=2",
+            "--vary",
+            "operating.combustion.compression_ratio=17,1e9",
+        ],
+        "the built-in pressure curve",
     );
     assert!(!cache.exists(), "a ROM was built before the refusal");
     assert!(!Path::new(o).exists());
@@ -1015,6 +1034,18 @@ fn regression_cavitation_values_are_bounded_and_a_calibration_file_is_named() {
         2,
         "cavitation.calibration_file",
     );
+    // k_p from a calibration file is bounded as the scene's key is
+    std::fs::write(
+        &cal,
+        r#"{"onset_m_s2": 1000, "high_risk_m_s2": 1300, "k_p_pa_per_m_s2": 1e30}"#,
+    )
+    .unwrap();
+    let err = refused(
+        &["simulate", SMALL, "--set", &set],
+        2,
+        "k_p_pa_per_m_s2 must be at most",
+    );
+    assert!(err.contains("cal.json"), "{err}");
 }
 
 /// Regression: duplicates and conflicts taken without a word: `rom.cylinders = [1, 1]`
@@ -1063,4 +1094,15 @@ fn regression_duplicates_and_conflicting_flags_are_refused() {
         "missing field `engine`",
     );
     assert!(!err.contains("key '.'"), "{err}");
+}
+
+/// Regression: a cache directory that exists as a file or device said "File exists (os error
+/// 17)"; it is named as not a directory.
+#[test]
+fn regression_a_cache_dir_that_is_not_a_directory_is_said_so() {
+    refused(
+        &["rom", SMALL, "--cache-dir", "/dev/null"],
+        2,
+        "/dev/null: cannot write: exists and is not a directory",
+    );
 }

@@ -385,7 +385,8 @@ fn check_variants(
     // together: in parallel on the machine's cores, against the last scene's limits (a
     // sweep's base design)
     if let (Some(last), true) = (scenes.last(), scenes.len() > 1) {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+        // the runs share rayon's threads (RAYON_NUM_THREADS where a scheduler sets it)
+        let cores = rayon::current_num_threads().max(1) as f64;
         let est = Estimate {
             what: "the runs together",
             memory: total.1 * cores.min(scenes.len() as f64) + scenes.len() as f64 * 50e3,
@@ -453,6 +454,8 @@ impl Variants {
                 sets.extend(extra.iter().cloned());
                 let sc = load_scene(path, &sets).map_err(|e| run_named(extra, e))?;
                 simulation(&sc).map_err(|e| run_named(extra, e.into()))?;
+                // its piston too (the pressure curve, the hot skirt), before any ROM is built
+                crate::piston::setup::piston_of(&sc).map_err(|e| run_named(extra, e.into()))?;
                 Ok(sc)
             })
             .collect::<Result<_>>()?;

@@ -353,7 +353,17 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
     }
     check_engine_meshes(scene, cc, (&mut lm, &mut cm), (lfile, cfile))?;
     if let Some(f) = found.as_mut() {
-        f.sets.extend(fixed_sets(&cm, cc, cfile.is_some()));
+        // a fixed set already listed (found from the geometry, a box) is marked as fixed there
+        for set in fixed_sets(&cm, cc, cfile.is_some()) {
+            match f
+                .sets
+                .iter_mut()
+                .find(|s| s.part == set.part && s.name == set.name)
+            {
+                Some(listed) => listed.detail = format!("{}; {}", listed.detail, set.detail),
+                None => f.sets.push(set),
+            }
+        }
     }
     let shape = found
         .as_ref()
@@ -375,13 +385,11 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
     })
 }
 
-/// The listing's lines of the crankcase's fixed sets (`crankcase.fix`) that are not box sets
-/// of the scene (those are listed as boxes), with their node counts: a deck's sets, or the
-/// generator's when the crankcase is not `from_file`.
+/// The listing's lines of the crankcase's fixed sets (`crankcase.fix`), with their node counts:
+/// a deck's sets, or the generator's when the crankcase is not `from_file`.
 fn fixed_sets(cm: &Mesh, cc: &crate::scene::Crankcase, from_file: bool) -> Vec<find::FoundSet> {
     cc.fix
         .iter()
-        .filter(|name| !cc.box_sets.iter().any(|(b, _)| b == *name))
         .filter_map(|name| {
             cm.node_set(name).map(|nodes| find::FoundSet {
                 part: "crankcase".into(),

@@ -270,9 +270,16 @@ impl Design {
             }
         };
         let keys = design.keys();
-        let mut seen = std::collections::HashSet::new();
-        if let Some(k) = keys.iter().find(|k| !seen.insert(k.as_str())) {
-            return Err(DesignError::Design(format!("key '{k}' given twice")));
+        // a key twice, or a table and a key inside it (the run's value would hang on their
+        // order)
+        for (i, k) in keys.iter().enumerate() {
+            if let Some(other) = keys[..i]
+                .iter()
+                .find(|o| super::overrides::within(o, k) || super::overrides::within(k, o))
+            {
+                let k = if other.len() > k.len() { other } else { k };
+                return Err(DesignError::Design(format!("key '{k}' given twice")));
+            }
         }
         Ok(design)
     }
@@ -286,14 +293,14 @@ impl Design {
             let key = key.split('.').map(str::trim).collect::<Vec<_>>().join(".");
             let key = key.as_str();
             // a fixed table holding a varied key is the same conflict
-            if keys
+            if let Some(varied) = keys
                 .iter()
-                .any(|k| super::overrides::within(key, k) || super::overrides::within(k, key))
+                .find(|k| super::overrides::within(key, k) || super::overrides::within(k, key))
             {
                 return Err(DesignError::Argument {
                     arg: "--set",
                     value: s.clone(),
-                    problem: format!("the design varies '{key}' too"),
+                    problem: format!("the design varies '{varied}' too"),
                     expected: "a key fixed by --set or varied by --vary/--range, not both",
                 });
             }
@@ -607,6 +614,24 @@ mod tests {
         assert!(d
             .check_fixed(&["piston.thermal.liner_temp=1".into()])
             .is_ok());
+        // the varied key is the one named
+        let e = d
+            .check_fixed(&["piston={mass_kg=1}".into()])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("the design varies 'piston.thermal.liner_temp_c'"),
+            "{e}"
+        );
+        // varying a table and a key inside it is a key given twice
+        let vary = [
+            "cavitation={gap_mm=4},{gap_mm=50}".into(),
+            "cavitation.gap_mm=6,7".into(),
+        ];
+        let e = Design::from_args(&vary, None, &[], None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("'cavitation.gap_mm' given twice"), "{e}");
     }
 
     #[test]

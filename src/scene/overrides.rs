@@ -79,13 +79,23 @@ pub fn parse_value(text: &str) -> Result<Value, String> {
             let v = t
                 .remove("v")
                 .unwrap_or_else(|| Value::String(text.to_string()));
-            if text.contains('#') && !v.to_string().contains('#') {
+            if has_comment(text, &v) {
                 return Err("a comment after the value (#) is not taken: remove it".into());
             }
             Ok(v)
         }
         Err(_) => Ok(Value::String(text.to_string())),
     }
+}
+
+/// Whether the value text `text` (read as `v`) ends in a comment: some '#' of it is where the
+/// same value ends (the text before it reads as `v` too), not a character of a string.
+fn has_comment(text: &str, v: &Value) -> bool {
+    text.match_indices('#').any(|(i, _)| {
+        format!("v = {}", &text[..i])
+            .parse::<Table>()
+            .is_ok_and(|t| t.get("v") == Some(v))
+    })
 }
 
 /// Applies one `key.path=value` override to `root`.
@@ -159,6 +169,8 @@ mod tests {
             assert!(e.starts_with("--set '"), "{e}");
         }
         assert_eq!(t["a"]["b"].as_integer(), Some(1));
+        // a comment after a string that holds '#' too
+        assert!(apply(&mut t, "a.s=\"#\" # comment").is_err());
         // a '#' inside a string is the string's
         apply(&mut t, "a.s=\"x # y\"").unwrap();
         assert_eq!(t["a"]["s"].as_str(), Some("x # y"));

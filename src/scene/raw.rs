@@ -250,7 +250,7 @@ pub struct RawRom {
     /// (exact coupling).
     #[serde(default = "default_cut_shapes")]
     pub cut_shapes: usize,
-    /// Cylinders whose liners are modelled (1-based); empty = all.
+    /// Cylinders whose liners are modelled (1-based, each once); empty = all.
     #[serde(default)]
     pub cylinders: Vec<usize>,
     /// Directory of the ROM cache, relative to the scene file.
@@ -471,8 +471,8 @@ pub struct RawPiston {
     /// Cold diametral clearance at the widest skirt height \[um\], >= 0; at most 2 % of the bore
     /// (warned above 0.5 %: running clearances are 0.05-0.2 %).
     pub clearance_um: f64,
-    /// Radial barrel drop at the farther skirt end \[um\], >= 0, and the widest height below the
-    /// pin \[mm\].
+    /// Radial barrel drop at the farther skirt end \[um\], >= 0 (from the widest height,
+    /// `barrel_max_below_pin_mm`).
     #[serde(default)]
     pub barrel_um: f64,
     /// Height of the barrel's widest point below the pin axis \[mm\]: on the skirt, from
@@ -668,7 +668,8 @@ fn default_cc_bar() -> f64 {
     1.0
 }
 
-/// Built-in Wiebe pressure curve at full load.
+/// Built-in Wiebe pressure curve at full load; its peak must not exceed 1000 bar (the bound of
+/// a pressure table's values).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawCombustion {
@@ -705,7 +706,8 @@ pub struct RawTransient {
     /// its sixth cycle with "newmark" and runs through with "hht" (docs/validation.md).
     #[serde(default)]
     pub scheme: Option<String>,
-    /// HHT alpha in [-1/3, 0] (scheme "hht", given or a lubricated skirt's default).
+    /// HHT alpha in [-1/3, 0] (used by scheme "hht", given or a lubricated skirt's default;
+    /// checked under either scheme).
     #[serde(default = "default_alpha")]
     pub hht_alpha: f64,
     /// Crank-angle step \[deg\]; 720 must be a whole multiple of it.

@@ -582,6 +582,17 @@ pub(super) fn calibration_thresholds(
             ));
         }
     }
+    if t.k_p_pa_per_m_s2 > MAX_K_P {
+        return Err(c.err(
+            key,
+            format!(
+                "{}: k_p_pa_per_m_s2 must be at most {}, got {}",
+                path.display(),
+                num(MAX_K_P),
+                num(t.k_p_pa_per_m_s2)
+            ),
+        ));
+    }
     Ok(ThresholdSpec::Calibrated {
         onset_m_s2: t.onset_m_s2,
         high_risk_m_s2: t.high_risk_m_s2,
@@ -739,11 +750,11 @@ pub(super) fn validate_piston(
     };
     let offset = (piston.pin_offset - piston.crank_offset).abs();
     if offset + engine.stroke / 2.0 >= engine.rod_length {
-        // the key the user moved: the crank's offset when the pin has none
-        let key = if piston.pin_offset == 0.0 {
-            "piston.crank_offset_mm"
-        } else {
-            "piston.pin_offset_mm"
+        // the keys the user moved: both when both are given
+        let key = match (piston.pin_offset != 0.0, piston.crank_offset != 0.0) {
+            (true, true) => "piston.pin_offset_mm and piston.crank_offset_mm",
+            (false, true) => "piston.crank_offset_mm",
+            _ => "piston.pin_offset_mm",
         };
         return Err(c.err(
             key,

@@ -99,7 +99,34 @@ pub const KINDS: [ElementKind; 4] = [
 /// Asserts a refusal of the binary run with `args`: the exit code, one `error:` message naming
 /// `needle`, no panic, nothing on stdout. Returns the message.
 pub fn refused(args: &[&str], code: i32, needle: &str) -> String {
-    let (c, out, err) = linercav(args);
+    refused_as(args, linercav(args), code, needle)
+}
+
+/// As [`refused`], the binary run under `timeout 60` and a 4 GB address-space cap
+/// (`prlimit`): a regression that would run on, or read without end, fails its test instead
+/// of taking the machine.
+pub fn refused_capped(args: &[&str], code: i32, needle: &str) -> String {
+    let out = std::process::Command::new("timeout")
+        .args(["60", "prlimit", "--as=4000000000", "--"])
+        .arg(env!("CARGO_BIN_EXE_linercav"))
+        .args(args)
+        .output()
+        .expect("timeout and prlimit run");
+    let run = (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    );
+    refused_as(args, run, code, needle)
+}
+
+/// The checks of [`refused`] on a run's (exit code, stdout, stderr).
+fn refused_as(
+    args: &[&str],
+    (c, out, err): (i32, String, String),
+    code: i32,
+    needle: &str,
+) -> String {
     assert_eq!(c, code, "{args:?}: exit {c}, stderr: {err}");
     assert!(err.contains("error: "), "{args:?}: no error message: {err}");
     assert!(!err.contains("panicked"), "{args:?}: panic: {err}");
