@@ -135,24 +135,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     }
     let design = Design::from_args(&req.vary, req.sample.as_deref(), &req.ranges, req.seed)?;
     design.check_fixed(&req.sets)?;
-    // --shards belongs to an Indexed Job's environment; beside --shard I/N it would be one
-    // count too many, and 0 shards are none
-    match (&req.shard, req.shards) {
-        (Some(_), Some(_)) => {
-            return Err(Error::Argument {
-                flag: "--shards".into(),
-                msg: "give either --shard I/N or --shards N (with JOB_COMPLETION_INDEX), not both"
-                    .into(),
-            })
-        }
-        (None, Some(0)) => {
-            return Err(Error::Argument {
-                flag: "--shards 0".into(),
-                msg: "must be at least 1".into(),
-            })
-        }
-        _ => {}
-    }
+    check_shard_flags(req)?;
     let shard = match &req.shard {
         Some(s) => Some(Shard::parse("--shard", s)?),
         None => Shard::from_env(&|k| std::env::var(k).ok(), req.shards)?,
@@ -402,6 +385,28 @@ fn execute(
         variants.roms.iter().map(|r| r.cache.to_string()).collect(),
         inputs,
     ))
+}
+
+/// Refuses `--shards` beside `--shard I/N` (one count too many) and `--shards 0` (no
+/// shard): `--shards` belongs to an Indexed Job's environment.
+fn check_shard_flags(req: &SweepRequest) -> Result<()> {
+    match (&req.shard, req.shards) {
+        (Some(_), Some(_)) => {
+            return Err(Error::Argument {
+                flag: "--shards".into(),
+                msg: "give either --shard I/N or --shards N (with JOB_COMPLETION_INDEX), not both"
+                    .into(),
+            })
+        }
+        (None, Some(0)) => {
+            return Err(Error::Argument {
+                flag: "--shards 0".into(),
+                msg: "must be at least 1".into(),
+            })
+        }
+        _ => {}
+    }
+    Ok(())
 }
 
 /// Refuses, before any scene is loaded for each run, a sweep whose `runs` would take longer

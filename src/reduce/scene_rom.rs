@@ -353,17 +353,7 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
     }
     check_engine_meshes(scene, cc, (&mut lm, &mut cm), (lfile, cfile))?;
     if let Some(f) = found.as_mut() {
-        // a fixed set already listed (found from the geometry, a box) is marked as fixed there
-        for set in fixed_sets(&cm, cc, cfile.is_some()) {
-            match f
-                .sets
-                .iter_mut()
-                .find(|s| s.part == set.part && s.name == set.name)
-            {
-                Some(listed) => listed.detail = format!("{}; {}", listed.detail, set.detail),
-                None => f.sets.push(set),
-            }
-        }
+        list_fixed_sets(f, fixed_sets(&cm, cc, cfile.is_some()));
     }
     let shape = found
         .as_ref()
@@ -383,6 +373,21 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
         guide,
         found,
     })
+}
+
+/// Adds the fixed sets `fixed` to what was found: a set already listed (found from the
+/// geometry, a box) is marked as fixed there, not listed twice.
+fn list_fixed_sets(found: &mut FoundInterfaces, fixed: Vec<find::FoundSet>) {
+    for set in fixed {
+        match found
+            .sets
+            .iter_mut()
+            .find(|s| s.part == set.part && s.name == set.name)
+        {
+            Some(listed) => listed.detail = format!("{}; {}", listed.detail, set.detail),
+            None => found.sets.push(set),
+        }
+    }
 }
 
 /// The listing's lines of the crankcase's fixed sets (`crankcase.fix`), with their node counts:
