@@ -1081,6 +1081,10 @@ fn regression_duplicates_and_conflicting_flags_are_refused() {
     let mut zero = sweep.to_vec();
     zero.extend(["--shards", "0"]);
     refused(&zero, 2, "--shards 0");
+    // --shards outside an Indexed Job ran the whole sweep
+    let mut alone = sweep.to_vec();
+    alone.extend(["--shards", "2"]);
+    refused(&alone, 2, "--shards 2: ");
     refused(
         &["simulate", SMALL, "--set", "transient.hht_alpha=nan"],
         2,

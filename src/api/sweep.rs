@@ -387,8 +387,9 @@ fn execute(
     ))
 }
 
-/// Refuses `--shards` beside `--shard I/N` (one count too many) and `--shards 0` (no
-/// shard): `--shards` belongs to an Indexed Job's environment.
+/// Refuses `--shards` beside `--shard I/N` (one count too many), `--shards 0` (no shard),
+/// and `--shards` outside an Indexed Job (no JOB_COMPLETION_INDEX) or beside a Slurm array:
+/// `--shards` belongs to an Indexed Job's environment.
 fn check_shard_flags(req: &SweepRequest) -> Result<()> {
     match (&req.shard, req.shards) {
         (Some(_), Some(_)) => {
@@ -405,6 +406,22 @@ fn check_shard_flags(req: &SweepRequest) -> Result<()> {
             })
         }
         _ => {}
+    }
+    // --shards counts an Indexed Job's shards: without its index every pod would run the
+    // whole sweep, and a Slurm array gives the count itself (the flag was ignored)
+    let set = |k: &str| std::env::var_os(k).is_some();
+    if let (None, Some(n)) = (&req.shard, req.shards) {
+        let msg = if set("SLURM_ARRAY_TASK_ID") {
+            "a Slurm array gives the shard count itself: leave --shards out"
+        } else if !set("JOB_COMPLETION_INDEX") {
+            "needs JOB_COMPLETION_INDEX (a Kubernetes Indexed Job sets it); elsewhere give --shard I/N"
+        } else {
+            return Ok(());
+        };
+        return Err(Error::Argument {
+            flag: format!("--shards {n}"),
+            msg: msg.into(),
+        });
     }
     Ok(())
 }

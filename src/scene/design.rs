@@ -473,8 +473,7 @@ impl Shard {
     /// - Kubernetes Indexed Jobs: JOB_COMPLETION_INDEX (0-based) with the count `shards`
     ///   (the Job's `completions`): I = INDEX + 1, N = shards.
     ///
-    /// None when neither is set. `shards` is refused beside a Slurm array (which gives the count)
-    /// and without JOB_COMPLETION_INDEX (every pod would run the whole sweep).
+    /// None when neither is set.
     pub fn from_env(
         var: &dyn Fn(&str) -> Option<String>,
         shards: Option<usize>,
@@ -495,16 +494,6 @@ impl Shard {
             }
         };
         if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
-            // the array gives the count: a --shards beside it would be a second one
-            if let Some(n) = shards {
-                return Err(DesignError::Environment {
-                    var: "SLURM_ARRAY_TASK_ID",
-                    value: id.to_string(),
-                    problem: format!(
-                        "a Slurm array gives the shard count itself: leave out --shards {n}"
-                    ),
-                });
-            }
             let missing = |name: &'static str| DesignError::Environment {
                 var: name,
                 value: String::new(),
@@ -561,16 +550,6 @@ impl Shard {
                 index: idx + 1,
                 count,
             }));
-        }
-        // --shards without an Indexed Job's index would run the whole sweep in every pod
-        if let Some(n) = shards {
-            return Err(DesignError::Environment {
-                var: "JOB_COMPLETION_INDEX",
-                value: String::new(),
-                problem: format!(
-                    "not set, so --shards {n} has no shard to run (a Kubernetes Indexed Job sets it; elsewhere give --shard I/N)"
-                ),
-            });
         }
         Ok(None)
     }
@@ -708,17 +687,7 @@ mod tests {
         );
         assert!(Shard::from_env(&k8s, None).is_err());
         assert!(Shard::from_env(&k8s, Some(4)).is_err());
-        // --shards without an index, or beside a Slurm array, is refused (it ran the whole
-        // sweep in every pod, or was ignored)
-        assert!(Shard::from_env(&env(&[]), Some(4)).is_err());
-        assert_eq!(Shard::from_env(&env(&[]), None).unwrap(), None);
-        let slurm = env(&[
-            ("SLURM_ARRAY_TASK_ID", "2"),
-            ("SLURM_ARRAY_TASK_MIN", "1"),
-            ("SLURM_ARRAY_TASK_MAX", "3"),
-        ]);
-        assert!(Shard::from_env(&slurm, Some(3)).is_err());
-        assert!(Shard::from_env(&slurm, None).unwrap().is_some());
+        assert_eq!(Shard::from_env(&env(&[]), Some(4)).unwrap(), None);
     }
 
     #[test]
