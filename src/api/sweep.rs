@@ -434,7 +434,9 @@ fn check_size(req: &SweepRequest, runs: usize) -> Result<()> {
     let Some(one) = crate::scene::budget::transient(&base) else {
         return Ok(());
     };
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    // the runs share rayon's threads (RAYON_NUM_THREADS where a scheduler sets it), as
+    // `Variants`' estimate of the runs together counts them
+    let cores = rayon::current_num_threads().max(1) as f64;
     let est = crate::scene::budget::Estimate {
         what: "the sweep",
         // runs in parallel, plus each run's scene and results held until the end (~50 kB)

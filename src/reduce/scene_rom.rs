@@ -536,14 +536,27 @@ pub fn rom_inputs<'a>(scene: &Scene, em: &'a EngineMeshes, keep_bases: bool) -> 
 /// happen: the cache is bypassed or holds no entry for it. A set of scenes checks every
 /// build it needs this way before the first.
 pub fn check_build(scene: &Scene, description: &str, opts: &CacheOptions) -> Result<()> {
+    let (_, path) = cache_entry(scene, description, opts);
+    if !opts.no_cache && path.is_file() {
+        return Ok(());
+    }
+    check_build_limits(scene)
+}
+
+/// The cache directory of `scene` under `opts` and the entry of the reduction input
+/// `description` in it.
+fn cache_entry(scene: &Scene, description: &str, opts: &CacheOptions) -> (PathBuf, PathBuf) {
     let dir = opts
         .dir
         .clone()
         .unwrap_or_else(|| scene.rom.cache_dir.clone());
     let path = cache::path_for(&dir, &cache::key_of(description));
-    if !opts.no_cache && path.is_file() {
-        return Ok(());
-    }
+    (dir, path)
+}
+
+/// Refuses a ROM build of `scene` that its limits do not allow: nothing is built that the
+/// machine cannot hold or whose result cannot be stored.
+fn check_build_limits(scene: &Scene) -> Result<()> {
     if let Some(est) = budget::rom_build(scene) {
         Limits::of(scene).check(scene, &est)?;
     }
@@ -554,13 +567,8 @@ pub fn check_build(scene: &Scene, description: &str, opts: &CacheOptions) -> Res
 /// `progress` is told the build's phases.
 pub fn get_rom(scene: &Scene, opts: &CacheOptions, progress: &dyn Fn(&str)) -> Result<LoadedRom> {
     let t = Instant::now();
-    let dir = opts
-        .dir
-        .clone()
-        .unwrap_or_else(|| scene.rom.cache_dir.clone());
     let description = key_description(scene)?;
-    let key = cache::key_of(&description);
-    let path = cache::path_for(&dir, &key);
+    let (dir, path) = cache_entry(scene, &description, opts);
     let mut replaced = None;
     let found = |rom: Box<EngineRom>, how: &'static str, path: PathBuf| LoadedRom {
         rom: *rom,
@@ -580,11 +588,7 @@ pub fn get_rom(scene: &Scene, opts: &CacheOptions, progress: &dyn Fn(&str)) -> R
             Lookup::Miss => {}
         }
     }
-    // nothing is built that the machine cannot hold or whose result cannot be stored
-    let limits = Limits::of(scene);
-    if let Some(est) = budget::rom_build(scene) {
-        limits.check(scene, &est)?;
-    }
+    check_build_limits(scene)?;
     // one builder per entry: processes that missed it at the same time wait for the lock and
     // then find what the builder stored
     let _lock = if opts.no_cache {
