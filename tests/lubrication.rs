@@ -2,9 +2,7 @@
 //! squeeze film of a rigid strip, a cylinder approaching a plane, the Greenwood-Tripp integral;
 //! and of its derivatives against finite differences.
 
-use linercav::piston::lubrication::{
-    gt_integral, Film, GreenwoodTripp, Line, Lubrication, Vogel, CAVITATION_SCALE,
-};
+use linercav::piston::lubrication::{gt_integral, Film, GreenwoodTripp, Line, Lubrication, Vogel};
 
 /// Cell-centred nodes of `n` slices on [0, len].
 fn nodes(n: usize, len: f64) -> Vec<f64> {
@@ -82,6 +80,174 @@ fn verification_cylinder_approaching_a_plane_converges_to_the_closed_form() {
     assert!(errors[3] < 1e-3, "{:.2e}", errors[3]);
     let inf = 3.0 * 2f64.sqrt() * std::f64::consts::PI * mu * (-hdot) * (r / h0).powf(1.5);
     println!("infinite-domain limit {inf:.6e} N/m");
+}
+
+/// The semi-analytic Reynolds-condition film of a long rigid cylinder (radius R, gap
+/// h = h0 + x^2 / (2R)) sliding at U over [-X, X] (p = 0 at -X, the inlet): integrating the
+/// Reynolds equation once, p' = 6 mu U (h - h_c) / h^3, and the rupture x_c > 0 is where
+/// p = p' = 0 (h_c = h(x_c)): int_-X^x_c (h - h(x_c)) / h^3 dx = 0, found by bisection with the
+/// closed-form primitives of 1 / h^2 and 1 / h^3. Returns the force per unit width
+/// int_-X^x_c p dx (composite Simpson, 20k intervals, on the closed-form p) and x_c.
+fn sliding_cylinder_reynolds(r: f64, h0: f64, mu: f64, u: f64, xmax: f64) -> (f64, f64) {
+    let (a, b) = (h0, 1.0 / (2.0 * r));
+    let h = |x: f64| a + b * x * x;
+    let at = |x: f64| (x * (b / a).sqrt()).atan() / (a * b).sqrt();
+    // primitives of 1 / h^2 and 1 / h^3
+    let j2 = |x: f64| x / (2.0 * a * h(x)) + at(x) / (2.0 * a);
+    let j3 = |x: f64| {
+        x / (4.0 * a * h(x).powi(2)) + 3.0 * x / (8.0 * a * a * h(x)) + 3.0 * at(x) / (8.0 * a * a)
+    };
+    let p = |x: f64, xc: f64| {
+        let hc = h(xc);
+        6.0 * mu * u * ((j2(x) - j2(-xmax)) - hc * (j3(x) - j3(-xmax)))
+    };
+    let (mut lo, mut hi) = (1e-12 * xmax, xmax);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if p(mid, mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let xc = 0.5 * (lo + hi);
+    let m = 20_000;
+    let dx = (xc + xmax) / m as f64;
+    let mut sum = p(-xmax, xc) + p(xc, xc);
+    for i in 1..m {
+        sum += if i % 2 == 1 { 4.0 } else { 2.0 } * p(-xmax + i as f64 * dx, xc);
+    }
+    (sum * dx / 3.0, xc)
+}
+
+/// Verification of the Reynolds cavitation condition: a long rigid cylinder sliding over the
+/// liner (no squeeze), the film's pressure under the Reynolds condition
+/// (`Line::reynolds_pressure`) against the semi-analytic solution above (rupture where
+/// p = p' = 0; on an infinite film x_c = 0.475 sqrt(2 R h0)). The discrete rupture lies
+/// within a node spacing of the true one, so first order at least is asserted (observed
+/// order >= 0.9 between the finer grids) and the finest grid (400 nodes) within 1 %
+/// (tolerances chosen before the run). Half-Sommerfeld's force (the unconstrained pressure
+/// clipped) is printed beside it: the two cavitation models differ by that much on a sliding
+/// film.
+#[test]
+fn verification_sliding_cylinder_meets_the_reynolds_condition() {
+    let (r, h0, mu, u): (f64, f64, f64, f64) = (0.05, 5e-6, 8e-3, 5.0);
+    let xmax = 4.0 * (2.0 * r * h0).sqrt();
+    let (exact, xc) = sliding_cylinder_reynolds(r, h0, mu, u, xmax);
+    println!(
+        "rupture at {:.4} sqrt(2 R h0), force {exact:.6e} N/m",
+        xc / (2.0 * r * h0).sqrt()
+    );
+    assert!(exact > 0.0);
+    let mut errors = Vec::new();
+    for n in [50, 100, 200, 400] {
+        let x: Vec<f64> = nodes(n, 2.0 * xmax).iter().map(|v| v - xmax).collect();
+        let h: Vec<f64> = x.iter().map(|v| h0 + v * v / (2.0 * r)).collect();
+        let mus = vec![mu; n];
+        let line = Line {
+            x: &x,
+            left: -xmax,
+            right: xmax,
+            h: &h,
+            mu: &mus,
+        };
+        // S = (U / 2) dh/dx
+        let src: Vec<f64> = x.iter().map(|v| 0.5 * u * v / r).collect();
+        let p = line.reynolds_pressure(&src);
+        assert!(p.iter().all(|&v| v >= 0.0));
+        let f: f64 = line.integrate(&p).iter().sum();
+        let hs: Vec<f64> = line.pressure(&src).iter().map(|v| v.max(0.0)).collect();
+        let f_hs: f64 = line.integrate(&hs).iter().sum();
+        let rel = (f - exact).abs() / exact;
+        println!(
+            "sliding cylinder n = {n}: {f:.6e} N/m against {exact:.6e}, {rel:.2e} \
+             (half-Sommerfeld {f_hs:.6e})"
+        );
+        errors.push(rel);
+    }
+    for w in errors.windows(2).skip(1) {
+        let order = (w[0] / w[1]).log2();
+        println!("observed order {order:.3}");
+        assert!(order >= 0.9, "order {order}");
+    }
+    assert!(errors[3] < 1e-2, "{:.2e}", errors[3]);
+}
+
+/// Verification of the complementarity solve: on lines with sources of both signs, uneven
+/// gaps and viscosities, the Reynolds-condition pressure satisfies the discrete conditions
+/// built here from the three-point form of the module docs (conductances h_f^3 / (12 mu_f d),
+/// face values the nodes' means, the edges at p = 0): P >= 0, the multiplier
+/// lambda = -(A P - m S) >= 0 where P = 0, and A P = m S where P > 0. The problem has one
+/// solution (A is an M-matrix), so this proves the solve; tolerance 1e-9 of the row's scale
+/// (roundoff of a 12- to 40-node tridiagonal solve).
+#[test]
+fn verification_reynolds_condition_solves_the_complementarity_problem() {
+    for (case, n) in [(0usize, 12usize), (1, 12), (2, 40), (3, 25)] {
+        let len = 0.065;
+        let x = nodes(n, len);
+        let f = |i: usize, k: f64| ((i * 7 + case * 13) as f64 * k).sin();
+        let h: Vec<f64> = (0..n).map(|i| 10e-6 * (1.0 + 0.6 * f(i, 0.37))).collect();
+        let mu: Vec<f64> = (0..n).map(|i| 8e-3 * (1.0 + 0.3 * f(i, 0.91))).collect();
+        let src: Vec<f64> = (0..n)
+            .map(|i| 0.05 * f(i, 1.3 + 0.2 * case as f64))
+            .collect();
+        let line = Line {
+            x: &x,
+            left: 0.0,
+            right: len,
+            h: &h,
+            mu: &mu,
+        };
+        let p = line.reynolds_pressure(&src);
+        // the three-point form, assembled here
+        let d: Vec<f64> = (0..=n)
+            .map(|k| {
+                let a = if k == 0 { 0.0 } else { x[k - 1] };
+                let b = if k == n { len } else { x[k] };
+                b - a
+            })
+            .collect();
+        let g: Vec<f64> = (0..=n)
+            .map(|k| {
+                let (hf, mf) = match (k, k == n) {
+                    (0, _) => (h[0], mu[0]),
+                    (_, true) => (h[n - 1], mu[n - 1]),
+                    _ => (0.5 * (h[k - 1] + h[k]), 0.5 * (mu[k - 1] + mu[k])),
+                };
+                hf.powi(3) / (12.0 * mf * d[k])
+            })
+            .collect();
+        let pv = |i: isize| {
+            if i < 0 || i >= n as isize {
+                0.0
+            } else {
+                p[i as usize]
+            }
+        };
+        let mut cavitated = 0;
+        for i in 0..n {
+            let ii = i as isize;
+            let ap = g[i + 1] * (pv(ii + 1) - p[i]) - g[i] * (p[i] - pv(ii - 1));
+            let rhs = 0.5 * (d[i] + d[i + 1]) * src[i];
+            let scale = (g[i] + g[i + 1]) * p.iter().fold(0.0f64, |m, v| m.max(*v)) + rhs.abs();
+            let lambda = rhs - ap;
+            assert!(p[i] >= 0.0, "case {case} node {i}: P {:e}", p[i]);
+            if p[i] == 0.0 {
+                cavitated += 1;
+                assert!(
+                    lambda >= -1e-9 * scale,
+                    "case {case} node {i}: lambda {lambda:e}"
+                );
+            } else {
+                assert!(
+                    lambda.abs() <= 1e-9 * scale,
+                    "case {case} node {i}: residual {lambda:e}"
+                );
+            }
+        }
+        println!("case {case}: {cavitated} of {n} nodes cavitated");
+        assert!(cavitated > 0 && cavitated < n, "case {case}: a mixed film");
+    }
 }
 
 /// Independent quadrature of F_n(lambda), n = k - 1/2, in s directly: composite Simpson on
@@ -208,8 +374,8 @@ fn verification_film_tangent_matches_finite_differences() {
 
 /// Verification of the sliding term's sign: the liner sliding into a gap that narrows along
 /// its motion (U > 0, dh/dx < 0) builds pressure; the opposite sliding does not (the film is
-/// cavitated: half-Sommerfeld, smoothed over 0.1 bar); with no squeeze and no sliding only the
-/// smoothing's e/2 remains.
+/// cavitated under the Reynolds condition, p >= 0: exactly zero, not a small suction clipped);
+/// with no squeeze and no sliding the film holds nothing.
 #[test]
 fn verification_sliding_wedge_builds_pressure_only_when_converging() {
     let mut f = film(Lubrication::Squeeze);
@@ -222,14 +388,8 @@ fn verification_sliding_wedge_builds_pressure_only_when_converging() {
     let still = f.side(0, &pen, &rest, 0.0).force.iter().sum::<f64>();
     println!("wedge: converging {converging:.3e} N, diverging {diverging:.3e} N");
     assert!(converging > 0.0);
-    // the smoothed cavitation keeps at most e/2 over the wetted area
-    let area = 7.0 * f.arc * f.length;
-    assert!(diverging >= 0.0 && diverging <= 0.5 * CAVITATION_SCALE * area);
-    assert!(diverging < 1e-4 * converging);
-    assert!(
-        still >= 0.0 && still <= 0.5 * CAVITATION_SCALE * area,
-        "{still}"
-    );
+    assert_eq!(diverging, 0.0);
+    assert_eq!(still, 0.0);
 }
 
 mod common;
@@ -426,8 +586,8 @@ fn contract_bad_oil_input_names_the_key() {
     }
 }
 
-/// Contract: a starved film (oil supply 1 um, which stops the small engine's run at 22 deg,
-/// docs/validation.md) is warned of before the run, and the run's failure (exit 1) says that
+/// Contract: a starved film (oil supply 1 um, which stops the small engine's run in its
+/// second cycle, docs/validation.md) is warned of before the run, and the run's failure (exit 1) says that
 /// the oil film did not settle, names the supply's key and the crank angle, and points to the
 /// way out; no JSON is printed.
 #[test]

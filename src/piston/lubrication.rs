@@ -17,14 +17,15 @@
 //!   d/dx (h^3 / (12 mu) dp/dx) = dh/dt + (U / 2) dh/dx,   p = 0 at the skirt's top and bottom,
 //!
 //! x downward along the skirt, U = z' the liner's velocity relative to the skirt along x (z'
-//! the piston's upward axial velocity), dh/dt = -cos(psi_j) p'_i the squeeze. Cavitation is
-//! half-Sommerfeld: the solved pressure is clipped at zero. Partial flooding: a point whose gap
-//! is larger than the oil supply on the liner (`supply`) is not wetted, so the film engages as
-//! the skirt closes to within the supply: with w the wetted fraction ([`Film::wetting`]) the
-//! source is w times the squeeze and sliding terms and the film's pressure is w p+(P) (an
-//! unwetted point holds none; without the factor a line that just wetted jumped to the
-//! cavitation smoothing's rest pressure over its whole length, and the step's Newton
-//! iteration cycled on that jump). Gaps below [`FILM_FLOOR`] enter the Reynolds term as the
+//! the piston's upward axial velocity), dh/dt = -cos(psi_j) p'_i the squeeze. Cavitation by
+//! the Reynolds (Swift-Stieber) condition, a complementarity problem: p >= 0 everywhere, and
+//! where the film is cavitated (p = 0) the flow into a node does not exceed what its source
+//! takes (`reynolds_condition`, [`Line::reynolds_pressure`]); at a rupture p and dp/dx go to zero together. Partial
+//! flooding: a point whose gap is larger than the oil supply on the liner (`supply`) is not
+//! wetted, so the film engages as the skirt closes to within the supply: with w the wetted
+//! fraction ([`Film::wetting`]) the source is w times the squeeze and sliding terms and the
+//! film's pressure is w P (an unwetted point holds none, so a line's pressure rises from zero
+//! as it wets). Gaps below [`FILM_FLOOR`] enter the Reynolds term as the
 //! floor, through a smooth maximum ([`Film::floored`]).
 //!
 //! Discretisation: the slice centres are the nodes; the three-point form
@@ -197,6 +198,34 @@ struct Tri {
     d: Vec<f64>,
 }
 
+impl Tri {
+    /// The system with the nodes not `free` decoupled from their neighbours (their row and
+    /// column reduced to the diagonal), so that with a zero right-hand side there they solve to
+    /// P = 0 and the free nodes see them as p = 0 edges.
+    fn decoupled(&self, free: &[bool]) -> Tri {
+        let mut t = Tri {
+            lower: self.lower.clone(),
+            diag: self.diag.clone(),
+            upper: self.upper.clone(),
+            m: self.m.clone(),
+            g: self.g.clone(),
+            d: self.d.clone(),
+        };
+        let n = free.len();
+        for i in (0..n).filter(|&i| !free[i]) {
+            t.lower[i] = 0.0;
+            t.upper[i] = 0.0;
+            if i > 0 {
+                t.upper[i - 1] = 0.0;
+            }
+            if i + 1 < n {
+                t.lower[i + 1] = 0.0;
+            }
+        }
+        t
+    }
+}
+
 impl Line<'_> {
     fn n(&self) -> usize {
         self.x.len()
@@ -280,6 +309,15 @@ impl Line<'_> {
         let t = self.system();
         let rhs: Vec<f64> = (0..self.n()).map(|i| t.m[i] * s[i]).collect();
         Factored::new(&t).solve(&rhs)
+    }
+
+    /// Pressure at the nodes for the source `s` under the Reynolds condition: the linear
+    /// complementarity problem P >= 0, lambda = -(A P - m S) >= 0, P_i lambda_i = 0 (the
+    /// module docs; solved as the film solves it, a fully wetted line).
+    pub fn reynolds_pressure(&self, s: &[f64]) -> Vec<f64> {
+        let t = self.system();
+        let rhs: Vec<f64> = (0..self.n()).map(|i| t.m[i] * s[i]).collect();
+        reynolds_condition(&t, &rhs).1
     }
 
     /// The force on each node's slice of the clipped pressure `p`: the integral over the
@@ -447,20 +485,64 @@ impl Factored {
     }
 }
 
-/// Pressure scale of the cavitation's smoothing \[Pa\] (0.1 bar).
-pub const CAVITATION_SCALE: f64 = 1e4;
+/// The Reynolds (Swift-Stieber) cavitation condition on one line, a linear complementarity
+/// problem: with K = -A (the three-point system of the module docs, an M-matrix) and b = -r
+/// (r = m S the right-hand side),
+///
+///   P >= 0,   lambda = K P - b >= 0,   P_i lambda_i = 0,
+///
+/// so the film holds no suction, and where it is cavitated (P_i = 0) the flow the pressure
+/// drives into the node does not exceed the flow the source takes out of it (lambda_i >= 0:
+/// mass is conserved up to the rupture). The cavitated set is found by the primal-dual
+/// active-set iteration (Hintermueller, Ito and Kunisch): a free node whose pressure is
+/// negative is cavitated, a cavitated node whose multiplier is negative is freed, until no
+/// node changes; for an M-matrix it converges in finitely many passes (capped here at
+/// 2n + 3, after which the last set's pressure is clipped). The
+/// pressure is continuous in the sources and the gaps, and its derivative changes only where
+/// a node changes its set, where the pressure and its slope are already near zero (the smooth
+/// rupture of the Reynolds condition), not across a whole line's suction as when the
+/// unconstrained pressure is clipped (half-Sommerfeld).
+///
+/// Returns the system with the cavitated nodes decoupled (identity-like rows: P_i = 0), the
+/// pressure and which nodes are free.
+fn reynolds_condition(t: &Tri, r: &[f64]) -> (Tri, Vec<f64>, Vec<bool>) {
+    let n = r.len();
+    let mut free = vec![true; n];
+    for _ in 0..=2 * n + 2 {
+        let (tc, p) = solve_free(t, r, &free);
+        let next: Vec<bool> = (0..n)
+            .map(|i| {
+                if free[i] {
+                    p[i] >= 0.0
+                } else {
+                    // lambda_i = (K P - b)_i = r_i - (A P)_i, P_i = 0
+                    let left = if i > 0 { t.lower[i] * p[i - 1] } else { 0.0 };
+                    let right = p.get(i + 1).map_or(0.0, |&pr| t.upper[i] * pr);
+                    r[i] - left - right <= 0.0
+                }
+            })
+            .collect();
+        if next == free {
+            return (tc, p.into_iter().map(|v| v.max(0.0)).collect(), free);
+        }
+        free = next;
+    }
+    // not reached for an M-matrix; the last free set's pressure without its suction
+    let (tc, p) = solve_free(t, r, &free);
+    (tc, p.into_iter().map(|v| v.max(0.0)).collect(), free)
+}
 
-/// Half-Sommerfeld cavitation, smoothed: p+ = (p + sqrt(p^2 + e^2)) / 2 with e =
-/// [`CAVITATION_SCALE`], and dp+/dp. p+ tends to max(p, 0) away from zero; a cavitated film
-/// keeps e^2 / (4 |p|) and a film at rest e/2 (0.05 bar: about 34 N on a side of the default
-/// skirt, against side forces of 18 kN). The clip's kink made the step's Newton iteration swing
-/// between a cavitated and a loaded film; the variant that is zero at rest, (p + r - e) / 2,
-/// holds a suction of up to e/2 and stopped the default engine's run with a deep penetration
-/// after 4066 deg (docs/validation.md).
-pub fn cavitation(p: f64) -> (f64, f64) {
-    let e = CAVITATION_SCALE;
-    let r = p.hypot(e);
-    (0.5 * (p + r), 0.5 * (1.0 + p / r))
+/// The system `t` with the nodes not `free` decoupled ([`Tri::decoupled`]) and its solution
+/// for the right-hand side `r` on the free nodes (zero on the others).
+fn solve_free(t: &Tri, r: &[f64], free: &[bool]) -> (Tri, Vec<f64>) {
+    let tc = t.decoupled(free);
+    let rc: Vec<f64> = r
+        .iter()
+        .zip(free)
+        .map(|(&v, &f)| if f { v } else { 0.0 })
+        .collect();
+    let p = Factored::new(&tc).solve(&rc);
+    (tc, p)
 }
 
 /// One sample line's data for the pressure and its derivatives: cos psi, how many sample lines
@@ -705,16 +787,24 @@ impl Film {
         }
     }
 
+    /// Whether a slice at thrust-line penetration `pen` \[m\] is wetted there (its gap -pen is
+    /// within the wetting ramp's end, [`Film::wetting`]).
+    pub fn wets(&self, pen: f64) -> bool {
+        self.wetting(-pen).0 > 0.0
+    }
+
     /// Adds one sample line's cavitated pressure force and (with `derivatives`) its
     /// derivatives to `out`: the source S_i = w_i raw_i (w the wetted fraction, raw = dh/dt +
-    /// (U/2) dh/dx), the pressure A P = m S, the force F = a Q diag(w) p+(P) (a = R dpsi cos psi,
-    /// Q the slices' integration weights), and for a change dr = m dS - dA P of the system's
-    /// right-hand side by one penetration or rate (three nodes at most)
+    /// (U/2) dh/dx), the pressure A P = m S under the Reynolds condition
+    /// ([`reynolds_condition`]: P >= 0, free nodes F and cavitated nodes at P = 0), the force
+    /// F = a Q diag(w) P (a = R dpsi cos psi, Q the slices' integration weights), and for a
+    /// change dr = m dS - dA P of the system's right-hand side by one penetration or rate (three
+    /// nodes at most), with the cavitated set held,
     ///
-    ///   dF = B dr,   B = a Q diag(w p+'(P)) A^-1,
+    ///   dF = B dr,   B = a Q diag(w o 1_F) A_F^-1,
     ///
-    /// B formed once per line, column j from A^-1's column j (three multiplications per entry),
-    /// so that each derivative is a sum of at most three of B's columns.
+    /// (A_F the system with the cavitated nodes decoupled), B formed once per line, column j
+    /// from A_F^-1's column j, so that each derivative is a sum of at most three of B's columns.
     fn add_sample(
         &self,
         line: &Line<'_>,
@@ -728,22 +818,22 @@ impl Film {
         } = *sample;
         let n = raw.len();
         let t = line.system();
-        let lu = Factored::new(&t);
         let rhs: Vec<f64> = (0..n).map(|i| t.m[i] * wt[i].0 * raw[i]).collect();
-        let p = lu.solve(&rhs);
-        // the film's pressure where the point is wetted: w_i p+(P_i) (an unwetted point holds
+        let (tc, p, free) = reynolds_condition(&t, &rhs);
+        let lu = Factored::new(&tc);
+        // the film's pressure where the point is wetted: w_i P_i (an unwetted point holds
         // none, so a line's pressure rises from zero as the skirt closes in)
-        let cav: Vec<(f64, f64)> = p.iter().map(|&v| cavitation(v)).collect();
-        let clip: Vec<f64> = cav.iter().zip(wt).map(|(c, w)| w.0 * c.0).collect();
+        let wetted: Vec<f64> = p.iter().zip(wt).map(|(v, w)| w.0 * v).collect();
         let w = self.arc * c * count;
-        for (i, f) in integrate_with(q, &clip).enumerate() {
+        for (i, f) in integrate_with(q, &wetted).enumerate() {
             out.force[i] += w * f;
         }
-        // B, column-major: column j = a Q (keep o A^-1 e_j), keep_i = w_i p+'(P_i)
+        // B, column-major: column j = a Q (keep o A_F^-1 e_j), keep_i = w_i on the free nodes
+        // (a cavitated node's pressure stays zero while the set holds)
         let mut b = lu.inverse();
         for col in b.chunks_exact_mut(n) {
-            for ((v, c), wt) in col.iter_mut().zip(&cav).zip(wt) {
-                *v *= wt.0 * c.1;
+            for ((v, &f), wt) in col.iter_mut().zip(&free).zip(wt) {
+                *v *= if f { wt.0 } else { 0.0 };
             }
             integrate_in_place(q, col, w);
         }
@@ -764,10 +854,10 @@ impl Film {
                         axpy(target, rj, column(j));
                     }
                 }
-                // the wetted fraction's own change at node k: p+(P_k) dw_k/dh (-c), integrated
-                // by the rows of Q that reach node k
+                // the wetted fraction's own change at node k: P_k dw_k/dh (-c), integrated by
+                // the rows of Q that reach node k
                 if wt[k].1 != 0.0 {
-                    let e = cav[k].0 * wt[k].1 * (-c);
+                    let e = p[k] * wt[k].1 * (-c);
                     for i in k.saturating_sub(1)..(k + 2).min(n) {
                         let weight = q[i][1 + k - i];
                         target[i] += w * (weight * e);

@@ -509,7 +509,8 @@ pub struct RawPiston {
     #[serde(default = "default_pin_slip")]
     pub pin_slip_rad_s: f64,
     /// The skirt's oil film: "dry" (default: the penalty contact alone, the reference study's
-    /// model), "squeeze" (the Reynolds squeeze and sliding film, half-Sommerfeld) or "mixed"
+    /// model), "squeeze" (the Reynolds squeeze and sliding film, cavitated by the Reynolds
+    /// condition: no suction, the film ruptures where p = dp/dx = 0) or "mixed"
     /// (the film plus Greenwood-Tripp asperity contact). The film's data: `[piston.oil]`.
     /// The lubricated transient is experimental: verified and converged with the step, about
     /// 10 times the cost of a dry run (docs/validation.md).
@@ -556,8 +557,8 @@ impl TryFrom<String> for RawLubrication {
 #[serde(deny_unknown_fields)]
 pub struct RawOil {
     /// Oil available on the liner \[um\], in (0, 1000]: a gap larger than it is not wetted
-    /// (partial flooding; a large value floods the skirt). Below 5 a starved film, warned of:
-    /// it may stop the run (exit 1; docs/validation.md). Default 20.
+    /// (partial flooding; a large value floods the skirt). Below 3 (the film's gap floor) a
+    /// starved film, warned of: it may stop the run (exit 1; docs/validation.md). Default 20.
     #[serde(default = "default_supply")]
     pub supply_um: f64,
     /// Vogel viscosity mu = a exp(b / (T + c)) at the film temperature T \[deg C\] (the mean of

@@ -258,11 +258,6 @@ impl SliceState {
     pub fn prior(&self) -> (f64, f64) {
         (self.penetration, self.rate)
     }
-
-    /// Whether the slice carries force from the liner: it penetrates, or its film pushes.
-    pub fn engaged(&self) -> bool {
-        self.penetration > 0.0 || self.film > 0.0
-    }
 }
 
 /// Damper impulses that the average-acceleration steps miss at a contact onset, one per

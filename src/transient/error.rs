@@ -53,7 +53,7 @@ pub enum TransientError {
 
 /// What a lubricated run that stopped in its contact iteration tells the user: the oil film's
 /// Newton iteration did not settle; for a starved film ([`crate::scene::spec::starved`]) that
-/// it is known not to (supplies of 1-4 um on the test engine, docs/validation.md) and the way
+/// it is known not to (supplies of 1-2 um on the test engine, docs/validation.md) and the way
 /// out.
 fn film_hint(supply_um: Option<f64>) -> String {
     let Some(s) = supply_um else {
@@ -62,7 +62,7 @@ fn film_hint(supply_um: Option<f64>) -> String {
     let num = crate::text::num(s);
     if crate::scene::spec::starved(s * 1e-6) {
         format!(
-            "; the skirt's oil film (piston.oil.supply_um = {num}) did not settle: a starved film (a supply of a few um) is known to stop so (docs/validation.md, \"A starved film does not always run\"): a larger supply (5 um or more ran on the test engine) or the dry skirt"
+            "; the skirt's oil film (piston.oil.supply_um = {num}) did not settle: a starved film (a supply of a few um) is known to stop so (docs/validation.md, \"A starved film does not always run\"): a larger supply (3 um or more ran on the test and the default engine) or the dry skirt"
         )
     } else {
         format!(

@@ -511,19 +511,27 @@ impl<'a> EngineRun<'a> {
 
     /// Whether a cylinder side touches the liner after the step (the step's slices per
     /// `meta`: cylinder index, thrust side, slice) with none of its slices touching before; a
-    /// slice touches when it penetrates or its oil film is engaged.
+    /// slice touches when it penetrates or, on a lubricated skirt, when its thrust line is
+    /// wetted ([`crate::piston::lubrication::Film::wets`]): a lubricated slap begins where the skirt closes
+    /// in to the oil, not where the film's pressure first rises from zero (under the Reynolds
+    /// condition it is zero again wherever the skirt draws back, so it would start a slap's
+    /// sub-steps at every turn of the skirt within the oil).
     pub(super) fn side_onset(
         &self,
         meta: &[(usize, bool, usize, f64)],
         res: &contact::StepResult,
     ) -> bool {
         let ns = self.setup.piston.skirt.heights.len();
+        let film = self.setup.piston.film.as_ref();
+        let touches = |pen: f64| {
+            pen > 0.0 || film.is_some_and(|f: &crate::piston::lubrication::Film| f.wets(pen))
+        };
         let mut before = vec![false; 2 * self.cyls.len()];
         let mut after = vec![false; 2 * self.cyls.len()];
         for (k_slice, &(b, side, i, _)) in meta.iter().enumerate() {
             let k = 2 * b + usize::from(!side);
-            before[k] |= self.prev_state[k * ns + i].engaged();
-            after[k] |= res.penetrations[k_slice] > 0.0 || res.film[k_slice] > 0.0;
+            before[k] |= touches(self.prev_state[k * ns + i].penetration);
+            after[k] |= touches(res.penetrations[k_slice]);
         }
         before.iter().zip(&after).any(|(&b, &a)| a && !b)
     }
