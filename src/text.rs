@@ -29,6 +29,18 @@ pub fn num(x: f64) -> String {
     }
 }
 
+/// Formats `x` exactly as read (the shortest form that reads back to it): plain notation
+/// between 1e-3 and 1e6, scientific outside (`1e300`, not 301 digits). For values checked
+/// against a bound, where [`num`]'s rounding could print 720.0004 as the bound itself.
+pub fn exact(x: f64) -> String {
+    let a = x.abs();
+    if !x.is_finite() || a == 0.0 || (1e-3..1e6).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// The message for a CSV row whose field count differs from the header's; more fields than
 /// columns usually means decimal commas (`369,5` for 369.5), which would shift every value.
 pub fn field_count_message(found: usize, header: usize) -> String {

@@ -61,6 +61,44 @@ fn regression_a_pressure_table_that_does_not_cover_the_cycle_is_refused() {
     }
 }
 
+/// Regression: a pressure row's crank angle beyond the cycle was printed in full (1e300 as
+/// 301 digits); it is printed as read, short, and not rounded onto the bound (720.0004, which
+/// four significant digits would print as the bound itself).
+#[test]
+fn regression_a_pressure_rows_angle_is_printed_as_read() {
+    let dir = tempfile::tempdir().unwrap();
+    for (angle, shown) in [("720.0004", "720.0004 deg"), ("1e300", "1e300 deg")] {
+        let p = dir.path().join("angle.csv");
+        std::fs::write(
+            &p,
+            format!("crank_angle_deg,pressure_bar\n0,1\n360,150\n{angle},1\n"),
+        )
+        .unwrap();
+        let set = format!("operating.pressure_file={}", toml_string(&p));
+        let err = refused(&["simulate", SMALL, "--set", &set], 2, shown);
+        assert!(err.contains("line 4") && err.len() < 600, "{err}");
+    }
+}
+
+/// Regression: `sweep --refine` over an interval narrower than it tells runs apart
+/// (40:40.00000000000003) ran 3 of 9 runs without a word; it is refused before any run.
+#[test]
+fn regression_a_refinement_too_narrow_for_its_runs_is_refused() {
+    let err = refused(
+        &[
+            "sweep",
+            SMALL,
+            "--refine",
+            "piston.clearance_um=40:40.00000000000003",
+            "--runs",
+            "9",
+        ],
+        2,
+        "--refine",
+    );
+    assert!(err.contains("too narrow"), "{err}");
+}
+
 /// A path as a TOML string literal.
 fn toml_string(p: &Path) -> String {
     format!("\"{}\"", p.display())

@@ -698,6 +698,20 @@ fn refine_args(req: &SweepRequest, spec: &str) -> Result<(crate::scene::design::
         flag: "--refine".into(),
         msg: e.to_string().replacen("--range", "", 1).trim().to_string(),
     })?;
+    // runs closer than the refinement tells apart (1e-12) would be dropped as repeats, and
+    // the sweep would return fewer runs than asked
+    if range.hi - range.lo < 1e-9 * range.lo.abs().max(range.hi.abs()).max(1.0) {
+        return Err(Error::Argument {
+            flag: "--refine".into(),
+            msg: format!(
+                "{}={}:{}: the interval is too narrow to place runs in (at least 1e-9 of its \
+                 values' size)",
+                range.key,
+                crate::text::exact(range.lo),
+                crate::text::exact(range.hi)
+            ),
+        });
+    }
     let runs = match req.runs {
         Some(n) if (3..=1000).contains(&n) => n,
         other => {

@@ -137,19 +137,25 @@ impl PressureCurve {
             if !(0.0..=720.0).contains(&a) {
                 return Err(line_err(
                     i + 1,
-                    format!("crank angle {a} deg outside [0, 720]"),
+                    format!("crank angle {} deg outside [0, 720]", crate::text::exact(a)),
                 ));
             }
             if angles_deg.last().is_some_and(|&last| a <= last) {
                 return Err(line_err(
                     i + 1,
-                    format!("crank angle {a} deg does not increase"),
+                    format!(
+                        "crank angle {} deg does not increase",
+                        crate::text::exact(a)
+                    ),
                 ));
             }
             if p <= 0.0 {
                 return Err(line_err(
                     i + 1,
-                    format!("pressure {p} bar must be positive (absolute)"),
+                    format!(
+                        "pressure {} bar must be positive (absolute)",
+                        crate::text::exact(p)
+                    ),
                 ));
             }
             if p > MAX_BAR {
