@@ -201,9 +201,9 @@ pub fn located(samples: &[Sample], q: usize) -> Option<Maximum> {
     })
 }
 
-/// The next point of a refinement ([`next`]) that is neither sampled nor `pending`, advancing
-/// `round`; None when no useful interval is left, or at a repeat once `round` exceeds
-/// 4 x `runs`.
+/// The next point of a refinement ([`next`]) that is neither sampled nor `pending` (not
+/// within 1e-12 of the interval of either), advancing `round`; None when no useful interval
+/// is left, or at a repeat once `round` exceeds 4 x `runs`.
 pub fn next_unsampled(
     samples: &[Sample],
     pending: &[f64],
@@ -217,7 +217,7 @@ pub fn next_unsampled(
         let repeat = pending
             .iter()
             .chain(samples.iter().map(|s| &s.x))
-            .any(|b| (b - x).abs() < 1e-12);
+            .any(|b| (b - x).abs() < 1e-12 * (hi - lo));
         if !repeat {
             return Some(x);
         }

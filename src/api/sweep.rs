@@ -698,8 +698,9 @@ fn refine_args(req: &SweepRequest, spec: &str) -> Result<(crate::scene::design::
         flag: "--refine".into(),
         msg: e.to_string().replacen("--range", "", 1).trim().to_string(),
     })?;
-    // runs closer than the refinement tells apart (1e-12) would be dropped as repeats, and
-    // the sweep would return fewer runs than asked
+    // values that f64 cannot tell apart from their neighbours' would be dropped as repeats
+    // (`refine::next_unsampled`: closer than 1e-12 of the interval), and the sweep would
+    // return fewer runs than asked
     if range.hi - range.lo < 1e-9 * range.lo.abs().max(range.hi.abs()).max(1.0) {
         return Err(Error::Argument {
             flag: "--refine".into(),

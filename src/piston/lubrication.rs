@@ -492,12 +492,13 @@ impl Factored {
 ///   P >= 0,   lambda = K P - b >= 0,   P_i lambda_i = 0,
 ///
 /// so the film holds no suction, and where it is cavitated (P_i = 0) the flow the pressure
-/// drives into the node does not exceed the flow the source takes out of it (lambda_i >= 0:
-/// mass is conserved up to the rupture). The cavitated set is found by the primal-dual
+/// drives into the node does not exceed the flow the source takes out of it (lambda_i >= 0;
+/// the cavitated zone's own flow and the film's reformation are not modelled: the condition
+/// is not mass-conserving, unlike the JFO theory). The cavitated set is found by the primal-dual
 /// active-set iteration (Hintermueller, Ito and Kunisch): a free node whose pressure is
 /// negative is cavitated, a cavitated node whose multiplier is negative is freed, until no
 /// node changes; for an M-matrix it converges in finitely many passes (capped here at
-/// 2n + 3, after which the last set's pressure is clipped). The
+/// 2n + 3, after which the last set's negative nodes are cavitated). The
 /// pressure is continuous in the sources and the gaps, and its derivative changes only where
 /// a node changes its set, where the pressure and its slope are already near zero (the smooth
 /// rupture of the Reynolds condition), not across a whole line's suction as when the
@@ -527,7 +528,12 @@ fn reynolds_condition(t: &Tri, r: &[f64]) -> (Tri, Vec<f64>, Vec<bool>) {
         }
         free = next;
     }
-    // not reached for an M-matrix; the last free set's pressure without its suction
+    // not reached for an M-matrix: the last set with its negative nodes cavitated, so that
+    // the returned set is the one the pressure (and the tangent) is solved on
+    let (_, p) = solve_free(t, r, &free);
+    for (f, v) in free.iter_mut().zip(&p) {
+        *f &= *v >= 0.0;
+    }
     let (tc, p) = solve_free(t, r, &free);
     (tc, p.into_iter().map(|v| v.max(0.0)).collect(), free)
 }

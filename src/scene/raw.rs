@@ -513,7 +513,7 @@ pub struct RawPiston {
     /// condition: no suction, the film ruptures where p = dp/dx = 0) or "mixed"
     /// (the film plus Greenwood-Tripp asperity contact). The film's data: `[piston.oil]`.
     /// The lubricated transient is experimental: verified and converged with the step, about
-    /// 10 times the cost of a dry run (docs/validation.md).
+    /// 10-14 times the cost of a dry run (docs/validation.md).
     #[serde(default)]
     pub lubrication: RawLubrication,
     /// Oil film data (used when `lubrication` is not "dry"; every key has a default).
