@@ -504,13 +504,13 @@ impl Factored {
 /// rupture of the Reynolds condition), not across a whole line's suction as when the
 /// unconstrained pressure is clipped (half-Sommerfeld).
 ///
-/// Returns the system with the cavitated nodes decoupled (identity-like rows: P_i = 0), the
-/// pressure and which nodes are free.
-fn reynolds_condition(t: &Tri, r: &[f64]) -> (Tri, Vec<f64>, Vec<bool>) {
+/// Returns the factored system with the cavitated nodes decoupled (identity-like rows:
+/// P_i = 0), the pressure and which nodes are free.
+fn reynolds_condition(t: &Tri, r: &[f64]) -> (Factored, Vec<f64>, Vec<bool>) {
     let n = r.len();
     let mut free = vec![true; n];
     for _ in 0..=2 * n + 2 {
-        let (tc, p) = solve_free(t, r, &free);
+        let (lu, p) = solve_free(t, r, &free);
         let next: Vec<bool> = (0..n)
             .map(|i| {
                 if free[i] {
@@ -524,7 +524,7 @@ fn reynolds_condition(t: &Tri, r: &[f64]) -> (Tri, Vec<f64>, Vec<bool>) {
             })
             .collect();
         if next == free {
-            return (tc, p.into_iter().map(|v| v.max(0.0)).collect(), free);
+            return (lu, p.into_iter().map(|v| v.max(0.0)).collect(), free);
         }
         free = next;
     }
@@ -534,21 +534,21 @@ fn reynolds_condition(t: &Tri, r: &[f64]) -> (Tri, Vec<f64>, Vec<bool>) {
     for (f, v) in free.iter_mut().zip(&p) {
         *f &= *v >= 0.0;
     }
-    let (tc, p) = solve_free(t, r, &free);
-    (tc, p.into_iter().map(|v| v.max(0.0)).collect(), free)
+    let (lu, p) = solve_free(t, r, &free);
+    (lu, p.into_iter().map(|v| v.max(0.0)).collect(), free)
 }
 
-/// The system `t` with the nodes not `free` decoupled ([`Tri::decoupled`]) and its solution
-/// for the right-hand side `r` on the free nodes (zero on the others).
-fn solve_free(t: &Tri, r: &[f64], free: &[bool]) -> (Tri, Vec<f64>) {
-    let tc = t.decoupled(free);
+/// The system `t` with the nodes not `free` decoupled ([`Tri::decoupled`]), factored, and its
+/// solution for the right-hand side `r` on the free nodes (zero on the others).
+fn solve_free(t: &Tri, r: &[f64], free: &[bool]) -> (Factored, Vec<f64>) {
+    let lu = Factored::new(&t.decoupled(free));
     let rc: Vec<f64> = r
         .iter()
         .zip(free)
         .map(|(&v, &f)| if f { v } else { 0.0 })
         .collect();
-    let p = Factored::new(&tc).solve(&rc);
-    (tc, p)
+    let p = lu.solve(&rc);
+    (lu, p)
 }
 
 /// One sample line's data for the pressure and its derivatives: cos psi, how many sample lines
@@ -825,8 +825,7 @@ impl Film {
         let n = raw.len();
         let t = line.system();
         let rhs: Vec<f64> = (0..n).map(|i| t.m[i] * wt[i].0 * raw[i]).collect();
-        let (tc, p, free) = reynolds_condition(&t, &rhs);
-        let lu = Factored::new(&tc);
+        let (lu, p, free) = reynolds_condition(&t, &rhs);
         // the film's pressure where the point is wetted: w_i P_i (an unwetted point holds
         // none, so a line's pressure rises from zero as the skirt closes in)
         let wetted: Vec<f64> = p.iter().zip(wt).map(|(v, w)| w.0 * v).collect();
