@@ -126,6 +126,35 @@ pub fn gt_integral(k: usize, lambda: f64) -> f64 {
     s * dt / 3.0 / (2.0 * std::f64::consts::PI).sqrt()
 }
 
+/// F_n(lambda) below lambda = -4, where the asperities are pressed in by more than four
+/// standard deviations of their heights: with a = -lambda,
+///
+///   F_n = 1 / sqrt(2 pi) int_-a^inf (a + s)^n exp(-s^2 / 2) ds
+///       = a^n sum_j C(n, 2j) (2j - 1)!! a^(-2j)   (the Gaussian's even moments),
+///
+/// an asymptotic series, summed to j = [`GT_DEEP_TERMS`]: at a = 4 its next term is below
+/// 1e-6 of the sum for n <= 5/2 and the part of the Gaussian below s = -a, which the series
+/// counts and the integral does not, is 3e-5 of the mass with (a + s)^n small there. Its
+/// derivative in lambda is -n F_(n-1) term by term (n C(n-1, 2j) = (n - 2j) C(n, 2j)), as
+/// the tabulated range's is, so the pressure's slope matches its value below the table.
+fn gt_deep(n: f64, lambda: f64) -> f64 {
+    let a = -lambda;
+    let (mut sum, mut binom, mut moment, mut power) = (0.0, 1.0, 1.0, a.powf(n));
+    for j in 0..=GT_DEEP_TERMS {
+        if j > 0 {
+            let m = 2.0 * j as f64;
+            binom *= (n - m + 2.0) * (n - m + 1.0) / ((m - 1.0) * m);
+            moment *= m - 1.0;
+            power /= a * a;
+        }
+        sum += binom * moment * power;
+    }
+    sum
+}
+
+/// Terms of [`gt_deep`]'s series beyond the first.
+const GT_DEEP_TERMS: usize = 6;
+
 /// F_1/2, F_3/2, F_5/2 tabulated on lambda in [-4, 8] (step 0.01), interpolated by cubic
 /// Hermite with the exact slopes dF_n/dlambda = -n F_(n-1) (F_3/2 and F_5/2 only are
 /// interpolated; F_1/2 gives F_3/2's slope).
@@ -151,7 +180,7 @@ fn gt_table() -> &'static GtTable {
 
 impl GtTable {
     /// F_(k+1/2) for `k` = 1 (F_3/2) or 2 (F_5/2) at `l`: 0 beyond the table's top, the
-    /// lowest tabulated value below its bottom.
+    /// asymptotic series [`gt_deep`] below its bottom.
     fn value(&self, l: f64, k: usize) -> f64 {
         let y = &self.f[k];
         let n = y.len();
@@ -159,7 +188,9 @@ impl GtTable {
         if x >= (n - 1) as f64 {
             return 0.0;
         }
-        let x = x.max(0.0);
+        if x < 0.0 {
+            return gt_deep(k as f64 + 0.5, l);
+        }
         let i = (x.floor() as usize).min(n - 2);
         let t = x - i as f64;
         // dF_n/dl = -n F_(n-1), in table units

@@ -100,11 +100,31 @@ pub struct PistonLoads {
     pub rod_rate: f64,
 }
 
+/// A lubricated skirt's film as a stopped run's error names it: the model, the oil supply
+/// \[um\], the composite roughness \[um\] (`mixed`) and the film's viscosity over the skirt
+/// (lowest, highest) \[mPa s\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmSummary {
+    pub model: &'static str,
+    pub supply_um: f64,
+    pub roughness_um: Option<f64>,
+    pub viscosity_mpa_s: (f64, f64),
+}
+
 impl Piston {
-    /// The oil supply on the liner \[um\] of a lubricated skirt (None: dry), as the scene
-    /// gives it (what a stopped run's error names).
-    pub fn film_supply_um(&self) -> Option<f64> {
-        self.film.as_ref().map(|f| f.supply * 1e6)
+    /// What a stopped run's error says of a lubricated skirt's film (None: dry).
+    pub fn film_summary(&self) -> Option<FilmSummary> {
+        self.film.as_ref().map(|f| {
+            let (lo, hi) = f.mu.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &m| {
+                (lo.min(m), hi.max(m))
+            });
+            FilmSummary {
+                model: f.model.name(),
+                supply_um: f.supply * 1e6,
+                roughness_um: f.asperity.as_ref().map(|g| g.sigma * 1e6),
+                viscosity_mpa_s: (lo * 1e3, hi * 1e3),
+            }
+        })
     }
 
     /// The 2 x 2 mass matrix of (y, phi), row-major.

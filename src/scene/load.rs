@@ -156,7 +156,10 @@ impl Checker<'_> {
         if v.is_finite() && v > 0.0 {
             Ok(v)
         } else {
-            Err(self.err(key, format!("must be a positive number, got {}", num(v))))
+            Err(self.err(
+                key,
+                format!("must be a positive number, got {}", crate::text::exact(v)),
+            ))
         }
     }
     /// A finite value >= 0.
@@ -164,7 +167,10 @@ impl Checker<'_> {
         if v.is_finite() && v >= 0.0 {
             Ok(v)
         } else {
-            Err(self.err(key, format!("must be a number >= 0, got {}", num(v))))
+            Err(self.err(
+                key,
+                format!("must be a number >= 0, got {}", crate::text::exact(v)),
+            ))
         }
     }
     /// A finite value.
@@ -172,7 +178,10 @@ impl Checker<'_> {
         if v.is_finite() {
             Ok(v)
         } else {
-            Err(self.err(key, format!("must be a finite number, got {}", num(v))))
+            Err(self.err(
+                key,
+                format!("must be a finite number, got {}", crate::text::exact(v)),
+            ))
         }
     }
     /// A finite value in [lo, hi] (a bound the physics of this engine class sets; the message
@@ -188,7 +197,12 @@ impl Checker<'_> {
         } else {
             Err(self.err(
                 key,
-                format!("must lie in [{}, {}], got {}", num(lo), num(hi), num(v)),
+                format!(
+                    "must lie in [{}, {}], got {}",
+                    num(lo),
+                    num(hi),
+                    crate::text::exact(v)
+                ),
             ))
         }
     }

@@ -89,6 +89,11 @@ fn field_err(scene: &Scene, key: &str, msg: String) -> SceneError {
     }
 }
 
+/// Greenwood-Tripp asperities touch where the gap is below about this many standard
+/// deviations of their heights (F_5/2(4) is 1e-5 of F_5/2(0)): a roughness whose reach
+/// exceeds the radial clearance holds the skirt off the liner everywhere it nears it.
+const ROUGH_TO_CLEARANCE: f64 = 4.0;
+
 /// The piston's skirt, clearance and offsets against the bore and the liner.
 fn piston(
     scene: &Scene,
@@ -163,6 +168,17 @@ fn piston(
             warnings.push(format!(
                 "piston.oil.supply_um = {}: a starved film (its wetted band lies near the film's 3 um gap floor); on the test engine supplies of 1, 1.5 and 2 um stop with \"contact iteration did not converge\" (exit 1) within two cycles, 2.5 um and more run (docs/validation.md, \"A starved film does not always run\")",
                 num(oil.supply * 1e6)
+            ));
+        }
+        if let Some(a) = oil
+            .asperity
+            .filter(|a| ROUGH_TO_CLEARANCE * a.sigma > 0.5 * clearance)
+        {
+            warnings.push(format!(
+                "piston.oil.roughness_um = {}: {ROUGH_TO_CLEARANCE} standard deviations of the asperities ({} um) exceed the skirt's radial cold clearance ({} um), so the asperities carry the skirt wherever it nears the liner (on the test engine 30 um and more left no slap at all); composite roughnesses of skirts and liners are 0.1-5 um",
+                num(a.sigma * 1e6),
+                num(ROUGH_TO_CLEARANCE * a.sigma * 1e6),
+                num(0.5 * clearance * 1e6)
             ));
         }
         if sim.transient.scheme == crate::scene::spec::SchemeChoice::AverageAcceleration {

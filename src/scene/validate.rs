@@ -305,7 +305,10 @@ pub(super) fn validate_rom(
     if !(r.cutoff_factor.is_finite() && r.cutoff_factor >= 1.0) {
         return Err(c.err(
             "rom.cutoff_factor",
-            format!("must be at least 1, got {}", num(r.cutoff_factor)),
+            format!(
+                "must be at least 1, got {}",
+                crate::text::exact(r.cutoff_factor)
+            ),
         ));
     }
     if r.interface_harmonics == 0 {
@@ -448,7 +451,11 @@ fn bounded(c: &Checker<'_>, key: &str, v: f64, max: f64, why: &str) -> Result<()
     if v > max {
         return Err(c.err(
             key,
-            format!("must be at most {} ({why}), got {}", num(max), num(v)),
+            format!(
+                "must be at most {} ({why}), got {}",
+                num(max),
+                crate::text::exact(v)
+            ),
         ));
     }
     Ok(())
@@ -504,7 +511,10 @@ pub(super) fn validate_cavitation(
             if !(k.is_finite() && k >= 0.0) {
                 return Err(c.err(
                     "cavitation.k_p_pa_per_m_s2",
-                    format!("must be a finite number >= 0, got {}", num(k)),
+                    format!(
+                        "must be a finite number >= 0, got {}",
+                        crate::text::exact(k)
+                    ),
                 ));
             }
             bounded(
@@ -577,7 +587,7 @@ pub(super) fn calibration_thresholds(
                 format!(
                     "{}: {name} must be a finite number >= 0, got {}",
                     path.display(),
-                    num(v)
+                    crate::text::exact(v)
                 ),
             ));
         }
@@ -589,7 +599,7 @@ pub(super) fn calibration_thresholds(
                 "{}: k_p_pa_per_m_s2 must be at most {}, got {}",
                 path.display(),
                 num(MAX_K_P),
-                num(t.k_p_pa_per_m_s2)
+                crate::text::exact(t.k_p_pa_per_m_s2)
             ),
         ));
     }
@@ -642,15 +652,21 @@ fn validate_skirt(
         } else {
             Err(c.err(
                 key,
-                format!("must be a temperature in [-50, 400] deg C, got {}", num(v)),
+                format!(
+                    "must be a temperature in [-50, 400] deg C, got {}",
+                    crate::text::exact(v)
+                ),
             ))
         }
     };
     let expansion = |key: &str, v: f64| -> Result<f64, SceneError> {
-        if v.is_finite() && (0.0..1e-4).contains(&v) {
+        if v.is_finite() && (0.0..=1e-4).contains(&v) {
             Ok(v)
         } else {
-            Err(c.err(key, format!("must be in [0, 1e-4] 1/K, got {}", num(v))))
+            Err(c.err(
+                key,
+                format!("must be in [0, 1e-4] 1/K, got {}", crate::text::exact(v)),
+            ))
         }
     };
     Ok(spec::SkirtSpec {
@@ -777,7 +793,7 @@ fn offset(c: &Checker<'_>, key: &str, mm: f64, engine: &Engine) -> Result<f64, S
             format!(
                 "must lie within the bore's radius ({} mm either way), got {}",
                 num(engine.bore / 2.0 * 1e3),
-                num(mm)
+                crate::text::exact(mm)
             ),
         ))
     }
@@ -804,7 +820,7 @@ fn barrel_max_below_pin(
                 "must lie on the skirt, from {} (its top) to {} mm (its bottom) below the pin, got {}",
                 num(lo * 1e3),
                 num(hi * 1e3),
-                num(p.barrel_max_below_pin_mm)
+                crate::text::exact(p.barrel_max_below_pin_mm)
             ),
         ))
     }
@@ -848,7 +864,11 @@ fn pin_radius(c: &Checker<'_>, p: &raw::RawPiston, engine: &Engine) -> Result<f6
     if d >= engine.bore {
         return Err(c.err(
             "piston.pin_diameter_mm",
-            format!("must be less than the bore ({:.1} mm)", engine.bore * 1e3),
+            format!(
+                "must be less than the bore ({:.1} mm), got {}",
+                engine.bore * 1e3,
+                num(d * 1e3)
+            ),
         ));
     }
     Ok(d / 2.0)
@@ -876,7 +896,10 @@ fn film_data(
     if supply > 1000.0 {
         return Err(c.err(
             "piston.oil.supply_um",
-            format!("must lie in (0, 1000] um, got {}", num(supply)),
+            format!(
+                "must lie in (0, 1000] um, got {}",
+                crate::text::exact(supply)
+            ),
         ));
     }
     let vogel = [
@@ -957,7 +980,7 @@ pub(super) fn validate_operating(
     if !(o.load.is_finite() && (0.0..=1.0).contains(&o.load)) {
         return Err(c.err(
             "operating.load",
-            format!("must be in [0, 1], got {}", num(o.load)),
+            format!("must be in [0, 1], got {}", crate::text::exact(o.load)),
         ));
     }
     let cb = &o.combustion;
@@ -1028,7 +1051,7 @@ fn crankcase_pressure(c: &Checker<'_>, bar: f64) -> Result<f64, SceneError> {
             format!(
                 "must be at most {} bar (a crankcase holds about 1 bar), got {}",
                 num(MAX_CRANKCASE_BAR),
-                num(bar)
+                crate::text::exact(bar)
             ),
         ));
     }
@@ -1046,7 +1069,10 @@ pub(super) fn validate_transient(
     if !(t.hht_alpha.is_finite() && (-1.0 / 3.0..=0.0).contains(&t.hht_alpha)) {
         return Err(c.err(
             "transient.hht_alpha",
-            format!("must lie in [-1/3, 0], got {}", num(t.hht_alpha)),
+            format!(
+                "must lie in [-1/3, 0], got {}",
+                crate::text::exact(t.hht_alpha)
+            ),
         ));
     }
     let implied = if lubricated { "hht" } else { "newmark" };
@@ -1067,7 +1093,7 @@ pub(super) fn validate_transient(
             "transient.step_deg",
             format!(
                 "720 must be a whole multiple of the step, with at least 36 steps, got {}",
-                num(step)
+                crate::text::exact(step)
             ),
         ));
     }
@@ -1086,13 +1112,19 @@ pub(super) fn validate_transient(
     if !(t.slap_span_deg.is_finite() && (0.0..=720.0).contains(&t.slap_span_deg)) {
         return Err(c.err(
             "transient.slap_span_deg",
-            format!("must lie in [0, 720], got {}", num(t.slap_span_deg)),
+            format!(
+                "must lie in [0, 720], got {}",
+                crate::text::exact(t.slap_span_deg)
+            ),
         ));
     }
     if !(t.damping_ratio.is_finite() && (0.0..1.0).contains(&t.damping_ratio)) {
         return Err(c.err(
             "transient.damping_ratio",
-            format!("must lie in [0, 1), got {}", num(t.damping_ratio)),
+            format!(
+                "must lie in [0, 1), got {}",
+                crate::text::exact(t.damping_ratio)
+            ),
         ));
     }
     let transient = TransientSpec {
@@ -1118,7 +1150,7 @@ pub(super) fn validate_transient(
                 "transient.tolerance",
                 format!(
                     "must lie in (0, 1) (a relative error), got {}",
-                    num(t.tolerance)
+                    crate::text::exact(t.tolerance)
                 ),
             ));
         },
@@ -1314,7 +1346,7 @@ fn max_penetration(c: &Checker<'_>, um: f64) -> Result<f64, SceneError> {
             key,
             format!(
                 "must be at least {MIN_PENETRATION_LIMIT_UM} um (the contact carries its load through penetrations of a few um), got {}",
-                num(um)
+                crate::text::exact(um)
             ),
         ));
     }

@@ -554,7 +554,10 @@ pub fn step(
             (&mut pen, &mut rates),
         );
         let film_done = films.is_empty()
-            || st.settle_films(&mut acc, films, searched, (&q, &forces, &pen, &rates));
+            || (st.settle_films(&mut acc, films, searched, (&q, &forces, &pen, &rates))
+                && acc
+                    .as_ref()
+                    .is_some_and(|a| st.laws_agree(&pieces, (&forces, &a.film), (&pen, &rates))));
         if changes.is_empty() && film_done {
             let mut res = st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it);
             // the film part of the forces the step carries (the film at its end differs by
@@ -995,6 +998,37 @@ impl<'s, 'a> Step<'s, 'a> {
             resid,
         });
         done
+    }
+
+    /// Whether every slice's force `forces` is its contact law's on its piece at the state,
+    /// plus the film part `film` (a lubricated step's line search mixes the last state's forces
+    /// with the new ones, and a slice whose piece changed in between carries the old piece's
+    /// force in the mix until a full step replaces it):
+    ///   |F_i - (a_i + kt_i p_i + c_d p'_i) - F_film,i| <= [`FILM_NEWTON_TOL`] F_side + [`FILM_NEWTON_FLOOR_N`],
+    /// the law's part 0 for a slice apart or clamped, F_side the body's summed |F| (as
+    /// [`film_agreement`] measures a side).
+    fn laws_agree(
+        &self,
+        pieces: &[Piece],
+        (forces, film): (&[f64], &[f64]),
+        (pen, rates): (&[f64], &[f64]),
+    ) -> bool {
+        let mut scale = vec![0.0; self.bodies.len()];
+        for (s, f) in self.slices.iter().zip(forces) {
+            scale[s.body] += f.abs();
+        }
+        self.slices.iter().enumerate().all(|(i, s)| {
+            let p = pieces[i];
+            let law = if p.mask != 0 && !p.clamped {
+                let piece = s.law.piece_of(p.mask);
+                let damper = if p.damped { s.damping * rates[i] } else { 0.0 };
+                piece.a + piece.kt * pen[i] + damper
+            } else {
+                0.0
+            };
+            (forces[i] - law - film[i]).abs()
+                <= FILM_NEWTON_TOL * scale[s.body] + FILM_NEWTON_FLOOR_N
+        })
     }
 
     /// The film force of every slice at penetrations `pen` and rates `rates` (0 off a film).

@@ -215,7 +215,7 @@ fn step_failure(f: contact::StepFailure, deg: f64, time_s: f64, piston: &Piston)
             time_s,
             iterations,
             halvings: 0,
-            film_supply_um: piston.film_supply_um(),
+            film: piston.film_summary(),
         },
         contact::StepFailure::Singular => TransientError::Singular {
             crank_angle_deg: deg,

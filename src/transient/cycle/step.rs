@@ -580,7 +580,7 @@ impl Failure {
                     time_s: t,
                     iterations,
                     halvings,
-                    film_supply_um: run.setup.piston.film_supply_um(),
+                    film: run.setup.piston.film_summary(),
                 }
             }
             Failure::Step(StepFailure::Singular) => TransientError::Singular {
