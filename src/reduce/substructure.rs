@@ -10,7 +10,10 @@
 //! the cut coordinates: the coupling is exact in the span of the shapes and converges as
 //! their number grows (measured in tests/rom.rs and benches/RESULTS.md). Shapes tried and
 //! dropped there: the eigenvectors of the cut's own block (K_ss, M_ss), which localise on
-//! weakly held nodes, and a thin slab's Schur complement on the cut.
+//! weakly held nodes, a thin slab's Schur complement on the cut, and the slab's transfer
+//! operator sampled by random displacements of its outer faces (randomised local spaces:
+//! over one or two element layers its singular values fall slowly, so the samples fill the
+//! basis with rough boundary data; CHANGELOG, session 67).
 //!
 //! Each component is reduced by [`super::craig_bampton::reduce`] on its own (its share of
 //! the part's interfaces, loads, outputs and fixed sets, plus its cuts as interfaces), one

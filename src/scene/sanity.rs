@@ -90,7 +90,7 @@ fn field_err(scene: &Scene, key: &str, msg: String) -> SceneError {
 }
 
 /// Greenwood-Tripp asperities touch where the gap is below about this many standard
-/// deviations of their heights (F_5/2(4) is 1e-5 of F_5/2(0)): a roughness whose reach
+/// deviations of their heights (F_5/2(4) is 4e-6 of F_5/2(0)): a roughness whose reach
 /// exceeds the radial clearance holds the skirt off the liner everywhere it nears it.
 const ROUGH_TO_CLEARANCE: f64 = 4.0;
 
@@ -161,7 +161,7 @@ fn piston(
     }
     if let Some(oil) = &sim.piston.oil {
         warnings.push(format!(
-            "piston.lubrication = \"{}\" is experimental: the film is verified against closed forms and the lubricated answer converges with the step on the test and the default engine, with the cylinders solved in one contact step, but a run costs about 10 times a dry one at the same step on the default engine; the dry skirt (the reference study's model) is the conservative answer (docs/validation.md)",
+            "piston.lubrication = \"{}\" is experimental: the film is verified against closed forms and the lubricated answer converges with the step on the test and the default engine, with the cylinders solved in one contact step, but a run costs about 10 times a dry one at the same step on the default engine; the dry skirt (the reference study's model) is the conservative answer on settled cycles at the default oil supply (docs/validation.md)",
             oil.model.name()
         ));
         if crate::scene::spec::starved(oil.supply) {

@@ -846,10 +846,10 @@ const VISCOSITY_RANGE_PA_S: (f64, f64) = (1e-4, 1e4);
 
 /// `piston.pin_diameter_mm`: the pin's radius \[m\], 0.2 x bore when not given.
 fn pin_radius(c: &Checker<'_>, p: &raw::RawPiston, engine: &Engine) -> Result<f64, SceneError> {
-    let Some(d) = p.pin_diameter_mm else {
+    let Some(given) = p.pin_diameter_mm else {
         return Ok(0.2 * engine.bore);
     };
-    let d = c.positive("piston.pin_diameter_mm", d)? * 1e-3;
+    let d = c.positive("piston.pin_diameter_mm", given)? * 1e-3;
     // a pin thinner than a tenth of the bore could not carry the gas force
     if d < 0.1 * engine.bore {
         return Err(c.err(
@@ -857,7 +857,7 @@ fn pin_radius(c: &Checker<'_>, p: &raw::RawPiston, engine: &Engine) -> Result<f6
             format!(
                 "must be at least a tenth of the bore ({:.1} mm; heavy-duty pins are 0.38-0.42 of it), got {}",
                 engine.bore * 1e2,
-                num(d * 1e3)
+                crate::text::exact(given)
             ),
         ));
     }
@@ -867,7 +867,7 @@ fn pin_radius(c: &Checker<'_>, p: &raw::RawPiston, engine: &Engine) -> Result<f6
             format!(
                 "must be less than the bore ({:.1} mm), got {}",
                 engine.bore * 1e3,
-                num(d * 1e3)
+                crate::text::exact(given)
             ),
         ));
     }

@@ -1005,8 +1005,8 @@ impl<'s, 'a> Step<'s, 'a> {
     /// with the new ones, and a slice whose piece changed in between carries the old piece's
     /// force in the mix until a full step replaces it):
     ///   |F_i - (a_i + kt_i p_i + c_d p'_i) - F_film,i| <= [`FILM_NEWTON_TOL`] F_side + [`FILM_NEWTON_FLOOR_N`],
-    /// the law's part 0 for a slice apart or clamped, F_side the body's summed |F| (as
-    /// [`film_agreement`] measures a side).
+    /// the law's part 0 for a slice apart or clamped, F_side the body's summed |F| over both
+    /// sides ([`film_agreement`] sums each side).
     fn laws_agree(
         &self,
         pieces: &[Piece],

@@ -80,7 +80,7 @@ fn film_hint(film: Option<&crate::piston::FilmSummary>) -> String {
         )
     } else {
         format!(
-            "; the skirt's oil film did not settle ({inputs}): films measured to stop so are starved (a supply below 3 um), very viscous (about 1e5 mPa s and more: a cold start) or, with \"mixed\", finely rough (0.1 um and less: asperities far stiffer than the skirt's contact) (docs/validation.md, \"Films that stop\"); the dry skirt is the conservative reference"
+            "; the skirt's oil film did not settle ({inputs}): films measured to stop so are starved (a supply below 3 um), very viscous (about 1e5 mPa s and more: a cold start) or, with \"mixed\", finely rough (0.1 um and less: asperities far stiffer than the skirt's contact) (docs/validation.md, \"Films that stop\"); or the dry skirt, the reference study's model"
         )
     }
 }
