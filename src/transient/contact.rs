@@ -554,11 +554,12 @@ pub fn step(
             (&mut pen, &mut rates),
         );
         let film_done = films.is_empty()
-            || (st.settle_films(&mut acc, films, searched, (&q, &forces, &pen, &rates))
-                && acc
-                    .as_ref()
-                    .is_some_and(|a| st.laws_agree(&pieces, (&forces, &a.film), (&pen, &rates))));
-        if changes.is_empty() && film_done {
+            || st.settle_films(&mut acc, films, searched, (&q, &forces, &pen, &rates));
+        // with films, the mixed forces must also be the laws' plus the films' (checked last)
+        if changes.is_empty()
+            && film_done
+            && (films.is_empty() || st.laws_agree(&pieces, (&forces, acc.as_ref()), (&pen, &rates)))
+        {
             let mut res = st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it);
             // the film part of the forces the step carries (the film at its end differs by
             // the Newton residual, measured again as stats.film_mismatch)
@@ -1001,7 +1002,7 @@ impl<'s, 'a> Step<'s, 'a> {
     }
 
     /// Whether every slice's force `forces` is its contact law's on its piece at the state,
-    /// plus the film part `film` (a lubricated step's line search mixes the last state's forces
+    /// plus the film part of the `accepted` state (none: false) (a lubricated step's line search mixes the last state's forces
     /// with the new ones, and a slice whose piece changed in between carries the old piece's
     /// force in the mix until a full step replaces it):
     ///   |F_i - (a_i + kt_i p_i + c_d p'_i) - F_film,i| <= [`FILM_NEWTON_TOL`] F_side + [`FILM_NEWTON_FLOOR_N`],
@@ -1010,9 +1011,12 @@ impl<'s, 'a> Step<'s, 'a> {
     fn laws_agree(
         &self,
         pieces: &[Piece],
-        (forces, film): (&[f64], &[f64]),
+        (forces, accepted): (&[f64], Option<&Accepted>),
         (pen, rates): (&[f64], &[f64]),
     ) -> bool {
+        let Some(film) = accepted.map(|a| &a.film) else {
+            return false;
+        };
         let mut scale = vec![0.0; self.bodies.len()];
         for (s, f) in self.slices.iter().zip(forces) {
             scale[s.body] += f.abs();
