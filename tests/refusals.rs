@@ -1086,6 +1086,38 @@ fn regression_cavitation_values_are_bounded_and_a_calibration_file_is_named() {
     assert!(err.contains("cal.json"), "{err}");
 }
 
+/// Regression: the type a key needs was said in the code's words: "expected a map" (a table
+/// of named entries) and "expected a sequence" (an array); each is now said as the scene
+/// writes it. A calibration file given as a JSON array was taken as its three values in the
+/// code's field order (a wrong-length one said "expected struct CalibrationThresholds"): it
+/// is refused, asking for an object.
+#[test]
+fn regression_wrong_types_are_named_as_the_scene_writes_them() {
+    for (set, key, said) in [
+        ("crankcase.sets=3", "crankcase.sets", "expected a table"),
+        (
+            "engine.firing_order=3",
+            "engine.firing_order",
+            "expected an array",
+        ),
+    ] {
+        let err = refused(&["rom", SMALL, "--set", set], 2, key);
+        assert!(err.contains(said), "{set}: {err}");
+        assert!(!err.contains("map") && !err.contains("sequence"), "{err}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let cal = dir.path().join("cal.json");
+    std::fs::write(&cal, "[1000, 1300, 138]").unwrap();
+    let set = format!("cavitation.calibration_file={}", cal.display());
+    let err = refused(
+        &["simulate", SMALL, "--set", &set],
+        2,
+        "cavitation.calibration_file",
+    );
+    assert!(err.contains("expected an object"), "{err}");
+    assert!(!err.contains("struct"), "{err}");
+}
+
 /// Regression: duplicates and conflicts taken without a word: `rom.cylinders = [1, 1]`
 /// (de-duplicated), `rom-tradeoff --factors 2,2` (the same ROM built twice), `--shards` beside
 /// `--shard` and `--shards 0` (ignored), `transient.hht_alpha = nan` under the Newmark scheme

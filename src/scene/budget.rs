@@ -369,7 +369,8 @@ pub fn rom_parts(crankcase_dofs: f64, liner_dofs: f64, interface_cols: f64) -> E
 /// (`reduce::substructure`), `cut_shapes` per cut: the crankcase's peak is that of its largest
 /// component (ceil(cylinders / components) cylinders' share of its DOFs and interface columns,
 /// plus two cuts' shapes) and of the dense assembly of the components (n_A^2, about six
-/// matrices of it); time adds over the components.
+/// matrices of it); time adds over the components. A cut carries at most its own DOFs
+/// ([`cut_columns`]), so a `cut_shapes` above them (every cut DOF kept) is not counted.
 pub fn rom_split(
     crankcase_dofs: f64,
     liner_dofs: f64,
@@ -380,16 +381,13 @@ pub fn rom_split(
 ) -> Estimate {
     let (cyl, n) = (cylinders.max(1) as f64, components.max(1) as f64);
     let share = (cyl / n).ceil() / cyl;
-    let cuts = if components > 1 {
-        2.0 * cut_shapes as f64
-    } else {
-        0.0
-    };
+    let shapes = cut_columns(crankcase_dofs, cut_shapes);
+    let cuts = if components > 1 { 2.0 * shapes } else { 0.0 };
     let piece_dofs = crankcase_dofs * share;
     let piece_cols = interface_cols * share + cuts;
     let piece = part_reduction_bytes(piece_dofs, 2.0 * piece_cols + 100.0);
     let n_a = if components > 1 {
-        2.0 * interface_cols + (n - 1.0) * cut_shapes as f64
+        2.0 * interface_cols + (n - 1.0) * shapes
     } else {
         0.0
     };
@@ -408,7 +406,12 @@ pub fn rom_split(
         what: "the ROM build",
         memory: cc + liner,
         seconds: n * t(piece_dofs) + t(liner_dofs),
-        keys: "rom.crankcase_components (the crankcase cut into up to engine.cylinders components: memory bounded by one), liner.mesh.* / crankcase.mesh.* (element counts and sizes) or rom.interface_harmonics",
+        // the larger part's remedy first: substructuring bounds the crankcase, not a liner
+        keys: if liner > cc {
+            "liner.mesh.* (element counts and sizes; the liner is reduced in one piece), rom.crankcase_components (the crankcase cut into up to engine.cylinders components: memory bounded by one), crankcase.mesh.* or rom.interface_harmonics"
+        } else {
+            "rom.crankcase_components (the crankcase cut into up to engine.cylinders components: memory bounded by one), liner.mesh.* / crankcase.mesh.* (element counts and sizes) or rom.interface_harmonics"
+        },
         detail: format!(
             "crankcase {} DOFs{split}, liner {} DOFs, {} interface columns",
             num(crankcase_dofs.round()),
@@ -416,6 +419,16 @@ pub fn rom_split(
             num(interface_cols)
         ),
     }
+}
+
+/// Columns one cut between components carries: `cut_shapes`, but never more than the cut's
+/// DOFs, bounded by a cross-section of a part of n DOFs that is no shorter along its cuts'
+/// normal than across: 3 (n / 3)^(2/3) = 1.44 n^(2/3) (a cube's section; a crankcase is
+/// longer along its row of bores, so its cuts hold fewer: 939 DOFs at 76k, 2,967 at 725k and
+/// 15,777 at 2.7M against 2,600, 11,700 and 28,300). A cut with fewer DOFs keeps every one
+/// (`reduce::substructure::cut_shapes`).
+pub fn cut_columns(part_dofs: f64, cut_shapes: usize) -> f64 {
+    (cut_shapes as f64).min(1.45 * part_dofs.max(0.0).powf(2.0 / 3.0))
 }
 
 /// The ROM build of a scene with generated meshes, from its parts' estimated DOFs
@@ -568,5 +581,32 @@ mod tests {
             let est = modal_solve(&s).memory;
             assert!(est >= high && est <= 1.25 * low, "{est} vs {low}-{high}");
         }
+    }
+
+    /// Regression: a `cut_shapes` above what a cut holds keeps every cut DOF
+    /// (`reduce::substructure::cut_shapes`), so it costs what that exact cut costs. Counting the
+    /// number asked for, the small engine in 2 components with `rom.cut_shapes=100000` was
+    /// refused for 507 GB (crankcase 14,400 DOFs; its cut has fewer than 1,000).
+    #[test]
+    fn regression_cut_shapes_beyond_the_cut_are_not_counted() {
+        let est = |shapes| rom_split(14_400.0, 9_216.0, 216.0, 2, 2, shapes).memory;
+        assert_eq!(est(100_000), est(10_000));
+        assert!(est(100_000) < 1e9, "{}", est(100_000));
+        // below the bound the shapes asked for count
+        assert!(est(200) < est(400));
+    }
+
+    /// Regression: a ROM build refused for a large liner (357k DOFs) suggested cutting the
+    /// crankcase into components first, which leaves the liner's reduction as it was.
+    #[test]
+    fn regression_the_larger_parts_remedy_comes_first() {
+        let liner = rom_split(110_592.0, 357_000.0, 936.0, 6, 1, 200);
+        assert!(liner.keys.starts_with("liner.mesh"), "{}", liner.keys);
+        let crankcase = rom_split(2.88e6, 45_504.0, 936.0, 6, 1, 200);
+        assert!(
+            crankcase.keys.starts_with("rom.crankcase_components"),
+            "{}",
+            crankcase.keys
+        );
     }
 }

@@ -134,6 +134,8 @@ fn plain_message(msg: &str) -> String {
         ("expected u64", "expected a whole number >= 0"),
         ("expected u32", "expected a whole number >= 0"),
         ("expected i64", "expected a whole number"),
+        ("expected a map", "expected a table"),
+        ("expected a sequence", "expected an array"),
     ]
     .iter()
     .fold(first, |m, (code, plain)| m.replace(code, plain))

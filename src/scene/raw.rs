@@ -247,7 +247,8 @@ pub struct RawRom {
     pub crankcase_components: usize,
     /// Shapes carried by each cut between crankcase components (traces of the lowest free modes
     /// of a slab around the cut), >= 1; a cut with at most 2 x this + 16 DOFs keeps every DOF
-    /// (exact coupling).
+    /// (exact coupling: a large value such as 100000 asks for it, and the build is estimated
+    /// with the cut's own DOFs, not with the number given).
     #[serde(default = "default_cut_shapes")]
     pub cut_shapes: usize,
     /// Cylinders whose liners are modelled (1-based, each once); empty = all.
@@ -655,7 +656,8 @@ pub struct RawOperating {
     pub load: f64,
     /// Measured cylinder pressure, CSV `crank_angle_deg,pressure_bar` (absolute; path relative
     /// to the scene; the cylinder's own angle, firing TDC at 360); replaces the built-in curve.
-    /// The table covers the whole 0-720 deg cycle, samples at most 45 deg apart (the wrap
+    /// The two columns are found by their header names, in any order; other columns are not
+    /// read (each row still needs as many fields as the header). The table covers the whole 0-720 deg cycle, samples at most 45 deg apart (the wrap
     /// through 720/0 included), pressures in (0, 1000] bar, and is interpolated linearly and
     /// periodically.
     #[serde(default)]

@@ -19,11 +19,11 @@ pub struct Elastic {
 /// the quantity, its bound and the value given.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ElasticError {
-    #[error("Young's modulus must be a positive number of Pa up to 1e14, got {}", crate::text::num(*.0))]
+    #[error("Young's modulus must be a positive number of Pa up to 1e14, got {}", crate::text::exact(*.0))]
     Young(f64),
-    #[error("Poisson's ratio must lie in (-1, 0.5), got {}", crate::text::num(*.0))]
+    #[error("Poisson's ratio must lie in (-1, 0.5), got {}", crate::text::exact(*.0))]
     Poisson(f64),
-    #[error("density must be a positive number of kg/m^3 up to 1e5, got {}", crate::text::num(*.0))]
+    #[error("density must be a positive number of kg/m^3 up to 1e5, got {}", crate::text::exact(*.0))]
     Density(f64),
 }
 
@@ -322,5 +322,18 @@ mod tests {
         assert!(!super::starved(20.0 * 1e-6));
         assert!(super::starved(2.99 * 1e-6));
         assert!(super::starved(1.0 * 1e-6));
+    }
+
+    /// Regression: a refused material value was printed rounded, so a Poisson's ratio just
+    /// above the bound read as the bound itself ("must lie in (-1, 0.5), got 0.5").
+    #[test]
+    fn regression_a_refused_poisson_ratio_is_printed_as_given() {
+        let m = super::Elastic {
+            young: 2.1e11,
+            poisson: 0.500000001,
+            density: 7850.0,
+        };
+        let msg = m.validate().unwrap_err().to_string();
+        assert!(msg.contains("got 0.500000001"), "{msg}");
     }
 }

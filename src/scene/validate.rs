@@ -567,15 +567,24 @@ pub(super) fn calibration_thresholds(
     let key = "cavitation.calibration_file";
     let text = crate::files::read_text(path, crate::files::LIMIT_TEXT)
         .map_err(|e| c.err(key, format!("cannot read {}: {e}", path.display())))?;
-    let t: CalibrationThresholds = serde_json::from_str(&text).map_err(|e| {
+    let not_calibration = |e: String| {
         c.err(
             key,
             format!(
-                "{}: not a calibration JSON (need onset_m_s2, high_risk_m_s2, k_p_pa_per_m_s2): {e}",
-                path.display()
+                "{}: not a calibration JSON (need an object with onset_m_s2, high_risk_m_s2, k_p_pa_per_m_s2): {e}",
+                path.display(),
             ),
         )
-    })?;
+    };
+    // an object only: serde would also take the three values as an array, in an order the
+    // file does not show
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| not_calibration(e.to_string()))?;
+    if !value.is_object() {
+        return Err(not_calibration("expected an object".into()));
+    }
+    let t: CalibrationThresholds =
+        serde_json::from_value(value).map_err(|e| not_calibration(e.to_string()))?;
     for (name, v) in [
         ("onset_m_s2", t.onset_m_s2),
         ("high_risk_m_s2", t.high_risk_m_s2),
