@@ -258,8 +258,7 @@ fn check_engine_meshes(
             3.0 * lm.nodes.len() as f64,
             (cylinders * budget::interface_columns(scene.rom.harmonics)) as f64,
             cylinders,
-            scene.rom.crankcase_components,
-            scene.rom.cut_shapes,
+            budget::Split::of(scene),
         );
         Limits::of(scene).check(scene, &est)?;
     }
@@ -455,6 +454,10 @@ pub fn key_description(scene: &Scene) -> Result<String> {
     if scene.rom.crankcase_components > 1 {
         d["crankcase_components"] = serde_json::json!(scene.rom.crankcase_components);
         d["cut_shapes"] = serde_json::json!(scene.rom.cut_shapes);
+        // only when raised, so builds at the default keep their keys
+        if scene.rom.component_cutoff_factor != 1.0 {
+            d["component_cutoff_factor"] = serde_json::json!(scene.rom.component_cutoff_factor);
+        }
     }
     // only when present, so the keys of dry scenes stay those of earlier builds
     let surface = liner_surface_mass(scene);
@@ -526,6 +529,7 @@ pub fn rom_inputs<'a>(scene: &Scene, em: &'a EngineMeshes, keep_bases: bool) -> 
         residual_vector_spacing: scene.rom.residual_vector_spacing,
         crankcase_components: scene.rom.crankcase_components,
         cut_shapes: scene.rom.cut_shapes,
+        component_cutoff_factor: scene.rom.component_cutoff_factor,
         keep_bases,
         part_cache: None,
     }

@@ -50,6 +50,10 @@ pub struct Split {
     pub cuts_x: Vec<f64>,
     /// Shapes per cut (fewer when the cut has fewer DOFs).
     pub cut_shapes: usize,
+    /// Each component's modes up to this multiple of the part's cut-off (>= 1): the second
+    /// step cuts the assembled model at the part's cut-off, so components that carry modes
+    /// above it leave the assembled spectrum below it converged.
+    pub component_cutoff_factor: f64,
 }
 
 /// One component: its mesh (own node numbering) and each of its nodes' index in the part.
@@ -525,11 +529,12 @@ fn prepare(
     })
 }
 
-/// Component `c`'s reduction through the component cache `dir`.
+/// Component `c`'s reduction through the component cache `dir`, its modes up to
+/// `factor` times the part's cut-off.
 fn reduce_component(
     p: &Part<'_>,
     prep: &Prepared,
-    c: usize,
+    (c, factor): (usize, f64),
     settings: &CbSettings,
     dir: Option<&Path>,
 ) -> Result<(PartReduction, Source), PartCacheError> {
@@ -545,7 +550,7 @@ fn reduce_component(
         outputs: &cp.outputs,
     };
     let cb = CbSettings {
-        cutoff_hz: settings.cutoff_hz,
+        cutoff_hz: settings.cutoff_hz * factor,
         keep_basis: false,
     };
     reduce_cached(&sub, &cb, dir)
@@ -562,7 +567,7 @@ pub fn reduce_one(
     c: usize,
 ) -> Result<(PartReduction, Source), PartCacheError> {
     let prep = prepare(p, split, dir, &|j| j + 1 == c || j == c)?;
-    reduce_component(p, &prep, c, settings, dir)
+    reduce_component(p, &prep, (c, split.component_cutoff_factor), settings, dir)
 }
 
 /// Reduces a part by substructuring (module doc): cut shapes, each component's Craig-Bampton
@@ -581,7 +586,8 @@ pub fn reduce_split(
     let mut reductions = Vec::with_capacity(prep.comps.len());
     let mut all_cached = true;
     for c in 0..prep.comps.len() {
-        let (r, source) = reduce_component(p, &prep, c, settings, dir)?;
+        let (r, source) =
+            reduce_component(p, &prep, (c, split.component_cutoff_factor), settings, dir)?;
         all_cached &= source == Source::Cached;
         reductions.push(r);
     }

@@ -362,30 +362,71 @@ pub fn part_reduction_bytes(dofs: f64, columns: f64) -> f64 {
 /// columns (constraint modes and their inertia loads) plus modes and loads. Time grows as
 /// (n_c + n_l)^1.5 from the default engine's build.
 pub fn rom_parts(crankcase_dofs: f64, liner_dofs: f64, interface_cols: f64) -> Estimate {
-    rom_split(crankcase_dofs, liner_dofs, interface_cols, 1, 1, 0)
+    rom_split(
+        crankcase_dofs,
+        liner_dofs,
+        interface_cols,
+        1,
+        Split::ONE_PIECE,
+    )
 }
 
-/// As [`rom_parts`] with the crankcase of `cylinders` cut into `components`
-/// (`reduce::substructure`), `cut_shapes` per cut: the crankcase's peak is that of its largest
-/// component (ceil(cylinders / components) cylinders' share of its DOFs and interface columns,
-/// plus two cuts' shapes) and of the dense assembly of the components (n_A^2, about six
-/// matrices of it); time adds over the components. A cut carries at most its own DOFs
-/// ([`cut_columns`]), so a `cut_shapes` above them (every cut DOF kept) is not counted.
+/// How the crankcase is cut for its reduction (`rom.crankcase_components`, `rom.cut_shapes`,
+/// `rom.component_cutoff_factor`).
+#[derive(Clone, Copy, Debug)]
+pub struct Split {
+    pub components: usize,
+    pub cut_shapes: usize,
+    pub cutoff_factor: f64,
+}
+
+impl Split {
+    pub const ONE_PIECE: Split = Split {
+        components: 1,
+        cut_shapes: 0,
+        cutoff_factor: 1.0,
+    };
+
+    /// The split a scene asks for.
+    pub fn of(scene: &Scene) -> Self {
+        Split {
+            components: scene.rom.crankcase_components,
+            cut_shapes: scene.rom.cut_shapes,
+            cutoff_factor: scene.rom.component_cutoff_factor,
+        }
+    }
+}
+
+/// As [`rom_parts`] with the crankcase of `cylinders` cut as `split` asks
+/// (`reduce::substructure`): the crankcase's peak is that of its largest component
+/// (ceil(cylinders / components) cylinders' share of its DOFs and interface columns, plus two
+/// cuts' shapes, and its modes: 100 columns grown as the cube of its cut-off factor, a solid's
+/// mode count) and of the dense assembly of the components (n_A^2, about six matrices of it);
+/// time adds over the components. A cut carries at most its own DOFs ([`cut_columns`]), so a
+/// `cut_shapes` above them (every cut DOF kept) is not counted.
 pub fn rom_split(
     crankcase_dofs: f64,
     liner_dofs: f64,
     interface_cols: f64,
     cylinders: usize,
-    components: usize,
-    cut_shapes: usize,
+    split: Split,
 ) -> Estimate {
+    let Split {
+        components,
+        cut_shapes,
+        cutoff_factor,
+    } = split;
     let (cyl, n) = (cylinders.max(1) as f64, components.max(1) as f64);
     let share = (cyl / n).ceil() / cyl;
     let shapes = cut_columns(crankcase_dofs, cut_shapes);
-    let cuts = if components > 1 { 2.0 * shapes } else { 0.0 };
+    let (cuts, modes) = if components > 1 {
+        (2.0 * shapes, 100.0 * cutoff_factor.powi(3))
+    } else {
+        (0.0, 100.0)
+    };
     let piece_dofs = crankcase_dofs * share;
     let piece_cols = interface_cols * share + cuts;
-    let piece = part_reduction_bytes(piece_dofs, 2.0 * piece_cols + 100.0);
+    let piece = part_reduction_bytes(piece_dofs, 2.0 * piece_cols + modes);
     let n_a = if components > 1 {
         2.0 * interface_cols + (n - 1.0) * shapes
     } else {
@@ -444,8 +485,7 @@ pub fn rom_build(scene: &Scene) -> Option<Estimate> {
         liner,
         (cylinders * interface_columns(scene.rom.harmonics)) as f64,
         cylinders,
-        scene.rom.crankcase_components,
-        scene.rom.cut_shapes,
+        Split::of(scene),
     ))
 }
 
@@ -589,7 +629,12 @@ mod tests {
     /// refused for 507 GB (crankcase 14,400 DOFs; its cut has fewer than 1,000).
     #[test]
     fn regression_cut_shapes_beyond_the_cut_are_not_counted() {
-        let est = |shapes| rom_split(14_400.0, 9_216.0, 216.0, 2, 2, shapes).memory;
+        let split = |cut_shapes| Split {
+            components: 2,
+            cut_shapes,
+            cutoff_factor: 1.0,
+        };
+        let est = |shapes| rom_split(14_400.0, 9_216.0, 216.0, 2, split(shapes)).memory;
         assert_eq!(est(100_000), est(10_000));
         assert!(est(100_000) < 1e9, "{}", est(100_000));
         // below the bound the shapes asked for count
@@ -600,9 +645,9 @@ mod tests {
     /// crankcase into components first, which leaves the liner's reduction as it was.
     #[test]
     fn regression_the_larger_parts_remedy_comes_first() {
-        let liner = rom_split(110_592.0, 357_000.0, 936.0, 6, 1, 200);
+        let liner = rom_split(110_592.0, 357_000.0, 936.0, 6, Split::ONE_PIECE);
         assert!(liner.keys.starts_with("liner.mesh"), "{}", liner.keys);
-        let crankcase = rom_split(2.88e6, 45_504.0, 936.0, 6, 1, 200);
+        let crankcase = rom_split(2.88e6, 45_504.0, 936.0, 6, Split::ONE_PIECE);
         assert!(
             crankcase.keys.starts_with("rom.crankcase_components"),
             "{}",

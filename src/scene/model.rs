@@ -97,6 +97,8 @@ pub struct Rom {
     pub crankcase_components: usize,
     /// Shapes per cut between crankcase components.
     pub cut_shapes: usize,
+    /// Components' modes up to this multiple of `cutoff_hz`.
+    pub component_cutoff_factor: f64,
     /// Modelled cylinders, 1-based, ascending.
     pub cylinders: Vec<usize>,
     pub cache_dir: PathBuf,

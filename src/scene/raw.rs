@@ -251,6 +251,14 @@ pub struct RawRom {
     /// with the cut's own DOFs, not with the number given).
     #[serde(default = "default_cut_shapes")]
     pub cut_shapes: usize,
+    /// Modes of each crankcase component up to this multiple of the part's cut-off (band_hz x
+    /// cutoff_factor), in [1, 4] (default 1). The components' own truncation: on the default
+    /// engine in 3 components with every cut DOF kept, 1 leaves the system frequencies below
+    /// half the cut-off within 1.05e-5 of the one-piece build and 1.5 within 5.6e-7 (MAC 1 -
+    /// 2e-9), at 1.2x the build time; with reduced cuts (200 shapes) the cut's error (3e-4)
+    /// dominates and a higher factor buys nothing (docs/physics.md).
+    #[serde(default = "default_component_cutoff_factor")]
+    pub component_cutoff_factor: f64,
     /// Cylinders whose liners are modelled (1-based, each once); empty = all.
     #[serde(default)]
     pub cylinders: Vec<usize>,
@@ -268,6 +276,7 @@ impl Default for RawRom {
             residual_vector_spacing: default_residual_spacing(),
             crankcase_components: default_components(),
             cut_shapes: default_cut_shapes(),
+            component_cutoff_factor: default_component_cutoff_factor(),
             cylinders: Vec::new(),
             cache_dir: default_cache_dir(),
         }
@@ -284,6 +293,9 @@ fn default_components() -> usize {
 }
 fn default_cut_shapes() -> usize {
     200
+}
+fn default_component_cutoff_factor() -> f64 {
+    1.0
 }
 fn default_residual_spacing() -> usize {
     2

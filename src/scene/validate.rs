@@ -363,6 +363,13 @@ pub(super) fn validate_rom(
     if r.cut_shapes == 0 {
         return Err(c.err("rom.cut_shapes", "must be at least 1, got 0".to_string()));
     }
+    let f = r.component_cutoff_factor;
+    if !(1.0..=4.0).contains(&f) {
+        return Err(c.err(
+            "rom.component_cutoff_factor",
+            format!("must be in [1, 4], got {}", crate::text::exact(f)),
+        ));
+    }
     let rom = Rom {
         band_hz,
         cutoff_hz: band_hz * r.cutoff_factor,
@@ -370,6 +377,7 @@ pub(super) fn validate_rom(
         residual_vector_spacing: r.residual_vector_spacing,
         crankcase_components: r.crankcase_components,
         cut_shapes: r.cut_shapes,
+        component_cutoff_factor: f,
         cylinders,
         cache_dir: base.join(path_value(
             c,

@@ -44,6 +44,8 @@ pub struct RomInputs<'a> {
     pub crankcase_components: usize,
     /// Shapes per cut between crankcase components.
     pub cut_shapes: usize,
+    /// Components' modes up to this multiple of `cutoff_hz`.
+    pub component_cutoff_factor: f64,
     /// Keep full bases for recovery (mode shapes on the meshes).
     pub keep_bases: bool,
     /// The component cache directory: each part's reduction read from it or stored in it
@@ -507,5 +509,6 @@ pub(super) fn crankcase_split(inp: &RomInputs<'_>) -> Option<crate::reduce::subs
     Some(crate::reduce::substructure::Split {
         cuts_x,
         cut_shapes: inp.cut_shapes,
+        component_cutoff_factor: inp.component_cutoff_factor,
     })
 }
