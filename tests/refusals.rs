@@ -1118,6 +1118,48 @@ fn regression_wrong_types_are_named_as_the_scene_writes_them() {
     assert!(!err.contains("struct"), "{err}");
 }
 
+/// Regression: the documented `crankcase.mesh.element = "tet10"` failed on every engine tried
+/// with "solid element #7 ... is inverted" (the generated lattice's tetrahedra invert at the
+/// blends between bores), naming no key. It is refused naming the key and the way out.
+#[test]
+fn regression_the_generated_crankcase_in_tet10_is_refused_naming_the_key() {
+    let err = refused(
+        &[
+            "rom",
+            SMALL,
+            "--no-cache",
+            "--set",
+            "crankcase.mesh.element=tet10",
+        ],
+        2,
+        "crankcase.mesh.element",
+    );
+    assert!(
+        err.contains("not available") && err.contains("hex20"),
+        "{err}"
+    );
+}
+
+/// Regression: a box set that selects no node (the fixed set's box 320 mm below the
+/// crankcase) built the parts and then failed the engine assembly as singular, exit 1, "check
+/// the crankcase 'fix' sets". It is bad input: refused before any reduction, exit 2, naming the
+/// key and the mesh's extent.
+#[test]
+fn regression_a_box_set_of_no_nodes_is_refused_naming_its_key() {
+    let err = refused(
+        &[
+            "rom",
+            SMALL,
+            "--no-cache",
+            "--set",
+            "crankcase.sets.pan_rail.box_mm=[-2000.0,-2000.0,-500.5,2000.0,2000.0,-499.5]",
+        ],
+        2,
+        "crankcase.sets.pan_rail.box_mm selects no node",
+    );
+    assert!(err.contains("spans"), "{err}");
+}
+
 /// Regression: duplicates and conflicts taken without a word: `rom.cylinders = [1, 1]`
 /// (de-duplicated), `rom-tradeoff --factors 2,2` (the same ROM built twice), `--shards` beside
 /// `--shard` and `--shards 0` (ignored), `transient.hht_alpha = nan` under the Newmark scheme

@@ -49,6 +49,15 @@ pub enum SceneRomError {
         file: Option<String>,
         msg: String,
     },
+    #[error("{}: {key}.{name}.box_mm selects no node of the {part} mesh, which spans ({}) mm: a set of no nodes holds or finds nothing", path.display(), extent.iter().map(|v| crate::text::num(v * 1e3)).collect::<Vec<_>>().join(", "))]
+    EmptyBoxSet {
+        path: PathBuf,
+        key: &'static str,
+        part: &'static str,
+        name: String,
+        /// The mesh's bounding box [m]: x0, y0, z0, x1, y1, z1.
+        extent: [f64; 6],
+    },
     #[error("{}: crankcase.fix: unknown set '{name}'; the crankcase mesh has: {}", path.display(), have.join(", "))]
     UnknownFixSet {
         path: PathBuf,
@@ -274,6 +283,39 @@ fn check_engine_meshes(
     Ok(())
 }
 
+/// Refuses a scene box set (`[part.sets.NAME] box_mm`) that selected no node of `mesh`: a
+/// fixed set of none left the engine unheld (exit 1, "singular"), found after the build.
+fn non_empty(scene: &Scene, mesh: &Mesh, (part, name): (&'static str, &str)) -> Result<()> {
+    if mesh.node_set(name).is_some_and(|s| !s.is_empty()) {
+        return Ok(());
+    }
+    let mut extent = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for p in &mesh.nodes {
+        for a in 0..3 {
+            extent[a] = extent[a].min(p[a]);
+            extent[a + 3] = extent[a + 3].max(p[a]);
+        }
+    }
+    Err(SceneRomError::EmptyBoxSet {
+        path: scene.path.clone(),
+        key: if part == "liner" {
+            "liner.sets"
+        } else {
+            "crankcase.sets"
+        },
+        part,
+        name: name.to_string(),
+        extent,
+    })
+}
+
 /// Loads and checks the liner and crankcase meshes of a scene: files read in their units,
 /// materials resolved, both put into their frames with every set (found from the geometry where
 /// a deck does not name it; box sets of the scene added), then checked.
@@ -321,6 +363,7 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
     let mut boxes = Vec::new();
     for (name, b) in &cc.box_sets {
         boxes.push(find::box_set(&mut cm, "crankcase", name, b));
+        non_empty(scene, &cm, ("crankcase", name))?;
     }
     let imported = lfile.is_some() || cfile.is_some();
     let axis_x = axis_x(scene);
@@ -345,6 +388,7 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
     };
     for (name, b) in &scene.liner.box_sets {
         boxes.push(find::box_set(&mut lm, "liner", name, b));
+        non_empty(scene, &lm, ("liner", name))?;
     }
     if let Some(f) = found.as_mut() {
         f.sets.extend(boxes);

@@ -206,7 +206,8 @@ pub struct RawBoxSet {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawCrankcaseMesh {
-    /// "hex20" (default) or "tet10".
+    /// "hex20" (the one element of the generated crankcase; "tet10" is refused: its split
+    /// of the lattice inverts tetrahedra where the walls blend between bores).
     #[serde(default = "default_element")]
     pub element: String,
     /// Elements per quarter of each bore's circumference, even, >= 2.
