@@ -55,8 +55,8 @@ pub enum SceneRomError {
         key: &'static str,
         part: &'static str,
         name: String,
-        /// The mesh's bounding box [m]: x0, y0, z0, x1, y1, z1.
-        extent: [f64; 6],
+        /// The mesh's bounding box \[m\]: x0, y0, z0, x1, y1, z1.
+        extent: Box<[f64; 6]>,
     },
     #[error("{}: crankcase.fix: unknown set '{name}'; the crankcase mesh has: {}", path.display(), have.join(", "))]
     UnknownFixSet {
@@ -312,7 +312,7 @@ fn non_empty(scene: &Scene, mesh: &Mesh, (part, name): (&'static str, &str)) -> 
         },
         part,
         name: name.to_string(),
-        extent,
+        extent: Box::new(extent),
     })
 }
 
