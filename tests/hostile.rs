@@ -698,7 +698,7 @@ proptest! {
             let path = Path::new(SMALL);
             if let Ok(sc) = linercav::scene::Scene::from_str_with(path, &text, &[]) {
                 use linercav::scene::budget;
-                for e in [budget::rom_build(&sc), budget::transient(&sc)].into_iter().flatten() {
+                for e in [budget::rom_build(&sc, budget::Split::of(&sc)), budget::transient(&sc)].into_iter().flatten() {
                     if e.memory.is_nan() || e.seconds.is_nan() {
                         return Err(format!("an estimate is not a number: {e:?}"));
                     }

@@ -750,7 +750,7 @@ fn regression_a_generated_liner_mesh_is_sized_before_it_is_made() {
 }
 
 /// Regression (issue 37's substructuring keys): components beyond the cylinders, no cut
-/// shapes, and engine mode shapes on the meshes (`modes --assembly --rom --vtu`) of a
+/// shapes or fewer than a cut's six rigid motions, and engine mode shapes on the meshes (`modes --assembly --rom --vtu`) of a
 /// substructured crankcase (which keeps no full basis) are refused naming the key (exit 2),
 /// the last before any part is reduced and with nothing written.
 #[test]
@@ -771,6 +771,21 @@ fn regression_substructuring_keys_are_checked() {
         2,
         "rom.cut_shapes",
     );
+    // fewer than a cut's six rigid motions ran, exit 0, with the first modes 17-67 % high
+    let err = refused(
+        &[
+            "rom",
+            SMALL,
+            "--no-cache",
+            "--set",
+            "rom.crankcase_components=2",
+            "--set",
+            "rom.cut_shapes=5",
+        ],
+        2,
+        "rom.cut_shapes",
+    );
+    assert!(err.contains("at least 6"), "{err}");
     let dir = tempfile::tempdir().unwrap();
     let vtu = dir.path().join("shapes.vtu");
     refused(

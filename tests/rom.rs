@@ -793,6 +793,16 @@ fn contract_rom_component_tasks() {
         assert_eq!(code, 2, "{args:?}: {err}");
         assert!(err.contains(needle), "{args:?}: {err}");
     }
+    // the scheduler's refusals speak of components, not of a sweep's --shard / --shards
+    for env in [
+        &[("JOB_COMPLETION_INDEX", "2")][..],
+        &[("SLURM_ARRAY_TASK_ID", "1")][..],
+    ] {
+        let (code, _, err) = run(&["--component", "auto"], env);
+        assert_eq!(code, 2, "{env:?}: {err}");
+        assert!(!err.contains("--shard"), "{env:?}: {err}");
+        assert!(err.contains("component"), "{env:?}: {err}");
+    }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     let (code, out, err) = run(&["--component", "1/2"], &[]);
     assert_eq!(code, 0, "{err}");
@@ -811,6 +821,14 @@ fn contract_rom_component_tasks() {
     let (code, out, _) = run(&["--component", "1/2"], &[]);
     assert_eq!(code, 0);
     assert!(out.contains("already in the component cache"), "{out}");
+    // a task is sized by its own component: the liner's (about 0.12 GB estimated) runs under a
+    // limit the engine's build (0.32 GB) exceeds; it was refused with the engine's estimate
+    let limit = ["--set", "limits.max_memory_gb=0.15"];
+    let (code, _, err) = run(&[&["--component", "1/2"][..], &limit].concat(), &[]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = run(&[&["--component", "2/2"][..], &limit].concat(), &[]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("the component task needs"), "{err}");
     let (code, out, err) = run(&["--json"], &[]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
@@ -905,6 +923,12 @@ fn verification_substructured_crankcase_matches_one_piece() {
     assert!(n >= 10, "{n}");
     assert!(f < 1e-5, "frequency difference {f:e}");
     assert!(mac > 0.999, "MAC {mac}");
+    // the same crankcase, so the same interior (a fixed node on a cut counted 3 DOFs more)
+    let stats = |r: &linercav::reduce::rom::EngineRom| {
+        let p = r.info.parts.iter().find(|p| p.name == "crankcase").unwrap();
+        (p.stats.full_dofs, p.stats.interior_dofs)
+    };
+    assert_eq!(stats(&split), stats(&one));
     let raised = scene(&[
         "rom.crankcase_components=2",
         "rom.cut_shapes=100000",

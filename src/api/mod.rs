@@ -259,7 +259,14 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
             limits = crate::scene::budget::Limits::of(&sc);
             let p = sc.part(part).ok_or_else(|| Error::Argument {
                 flag: format!("{}: part '{part}'", scene.display()),
-                msg: format!("unknown; the scene has: {}", PARTS.join(", ")),
+                msg: if part == "crankcase" {
+                    "takes the liner only (the crankcase is held by the liners and the mounts): \
+                     its modes come with the engine's, `modes SCENE --assembly`, or on its own \
+                     from `export-mesh SCENE --part crankcase --out F` then `modes --mesh F`"
+                        .to_string()
+                } else {
+                    format!("unknown; --part takes: {}", PARTS.join(", "))
+                },
             })?;
             check_generated(&sc, &p.source, &limits)?;
             let (mut mesh, file, material, src, warning) = read_mesh(

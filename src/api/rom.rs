@@ -2,7 +2,7 @@
 //! ([`crate::reduce::scene_rom`]) with a progress display, and the commands' reports.
 
 use super::progress::Progress;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::reduce::rom::RomBuild;
 pub use crate::reduce::scene_rom::{CacheOptions, LoadedRom};
@@ -63,6 +63,29 @@ pub struct RomReport {
     /// Interfaces, points and materials found on imported meshes (absent for generated ones).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub interfaces: Option<crate::mesh::find::FoundInterfaces>,
+    /// How the crankcase was cut for its reduction (absent when reduced in one piece).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub substructured: Option<Substructured>,
+}
+
+/// The scene's substructuring of the crankcase (`rom.crankcase_components` and its keys).
+#[derive(serde::Serialize)]
+pub struct Substructured {
+    pub components: usize,
+    pub cut_shapes: usize,
+    pub component_cutoff_factor: f64,
+}
+
+impl Substructured {
+    /// The split `scene` asks for, none for a crankcase in one piece.
+    pub fn of(scene: &crate::scene::Scene) -> Option<Self> {
+        let r = &scene.rom;
+        (r.crankcase_components > 1).then_some(Substructured {
+            components: r.crankcase_components,
+            cut_shapes: r.cut_shapes,
+            component_cutoff_factor: r.component_cutoff_factor,
+        })
+    }
 }
 
 impl RomReport {
@@ -95,6 +118,7 @@ impl RomReport {
                 .filter(|&f| f < 0.5 * i.cutoff_hz)
                 .collect(),
             interfaces: i.interfaces.clone(),
+            substructured: None,
         }
     }
 
@@ -144,6 +168,16 @@ impl RomReport {
             .map(|f| format!("{f:.1}"))
             .collect();
         let _ = writeln!(s, "  first modes [Hz]: {}", f.join(", "));
+        if let Some(c) = &self.substructured {
+            let _ = writeln!(
+                s,
+                "  crankcase in {} components: {} shapes per cut (every DOF of a cut with at most {}), components' modes to {} x the cut-off",
+                c.components,
+                c.cut_shapes,
+                c.cut_shapes.saturating_mul(2).saturating_add(16),
+                c.component_cutoff_factor
+            );
+        }
         if let Some(found) = &self.interfaces {
             s.push_str(&interfaces_text(found));
         }
@@ -237,10 +271,9 @@ pub fn reduce_component(
     let names = crate::reduce::rom::component_names(scene.rom.crankcase_components);
     let count = names.len();
     let task = if arg == "auto" {
-        Shard::from_env(&|k| std::env::var(k).ok(), Some(count))?.ok_or_else(|| {
-            crate::scene::SceneError::Field {
-                path: scene.path.clone(),
-                key: "--component auto".into(),
+        Shard::from_env_as(&|k| std::env::var(k).ok(), Some(count), "--component")?.ok_or_else(|| {
+            Error::Argument {
+                flag: "--component auto".into(),
                 msg: format!("no scheduler task in the environment (SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX): give --component I/{count}"),
             }
         })?
@@ -248,16 +281,14 @@ pub fn reduce_component(
         Shard::parse("--component", arg)?
     };
     if task.count != count {
-        return Err(crate::scene::SceneError::Field {
-            path: scene.path.clone(),
-            key: "--component".into(),
+        return Err(Error::Argument {
+            flag: format!("{}: --component", scene.path.display()),
             msg: format!(
                 "the engine has {count} components ({}), the task names {} (an array of {count} tasks is needed)",
                 names.join(", "),
                 task.count
             ),
-        }
-        .into());
+        });
     }
     Ok(crate::reduce::scene_rom::reduce_component(
         scene, opts, task.index,

@@ -237,7 +237,7 @@ fn part_mesh(
 /// limits (a file is sized only once read), and every fixed crankcase set present.
 fn check_engine_meshes(
     scene: &Scene,
-    cc: &crate::scene::Crankcase,
+    (cc, split): (&crate::scene::Crankcase, budget::Split),
     (lm, cm): (&mut Mesh, &mut Mesh),
     (lfile, cfile): (Option<&Path>, Option<&Path>),
 ) -> Result<()> {
@@ -267,7 +267,7 @@ fn check_engine_meshes(
             3.0 * lm.nodes.len() as f64,
             (cylinders * budget::interface_columns(scene.rom.harmonics)) as f64,
             cylinders,
-            budget::Split::of(scene),
+            split,
         );
         Limits::of(scene).check(scene, &est)?;
     }
@@ -320,6 +320,12 @@ fn non_empty(scene: &Scene, mesh: &Mesh, (part, name): (&'static str, &str)) -> 
 /// materials resolved, both put into their frames with every set (found from the geometry where
 /// a deck does not name it; box sets of the scene added), then checked.
 pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
+    load_meshes_for(scene, budget::Split::of(scene))
+}
+
+/// [`load_meshes`] for the reduction `split` says (a component task sizes only its own
+/// component once a mesh file is read).
+fn load_meshes_for(scene: &Scene, split: budget::Split) -> Result<EngineMeshes> {
     let cc = crankcase_of(scene)?;
     // generated meshes are sized before they are made (`export-mesh` of a liner with
     // `radial = 100000` ran on at many GB)
@@ -394,7 +400,7 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
         f.sets.extend(boxes);
         f.materials = vec![lnote, cnote];
     }
-    check_engine_meshes(scene, cc, (&mut lm, &mut cm), (lfile, cfile))?;
+    check_engine_meshes(scene, (cc, split), (&mut lm, &mut cm), (lfile, cfile))?;
     if let Some(f) = found.as_mut() {
         list_fixed_sets(f, fixed_sets(&cm, cc, cfile.is_some()));
     }
@@ -605,7 +611,7 @@ fn cache_entry(scene: &Scene, description: &str, opts: &CacheOptions) -> (PathBu
 /// Refuses a ROM build of `scene` that its limits do not allow: nothing is built that the
 /// machine cannot hold or whose result cannot be stored.
 fn check_build_limits(scene: &Scene) -> Result<()> {
-    if let Some(est) = budget::rom_build(scene) {
+    if let Some(est) = budget::rom_build(scene, budget::Split::of(scene)) {
         Limits::of(scene).check(scene, &est)?;
     }
     Ok(())
@@ -721,10 +727,15 @@ pub fn reduce_component(scene: &Scene, opts: &CacheOptions, index: usize) -> Res
         .clone()
         .unwrap_or_else(|| scene.rom.cache_dir.clone());
     crate::files::check_writable(&dir)?;
-    if let Some(est) = budget::rom_build(scene) {
+    // the task's own component is sized, not the engine's build
+    let split = budget::Split {
+        task: Some(index - 1),
+        ..budget::Split::of(scene)
+    };
+    if let Some(est) = budget::rom_build(scene, split) {
         Limits::of(scene).check(scene, &est)?;
     }
-    let em = load_meshes(scene)?;
+    let em = load_meshes_for(scene, split)?;
     let mut inputs = rom_inputs(scene, &em, false);
     inputs.part_cache = Some(dir);
     let (r, source) = super::rom::reduce_component(&inputs, index - 1)?;

@@ -596,11 +596,13 @@ pub fn reduce_split(
         .map_err(|e| other(part, format!("substructuring: {e}")))?;
     let mut r = second_level(part, assembled, settings.cutoff_hz, dofs)?;
     r.stats.seconds = t0.elapsed().as_secs_f64();
+    // the components' interiors and the cuts' free DOFs (a fixed node on a cut is no DOF)
+    let free = |n: &usize| (0..3).filter(|i| r.dofs.dof[3 * n + i] != FIXED).count();
     r.stats.interior_dofs = reductions
         .iter()
         .map(|c| c.stats.interior_dofs)
         .sum::<usize>()
-        + prep.cuts.iter().map(|c| 3 * c.len()).sum::<usize>();
+        + prep.cuts.iter().flatten().map(free).sum::<usize>();
     log::info!(
         "[{part}] substructured: {} coordinates ({} constraint, {} modes, {} attachments) in {:.2} s",
         r.size(),

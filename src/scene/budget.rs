@@ -378,6 +378,9 @@ pub struct Split {
     pub components: usize,
     pub cut_shapes: usize,
     pub cutoff_factor: f64,
+    /// One task of a component job array (`rom --component`, 0-based: the liner, then the
+    /// crankcase's components): only its own reduction is estimated.
+    pub task: Option<usize>,
 }
 
 impl Split {
@@ -385,6 +388,7 @@ impl Split {
         components: 1,
         cut_shapes: 0,
         cutoff_factor: 1.0,
+        task: None,
     };
 
     /// The split a scene asks for.
@@ -393,6 +397,7 @@ impl Split {
             components: scene.rom.crankcase_components,
             cut_shapes: scene.rom.cut_shapes,
             cutoff_factor: scene.rom.component_cutoff_factor,
+            task: None,
         }
     }
 }
@@ -415,6 +420,7 @@ pub fn rom_split(
         components,
         cut_shapes,
         cutoff_factor,
+        task,
     } = split;
     let (cyl, n) = (cylinders.max(1) as f64, components.max(1) as f64);
     let share = (cyl / n).ceil() / cyl;
@@ -443,6 +449,33 @@ pub fn rom_split(
     } else {
         String::new()
     };
+    // a component task reduces its component only: the liner, or one crankcase piece
+    if let Some(task) = task {
+        let (memory, dofs) = if task == 0 {
+            (liner, liner_dofs)
+        } else {
+            (piece, piece_dofs)
+        };
+        return Estimate {
+            what: "the component task",
+            memory,
+            seconds: t(dofs),
+            keys: if task == 0 {
+                "liner.mesh.* (element counts and sizes)"
+            } else {
+                "rom.crankcase_components (more, smaller components) or crankcase.mesh.* (element counts and sizes)"
+            },
+            detail: format!(
+                "{} of about {} DOFs",
+                if task == 0 {
+                    "the liner"
+                } else {
+                    "a crankcase component"
+                },
+                num(dofs.round())
+            ),
+        };
+    }
     Estimate {
         what: "the ROM build",
         memory: cc + liner,
@@ -472,9 +505,9 @@ pub fn cut_columns(part_dofs: f64, cut_shapes: usize) -> f64 {
     (cut_shapes as f64).min(1.45 * part_dofs.max(0.0).powf(2.0 / 3.0))
 }
 
-/// The ROM build of a scene with generated meshes, from its parts' estimated DOFs
-/// ([`rom_split`]).
-pub fn rom_build(scene: &Scene) -> Option<Estimate> {
+/// The ROM build of a scene with generated meshes cut as `split` asks (usually
+/// [`Split::of`] the scene), from its parts' estimated DOFs ([`rom_split`]).
+pub fn rom_build(scene: &Scene, split: Split) -> Option<Estimate> {
     let (cc, liner) = part_dofs(scene)?;
     let cylinders = scene.crankcase.as_ref().map_or(0, |c| match &c.source {
         CrankcaseSource::Parametric { geometry, .. } => geometry.cylinders,
@@ -485,7 +518,7 @@ pub fn rom_build(scene: &Scene) -> Option<Estimate> {
         liner,
         (cylinders * interface_columns(scene.rom.harmonics)) as f64,
         cylinders,
-        Split::of(scene),
+        split,
     ))
 }
 
@@ -633,6 +666,7 @@ mod tests {
             components: 2,
             cut_shapes,
             cutoff_factor: 1.0,
+            task: None,
         };
         let est = |shapes| rom_split(14_400.0, 9_216.0, 216.0, 2, split(shapes)).memory;
         assert_eq!(est(100_000), est(10_000));

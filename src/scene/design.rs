@@ -478,6 +478,16 @@ impl Shard {
         var: &dyn Fn(&str) -> Option<String>,
         shards: Option<usize>,
     ) -> Result<Option<Self>, DesignError> {
+        Self::from_env_as(var, shards, "--shard")
+    }
+
+    /// [`Shard::from_env`] for the command whose explicit form is `flag` I/N (`--shard` of a
+    /// sweep, `--component` of `rom`, whose count is its components'): the messages name it.
+    pub fn from_env_as(
+        var: &dyn Fn(&str) -> Option<String>,
+        shards: Option<usize>,
+        flag: &str,
+    ) -> Result<Option<Self>, DesignError> {
         let number = |name: &'static str| -> Result<Option<usize>, DesignError> {
             match var(name) {
                 None => Ok(None),
@@ -497,7 +507,7 @@ impl Shard {
             let missing = |name: &'static str| DesignError::Environment {
                 var: name,
                 value: String::new(),
-                problem: "not set beside SLURM_ARRAY_TASK_ID (give --shard I/N)".into(),
+                problem: format!("not set beside SLURM_ARRAY_TASK_ID (give {flag} I/N)"),
             };
             let min =
                 number("SLURM_ARRAY_TASK_MIN")?.ok_or_else(|| missing("SLURM_ARRAY_TASK_MIN"))?;
@@ -507,7 +517,7 @@ impl Shard {
                 return Err(DesignError::Environment {
                     var: "SLURM_ARRAY_TASK_STEP",
                     value: step.to_string(),
-                    problem: "the array must be a contiguous range like --array=0-9 (or give --shard I/N)".into(),
+                    problem: format!("the array must be a contiguous range like --array=0-9 (or give {flag} I/N)"),
                 });
             }
             let count = max
@@ -524,7 +534,7 @@ impl Shard {
                     var: "SLURM_ARRAY_TASK_COUNT",
                     value: c.to_string(),
                     problem: format!(
-                        "the array has gaps ({c} tasks in {min}..{max}): use a contiguous range or --shard I/N"
+                        "the array has gaps ({c} tasks in {min}..{max}): use a contiguous range or {flag} I/N"
                     ),
                 });
             }
@@ -543,7 +553,11 @@ impl Shard {
                 return Err(DesignError::Environment {
                     var: "JOB_COMPLETION_INDEX",
                     value: idx.to_string(),
-                    problem: format!("not below --shards {count}"),
+                    problem: if flag == "--component" {
+                        format!("not below the engine's {count} components (indices 0..{count})")
+                    } else {
+                        format!("not below --shards {count}")
+                    },
                 });
             }
             return Ok(Some(Shard {

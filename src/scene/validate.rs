@@ -360,8 +360,14 @@ pub(super) fn validate_rom(
             ),
         ));
     }
-    if r.cut_shapes == 0 {
-        return Err(c.err("rom.cut_shapes", "must be at least 1, got 0".to_string()));
+    if r.cut_shapes < 6 {
+        return Err(c.err(
+            "rom.cut_shapes",
+            format!(
+                "must be at least 6 (a cut's six rigid motions), got {}; 20 or more for results within about 1 % (docs/physics.md)",
+                r.cut_shapes
+            ),
+        ));
     }
     let f = r.component_cutoff_factor;
     if !(1.0..=4.0).contains(&f) {
