@@ -269,6 +269,61 @@ fn verification_small_engine_as_mm_decks_gives_the_parametric_frequencies() {
     assert!(param["interfaces"].is_null());
 }
 
+/// Regression: the small engine with its bores 149 mm apart (the 148 mm flanges' counterbores
+/// 1 mm apart) built from its parameters, but its own exported crankcase deck was refused:
+/// the seat found from the geometry took, within the finder's mesh tolerance, a bridge node
+/// 0.125 mm beyond the flange's rim, which the engine's fit check then rejected ("node 1508 ...
+/// is not under the liner flange"). The deck now gives the parametric frequencies (1e-6, as the
+/// verification above).
+#[test]
+fn regression_close_counterbores_of_a_deck_are_seated() {
+    let dir = tempfile::tempdir().unwrap();
+    let pitch = "engine.cylinder_pitch_mm=149";
+    let text = small_engine_as_decks(dir.path());
+    let cc = dir.path().join("crankcase.bdf");
+    let (code, _, err) = linercav(&[
+        "export-mesh",
+        SMALL,
+        "--part",
+        "crankcase",
+        "--unit",
+        "mm",
+        "--no-sets",
+        "--set",
+        pitch,
+        "--out",
+        cc.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let sp = dir.path().join("engine.toml");
+    std::fs::write(&sp, text).unwrap();
+    let sp = sp.display().to_string();
+    let param = json(&linercav_output(&[
+        "rom",
+        SMALL,
+        "--json",
+        "--no-cache",
+        "--set",
+        pitch,
+    ]));
+    let decks = json(&linercav_output(&[
+        "rom",
+        &sp,
+        "--json",
+        "--no-cache",
+        "--set",
+        pitch,
+    ]));
+    let (a, b) = (frequencies(&param), frequencies(&decks));
+    assert!(a.len() >= 10 && a.len() == b.len(), "{a:?} {b:?}");
+    for (k, (fa, fb)) in a.iter().zip(&b).enumerate() {
+        assert!(
+            (fa - fb).abs() <= 1e-6 * fa,
+            "mode {k}: {fa} Hz parametric, {fb} Hz decks"
+        );
+    }
+}
+
 /// Regression: a crankcase deck with a stray element (a second piece, joined to nothing)
 /// failed in the factorisation ("not positive definite", exit 1, no file named), and a liner
 /// with one was placed with a wrong bore; a part in pieces is refused naming the file.

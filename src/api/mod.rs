@@ -246,6 +246,19 @@ fn read_bare_mesh(
     )
 }
 
+/// Why `--part` cannot take `part`: the crankcase's modes are the engine's, any other name
+/// is unknown.
+fn unknown_part(part: &str) -> String {
+    if part == "crankcase" {
+        "takes the liner only (the crankcase is held by the liners and the mounts): its modes \
+         come with the engine's, `modes SCENE --assembly`, or on its own from `export-mesh \
+         SCENE --part crankcase --out F` then `modes --mesh F`"
+            .to_string()
+    } else {
+        format!("unknown; --part takes: {}", PARTS.join(", "))
+    }
+}
+
 /// Resolves a [`ModelInput`] to a checked mesh and material. `extra_fix` adds sets to fix.
 pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart> {
     // a scene's own limits (`limits.max_memory_gb`), the machine's (with `--set limits.*`) for
@@ -259,14 +272,7 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
             limits = crate::scene::budget::Limits::of(&sc);
             let p = sc.part(part).ok_or_else(|| Error::Argument {
                 flag: format!("{}: part '{part}'", scene.display()),
-                msg: if part == "crankcase" {
-                    "takes the liner only (the crankcase is held by the liners and the mounts): \
-                     its modes come with the engine's, `modes SCENE --assembly`, or on its own \
-                     from `export-mesh SCENE --part crankcase --out F` then `modes --mesh F`"
-                        .to_string()
-                } else {
-                    format!("unknown; --part takes: {}", PARTS.join(", "))
-                },
+                msg: unknown_part(part),
             })?;
             check_generated(&sc, &p.source, &limits)?;
             let (mut mesh, file, material, src, warning) = read_mesh(

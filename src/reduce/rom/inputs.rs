@@ -158,10 +158,11 @@ pub(super) fn check_fit(inp: &RomInputs<'_>) -> Result<(), RomError> {
                 part: "crankcase".into(),
                 set: format!("bore {}", c + 1),
                 msg: format!(
-                    "crankcase node {} at {:?} lies inside the liner of cylinder {}: the parts overlap",
+                    "crankcase node {} at {:?} lies inside the liner of cylinder {}: the parts overlap (a bore smaller than the liner's outer diameter, or a crankcase deck off the engine frame: bore axes at x = {} m, y = 0, z up, even a fraction of a degree)",
                     n + 1,
                     inp.crankcase.nodes[n],
-                    c + 1
+                    c + 1,
+                    crate::text::joined(&inp.axis_x, ", ")
                 ),
             });
         }
