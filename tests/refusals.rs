@@ -1173,6 +1173,23 @@ fn regression_a_box_set_of_no_nodes_is_refused_naming_its_key() {
         "crankcase.sets.pan_rail.box_mm selects no node",
     );
     assert!(err.contains("spans"), "{err}");
+    // `modes --part liner` ran free-free under "fixed: clamp" with a clamp box of no nodes
+    refused(
+        &[
+            "modes",
+            SMALL,
+            "--part",
+            "liner",
+            "--count",
+            "3",
+            "--set",
+            "liner.sets.clamp.box_mm=[0.0,0.0,-900.0,1.0,1.0,-899.0]",
+            "--set",
+            "liner.fix=[\"clamp\"]",
+        ],
+        2,
+        "liner.sets.clamp.box_mm",
+    );
 }
 
 /// Regression: duplicates and conflicts taken without a word: `rom.cylinders = [1, 1]`

@@ -345,6 +345,9 @@ fn contract_cache_key_follows_the_reduction_inputs() {
         "rom.interface_harmonics=5",
         "rom.cylinders=[1]",
         "engine.cylinder_pitch_mm=160",
+        // a generated mesh's box sets (a moved fixed box hit the old ROM's cache)
+        "crankcase.sets.pan_rail.box_mm=[-2000.0,-2000.0,-180.5,0.0,2000.0,-179.5]",
+        "liner.sets.band.box_mm=[-100.0,-100.0,0.0,100.0,100.0,10.0]",
     ] {
         assert_ne!(
             key_description(&scene(&[changed])).unwrap(),
@@ -821,14 +824,30 @@ fn contract_rom_component_tasks() {
     let (code, out, _) = run(&["--component", "1/2"], &[]);
     assert_eq!(code, 0);
     assert!(out.contains("already in the component cache"), "{out}");
-    // a task is sized by its own component: the liner's (about 0.12 GB estimated) runs under a
-    // limit the engine's build (0.32 GB) exceeds; it was refused with the engine's estimate
-    let limit = ["--set", "limits.max_memory_gb=0.15"];
-    let (code, _, err) = run(&[&["--component", "1/2"][..], &limit].concat(), &[]);
+    // a task is sized by its own component: with a fine liner (118k DOFs) the engine's build
+    // is estimated at about 2 GB, a crankcase component's task at about 0.4 GB: under a 0.6 GB
+    // limit that task runs (it was refused with the engine's estimate, naming the liner) and
+    // the liner's is refused, naming the liner
+    let big = [
+        "--set",
+        "rom.crankcase_components=2",
+        "--set",
+        "liner.mesh.circumferential=48",
+        "--set",
+        "liner.mesh.axial_size_mm=5",
+        "--set",
+        "liner.mesh.radial=3",
+        "--set",
+        "limits.max_memory_gb=0.6",
+    ];
+    let (code, _, err) = run(&[&["--component", "2/3"][..], &big].concat(), &[]);
     assert_eq!(code, 0, "{err}");
-    let (code, _, err) = run(&[&["--component", "2/2"][..], &limit].concat(), &[]);
+    let (code, _, err) = run(&[&["--component", "1/3"][..], &big].concat(), &[]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("the component task needs"), "{err}");
+    assert!(
+        err.contains("the component task needs") && err.contains("liner"),
+        "{err}"
+    );
     let (code, out, err) = run(&["--json"], &[]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();

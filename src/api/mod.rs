@@ -246,13 +246,32 @@ fn read_bare_mesh(
     )
 }
 
+/// A scene part's box sets added to its mesh; one that selects no node is refused (a fixed
+/// box of none left the part free under "fixed: NAME").
+fn add_box_sets(
+    mesh: &mut Mesh,
+    (scene, part): (&Path, &str),
+    sets: &[(String, [f64; 6])],
+) -> Result<()> {
+    for (name, b) in sets {
+        if crate::mesh::find::box_set(mesh, part, name, b).nodes == 0 {
+            return Err(Error::Argument {
+                flag: format!("{}: {part}.sets.{name}.box_mm", scene.display()),
+                msg: format!("selects no node of the {part} mesh"),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Why `--part` cannot take `part`: the crankcase's modes are the engine's, any other name
 /// is unknown.
 fn unknown_part(part: &str) -> String {
     if part == "crankcase" {
         "takes the liner only (the crankcase is held by the liners and the mounts): its modes \
          come with the engine's, `modes SCENE --assembly`, or on its own from `export-mesh \
-         SCENE --part crankcase --out F` then `modes --mesh F`"
+         SCENE --part crankcase --out F.bdf` (a deck with its material and sets) then `modes \
+         --mesh F.bdf --fix SET`"
             .to_string()
     } else {
         format!("unknown; --part takes: {}", PARTS.join(", "))
@@ -282,9 +301,7 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
                 p.material,
                 &format!("{part}.material"),
             )?;
-            for (name, b) in &p.box_sets {
-                crate::mesh::find::box_set(&mut mesh, part, name, b);
-            }
+            add_box_sets(&mut mesh, (scene, part), &p.box_sets)?;
             material_warning = warning;
             (
                 mesh,

@@ -604,8 +604,9 @@ pub fn crankcase_sets(
         // under the flange only: a node of the floor a mesh tolerance beyond its rim (the
         // bridge between close counterbores, pitch 149 mm against a 148 mm flange) is not
         // seated, and the engine's fit check (1e-4 of the pitch) refused the set found
-        let rim = rf + tol.min(1e-4 * rf);
-        let seat = move |p: &[f64; 3]| (p[2] - zs).abs() < tol && radius_about(p, xc) <= rim;
+        let tight = tol.min(1e-4 * rf);
+        let seat =
+            move |p: &[f64; 3]| (p[2] - zs).abs() <= tight && radius_about(p, xc) <= rf + tight;
         out.push(add_set(
             cm,
             "crankcase",

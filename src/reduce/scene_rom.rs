@@ -467,18 +467,28 @@ pub fn axis_x(scene: &Scene) -> Vec<f64> {
 /// The canonical description hashed into the cache key.
 pub fn key_description(scene: &Scene) -> Result<String> {
     let cc = crankcase_of(scene)?;
-    let liner_src = match &scene.liner.source {
-        MeshSource::Liner { geometry, meshing } => {
-            serde_json::json!({"geometry": geometry, "meshing": meshing})
+    // a generated mesh's box sets count too (a moved fixed box hit the cache of the old
+    // one), added only when there are any so that the keys of other builds stay
+    let with_sets = |mut v: serde_json::Value, sets: &[(String, [f64; 6])]| {
+        if !sets.is_empty() {
+            v["sets"] = serde_json::json!(sets);
         }
+        v
+    };
+    let liner_src = match &scene.liner.source {
+        MeshSource::Liner { geometry, meshing } => with_sets(
+            serde_json::json!({"geometry": geometry, "meshing": meshing}),
+            &scene.liner.box_sets,
+        ),
         MeshSource::File(p) => {
             serde_json::json!({"file": file_digest(p)?, "unit": scene.liner.mesh_unit, "sets": scene.liner.box_sets})
         }
     };
     let cc_src = match &cc.source {
-        CrankcaseSource::Parametric { geometry, meshing } => {
-            serde_json::json!({"geometry": geometry, "meshing": meshing})
-        }
+        CrankcaseSource::Parametric { geometry, meshing } => with_sets(
+            serde_json::json!({"geometry": geometry, "meshing": meshing}),
+            &cc.box_sets,
+        ),
         CrankcaseSource::File(p) => {
             serde_json::json!({"file": file_digest(p)?, "unit": cc.mesh_unit, "sets": cc.box_sets})
         }

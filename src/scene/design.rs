@@ -554,7 +554,10 @@ impl Shard {
                     var: "JOB_COMPLETION_INDEX",
                     value: idx.to_string(),
                     problem: if flag == "--component" {
-                        format!("not below the engine's {count} components (indices 0..{count})")
+                        format!(
+                            "not below the engine's {count} components (indices 0 to {})",
+                            count - 1
+                        )
                     } else {
                         format!("not below --shards {count}")
                     },

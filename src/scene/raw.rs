@@ -250,8 +250,8 @@ pub struct RawRom {
     /// of a slab around the cut), >= 6 (a cut's rigid motions; fewer than about 20 leave the
     /// frequencies percent-level high: +17 to +67 % with 1 on the test engine, 7.4e-3 with
     /// 20, 7.4e-4 with 80, 3.3e-4 median with the default on the default engine); a cut with at most 2 x this + 16 DOFs keeps every DOF
-    /// (exact coupling: a large value such as 100000 asks for it, and the build is estimated
-    /// with the cut's own DOFs, not with the number given).
+    /// (exact coupling: a large value such as 100000 asks for it; the build's estimate then
+    /// counts every DOF of a cut at its estimated size, not the number given).
     #[serde(default = "default_cut_shapes")]
     pub cut_shapes: usize,
     /// Modes of each crankcase component up to this multiple of the part's cut-off (band_hz x
