@@ -243,7 +243,8 @@ pub struct RawRom {
     /// its own. 1 reduces it in one piece; more bound the memory by one component (a
     /// production-size crankcase) at a cost in accuracy set by `cut_shapes` (frequencies above
     /// the one-piece build's by 1e-4 to 5e-4 on the default engine in 3 components, 3e-4 to
-    /// 3e-3 refined to 725k DOFs in 6; docs/physics.md).
+    /// 3e-3 refined to 725k DOFs in 6; docs/physics.md). `rom`'s estimated error measures the
+    /// modal truncation only, not the cuts'.
     #[serde(default = "default_components")]
     pub crankcase_components: usize,
     /// Shapes carried by each cut between crankcase components (traces of the lowest free modes
