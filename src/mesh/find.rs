@@ -603,10 +603,11 @@ pub fn crankcase_sets(
         let (ro, rf, zs) = (s.outer_radius, s.flange_radius, s.seat_z);
         // under the flange only: a node of the floor a mesh tolerance beyond its rim (the
         // bridge between close counterbores, pitch 149 mm against a 148 mm flange) is not
-        // seated, and the engine's fit check (1e-4 of the pitch) refused the set found
-        let tight = tol.min(1e-4 * rf);
-        let seat =
-            move |p: &[f64; 3]| (p[2] - zs).abs() <= tight && radius_about(p, xc) <= rf + tight;
+        // seated, and the engine's fit check (1e-4 of the pitch) refused the set found. The
+        // floor's plane keeps the mesh tolerance: a node off it is found and then refused by
+        // that check, naming it, rather than left out of the seat without a word.
+        let rim = rf + tol.min(1e-4 * rf);
+        let seat = move |p: &[f64; 3]| (p[2] - zs).abs() < tol && radius_about(p, xc) <= rim;
         out.push(add_set(
             cm,
             "crankcase",
