@@ -602,7 +602,7 @@ fn rom_command(
     let loaded = rom::get_rom_with_progress(&sc, &cache.options())?;
     let mut report = rom::RomReport::new(&loaded);
     report.seconds = started.elapsed().as_secs_f64();
-    report.substructured = rom::Substructured::of(&sc);
+    report.substructured = linercav::scene::budget::Split::substructured(&sc);
     print_report(json, &report, || report.to_text());
     Ok(())
 }

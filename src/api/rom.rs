@@ -63,29 +63,10 @@ pub struct RomReport {
     /// Interfaces, points and materials found on imported meshes (absent for generated ones).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub interfaces: Option<crate::mesh::find::FoundInterfaces>,
-    /// How the crankcase was cut for its reduction (absent when reduced in one piece).
+    /// How the crankcase was cut for its reduction (absent when reduced in one piece):
+    /// [`crate::scene::budget::Split::substructured`].
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub substructured: Option<Substructured>,
-}
-
-/// The scene's substructuring of the crankcase (`rom.crankcase_components` and its keys).
-#[derive(serde::Serialize)]
-pub struct Substructured {
-    pub components: usize,
-    pub cut_shapes: usize,
-    pub component_cutoff_factor: f64,
-}
-
-impl Substructured {
-    /// The split `scene` asks for, none for a crankcase in one piece.
-    pub fn of(scene: &crate::scene::Scene) -> Option<Self> {
-        let r = &scene.rom;
-        (r.crankcase_components > 1).then_some(Substructured {
-            components: r.crankcase_components,
-            cut_shapes: r.cut_shapes,
-            component_cutoff_factor: r.component_cutoff_factor,
-        })
-    }
+    pub substructured: Option<crate::scene::budget::Split>,
 }
 
 impl RomReport {
@@ -175,7 +156,7 @@ impl RomReport {
                 c.components,
                 c.cut_shapes,
                 c.cut_shapes.saturating_mul(2).saturating_add(16),
-                c.component_cutoff_factor
+                c.cutoff_factor
             );
         }
         if let Some(found) = &self.interfaces {

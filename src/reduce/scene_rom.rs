@@ -289,20 +289,8 @@ fn non_empty(scene: &Scene, mesh: &Mesh, (part, name): (&'static str, &str)) -> 
     if mesh.node_set(name).is_some_and(|s| !s.is_empty()) {
         return Ok(());
     }
-    let mut extent = [
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    for p in &mesh.nodes {
-        for a in 0..3 {
-            extent[a] = extent[a].min(p[a]);
-            extent[a + 3] = extent[a + 3].max(p[a]);
-        }
-    }
+    let (lo, hi) = mesh.bounding_box();
+    let extent = [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]];
     Err(SceneRomError::EmptyBoxSet {
         path: scene.path.clone(),
         key: if part == "liner" {

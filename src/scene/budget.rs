@@ -373,13 +373,15 @@ pub fn rom_parts(crankcase_dofs: f64, liner_dofs: f64, interface_cols: f64) -> E
 
 /// How the crankcase is cut for its reduction (`rom.crankcase_components`, `rom.cut_shapes`,
 /// `rom.component_cutoff_factor`).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct Split {
     pub components: usize,
     pub cut_shapes: usize,
+    /// `rom.component_cutoff_factor`.
     pub cutoff_factor: f64,
     /// One task of a component job array (`rom --component`, 0-based: the liner, then the
     /// crankcase's components): only its own reduction is estimated.
+    #[serde(skip)]
     pub task: Option<usize>,
 }
 
@@ -399,6 +401,11 @@ impl Split {
             cutoff_factor: scene.rom.component_cutoff_factor,
             task: None,
         }
+    }
+
+    /// The split of a scene whose crankcase is cut (none for one piece): what `rom` reports.
+    pub fn substructured(scene: &Scene) -> Option<Self> {
+        (scene.rom.crankcase_components > 1).then(|| Self::of(scene))
     }
 }
 
