@@ -262,9 +262,13 @@ fn check_engine_meshes(
     // a mesh from a file is sized only once read: the engine model it makes is checked now
     if lfile.is_some() || cfile.is_some() {
         let cylinders = axis_x(scene).len();
+        let loads = match &scene.liner.source {
+            MeshSource::Liner { geometry, meshing } => budget::liner_loads(geometry, meshing),
+            _ => budget::liner_loads_of(axial_levels(lm)),
+        };
         let est = budget::rom_split(
             3.0 * cm.nodes.len() as f64,
-            3.0 * lm.nodes.len() as f64,
+            (3.0 * lm.nodes.len() as f64, loads),
             (cylinders * budget::interface_columns(scene.rom.harmonics)) as f64,
             cylinders,
             split,
@@ -281,6 +285,18 @@ fn check_engine_meshes(
         }
     }
     Ok(())
+}
+
+/// Distinct axial coordinates of a mesh's nodes (to 1 um).
+fn axial_levels(mesh: &Mesh) -> usize {
+    let mut z: Vec<i64> = mesh
+        .nodes
+        .iter()
+        .map(|p| (p[2] * 1e6).round() as i64)
+        .collect();
+    z.sort_unstable();
+    z.dedup();
+    z.len()
 }
 
 /// Refuses a scene box set (`[part.sets.NAME] box_mm`) that selected no node of `mesh`: a

@@ -357,20 +357,6 @@ pub fn part_reduction_bytes(dofs: f64, columns: f64) -> f64 {
         + 8.0 * dofs * columns
 }
 
-/// The ROM build from its parts' DOFs: their peaks add (conservative: the parts are reduced one
-/// after the other, but the measured peak exceeds either part's alone); the crankcase's basis holds twice its interface
-/// columns (constraint modes and their inertia loads) plus modes and loads. Time grows as
-/// (n_c + n_l)^1.5 from the default engine's build.
-pub fn rom_parts(crankcase_dofs: f64, liner_dofs: f64, interface_cols: f64) -> Estimate {
-    rom_split(
-        crankcase_dofs,
-        liner_dofs,
-        interface_cols,
-        1,
-        Split::ONE_PIECE,
-    )
-}
-
 /// How the crankcase is cut for its reduction (`rom.crankcase_components`, `rom.cut_shapes`,
 /// `rom.component_cutoff_factor`).
 #[derive(Clone, Copy, Debug, serde::Serialize)]
@@ -409,7 +395,47 @@ impl Split {
     }
 }
 
-/// As [`rom_parts`] with the crankcase of `cylinders` cut as `split` asks
+/// Fixed-interface modes a liner's basis is counted with (the generated liners keep 6-9 below
+/// the default cut-offs).
+const LINER_MODES: f64 = 20.0;
+
+/// Columns of a liner's reduction ([`rom_split`]): 2 (2 n_c + n_m + n_l) + n_l for n_c
+/// interface columns and n_l loads. Measured (task peaks of `rom --component 1/2`, which hold
+/// the engine's meshes too): the default liner, 48,672 DOFs with 156 + 119, 1.06 GB; the small
+/// engine's liner at 3 mm, 48,816 DOFs with 108 + 363, 1.16 GB (the 400 columns counted
+/// before gave 0.66 and 0.76 GB for them).
+pub fn liner_columns(interface_cols: f64, loads: f64) -> f64 {
+    2.0 * (2.0 * interface_cols + LINER_MODES + loads) + loads
+}
+
+/// Loads of a generated liner's reduction: the contact DOFs of its two bore lines (a node
+/// per axial level of the tube, and one between for a quadratic element) and the analysis
+/// points.
+pub fn liner_loads(g: &LinerGeometry, m: &LinerMeshing) -> f64 {
+    let points = g.analysis_depths.len();
+    let tube = levels(g.length, m.axial_size, 2 * points + 4);
+    let per_line = match m.kind {
+        ElementKind::Hex20 | ElementKind::Tet10 => 2.0 * tube + 1.0,
+        ElementKind::Hex8 | ElementKind::Tet4 => tube + 1.0,
+    };
+    2.0 * per_line + points as f64
+}
+
+/// Loads of a liner read from a file ([`liner_loads`]): two bore lines with a node at each of
+/// the mesh's `axial_levels` distinct axial coordinates, and eight points.
+pub fn liner_loads_of(axial_levels: usize) -> f64 {
+    2.0 * axial_levels as f64 + 8.0
+}
+
+/// The ROM build from its parts' DOFs: their peaks add (conservative: the parts are reduced one
+/// after the other; measured, the whole build's peak is the larger part's plus 0.03 GB). The
+/// crankcase's basis holds twice its interface columns (constraint modes and their inertia
+/// loads) plus modes and loads. A liner's ([`liner_columns`]) holds its basis block
+/// [constraint modes | modes | attachment candidates: its `liner_loads` loads and the
+/// constraint modes' inertia] twice (the block and its products) and its loads once more.
+/// Time grows as (n_c + n_l)^1.5 from the default engine's build.
+///
+/// With the crankcase of `cylinders` cut as `split` asks
 /// (`reduce::substructure`): the crankcase's peak is that of its largest component
 /// (ceil(cylinders / components) cylinders' share of its DOFs and interface columns, plus two
 /// cuts' shapes, and its modes: 100 columns grown as the cube of its cut-off factor, a solid's
@@ -418,7 +444,7 @@ impl Split {
 /// `cut_shapes` above them (every cut DOF kept) is not counted.
 pub fn rom_split(
     crankcase_dofs: f64,
-    liner_dofs: f64,
+    (liner_dofs, liner_loads): (f64, f64),
     interface_cols: f64,
     cylinders: usize,
     split: Split,
@@ -446,7 +472,7 @@ pub fn rom_split(
         0.0
     };
     let cc = piece + 6.0 * 8.0 * n_a * n_a;
-    let liner = part_reduction_bytes(liner_dofs, 400.0);
+    let liner = part_reduction_bytes(liner_dofs, liner_columns(interface_cols / cyl, liner_loads));
     let t = |dofs: f64| REF_ROM_SECONDS * (dofs / REF_ROM_DOFS).powf(1.5);
     let split = if components > 1 {
         format!(
@@ -523,13 +549,16 @@ pub fn cut_columns(part_dofs: f64, cut_shapes: usize) -> f64 {
 /// [`Split::of`] the scene), from its parts' estimated DOFs ([`rom_split`]).
 pub fn rom_build(scene: &Scene, split: Split) -> Option<Estimate> {
     let (cc, liner) = part_dofs(scene)?;
+    let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
+        return None;
+    };
     let cylinders = scene.crankcase.as_ref().map_or(0, |c| match &c.source {
         CrankcaseSource::Parametric { geometry, .. } => geometry.cylinders,
         CrankcaseSource::File(_) => 0,
     });
     Some(rom_split(
         cc,
-        liner,
+        (liner, liner_loads(geometry, meshing)),
         (cylinders * interface_columns(scene.rom.harmonics)) as f64,
         cylinders,
         split,
@@ -548,7 +577,7 @@ fn part_dofs(scene: &Scene) -> Option<(f64, f64)> {
     let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
         return None;
     };
-    let liner = 3.0 * liner_elements(geometry, meshing) * nodes_per_cell(meshing.kind);
+    let liner = liner_dofs(geometry, meshing);
     let cc = match scene.crankcase.as_ref().map(|c| &c.source) {
         Some(CrankcaseSource::Parametric {
             geometry: cg,
@@ -682,7 +711,7 @@ mod tests {
             cutoff_factor: 1.0,
             task: None,
         };
-        let est = |shapes| rom_split(14_400.0, 9_216.0, 216.0, 2, split(shapes)).memory;
+        let est = |shapes| rom_split(14_400.0, (9_216.0, 55.0), 216.0, 2, split(shapes)).memory;
         assert_eq!(est(100_000), est(10_000));
         assert!(est(100_000) < 1e9, "{}", est(100_000));
         // below the cut's estimated size the shapes asked for count, up to 2 x + 16 of them
@@ -690,13 +719,29 @@ mod tests {
         assert!(est(50) < est(100));
     }
 
+    /// Regression: a liner's reduction was counted with 400 columns whatever its loads; the
+    /// small engine's liner at 3 mm (48,816 DOFs, 108 interface columns, 363 loads) was
+    /// estimated at 0.76 GB and its build measured at 1.19 GB peak (the liner's task 1.16 GB,
+    /// the crankcase's 0.26 GB). With the measured sizes (crankcase 10,080 DOFs) the estimate
+    /// now covers the measured peak, and more loads cost more.
+    #[test]
+    fn regression_a_liners_loads_count_in_its_reduction() {
+        let est = |loads| rom_split(10_080.0, (48_816.0, loads), 216.0, 2, Split::ONE_PIECE);
+        assert!(est(363.0).memory >= 1.19e9, "{}", est(363.0).memory);
+        assert!(est(363.0).memory > est(55.0).memory + 0.3e9);
+        assert_eq!(
+            liner_columns(108.0, 363.0),
+            2.0 * (216.0 + 20.0 + 363.0) + 363.0
+        );
+    }
+
     /// Regression: a ROM build refused for a large liner (357k DOFs) suggested cutting the
     /// crankcase into components first, which leaves the liner's reduction as it was.
     #[test]
     fn regression_the_larger_parts_remedy_comes_first() {
-        let liner = rom_split(110_592.0, 357_000.0, 936.0, 6, Split::ONE_PIECE);
+        let liner = rom_split(110_592.0, (357_000.0, 119.0), 936.0, 6, Split::ONE_PIECE);
         assert!(liner.keys.starts_with("liner.mesh"), "{}", liner.keys);
-        let crankcase = rom_split(2.88e6, 45_504.0, 936.0, 6, Split::ONE_PIECE);
+        let crankcase = rom_split(2.88e6, (45_504.0, 119.0), 936.0, 6, Split::ONE_PIECE);
         assert!(
             crankcase.keys.starts_with("rom.crankcase_components"),
             "{}",
