@@ -24,6 +24,8 @@ ap.add_argument("--scene", help="a part of this scene instead of the tube (e.g. 
 ap.add_argument("--part", default="liner", help="the part of --scene")
 ap.add_argument("--repeat", type=int, default=3, help="runs of each side; the ratio is of the medians")
 a = ap.parse_args()
+if a.repeat < 1:
+    sys.exit("--repeat must be at least 1")
 os.makedirs(a.out, exist_ok=True)
 msh = os.path.join(a.out, f"tube_tet10_{a.size_mm:g}mm.msh")
 

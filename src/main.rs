@@ -66,20 +66,23 @@ extern "C" fn fit_allocator_to_address_space() {
 static FIT_ALLOCATOR: extern "C" fn() = fit_allocator_to_address_space;
 
 /// Transparent huge pages off for the process (`prctl(PR_SET_THP_DISABLE)`), unless the
-/// environment sets mimalloc's own `MIMALLOC_ALLOW_THP`, which then decides.
+/// environment sets mimalloc's own `MIMALLOC_ALLOW_THP`, which then decides (mimalloc does the
+/// same `prctl` for `MIMALLOC_ALLOW_THP=0`). The setting passes to the processes linercav
+/// starts; one started from it cannot turn huge pages back on.
 ///
 /// mimalloc asks for huge pages on its arenas (`madvise(MADV_HUGEPAGE)`), and a first touch
 /// of a huge page that the kernel must first assemble (compaction, or memory a virtual machine's
 /// host has taken back) costs 1-2 s per GB on the 2-core machine, against 0.2-0.4 s per GB
-/// for small pages; the solves gain nothing measurable from huge pages (whole-process figures,
-/// medians of 5 runs against `MIMALLOC_ALLOW_THP=1`, benches/RESULTS.md, session 69).
+/// for small pages; the solves gain little from huge pages (whole-process figures against
+/// `MIMALLOC_ALLOW_THP=1`: benches/RESULTS.md, docs/performance.md, session 69).
 extern "C" fn small_pages() {
-    if std::env::var_os("MIMALLOC_ALLOW_THP").is_some() {
-        return;
-    }
-    // SAFETY: PR_SET_THP_DISABLE takes one integer flag and touches no memory of ours; a
-    // kernel without it returns an error, which leaves the default.
+    // SAFETY: getenv reads the environment the C runtime set before the constructors ran
+    // (no thread exists yet to change it); PR_SET_THP_DISABLE takes one integer flag and
+    // touches no memory of ours (a kernel without it returns an error: the default stays).
     unsafe {
+        if !libc::getenv(c"MIMALLOC_ALLOW_THP".as_ptr()).is_null() {
+            return;
+        }
         libc::prctl(libc::PR_SET_THP_DISABLE, 1, 0, 0, 0);
     }
 }

@@ -120,7 +120,7 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
         let freqs: Vec<f64> = (0..n).map(|j| sol.modes.frequency_hz(j)).collect();
         vtu::write_part_modes(path, &model.mesh, &model.dofs, &shapes, &freqs)?;
     }
-    let max_residual = sol.residuals.iter().copied().fold(0.0, f64::max);
+    let max_residual = crate::eigen::certify::worst(sol.residuals.iter().copied());
     let mut warnings = part.checks.warnings;
     let used_hz = (-sol.sigma).max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
     if sol.sigma != sigma {

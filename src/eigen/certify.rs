@@ -29,13 +29,18 @@ pub fn residuals_and_orthogonality(
     use rayon::prelude::*;
     let (n, c) = (modes.n, modes.count());
     let phi = faer::MatRef::from_column_major_slice(&modes.vectors[..n * c], n, c);
-    let product = |values: &[f64]| {
+    let product = |pattern: &crate::linalg::sparse::Pattern, values: &[f64]| {
         let mut y = vec![0.0; n * c];
         let out = faer::MatMut::from_column_major_slice_mut(&mut y, n, c);
-        km.pattern.mul_dense(values, phi, out);
+        pattern.mul_dense(values, phi, out);
         y
     };
-    let (kphi, mphi) = (product(&km.k), product(&km.m));
+    // M couples like directions only: its products skip the pattern's zeros (the same sums)
+    let mass = km.pattern.compress(&km.m);
+    let (kphi, mphi) = (
+        product(&km.pattern, &km.k),
+        product(&mass.pattern, &mass.values),
+    );
     let residuals = (0..c)
         .into_par_iter()
         .map(|j| {
@@ -60,17 +65,29 @@ fn gram_error(modes: &Modes, mphi: &[f64]) -> f64 {
         .into_par_iter()
         .map(|i| {
             let phi = modes.vector(i);
-            (0..c).fold(0.0f64, |worst, j| {
+            worst((0..c).map(|j| {
                 let dot: f64 = phi
                     .iter()
                     .zip(&mphi[j * n..(j + 1) * n])
                     .map(|(a, b)| a * b)
                     .sum();
                 let e = if i == j { 1.0 } else { 0.0 };
-                worst.max((dot - e).abs())
-            })
+                (dot - e).abs()
+            }))
         })
-        .reduce(|| 0.0, f64::max)
+        .reduce(|| 0.0, |a, b| worst([a, b]))
+}
+
+/// The largest of `values` (0 for none), NaN when any is NaN: a certificate's worst figure,
+/// where `f64::max` would pass over a NaN and let a failed product certify.
+pub fn worst(values: impl IntoIterator<Item = f64>) -> f64 {
+    values.into_iter().fold(0.0, |w: f64, v| {
+        if w.is_nan() || v.is_nan() {
+            f64::NAN
+        } else {
+            w.max(v)
+        }
+    })
 }
 
 /// Where to place the Sturm shift: the middle of the first gap at or after index `count`
@@ -172,6 +189,18 @@ pub fn system_verdict(sturm_count_ok: Option<bool>) -> Result<(), CertificationE
 #[cfg(test)]
 mod verdict_tests {
     use super::*;
+
+    /// Regression: the worst figure of a certificate is NaN when any is (`f64::max` passed
+    /// over a NaN residual, so a mode with a failed product reported its neighbours' worst and
+    /// certified); otherwise the largest, 0 for none.
+    #[test]
+    fn regression_a_nan_is_the_worst_figure() {
+        assert!(worst([1e-12, f64::NAN, 1e-9]).is_nan());
+        assert!(worst([f64::NAN]).is_nan());
+        assert_eq!(worst([1e-12, 3e-9, 1e-10]), 3e-9);
+        assert_eq!(worst(std::iter::empty()), 0.0);
+        assert!(verdict(None, worst([1e-12, f64::NAN]), 0.0).is_err());
+    }
 
     /// Verification: each failure is named, a NaN residual fails, a clean set passes.
     #[test]

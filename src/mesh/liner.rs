@@ -135,18 +135,8 @@ fn levels(geo: &LinerGeometry, meshing: &LinerMeshing) -> (Vec<f64>, Vec<f64>, O
             (rf - ro) / meshing.radial_flange.max(1) as f64,
         );
     }
-    let z_flange = geo.length - geo.flange_height;
-    let guide_top = geo.guide_bottom + geo.guide_height;
-    let rp = geo.pilot_diameter / 2.0;
-    // the upper pilot's lower edge, a lattice plane when the pilots differ from the wet wall
-    let deck = geo
-        .deck_underside
-        .filter(|&z| rp != ro && z > guide_top && z < z_flange);
-    let mut planes: Vec<f64> = vec![0.0, geo.guide_bottom, guide_top, z_flange, geo.length];
-    planes.extend(deck);
-    planes.extend(geo.analysis_depths.iter().map(|d| geo.length - d));
-    planes.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    planes.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let deck = geo.deck_plane();
+    let planes = geo.axial_planes();
     let mut z_levels = vec![planes[0]];
     for w in planes.windows(2) {
         subdivide(&mut z_levels, w[0], w[1], meshing.axial_size);

@@ -264,7 +264,11 @@ fn check_engine_meshes(
         let cylinders = axis_x(scene).len();
         let loads = match &scene.liner.source {
             MeshSource::Liner { geometry, meshing } => budget::liner_loads(geometry, meshing),
-            _ => budget::liner_loads_of(axial_levels(lm)),
+            // the bore lines are found by now (`import::complete_engine`)
+            _ => {
+                let line = |name| lm.node_set(name).map_or(0, <[usize]>::len);
+                (line("bore_thrust") + line("bore_antithrust") + 1) as f64
+            }
         };
         let est = budget::rom_split(
             3.0 * cm.nodes.len() as f64,
@@ -285,18 +289,6 @@ fn check_engine_meshes(
         }
     }
     Ok(())
-}
-
-/// Distinct axial coordinates of a mesh's nodes (to 1 um).
-fn axial_levels(mesh: &Mesh) -> usize {
-    let mut z: Vec<i64> = mesh
-        .nodes
-        .iter()
-        .map(|p| (p[2] * 1e6).round() as i64)
-        .collect();
-    z.sort_unstable();
-    z.dedup();
-    z.len()
 }
 
 /// Refuses a scene box set (`[part.sets.NAME] box_mm`) that selected no node of `mesh`: a

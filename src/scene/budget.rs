@@ -170,19 +170,48 @@ fn levels(l: f64, h: f64, extra: usize) -> f64 {
     (l / h).ceil() + extra as f64
 }
 
-/// Estimated lattice cells (bricks) of one generated liner:
-/// n_e = n_c (n_r N_z + n_f N_f), N_z the axial levels of the tube (2 per analysis point and
-/// the guide band's edges extra), N_f those of the flange.
-pub fn liner_elements(g: &LinerGeometry, m: &LinerMeshing) -> f64 {
-    let points = g.analysis_depths.len();
-    let tube = levels(g.length, m.axial_size, 2 * points + 4);
-    let flange = levels(g.flange_height, m.axial_size, 1);
-    m.circumferential as f64 * (m.radial as f64 * tube + m.radial_flange as f64 * flange)
+/// Axial cells of a generated liner: (the tube's, the flange's), from its planes
+/// ([`LinerGeometry::axial_planes`]) each gap cut into ceil(gap / h) cells, as the mesh is.
+fn liner_axial_cells(g: &LinerGeometry, m: &LinerMeshing) -> (f64, f64) {
+    let z_flange = g.length - g.flange_height;
+    let planes = g.axial_planes();
+    let cells = |w: &[f64]| (((w[1] - w[0]) / m.axial_size) - 1e-9).ceil().max(1.0);
+    let all: f64 = planes.windows(2).map(cells).sum();
+    let flange: f64 = planes
+        .windows(2)
+        .filter(|w| w[0] >= z_flange - 1e-9)
+        .map(cells)
+        .sum();
+    (all, flange)
 }
 
-/// Estimated full DOFs of one generated liner: 3 per node, nodes from [`liner_elements`].
+/// Full DOFs of one generated liner: 3 per node of its lattice (`mesh::liner`), n_c cells
+/// around, the wall's n_r layers over all n_z axial cells and the flange's n_f over its n_zf:
+/// corners n_c ((n_r + 1)(n_z + 1) + n_f (n_zf + 1)), and for hex20 a node on every edge:
+/// as many around as corners, n_c (n_r (n_z + 1) + n_f (n_zf + 1)) radial and
+/// n_c ((n_r + 1) n_z + n_f n_zf) axial. Tetrahedral lattices: 1 (tet4) or 7 (tet10) per cell.
 pub fn liner_dofs(g: &LinerGeometry, m: &LinerMeshing) -> f64 {
-    3.0 * liner_elements(g, m) * nodes_per_cell(m.kind)
+    let (nz, nzf) = liner_axial_cells(g, m);
+    let nr = m.radial as f64;
+    let nf = if g.flange_outer_diameter > g.outer_diameter {
+        m.radial_flange.max(1) as f64
+    } else {
+        0.0
+    };
+    let nc = m.circumferential as f64;
+    let corners = nc * ((nr + 1.0) * (nz + 1.0) + nf * (nzf + 1.0));
+    let nodes = match m.kind {
+        ElementKind::Hex8 => corners,
+        ElementKind::Hex20 => {
+            2.0 * corners
+                + nc * (nr * (nz + 1.0) + nf * (nzf + 1.0))
+                + nc * ((nr + 1.0) * nz + nf * nzf)
+        }
+        ElementKind::Tet4 | ElementKind::Tet10 => {
+            nc * (nr * nz + nf * nzf) * nodes_per_cell(m.kind)
+        }
+    };
+    3.0 * nodes
 }
 
 /// Estimated lattice cells of the generated crankcase: per cylinder (1 + wall layers) rings of
@@ -408,23 +437,17 @@ pub fn liner_columns(interface_cols: f64, loads: f64) -> f64 {
     2.0 * (2.0 * interface_cols + LINER_MODES + loads) + loads
 }
 
-/// Loads of a generated liner's reduction: the contact DOFs of its two bore lines (a node
-/// per axial level of the tube, and one between for a quadratic element) and the analysis
-/// points.
+/// Loads of a generated liner's reduction: a contact load at every node of its two bore
+/// lines (a node per axial level of the tube, and one between for a quadratic element) and the
+/// clamp's (`rom::inputs`); the same count on a liner read from a file is its bore sets' sizes
+/// plus one.
 pub fn liner_loads(g: &LinerGeometry, m: &LinerMeshing) -> f64 {
-    let points = g.analysis_depths.len();
-    let tube = levels(g.length, m.axial_size, 2 * points + 4);
+    let (nz, _) = liner_axial_cells(g, m);
     let per_line = match m.kind {
-        ElementKind::Hex20 | ElementKind::Tet10 => 2.0 * tube + 1.0,
-        ElementKind::Hex8 | ElementKind::Tet4 => tube + 1.0,
+        ElementKind::Hex20 | ElementKind::Tet10 => 2.0 * nz + 1.0,
+        ElementKind::Hex8 | ElementKind::Tet4 => nz + 1.0,
     };
-    2.0 * per_line + points as f64
-}
-
-/// Loads of a liner read from a file ([`liner_loads`]): two bore lines with a node at each of
-/// the mesh's `axial_levels` distinct axial coordinates, and eight points.
-pub fn liner_loads_of(axial_levels: usize) -> f64 {
-    2.0 * axial_levels as f64 + 8.0
+    2.0 * per_line + 1.0
 }
 
 /// The ROM build from its parts' DOFs: their peaks add (conservative: the parts are reduced one
@@ -723,7 +746,8 @@ mod tests {
     /// small engine's liner at 3 mm (48,816 DOFs, 108 interface columns, 363 loads) was
     /// estimated at 0.76 GB and its build measured at 1.19 GB peak (the liner's task 1.16 GB,
     /// the crankcase's 0.26 GB). With the measured sizes (crankcase 10,080 DOFs) the estimate
-    /// now covers the measured peak, and more loads cost more.
+    /// now covers the measured peak, and more loads cost more; so does the estimate from the
+    /// scene.
     #[test]
     fn regression_a_liners_loads_count_in_its_reduction() {
         let est = |loads| rom_split(10_080.0, (48_816.0, loads), 216.0, 2, Split::ONE_PIECE);
@@ -733,6 +757,15 @@ mod tests {
             liner_columns(108.0, 363.0),
             2.0 * (216.0 + 20.0 + 363.0) + 363.0
         );
+        // and from the scene, as a build is refused: the liner's DOFs and loads are counted
+        // as its mesh will have them (tests/liner.rs)
+        let scene = Scene::load(
+            std::path::Path::new("tests/fixtures/engine_small.toml"),
+            &["liner.mesh.axial_size_mm=3".to_string()],
+        )
+        .unwrap();
+        let est = rom_build(&scene, Split::of(&scene)).unwrap().memory;
+        assert!(est >= 1.19e9, "{est}");
     }
 
     /// Regression: a ROM build refused for a large liner (357k DOFs) suggested cutting the

@@ -85,6 +85,31 @@ pub struct LinerGeometry {
     pub deck_underside: Option<f64>,
 }
 
+impl LinerGeometry {
+    /// The upper pilot's lower edge: the deck's underside when the pilots differ from the wet
+    /// wall and it lies between the guide band and the flange (a plane of the generated mesh).
+    pub fn deck_plane(&self) -> Option<f64> {
+        let guide_top = self.guide_bottom + self.guide_height;
+        let z_flange = self.length - self.flange_height;
+        self.deck_underside.filter(|&z| {
+            self.pilot_diameter != self.outer_diameter && z > guide_top && z < z_flange
+        })
+    }
+
+    /// The axial planes every generated liner mesh has, ascending and distinct: its ends, the
+    /// guide band's edges, the flange underside, the analysis points and [`Self::deck_plane`].
+    pub fn axial_planes(&self) -> Vec<f64> {
+        let guide_top = self.guide_bottom + self.guide_height;
+        let z_flange = self.length - self.flange_height;
+        let mut planes = vec![0.0, self.guide_bottom, guide_top, z_flange, self.length];
+        planes.extend(self.deck_plane());
+        planes.extend(self.analysis_depths.iter().map(|d| self.length - d));
+        planes.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        planes.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        planes
+    }
+}
+
 /// Mesh density and element kind of the generated liner.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct LinerMeshing {
