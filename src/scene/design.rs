@@ -198,6 +198,18 @@ pub fn parse_range(arg: &str) -> Result<Range, DesignError> {
     })
 }
 
+/// A count or index as given: `s` (trimmed) as a whole number, or what is wrong with it (too
+/// large for this machine's integers, or not a whole number).
+fn whole_number(s: &str) -> Result<usize, String> {
+    let s = s.trim();
+    s.parse::<usize>().map_err(|e| match e.kind() {
+        std::num::IntErrorKind::PosOverflow => {
+            format!("'{s}' is too large (at most {})", usize::MAX)
+        }
+        _ => format!("'{s}' is not a whole number"),
+    })
+}
+
 /// Parses `lhs:N` or `mc:N` (N >= 2).
 pub fn parse_sample(arg: &str) -> Result<(Method, usize), DesignError> {
     let bad = |p: &str| argument("--sample", arg, p, "lhs:N or mc:N with N >= 2");
@@ -207,10 +219,7 @@ pub fn parse_sample(arg: &str) -> Result<(Method, usize), DesignError> {
         "mc" => Method::Mc,
         other => return Err(bad(&format!("unknown method '{other}'"))),
     };
-    let n: usize = n
-        .trim()
-        .parse()
-        .map_err(|_| bad("N is not a whole number"))?;
+    let n = whole_number(n).map_err(|p| bad(&format!("N: {p}")))?;
     if n < 2 {
         return Err(bad("fewer than 2 runs"));
     }
@@ -455,11 +464,7 @@ impl Shard {
     pub fn parse(flag: &'static str, arg: &str) -> Result<Self, DesignError> {
         let bad = |p: &str| argument(flag, arg, p, "I/N with 1 <= I <= N");
         let (i, n) = arg.split_once('/').ok_or_else(|| bad("no '/'"))?;
-        let num = |s: &str| {
-            s.trim()
-                .parse::<usize>()
-                .map_err(|_| bad(&format!("'{}' is not a whole number", s.trim())))
-        };
+        let num = |s: &str| whole_number(s).map_err(|p| bad(&p));
         let (index, count) = (num(i)?, num(n)?);
         if index == 0 || index > count {
             return Err(bad("I outside 1..N"));
@@ -491,16 +496,13 @@ impl Shard {
         let number = |name: &'static str| -> Result<Option<usize>, DesignError> {
             match var(name) {
                 None => Ok(None),
-                Some(v) => {
-                    v.trim()
-                        .parse::<usize>()
-                        .map(Some)
-                        .map_err(|_| DesignError::Environment {
-                            var: name,
-                            value: v.clone(),
-                            problem: "not a whole number".into(),
-                        })
-                }
+                Some(v) => whole_number(&v)
+                    .map(Some)
+                    .map_err(|problem| DesignError::Environment {
+                        var: name,
+                        value: v.clone(),
+                        problem,
+                    }),
             }
         };
         if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
@@ -597,6 +599,25 @@ mod tests {
             .map(|(k, v)| (k.to_string(), v.to_string()))
             .collect();
         move |k: &str| m.get(k).cloned()
+    }
+
+    /// Regression: an index beyond the machine's integers was called "not a whole number"
+    /// (`--component 99999999999999999999/3`); it is now "too large", and a word still "not a
+    /// whole number", in a shard, a sample's N and a scheduler's variable.
+    #[test]
+    fn regression_a_number_too_large_is_called_so() {
+        let e = Shard::parse("--component", "99999999999999999999/3")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is too large"), "{e}");
+        let e = Shard::parse("--shard", "x/3").unwrap_err().to_string();
+        assert!(e.contains("'x' is not a whole number"), "{e}");
+        let e = parse_sample("lhs:99999999999999999999")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is too large"), "{e}");
+        let e = whole_number(" 12 ").unwrap();
+        assert_eq!(e, 12);
     }
 
     /// Regression: a value given twice in two spellings (80,8e1 or 80,80.0) ran twice.
