@@ -572,16 +572,13 @@ pub fn cut_columns(part_dofs: f64, cut_shapes: usize) -> f64 {
 /// [`Split::of`] the scene), from its parts' estimated DOFs ([`rom_split`]).
 pub fn rom_build(scene: &Scene, split: Split) -> Option<Estimate> {
     let (cc, liner) = part_dofs(scene)?;
-    let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
-        return None;
-    };
     let cylinders = scene.crankcase.as_ref().map_or(0, |c| match &c.source {
         CrankcaseSource::Parametric { geometry, .. } => geometry.cylinders,
         CrankcaseSource::File(_) => 0,
     });
     Some(rom_split(
         cc,
-        (liner, liner_loads(geometry, meshing)),
+        liner,
         (cylinders * interface_columns(scene.rom.harmonics)) as f64,
         cylinders,
         split,
@@ -594,13 +591,16 @@ pub fn interface_columns(harmonics: usize) -> usize {
     (2 * harmonics + 1) * 2 * 6
 }
 
-/// Estimated DOFs of the generated crankcase and of one generated liner (`None` when a mesh
-/// comes from a file).
-fn part_dofs(scene: &Scene) -> Option<(f64, f64)> {
+/// Estimated DOFs of the generated crankcase, and the DOFs and reduction loads of one
+/// generated liner ([`liner_dofs`], [`liner_loads`]; `None` when a mesh comes from a file).
+fn part_dofs(scene: &Scene) -> Option<(f64, (f64, f64))> {
     let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
         return None;
     };
-    let liner = liner_dofs(geometry, meshing);
+    let liner = (
+        liner_dofs(geometry, meshing),
+        liner_loads(geometry, meshing),
+    );
     let cc = match scene.crankcase.as_ref().map(|c| &c.source) {
         Some(CrankcaseSource::Parametric {
             geometry: cg,
