@@ -93,6 +93,13 @@ pub enum ReadError {
     TooLarge { size: u64, limit: u64 },
     #[error("line {line}: byte 0x{byte:02x} is not UTF-8 text")]
     NotText { line: usize, byte: u8 },
+    #[error("the file has {size} bytes and reading it takes about {:.2} GB, more than the {:.2} GB {bound} leaves", *need as f64 / 1e9, *available as f64 / 1e9)]
+    NoMemory {
+        size: u64,
+        need: u64,
+        available: u64,
+        bound: &'static str,
+    },
 }
 
 /// Size limit of scene, pressure-curve and calibration files (a hand-written table).
@@ -109,6 +116,13 @@ pub const LIMIT_MESH: u64 = 4 << 30;
 /// Reads a whole regular file of at most `limit` bytes (links are followed; what they point to
 /// must be a regular file).
 pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+    read_regular_within(path, limit, 1)
+}
+
+/// [`read_regular`] of a file whose reading takes `factor` times its size in memory (the text
+/// and what is made of it): refused when the machine does not have that
+/// ([`crate::machine::available_memory_from`]), instead of aborting in an allocation.
+pub fn read_regular_within(path: &Path, limit: u64, factor: u64) -> Result<Vec<u8>, ReadError> {
     let meta = std::fs::metadata(path)?;
     if !meta.is_file() {
         return Err(ReadError::NotRegular);
@@ -119,8 +133,23 @@ pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
             limit,
         });
     }
+    let no_memory = || {
+        let (available, bound) = crate::machine::available_memory_from();
+        ReadError::NoMemory {
+            size: meta.len(),
+            need: meta.len().saturating_mul(factor),
+            available,
+            bound,
+        }
+    };
+    if meta.len().saturating_mul(factor) > crate::machine::available_memory() {
+        return Err(no_memory());
+    }
     use std::io::Read;
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    let mut bytes = Vec::new();
+    bytes
+        .try_reserve_exact(meta.len() as usize)
+        .map_err(|_| no_memory())?;
     // `take` guards against a file that grows while it is read
     std::fs::File::open(path)?
         .take(limit + 1)
@@ -138,7 +167,12 @@ pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
 /// of the first byte that is not), without a leading byte-order mark (spreadsheets' "CSV
 /// UTF-8" and some editors write one; left in, it would stick to the first header name).
 pub fn read_text(path: &Path, limit: u64) -> Result<String, ReadError> {
-    let mut bytes = read_regular(path, limit)?;
+    read_text_within(path, limit, 1)
+}
+
+/// [`read_text`] of a file whose reading takes `factor` times its size ([`read_regular_within`]).
+pub fn read_text_within(path: &Path, limit: u64, factor: u64) -> Result<String, ReadError> {
+    let mut bytes = read_regular_within(path, limit, factor)?;
     if bytes.starts_with(b"\xEF\xBB\xBF") {
         bytes.drain(..3);
     }

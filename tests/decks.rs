@@ -491,21 +491,29 @@ fn verification_deck_materials_are_assembled_per_element() {
 }
 
 /// Regression (issue 40): an empty `mesh_file` was read as the scene's directory ("cannot read
-/// mesh file small/"); it is refused naming the key.
+/// mesh file small/"); it is refused naming the key. So is (session 70's hostile sweep) a
+/// missing file or a directory, which were reported by the file's name alone.
 #[test]
-fn regression_empty_mesh_file_is_refused_by_key() {
+fn regression_empty_or_missing_mesh_file_is_refused_by_key() {
     let dir = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(SMALL)
-        .unwrap()
-        .replace("[liner]\n", "[liner]\nmesh_file = \"\"\n");
-    let p = dir.path().join("engine.toml");
-    std::fs::write(&p, text).unwrap();
-    let (code, _, err) = linercav(&["rom", &p.display().to_string(), "--no-cache"]);
-    assert_eq!(code, 2, "{err}");
-    assert!(
-        err.contains("liner.mesh_file") && err.contains("is empty"),
-        "{err}"
-    );
+    std::fs::create_dir(dir.path().join("adir.inp")).unwrap();
+    for (value, says) in [
+        ("", "is empty"),
+        ("nothere.inp", "'nothere.inp'"),
+        ("adir.inp", "is not a regular file"),
+    ] {
+        let text = std::fs::read_to_string(SMALL)
+            .unwrap()
+            .replace("[liner]\n", &format!("[liner]\nmesh_file = \"{value}\"\n"));
+        let p = dir.path().join("engine.toml");
+        std::fs::write(&p, text).unwrap();
+        let (code, _, err) = linercav(&["rom", &p.display().to_string(), "--no-cache"]);
+        assert_eq!(code, 2, "{value}: {err}");
+        assert!(
+            err.contains("key 'liner.mesh_file'") && err.contains(says),
+            "{value}: {err}"
+        );
+    }
 }
 
 /// Regression: a material given on the command line (or in the scene) over a deck that

@@ -896,8 +896,60 @@ fn regression_a_run_let_through_under_an_address_space_cap_completes() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("no mode missed"));
 }
 
+/// Regression (session 70's hostile sweep): a mesh file was read whole before any memory
+/// check, so a 2 GB deck under a 1 GB address-space cap aborted in its allocation (exit 134);
+/// it is refused before it is read, exit 2, with what reading it takes.
+#[test]
+fn regression_a_mesh_file_larger_than_memory_is_refused_before_it_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["big.bdf", "big.inp", "big.msh"] {
+        let p = dir.path().join(name);
+        // a sparse file: no disk used
+        std::fs::File::create(&p).unwrap().set_len(2 << 30).unwrap();
+        let mut args = vec!["modes", "--count", "3", "--mesh", p.to_str().unwrap()];
+        args.extend(STEEL);
+        let o = under_limit((libc::RLIMIT_AS, 1_000_000_000), &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(err.contains("reading it takes about"), "{name}: {err}");
+    }
+}
+
+/// Regression (session 70's hostile sweep): a write beyond the file-size limit (`ulimit -f`)
+/// killed the process by SIGXFSZ and left the temporary file; the write now fails as an
+/// error naming the output, exit 2, and nothing is left.
+#[test]
+fn regression_a_file_size_limit_leaves_no_temporary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("liner.inp");
+    let args = [
+        "export-mesh",
+        SMALL,
+        "--part",
+        "liner",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let o = under_limit((libc::RLIMIT_FSIZE, 100_000), &args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("liner.inp") && err.contains("cannot write"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
 /// Runs the command line `args` with RLIMIT_AS set to `cap` bytes.
 fn under_address_space_cap(cap: u64, args: &[&str]) -> std::process::Output {
+    under_limit((libc::RLIMIT_AS, cap), args)
+}
+
+/// Runs the command line `args` with the resource limit `resource` set to `cap`.
+fn under_limit(
+    (resource, cap): (libc::__rlimit_resource_t, u64),
+    args: &[&str],
+) -> std::process::Output {
     use std::os::unix::process::CommandExt;
     let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_linercav"));
     c.args(args);
@@ -908,7 +960,7 @@ fn under_address_space_cap(cap: u64, args: &[&str]) -> std::process::Output {
                 rlim_cur: cap,
                 rlim_max: cap,
             };
-            if libc::setrlimit(libc::RLIMIT_AS, &r) != 0 {
+            if libc::setrlimit(resource, &r) != 0 {
                 return Err(std::io::Error::last_os_error());
             }
             Ok(())

@@ -252,7 +252,11 @@ pub fn reduce_component(
     let names = crate::reduce::rom::component_names(scene.rom.crankcase_components);
     let count = names.len();
     let task = if arg == "auto" {
-        Shard::from_env_as(&|k| std::env::var(k).ok(), Some(count), "--component")?.ok_or_else(|| {
+        Shard::from_env_as(
+            &|k| std::env::var(k).ok(),
+            (Some(count), "the engine's components"),
+            "--component",
+        )?.ok_or_else(|| {
             Error::Argument {
                 flag: "--component auto".into(),
                 msg: format!("no scheduler task in the environment (SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX): give --component I/{count}"),

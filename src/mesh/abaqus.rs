@@ -60,7 +60,8 @@
 //! lacks `*ELASTIC` or `*DENSITY` (a modal model needs both), `*INSTANCE` of an undefined part
 //! or importing one (`INSTANCE=`, `LIBRARY=`), nodes, elements or sections inside an
 //! `*INSTANCE` block, `*PART` without `*ASSEMBLY`, ids <= 0, sets of sets, and an assembly
-//! with more nodes, elements and set members than its files have bytes.
+//! with more nodes, elements and set members than its files have bytes, sets holding more
+//! than 4 ids per byte of the files.
 
 use super::collect::{
     read_mesh_text, reorder, Collected, DeckError, Loc, HEX20_ABAQUS, TET10_DECK,
@@ -417,9 +418,17 @@ struct Reader {
     stack: Vec<PathBuf>,
     /// Bytes read from all files (bounds GENERATE ranges and instanced records).
     bytes: usize,
+    /// Members of all sets so far (at most [`SET_IDS_PER_BYTE`] per byte read).
+    set_ids: usize,
+    /// Files read so far, each include counted (at most [`super::DECK_FILES`]).
+    reads: usize,
     model: Scope,
     parts: Vec<Part>,
     instances: Vec<Instance>,
+    /// Indices of the parts and the names of the instances, by upper-case name (Abaqus names
+    /// are case-insensitive; a deck of 60k instances was checked name by name, quadratically).
+    part_index: std::collections::HashMap<String, usize>,
+    instance_names: std::collections::HashSet<String>,
     bound: Vec<BoundSet>,
     /// Materials by upper-case name.
     materials: BTreeMap<String, MaterialDef>,
@@ -442,9 +451,13 @@ impl Reader {
             files: vec![path.to_path_buf()],
             stack: vec![canonical],
             bytes,
+            set_ids: 0,
+            reads: 1,
             model: Scope::default(),
             parts: Vec::new(),
             instances: Vec::new(),
+            part_index: Default::default(),
+            instance_names: Default::default(),
             bound: Vec::new(),
             materials: BTreeMap::new(),
             at: Where::Model,
@@ -505,6 +518,14 @@ impl Reader {
                 format!("*INCLUDE of '{input}': files nested more than {MAX_DEPTH} deep"),
             ));
         }
+        self.reads += 1;
+        if self.reads > super::DECK_FILES {
+            let msg = format!(
+                "*INCLUDE of '{input}': more than {} files read (each include counted)",
+                super::DECK_FILES
+            );
+            return Err(self.err(loc, msg));
+        }
         let base = self.files[loc.file].parent().unwrap_or(Path::new(""));
         let path = base.join(input);
         let canonical = std::fs::canonicalize(&path).map_err(|e| {
@@ -527,7 +548,13 @@ impl Reader {
                 ),
             ));
         }
-        let text = read_mesh_text(&path, EXPECTED)?;
+        let text = read_mesh_text(&path, EXPECTED).map_err(|e| {
+            if e.line > 0 {
+                e
+            } else {
+                self.err(loc, format!("*INCLUDE of '{input}': {}", e.msg))
+            }
+        })?;
         self.bytes = self.bytes.saturating_add(text.len());
         if self.bytes as u64 > crate::files::LIMIT_MESH {
             return Err(self.err(
@@ -593,6 +620,8 @@ impl Reader {
                 if self.part(name).is_some() {
                     return fail(self, &format!("part '{name}' is defined twice"));
                 }
+                self.part_index
+                    .insert(name.to_ascii_uppercase(), self.parts.len());
                 self.parts.push(Part {
                     name: name.to_string(),
                     scope: Scope::default(),
@@ -621,9 +650,7 @@ impl Reader {
 
     /// The index of part `name` (case-insensitive, as Abaqus names).
     fn part(&self, name: &str) -> Option<usize> {
-        self.parts
-            .iter()
-            .position(|p| p.name.eq_ignore_ascii_case(name))
+        self.part_index.get(&name.to_ascii_uppercase()).copied()
     }
 
     /// `*INSTANCE, NAME=, PART=` (its data lines follow) and `*END INSTANCE`.
@@ -646,11 +673,7 @@ impl Reader {
         let (Some(name), Some(part)) = (k.get("NAME"), k.get("PART")) else {
             return fail(self, "expected NAME= and PART=");
         };
-        if self
-            .instances
-            .iter()
-            .any(|i| i.name.eq_ignore_ascii_case(name))
-        {
+        if !self.instance_names.insert(name.to_ascii_uppercase()) {
             return fail(self, &format!("instance '{name}' is defined twice"));
         }
         self.instances.push(Instance {
@@ -835,7 +858,12 @@ impl Reader {
             } => {
                 let kw = if *nodes { "*NSET" } else { "*ELSET" };
                 let at = |m: String| self.err(loc, format!("{kw} {name}: {m}"));
-                set_ids(&f, *generate, l, self.bytes, &at).map(|ids| match instance {
+                let room = SET_IDS_PER_BYTE
+                    .saturating_mul(self.bytes)
+                    .saturating_sub(self.set_ids);
+                let ids = set_ids(&f, *generate, l, room, &at);
+                self.set_ids += ids.as_ref().map_or(0, Vec::len);
+                ids.map(|ids| match instance {
                     Some(i) => self.bound.push(BoundSet {
                         nodes: *nodes,
                         name: name.clone(),
@@ -1080,6 +1108,18 @@ impl Reader {
                     "*{kw} of material '{material}': expected '{form}[, temperature]', found '{l}'"
                 ),
             ));
+        }
+        let given = self.materials.get(material).is_some_and(|m| {
+            if density {
+                m.density.is_some()
+            } else {
+                m.elastic.is_some()
+            }
+        });
+        if given {
+            let msg =
+                format!("*{kw} of material '{material}' is given twice (one *{kw} per *MATERIAL)");
+            return Err(self.err(loc, msg));
         }
         if let Some(m) = self.materials.get_mut(material) {
             if density {
@@ -1482,13 +1522,18 @@ fn solid_kind(t: &str) -> Option<ElementKind> {
     }
 }
 
+/// Set members a deck may hold per byte of its files, over all its sets (a set's GENERATE
+/// line is a few bytes for many ids; a deck whose sets hold more is refused before it takes
+/// the memory: every node in several sets stays far below it).
+const SET_IDS_PER_BYTE: usize = 4;
+
 /// The ids of a set's data line `l` (fields `f`): positive ids, or `first, last[, step]` when
-/// `generate` (at most `bytes` ids: a file defines fewer ids than it has bytes).
+/// `generate` (at most `room` of them: the rest of the deck's [`SET_IDS_PER_BYTE`] bound).
 fn set_ids(
     f: &[&str],
     generate: bool,
     l: &str,
-    bytes: usize,
+    room: usize,
     at: &dyn Fn(String) -> DeckError,
 ) -> Result<Vec<i64>, DeckError> {
     let mut ids = Vec::new();
@@ -1504,9 +1549,14 @@ fn set_ids(
             [a, b, s] => (a, b, s),
             _ => return Err(range()),
         };
-        if a <= 0 || s <= 0 || b < a || (b - a) / s > bytes as i64 {
+        if a <= 0 || s <= 0 || b < a {
             return Err(at(format!(
                 "GENERATE {a}, {b}, {s} is not a range of positive ids"
+            )));
+        }
+        if (b - a) / s >= room as i64 {
+            return Err(at(format!(
+                "GENERATE {a}, {b}, {s}: the deck's sets would hold more than {SET_IDS_PER_BYTE} ids per byte of its files"
             )));
         }
         ids.extend((a..=b).step_by(s as usize));
@@ -1563,6 +1613,34 @@ mod tests {
             m.materials.is_empty(),
             "a material no section uses stays out"
         );
+    }
+
+    /// Regression: GENERATE lines were bounded one by one (a line's range by the file's
+    /// bytes), so 2000 lines of `1, 60000, 1` in a 26 kB deck asked for 0.5 GB and aborted
+    /// under a memory cap; the deck's sets together now hold at most 4 ids per byte.
+    #[test]
+    fn regression_generated_sets_are_bounded_together() {
+        let lines = "1, 60, 1\n".repeat(2000);
+        let deck = format!("{TET}*NSET, NSET=boom, GENERATE\n{lines}");
+        let e = parse(Path::new("t.inp"), &deck).unwrap_err();
+        assert!(e.msg.contains("4 ids per byte"), "{e}");
+        // fewer lines of it are read
+        let deck = format!(
+            "{TET}*NSET, NSET=boom, GENERATE\n{}",
+            "1, 3, 1\n".repeat(20)
+        );
+        assert!(parse(Path::new("t.inp"), &deck).is_ok());
+    }
+
+    /// Regression: a second `*ELASTIC` in one `*MATERIAL` replaced the first silently (a
+    /// first elastic mode of 637 Hz instead of 8870 Hz).
+    #[test]
+    fn regression_a_material_constant_given_twice_is_refused() {
+        for second in ["*ELASTIC\n2e9, 0.3\n", "*DENSITY\n7800.\n*DENSITY\n10.\n"] {
+            let deck = format!("{TET}{second}");
+            let e = parse(Path::new("t.inp"), &deck).unwrap_err();
+            assert!(e.msg.contains("given twice"), "{e}");
+        }
     }
 
     #[test]

@@ -14,7 +14,7 @@ pub struct DeckError {
     pub line: usize,
     pub msg: String,
 }
-use crate::files::{read_text, ReadError, LIMIT_MESH};
+use crate::files::{read_text_within, ReadError, LIMIT_MESH};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
@@ -112,10 +112,17 @@ pub(crate) const HEX20_NASTRAN: [(usize, usize); 12] = [
     (7, 4),
 ];
 
-/// The text of mesh file `path` (a regular file of at most [`LIMIT_MESH`] bytes); a byte that
-/// is not text is reported with its line and `expected` (what the reader takes).
+/// Memory a mesh file's reading takes per byte of its text: the text and the mesh made of it
+/// (a node's coordinates and an element's node list take about as many bytes as their
+/// text), with the readers' sets and maps beside them. A file that does not fit so is refused
+/// before it is read (a 2 GB deck aborted in its allocation under a 1 GB cap).
+const MESH_TEXT_FACTOR: u64 = 3;
+
+/// The text of mesh file `path` (a regular file of at most [`LIMIT_MESH`] bytes, whose reading
+/// the machine can hold: [`MESH_TEXT_FACTOR`]); a byte that is not text is reported with its
+/// line and `expected` (what the reader takes).
 pub(crate) fn read_mesh_text(path: &Path, expected: &str) -> Result<String, DeckError> {
-    read_text(path, LIMIT_MESH).map_err(|e| {
+    read_text_within(path, LIMIT_MESH, MESH_TEXT_FACTOR).map_err(|e| {
         let (line, msg) = match e {
             ReadError::NotText { line, byte } => {
                 (line, format!("byte 0x{byte:02x} is not text: {expected}"))

@@ -120,12 +120,22 @@ pub fn resolve_material(
             .validate()
             .map_err(|e| {
                 bad(format!(
-                    "the deck's material '{}': {e} (after the unit conversion: a deck in mm gives E in MPa and the density in t/mm^3; or give {key} to override it)",
+                    "the deck's material '{}': {e} (constants in the deck's unit system: a deck in m takes Pa and kg/m^3, a deck in mm MPa and t/mm^3; or give {key} to override it)",
                     m.name
                 ))
             })?;
     }
-    Ok((mesh.materials[0].elastic, MaterialSource::Deck, None))
+    let unusual: Vec<String> = mesh
+        .materials
+        .iter()
+        .filter_map(|m| {
+            m.elastic
+                .structural_warning(&format!("the deck's material '{}'", m.name))
+        })
+        .collect();
+    let warning =
+        (!unusual.is_empty()).then(|| format!("{}: {}", path.display(), unusual.join("; ")));
+    Ok((mesh.materials[0].elastic, MaterialSource::Deck, warning))
 }
 
 /// The warning for a given material `m` that replaces deck materials of `mesh` with other

@@ -442,6 +442,15 @@ impl Reader {
                 path.display()
             )));
         }
+        if self.files.len() >= super::DECK_FILES {
+            return Err(at(
+                self,
+                format!(
+                    "more than {} files read (each include counted)",
+                    super::DECK_FILES
+                ),
+            ));
+        }
         if self.stack.len() > MAX_INCLUDE_DEPTH {
             return Err(at(self, format!(
                 "includes nest deeper than {MAX_INCLUDE_DEPTH} files: expected at most {MAX_INCLUDE_DEPTH} levels"

@@ -203,11 +203,14 @@ pub fn parse_range(arg: &str) -> Result<Range, DesignError> {
 fn whole_number(s: &str) -> Result<usize, String> {
     let s = s.trim();
     s.parse::<usize>().map_err(|e| match e.kind() {
-        std::num::IntErrorKind::PosOverflow => {
-            format!("'{s}' is too large (at most {})", usize::MAX)
-        }
-        _ => format!("'{s}' is not a whole number"),
+        std::num::IntErrorKind::PosOverflow => format!("too large (at most {})", usize::MAX),
+        _ => "not a whole number".to_string(),
     })
+}
+
+/// [`whole_number`] with the refused text named in its problem ("'x' is not a whole number").
+fn whole_number_named(s: &str) -> Result<usize, String> {
+    whole_number(s).map_err(|p| format!("'{}' is {p}", s.trim()))
 }
 
 /// Parses `lhs:N` or `mc:N` (N >= 2).
@@ -219,7 +222,7 @@ pub fn parse_sample(arg: &str) -> Result<(Method, usize), DesignError> {
         "mc" => Method::Mc,
         other => return Err(bad(&format!("unknown method '{other}'"))),
     };
-    let n = whole_number(n).map_err(|p| bad(&format!("N: {p}")))?;
+    let n = whole_number_named(n).map_err(|p| bad(&format!("N: {p}")))?;
     if n < 2 {
         return Err(bad("fewer than 2 runs"));
     }
@@ -464,7 +467,7 @@ impl Shard {
     pub fn parse(flag: &'static str, arg: &str) -> Result<Self, DesignError> {
         let bad = |p: &str| argument(flag, arg, p, "I/N with 1 <= I <= N");
         let (i, n) = arg.split_once('/').ok_or_else(|| bad("no '/'"))?;
-        let num = |s: &str| whole_number(s).map_err(|p| bad(&p));
+        let num = |s: &str| whole_number_named(s).map_err(|p| bad(&p));
         let (index, count) = (num(i)?, num(n)?);
         if index == 0 || index > count {
             return Err(bad("I outside 1..N"));
@@ -483,16 +486,27 @@ impl Shard {
         var: &dyn Fn(&str) -> Option<String>,
         shards: Option<usize>,
     ) -> Result<Option<Self>, DesignError> {
-        Self::from_env_as(var, shards, "--shard")
+        Self::from_env_as(var, (shards, "--shards"), "--shard")
     }
 
     /// [`Shard::from_env`] for the command whose explicit form is `flag` I/N (`--shard` of a
-    /// sweep, `--component` of `rom`, whose count is its components'): the messages name it.
+    /// sweep, `--component` of `rom`), whose count `shards` is `count_name` (`--shards`, the
+    /// engine's components): the messages name them. Both schedulers' task variables set at
+    /// once are refused (which one placed this process is not known).
     pub fn from_env_as(
         var: &dyn Fn(&str) -> Option<String>,
-        shards: Option<usize>,
+        (shards, count_name): (Option<usize>, &str),
         flag: &str,
     ) -> Result<Option<Self>, DesignError> {
+        if let (Some(slurm), Some(_)) = (var("SLURM_ARRAY_TASK_ID"), var("JOB_COMPLETION_INDEX")) {
+            return Err(DesignError::Environment {
+                var: "SLURM_ARRAY_TASK_ID",
+                value: slurm,
+                problem: format!(
+                    "JOB_COMPLETION_INDEX is set as well (a Slurm array task and a Kubernetes Indexed Job at once): unset one, or give {flag} I/N"
+                ),
+            });
+        }
         let number = |name: &'static str| -> Result<Option<usize>, DesignError> {
             match var(name) {
                 None => Ok(None),
@@ -555,14 +569,10 @@ impl Shard {
                 return Err(DesignError::Environment {
                     var: "JOB_COMPLETION_INDEX",
                     value: idx.to_string(),
-                    problem: if flag == "--component" {
-                        format!(
-                            "not below the engine's {count} components (indices 0 to {})",
-                            count - 1
-                        )
-                    } else {
-                        format!("not below --shards {count}")
-                    },
+                    problem: format!(
+                        "not below {count_name} ({count}: indices 0 to {})",
+                        count - 1
+                    ),
                 });
             }
             return Ok(Some(Shard {
@@ -726,6 +736,39 @@ mod tests {
         assert!(Shard::from_env(&k8s, None).is_err());
         assert!(Shard::from_env(&k8s, Some(4)).is_err());
         assert_eq!(Shard::from_env(&env(&[]), Some(4)).unwrap(), None);
+    }
+
+    /// Regression: with a Slurm array's and a Kubernetes Indexed Job's task variables both
+    /// set, the Slurm one was taken silently; a scheduler's bad value repeated itself in the
+    /// message ("SLURM_ARRAY_TASK_ID='x': 'x' is not a whole number").
+    #[test]
+    fn regression_two_schedulers_at_once_are_refused() {
+        let both = env(&[
+            ("SLURM_ARRAY_TASK_ID", "1"),
+            ("SLURM_ARRAY_TASK_MIN", "1"),
+            ("SLURM_ARRAY_TASK_MAX", "3"),
+            ("JOB_COMPLETION_INDEX", "0"),
+        ]);
+        let e = Shard::from_env(&both, Some(3)).unwrap_err().to_string();
+        assert!(e.contains("JOB_COMPLETION_INDEX is set as well"), "{e}");
+        let e = Shard::from_env(&env(&[("JOB_COMPLETION_INDEX", "x")]), Some(3))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "environment variable JOB_COMPLETION_INDEX='x': not a whole number"
+        );
+        let e = Shard::from_env_as(
+            &env(&[("JOB_COMPLETION_INDEX", "3")]),
+            (Some(3), "the engine's components"),
+            "--component",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("not below the engine's components (3: indices 0 to 2)"),
+            "{e}"
+        );
     }
 
     #[test]

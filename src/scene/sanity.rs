@@ -31,8 +31,6 @@ const MAX_CLEARANCE: f64 = 0.02;
 /// 0.9 %); warned beyond 5 %. The pin axis and the centre of gravity lie inside the piston:
 /// offsets of half the bore or more are refused.
 const WIDE_PIN_OFFSET: f64 = 0.05;
-/// Young's moduli of structural metals and composites lie within this range [Pa].
-const YOUNG_RANGE: (f64, f64) = (1e9, 1e12);
 
 /// Refuses the absurd and lists the doubtful.
 pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
@@ -233,16 +231,7 @@ fn step(
 }
 
 fn materials(scene: &Scene, warnings: &mut Vec<String>) {
-    let mut check = |what: &str, m: &Elastic| {
-        if !(YOUNG_RANGE.0..=YOUNG_RANGE.1).contains(&m.young) {
-            warnings.push(format!(
-                "{what}: Young's modulus {} Pa is outside the range of structural materials ({}-{} Pa)",
-                num(m.young),
-                num(YOUNG_RANGE.0),
-                num(YOUNG_RANGE.1)
-            ));
-        }
-    };
+    let mut check = |what: &str, m: &Elastic| warnings.extend(m.structural_warning(what));
     if let Some(m) = &scene.liner.material {
         check("liner", m);
     }

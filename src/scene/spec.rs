@@ -19,30 +19,70 @@ pub struct Elastic {
 /// the quantity, its bound and the value given.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ElasticError {
-    #[error("Young's modulus must be a positive number of Pa up to 1e14, got {}", crate::text::exact(*.0))]
+    #[error("Young's modulus must lie in [1e3, 1e14] Pa, got {}", crate::text::exact(*.0))]
     Young(f64),
     #[error("Poisson's ratio must lie in (-1, 0.5), got {}", crate::text::exact(*.0))]
     Poisson(f64),
-    #[error("density must be a positive number of kg/m^3 up to 1e5, got {}", crate::text::exact(*.0))]
+    #[error("density must lie in [1, 1e5] kg/m^3, got {}", crate::text::exact(*.0))]
     Density(f64),
+    #[error("E {} Pa and density {} kg/m^3 give a bar wave speed sqrt(E / rho) of {} m/s, above the {} m/s no solid reaches (diamond: 18,600 m/s): are E and the density in one unit system?", crate::text::num(*young), crate::text::num(*density), crate::text::num(*speed), crate::text::num(MAX_WAVE_SPEED))]
+    WaveSpeed {
+        young: f64,
+        density: f64,
+        speed: f64,
+    },
 }
+
+/// The largest bar wave speed sqrt(E / rho) a material may have \[m/s\]: 2.7 times diamond's
+/// (1.05e12 Pa, 3,515 kg/m^3: 17,300 m/s; steel 5,200). Constants from two unit systems (E in
+/// MPa with rho in kg/m^3 read as SI, or mm-t-s constants in a deck read in metres) lie 1e3 to
+/// 1e6 times off.
+pub const MAX_WAVE_SPEED: f64 = 5e4;
+
+/// Young's moduli of structural metals and composites \[Pa\] (outside: a warning).
+pub const STRUCTURAL_YOUNG: (f64, f64) = (1e9, 1e12);
 
 impl Elastic {
     /// Checks the physical bounds. Upper bounds: 100 times the stiffest (diamond, 1.2e12 Pa)
     /// and 4 times the densest (osmium, 22,600 kg/m^3) solid; beyond them the matrices
-    /// overflow or are no solid's.
+    /// overflow or are no solid's. Lower bounds: 1e3 Pa (below gels; elastomers 1e6) and 1
+    /// kg/m^3 (aerogels): below them the constants are a unit mistake or roundoff (1e-300 gave
+    /// a singular factorisation instead of this message). The bar wave speed sqrt(E / rho)
+    /// at most [`MAX_WAVE_SPEED`].
     pub fn validate(&self) -> Result<(), ElasticError> {
-        if !(self.young.is_finite() && self.young > 0.0 && self.young <= 1e14) {
+        if !(self.young.is_finite() && (1e3..=1e14).contains(&self.young)) {
             return Err(ElasticError::Young(self.young));
         }
         if !(self.poisson.is_finite() && self.poisson > -1.0 && self.poisson < 0.5) {
             return Err(ElasticError::Poisson(self.poisson));
         }
-        if !(self.density.is_finite() && self.density > 0.0 && self.density <= 1e5) {
+        if !(self.density.is_finite() && (1.0..=1e5).contains(&self.density)) {
             return Err(ElasticError::Density(self.density));
+        }
+        let speed = (self.young / self.density).sqrt();
+        if speed > MAX_WAVE_SPEED {
+            return Err(ElasticError::WaveSpeed {
+                young: self.young,
+                density: self.density,
+                speed,
+            });
         }
         Ok(())
     }
+    /// A warning when Young's modulus lies outside [`STRUCTURAL_YOUNG`] (valid, but no metal's
+    /// or composite's: E given in MPa as Pa, say), naming the material as `what`.
+    pub fn structural_warning(&self, what: &str) -> Option<String> {
+        let (lo, hi) = STRUCTURAL_YOUNG;
+        (!(lo..=hi).contains(&self.young)).then(|| {
+            format!(
+                "{what}: Young's modulus {} Pa is outside the range of structural materials ({}-{} Pa)",
+                crate::text::num(self.young),
+                crate::text::num(lo),
+                crate::text::num(hi)
+            )
+        })
+    }
+
     /// First Lame constant lambda \[Pa\].
     pub fn lambda(&self) -> f64 {
         self.young * self.poisson / ((1.0 + self.poisson) * (1.0 - 2.0 * self.poisson))

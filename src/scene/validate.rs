@@ -38,7 +38,7 @@ pub(super) fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> 
     let base = path.parent().unwrap_or(Path::new("."));
     let liner_geometry = geometry.clone();
     let source = match &l.mesh_file {
-        Some(f) => MeshSource::File(base.join(mesh_file(&c, "liner.mesh_file", f)?)),
+        Some(f) => MeshSource::File(mesh_file(&c, "liner.mesh_file", base, f)?),
         None => MeshSource::Liner { geometry, meshing },
     };
     let liner = Part {
@@ -1279,7 +1279,7 @@ pub(super) fn validate_crankcase(
     }
     let meshing = validate_crankcase_meshing(c, &cc.mesh)?;
     let source = match &cc.mesh_file {
-        Some(f) => CrankcaseSource::File(base.join(mesh_file(c, "crankcase.mesh_file", f)?)),
+        Some(f) => CrankcaseSource::File(mesh_file(c, "crankcase.mesh_file", base, f)?),
         None => CrankcaseSource::Parametric { geometry, meshing },
     };
     let clamp_force = c.positive("crankcase.flange_clamp_kn", cc.flange_clamp_kn)? * 1e3;
@@ -1383,10 +1383,31 @@ fn max_penetration(c: &Checker<'_>, um: f64) -> Result<f64, SceneError> {
     Ok(c.positive(key, um)? * 1e-6)
 }
 
-/// A mesh file name: not blank (an empty one joined the scene's directory: "cannot read mesh
-/// file small/").
-pub(super) fn mesh_file<'f>(c: &Checker<'_>, key: &str, f: &'f str) -> Result<&'f str, SceneError> {
-    path_value(c, key, f, "the parametric mesh")
+/// A mesh file's path: the name `f` (not blank: an empty one joined the scene's directory,
+/// "cannot read mesh file small/") in the scene's directory `base`, a file that is there (a
+/// missing one was reported by its name alone, without the scene's key).
+pub(super) fn mesh_file(
+    c: &Checker<'_>,
+    key: &str,
+    base: &Path,
+    f: &str,
+) -> Result<std::path::PathBuf, SceneError> {
+    let p = base.join(path_value(c, key, f, "the parametric mesh")?);
+    if !p.is_file() {
+        let why = if p.exists() {
+            "is not a regular file"
+        } else {
+            "does not exist"
+        };
+        return Err(c.err(
+            key,
+            format!(
+                "'{f}' ({}) {why}: give a mesh file's path, relative to the scene file",
+                p.display()
+            ),
+        ));
+    }
+    Ok(p)
 }
 
 /// A path key's value: not blank (an empty one names the scene's own directory, and reading
