@@ -74,6 +74,29 @@ pub fn stop_cleanly() {
     std::process::exit(130);
 }
 
+/// What an abort (an allocation beyond the memory a cap leaves: Rust's allocation-failure
+/// handler aborts) leaves undone: removes the temporary files and directories and the new,
+/// empty output directories, as [`stop_cleanly`] does, but only when their registries are
+/// free at once (the aborting thread may hold one; waiting would hang the abort). Called from
+/// the command line's SIGABRT handler, which then lets the abort go on.
+pub fn remove_temporaries_at_abort() {
+    let Ok(mut temporaries) = TEMPORARIES.try_lock() else {
+        return;
+    };
+    for p in temporaries.drain(..) {
+        if p.is_dir() {
+            let _ = std::fs::remove_dir_all(&p);
+        } else {
+            let _ = std::fs::remove_file(&p);
+        }
+    }
+    if let Ok(mut dirs) = NEW_DIRS.try_lock() {
+        for d in dirs.drain(..).rev() {
+            let _ = std::fs::remove_dir(&d);
+        }
+    }
+}
+
 /// An output file that could not be written.
 #[derive(Debug, thiserror::Error)]
 #[error("{}: cannot write: {source}", path.display())]
@@ -281,6 +304,26 @@ pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
     let removed = std::fs::remove_file(&probe);
     unregister(&probe);
     removed.map_err(fail)
+}
+
+/// Checks, before work starts, that output file `path` can be written: its directory can be
+/// made and written ([`check_writable`]) and `path` is not something else than a file (a
+/// `--vtu /proc/x.vtu` was refused only after its modal solve).
+pub fn check_output_file(path: &Path) -> Result<(), WriteError> {
+    if path.exists() && !path.is_file() {
+        return Err(WriteError {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                "exists and is not a file: give a file's path",
+            ),
+        });
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    check_writable(dir)
 }
 
 /// The first entry of directory `dir` that is not a regular file (a directory, a device, a

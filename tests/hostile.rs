@@ -59,6 +59,13 @@ fn regression_hostile_gmsh_files_are_refused_naming_the_line() {
             ":19",
             "the entity record gives 1e300 physical tags",
         ),
+        // session 70: a section name in the wrong case was skipped to the end of the file
+        // ("unexpected end of file" at the last line)
+        (
+            mesh_with(d, "g.msh", 40, "$nodes"),
+            ":40",
+            "section '$nodes' (section names are case-sensitive: '$Nodes') has no '$Endnodes'",
+        ),
     ];
     for (p, line, what) in &cases {
         let mut args = vec!["modes", "--mesh", p.to_str().unwrap(), "--count", "10"];
@@ -371,6 +378,27 @@ fn regression_a_taken_output_name_writes_nothing() {
         vec!["simulate.json".to_string()],
         "nothing else left"
     );
+}
+
+/// Regression (session 70's hostile sweep): an output file or directory that could not be
+/// written was found only after the work (`modes --vtu` into a directory after its solve,
+/// `export-matrices --out` onto a file after the assembly); both are refused first, exit 2,
+/// and a given material's FE model is never assembled (nothing on stdout).
+#[test]
+fn regression_an_unwritable_output_stops_the_command_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let taken = dir.path().join("shapes.vtu");
+    std::fs::create_dir(&taken).unwrap();
+    let file = dir.path().join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let mut modes = vec!["modes", "--mesh", MESH, "--count", "3"];
+    modes.extend(STEEL);
+    modes.extend(["--vtu", taken.to_str().unwrap()]);
+    refused(&modes, 2, "shapes.vtu");
+    let mut export = vec!["export-matrices", "--mesh", MESH];
+    export.extend(STEEL);
+    export.extend(["--out", file.to_str().unwrap()]);
+    refused(&export, 2, "afile");
 }
 
 /// A cache directory holding the test engine's ROM (kept while the directory lives), and its

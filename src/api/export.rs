@@ -26,9 +26,12 @@ pub fn export_matrices(
     extra_fix: &[String],
     out: &Path,
 ) -> Result<ExportReport> {
+    // an output place that cannot be written stops the command before the assembly
+    crate::files::check_output_names(out, &["K.mtx", "M.mtx"])?;
+    let dirs = crate::files::NewDirs::create(out)?;
+    crate::files::check_writable(out)?;
     let part = load_part(input, extra_fix)?;
     let model = FeModel::build(part.mesh, &part.material, &part.fix)?;
-    let dirs = crate::files::NewDirs::create(out)?;
     let (kp, mp) = (out.join("K.mtx"), out.join("M.mtx"));
     let km = &model.km;
     let comment = format!(

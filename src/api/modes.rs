@@ -58,16 +58,17 @@ pub struct ModesReport {
     pub material: String,
 }
 
-/// Runs the modal analysis; `started` is the process start so `seconds` covers everything.
-pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
-    let progress = Progress::new();
-    progress.phase("reading mesh");
-    let part = load_part(&req.input, &req.extra_fix)?;
+/// The shift of the request (`--shift-hz`, else the scene's `solver.shift_hz`) and its count,
+/// checked: above 1e9 Hz sigma = -(2 pi f)^2 swamps K, no structural spectrum lies there.
+fn checked_shift(req: &ModesRequest, part: &super::LoadedPart) -> Result<f64> {
     let shift_hz = req.shift_hz.unwrap_or(part.shift_hz);
-    // above 1e9 Hz sigma = -(2 pi f)^2 swamps K: no structural spectrum lies there
     if !(shift_hz.is_finite() && shift_hz > 0.0 && shift_hz <= 1e9) {
+        let flag = match req.shift_hz {
+            Some(_) => format!("--shift-hz {}", crate::text::num(shift_hz)),
+            None => format!("solver.shift_hz = {}", crate::text::num(shift_hz)),
+        };
         return Err(crate::error::Error::Argument {
-            flag: format!("--shift-hz {}", crate::text::num(shift_hz)),
+            flag,
             msg: "must be a positive number up to 1e9".into(),
         });
     }
@@ -77,6 +78,18 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
             msg: "must be at least 1".into(),
         });
     }
+    Ok(shift_hz)
+}
+
+/// Runs the modal analysis; `started` is the process start so `seconds` covers everything.
+pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
+    if let Some(path) = &req.vtu {
+        crate::files::check_output_file(path)?;
+    }
+    let progress = Progress::new();
+    progress.phase("reading mesh");
+    let part = load_part(&req.input, &req.extra_fix)?;
+    let shift_hz = checked_shift(req, &part)?;
     let (nodes, elements) = (part.mesh.nodes.len(), part.mesh.num_elements());
     let material = match part.material_source {
         crate::mesh::import::MaterialSource::Given => "given".to_string(),
@@ -289,15 +302,14 @@ pub fn run_assembly(
             msg: "must be at least 1".into(),
         });
     }
+    if let Some(path) = vtu_path {
+        crate::files::check_output_file(path)?;
+    }
     if full {
         // the whole engine's FE model is sized before it is made (per_sector = 2000 aborted in
         // an allocation after 22 s under a 6 GB cap)
-        if let Some(dofs) = crate::scene::budget::engine_dofs(scene) {
-            let mut est = crate::scene::budget::fe_model(
-                dofs.min(1e18) as usize,
-                "the full engine's modal solve",
-            );
-            est.keys = "liner.mesh.* / crankcase.mesh.* (element counts and sizes)";
+        let full = crate::scene::budget::full_model(scene, "the full engine's modal solve", false);
+        if let Some(est) = full {
             crate::scene::budget::Limits::of(scene).check(scene, &est)?;
         }
         let r = super::full_modes::run(scene, count, vtu_path)?;

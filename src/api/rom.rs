@@ -31,6 +31,9 @@ pub fn get_rom_with_progress(scene: &Scene, opts: &CacheOptions) -> Result<Loade
 /// Builds the ROM of a scene without the cache ([`crate::reduce::scene_rom::build_rom`]),
 /// showing its phases on a terminal.
 pub fn build_rom_with_progress(scene: &Scene, keep_bases: bool) -> Result<(RomBuild, Mesh, Mesh)> {
+    // sized first, as a build through the cache is (`modes --assembly --rom --vtu` aborted
+    // in an allocation under a 0.95 GB address-space cap)
+    crate::reduce::scene_rom::check_build_limits(scene)?;
     let bar = RomProgress::default();
     Ok(crate::reduce::scene_rom::build_rom(
         scene,

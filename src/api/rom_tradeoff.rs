@@ -52,6 +52,11 @@ pub fn run(
         crate::files::check_output_names(dir, &OUTPUTS)?;
     }
     let base = super::load_scene(scene_path, sets)?;
+    // the reference is the full model's modal solve
+    let full = crate::scene::budget::full_model(&base, "the full engine's modal solve", false);
+    if let Some(est) = full {
+        crate::scene::budget::Limits::of(&base).check(&base, &est)?;
+    }
     let band = base.rom.band_hz;
     // validate every factor's scene before the long solves
     let scenes: Vec<Scene> = factors

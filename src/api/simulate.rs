@@ -65,13 +65,15 @@ pub struct SimulateRequest {
     pub rank: bool,
 }
 
-/// Runs `simulate`.
-pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
-    let scene = super::load_scene(&req.scene, &req.sets)?;
-    let sim = simulation(&scene)?;
-    let piston = piston_of(&scene)?;
-    // refused before any work: a transient beyond the limits, an output that cannot be written
-    if let Some(mut est) = crate::scene::budget::transient(&scene) {
+/// Refuses a run its scene's limits do not allow: the transient (three times with the step
+/// check, plus the ranking's time) and the full-order window.
+fn check_limits(
+    req: &SimulateRequest,
+    scene: &crate::scene::Scene,
+    sim: &crate::scene::Simulation,
+) -> Result<()> {
+    let limits = crate::scene::budget::Limits::of(scene);
+    if let Some(mut est) = crate::scene::budget::transient(scene) {
         if req.check_step || req.rank {
             // the repeated run at half the step costs about twice the run
             est.seconds *= 3.0;
@@ -79,8 +81,22 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
         if req.rank {
             est.seconds += sim.transient.max_seconds;
         }
-        crate::scene::budget::Limits::of(&scene).check(&scene, &est)?;
+        limits.check(scene, &est)?;
     }
+    let window = crate::scene::budget::full_model(scene, "the full-order window", true);
+    if let Some(est) = window.filter(|_| req.full_order) {
+        limits.check(scene, &est)?;
+    }
+    Ok(())
+}
+
+/// Runs `simulate`.
+pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
+    let scene = super::load_scene(&req.scene, &req.sets)?;
+    let sim = simulation(&scene)?;
+    let piston = piston_of(&scene)?;
+    // refused before any work: a transient beyond the limits, an output that cannot be written
+    check_limits(req, &scene, sim)?;
     let stage = req
         .out
         .as_deref()

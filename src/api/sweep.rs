@@ -149,7 +149,8 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     // the size is checked before any list of the runs is made
     let total = design.len();
     // the design's runs and the base design's
-    check_size(req, shard.map_or(total, |s| s.len(total)) + 1)?;
+    // (saturating: a design of usize::MAX runs wrapped to 0 and passed the check)
+    check_size(req, shard.map_or(total, |s| s.len(total)).saturating_add(1))?;
     let indices: Vec<usize> = match shard {
         Some(s) => s.runs(total),
         None => (0..total).collect(),

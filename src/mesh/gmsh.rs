@@ -143,6 +143,38 @@ struct Block {
     lines: Vec<u32>,
 }
 
+/// Skips a section linercav does not read, from its header `h` to `$End...`; a file that ends
+/// first is refused at the header, saying whether it is a section read here misspelt in
+/// case (`$nodes`: the names are case-sensitive).
+fn skip_section(lines: &mut Lines<'_>, h: &str) -> Result<(), DeckError> {
+    let start = lines.line;
+    let end = format!("$End{}", &h[1..]);
+    loop {
+        match lines.next_line() {
+            Ok(l) if l == end => return Ok(()),
+            Ok(_) => {}
+            Err(_) => {
+                lines.line = start;
+                let known = [
+                    "$MeshFormat",
+                    "$PhysicalNames",
+                    "$Entities",
+                    "$Nodes",
+                    "$Elements",
+                ];
+                let hint = known
+                    .iter()
+                    .find(|k| k.eq_ignore_ascii_case(h))
+                    .map(|k| format!(" (section names are case-sensitive: '{k}')"))
+                    .unwrap_or_default();
+                return Err(lines.err(format!(
+                    "section '{h}'{hint} has no '{end}' before the end of the file"
+                )));
+            }
+        }
+    }
+}
+
 /// Parses MSH 4.1 ASCII text; `path` is used in messages only.
 pub fn parse(path: &Path, text: &str) -> Result<Mesh, DeckError> {
     let mut lines = Lines {
@@ -162,11 +194,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, DeckError> {
             h if h.starts_with("$End") => {
                 return Err(lines.err(format!("unexpected '{h}'")));
             }
-            h if h.starts_with('$') => {
-                // skip an unknown section
-                let end = format!("$End{}", &h[1..]);
-                while lines.next_line()? != end {}
-            }
+            h if h.starts_with('$') => skip_section(&mut lines, h)?,
             other => {
                 return Err(lines.err(format!(
                     "expected a section header like '$Nodes', found '{other}'"

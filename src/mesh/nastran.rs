@@ -12,8 +12,8 @@
 //!
 //! **Fields.** Small (8 columns; a line holding tabs has them expanded to the next multiple of
 //! 8 columns first), large (`*` after the name, 16 columns, continuation lines starting with
-//! `*`) and free (comma-separated, a large free card named with `*`; a 10th field that is blank
-//! or a `+`/`*` marker is the continuation field); continuation lines start with `+` or `*`
+//! `*`) and free (comma-separated, a large free card named with `*`; a 10th field is the
+//! continuation field, whatever it holds); continuation lines start with `+` or `*`
 //! or, in small field, with a blank name field; a line that ends a card early is continued by
 //! the next such line; a continuation line with no card before it is refused. Reals in any
 //! Nastran form: `1.5E-3`, `1.5D-3`, `1.5-3` (exponent without a letter), `.5`, `7.`.
@@ -241,11 +241,10 @@ fn split_line(l: &str) -> (String, Vec<String>, bool) {
         let first = parts.remove(0);
         let cont = first.starts_with('+') || first.starts_with('*') || first.is_empty();
         let large = first.ends_with('*') || first.starts_with('*');
-        // the 10th field of a small free-field line is its continuation marker
-        if !large
-            && parts.len() == 9
-            && (parts[8].is_empty() || parts[8].starts_with('+') || parts[8].starts_with('*'))
-        {
+        // the 10th field of a small free-field line is its continuation field, whatever it
+        // holds (a marker need not start with '+': `CHEXA,1,1,1,2,3,4,5,,6` read the marker
+        // 6 as a node, in place of the blank G6)
+        if !large && parts.len() == 9 {
             parts.pop();
         }
         return (first, parts, cont);
@@ -1246,6 +1245,21 @@ mod tests {
         }
         assert_eq!(real("abc"), None);
         assert_eq!(real(""), None);
+    }
+
+    /// Regression (session 70's hostile sweep): in `CHEXA,1,1,1,2,3,4,5,,6`, the 10th field
+    /// (the continuation marker `6`) was read as a node and the blank G6 squeezed out.
+    #[test]
+    fn regression_a_free_field_continuation_marker_is_no_node() {
+        let grids: String = (1..=8)
+            .map(|k| format!("GRID,{k},,{}.,{}.,{}.\n", k % 2, k / 2 % 2, k / 4))
+            .collect();
+        let p = Path::new("t.bdf");
+        let e = parse(p, &format!("{grids}CHEXA,1,1,1,2,3,4,5,,6\n+,7,8\n")).unwrap_err();
+        assert!(e.msg.contains("element 1 has 7 nodes"), "{e}");
+        // the same marker after six nodes continues the card
+        let c = parse(p, &format!("{grids}CHEXA,1,1,1,2,3,4,5,6,A1\n+A1,7,8\n")).unwrap();
+        assert_eq!(c.num_elements(), 1);
     }
 
     #[test]

@@ -616,7 +616,7 @@ fn cache_entry(scene: &Scene, description: &str, opts: &CacheOptions) -> (PathBu
 
 /// Refuses a ROM build of `scene` that its limits do not allow: nothing is built that the
 /// machine cannot hold or whose result cannot be stored.
-fn check_build_limits(scene: &Scene) -> Result<()> {
+pub fn check_build_limits(scene: &Scene) -> Result<()> {
     if let Some(est) = budget::rom_build(scene, budget::Split::of(scene)) {
         Limits::of(scene).check(scene, &est)?;
     }

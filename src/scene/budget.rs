@@ -251,18 +251,43 @@ pub fn engine_dofs(scene: &Scene) -> Option<f64> {
     Some(3.0 * (cc + scene.rom.cylinders.len() as f64 * liner))
 }
 
+/// What a whole engine's FE model takes whatever its size \[bytes\]: the test engine's full
+/// modal solve (`modes --assembly --full`, 29.6k DOFs) peaked at 0.50 GB resident against the
+/// 0.17 GB of the power law below, ran out of a 1.5 GB address-space cap it had been let into
+/// and aborted under 1.55 GB with a floor of 0.4 GB (it needs about 1.6 GB of address space);
+/// 0.6 GB refuses it below 1.77 GB.
+const FE_MODEL_FLOOR_BYTES: f64 = 0.6e9;
+
 /// A modal solve or ROM build of a model with `dofs` full DOFs n: memory and time scale as
-/// nested-dissection fill, M = M_0 (n / n_0)^{4/3} and t = t_0 (n / n_0)^{3/2}, from the
-/// default engine's build (also for a mesh read from a file, sized once read).
+/// nested-dissection fill, M = M_0 (n / n_0)^{4/3} + [`FE_MODEL_FLOOR_BYTES`] and
+/// t = t_0 (n / n_0)^{3/2}, from the default engine's build (also for a mesh read from a file,
+/// sized once read).
 pub fn fe_model(dofs: usize, what: &'static str) -> Estimate {
     let r = dofs as f64 / REF_DOFS;
     Estimate {
         what,
-        memory: REF_BUILD_BYTES * r.powf(4.0 / 3.0),
+        memory: REF_BUILD_BYTES * r.powf(4.0 / 3.0) + FE_MODEL_FLOOR_BYTES,
         seconds: REF_BUILD_SECONDS * r.powf(1.5),
         keys: "the mesh (a coarser one)",
         detail: format!("{} DOFs", num(dofs as f64)),
     }
+}
+
+/// The full coupled engine model of `scene` held whole ([`fe_model`] of [`engine_dofs`]):
+/// its modal solve (`modes --assembly --full`, `rom-tradeoff`'s reference) or, with `window`,
+/// the full-order window of `simulate --full-order`, which holds the factor of K_eff with the
+/// contact columns K_eff^-1 B and the ROM beside it: 1.25 times (measured 6.2 GB on the
+/// default engine's 352k DOFs, 0.47 GB on the test engine's 29.6k; the window was not sized,
+/// and aborted in an allocation under a 1.15 GB cap). `None` for an engine read from files
+/// (sized once read).
+pub fn full_model(scene: &Scene, what: &'static str, window: bool) -> Option<Estimate> {
+    let dofs = engine_dofs(scene)?;
+    let mut est = fe_model(dofs.min(1e18) as usize, what);
+    if window {
+        est.memory *= 1.25;
+    }
+    est.keys = "liner.mesh.* / crankcase.mesh.* (element counts and sizes)";
+    Some(est)
 }
 
 /// Stored entries per row of K (both triangles) of a mesh of `kind`, rounded up from measured

@@ -538,7 +538,7 @@ impl Shard {
             }
             let count = max
                 .checked_sub(min)
-                .map(|d| d + 1)
+                .and_then(|d| d.checked_add(1))
                 .filter(|_| id >= min && id <= max);
             let count = count.ok_or_else(|| DesignError::Environment {
                 var: "SLURM_ARRAY_TASK_ID",
@@ -585,7 +585,11 @@ impl Shard {
 
     /// How many of `total` runs this shard holds.
     pub fn len(&self, total: usize) -> usize {
-        (total + self.count - self.index) / self.count
+        if total < self.index {
+            0
+        } else {
+            (total - self.index) / self.count + 1
+        }
     }
 
     /// The runs (0-based indices among `total`) of this shard: k with k mod N = I - 1.
@@ -751,6 +755,14 @@ mod tests {
         ]);
         let e = Shard::from_env(&both, Some(3)).unwrap_err().to_string();
         assert!(e.contains("JOB_COMPLETION_INDEX is set as well"), "{e}");
+        // a range as wide as the machine's integers (its count wrapped to 0: a division by
+        // zero)
+        let wide = env(&[
+            ("SLURM_ARRAY_TASK_ID", "0"),
+            ("SLURM_ARRAY_TASK_MIN", "0"),
+            ("SLURM_ARRAY_TASK_MAX", "18446744073709551615"),
+        ]);
+        assert!(Shard::from_env(&wide, None).is_err());
         let e = Shard::from_env(&env(&[("JOB_COMPLETION_INDEX", "x")]), Some(3))
             .unwrap_err()
             .to_string();

@@ -335,11 +335,14 @@ pub struct RawEngine {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawMaterial {
-    /// Young's modulus \[Pa\], > 0.
+    /// Young's modulus \[Pa\], in [1e3, 1e14] (warned outside 1e9-1e12, the structural metals
+    /// and composites).
     pub youngs_pa: f64,
     /// Poisson's ratio, in (-1, 0.5).
     pub poisson: f64,
-    /// Density [kg/m^3], > 0.
+    /// Density [kg/m^3], in [1, 1e5]; with E, a bar wave speed sqrt(E / rho) of at most 50
+    /// km/s (diamond's is 17 km/s: E and rho from two unit systems are refused). The same
+    /// bounds hold for a deck's materials and `--youngs/--density`.
     pub density_kg_m3: f64,
 }
 
