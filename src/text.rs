@@ -52,6 +52,16 @@ pub fn field_count_message(found: usize, header: usize) -> String {
     format!("{found} fields, the header has {header}{hint}")
 }
 
+/// The first column name of a CSV header `names` that appears twice, among `wanted` (a second
+/// `time_s` column was read silently, the first one winning).
+pub fn repeated_column<'a>(names: &[&'a str], wanted: &[&str]) -> Option<&'a str> {
+    names
+        .iter()
+        .enumerate()
+        .find(|&(k, n)| wanted.contains(n) && names[..k].contains(n))
+        .map(|(_, n)| *n)
+}
+
 /// The items' Display forms joined by `sep` (`[2, 5, 4]` with ", " reads "2, 5, 4"): lists in
 /// user-facing text, never Rust's debug form.
 pub fn joined<T: std::fmt::Display>(items: &[T], sep: &str) -> String {

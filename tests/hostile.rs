@@ -117,6 +117,49 @@ fn regression_hostile_scene_values_are_refused_before_work() {
             "liner.analysis_points",
         ),
         ("simulate", vec!["piston.slices=1000000"], "piston.slices"),
+        // session 70's hostile sweep: accepted with every peak 0, or failed as numerical
+        // trouble named by no key
+        (
+            "simulate",
+            vec!["piston.barrel_um=1e308"],
+            "piston.barrel_um",
+        ),
+        (
+            "simulate",
+            vec!["engine.rod_length_mm=219000"],
+            "engine.rod_length_mm",
+        ),
+        (
+            "simulate",
+            vec!["crankcase.front_wall_mm=14000"],
+            "crankcase.front_wall_mm",
+        ),
+        (
+            "simulate",
+            vec!["crankcase.deck_thickness_mm=1e-9"],
+            "crankcase.deck_thickness_mm",
+        ),
+        (
+            "simulate",
+            vec!["crankcase.flange_clamp_kn=107000"],
+            "crankcase.flange_clamp_kn",
+        ),
+        (
+            "simulate",
+            vec!["rom.cutoff_factor=1e308"],
+            "rom.cutoff_factor",
+        ),
+        ("simulate", vec!["crankcase.fix=[]"], "crankcase.fix"),
+        (
+            "simulate",
+            vec!["operating.combustion.duration_deg=50000"],
+            "operating.combustion.duration_deg",
+        ),
+        (
+            "simulate",
+            vec!["liner.analysis_spacing_mm=1e-9"],
+            "liner.analysis_spacing_mm",
+        ),
         (
             "simulate",
             vec!["transient.slap_substeps=0"],

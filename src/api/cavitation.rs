@@ -48,13 +48,15 @@ pub fn coolant_of(temp_c: f64, static_kpa: f64, glycol: f64) -> Result<Coolant> 
     })
 }
 
+/// `--gap-mm` in metres, within the scene's bounds for `cavitation.gap_mm` (0.05-100 mm: a
+/// 1e308 mm gap printed 300-digit layer masses).
 fn gap_of(gap_mm: f64) -> Result<f64> {
-    if gap_mm.is_finite() && gap_mm > 0.0 {
+    if gap_mm.is_finite() && (0.05..=100.0).contains(&gap_mm) {
         Ok(gap_mm * 1e-3)
     } else {
         Err(Error::Argument {
             flag: format!("--gap-mm {}", num(gap_mm)),
-            msg: "must be a positive number of millimetres".into(),
+            msg: "must lie in [0.05, 100] mm (as cavitation.gap_mm)".into(),
         })
     }
 }

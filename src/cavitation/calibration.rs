@@ -83,6 +83,12 @@ impl RigData {
             });
         };
         let names: Vec<&str> = header.split(',').map(|s| s.trim()).collect();
+        if let Some(c) = crate::text::repeated_column(&names, &COLUMNS) {
+            return Err(CalibrationError::Data {
+                file: file.into(),
+                msg: format!("the header names column '{c}' twice: give each column once"),
+            });
+        }
         let mut idx = [0usize; 3];
         for (k, col) in COLUMNS.iter().enumerate() {
             idx[k] =
@@ -383,6 +389,12 @@ mod tests {
 
     #[test]
     fn bad_csv_is_named() {
+        let e = RigData::parse(
+            "r.csv",
+            "time_s,time_s,acceleration_m_s2,pressure_kpa\n0,1,2,3\n",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("'time_s' twice"), "{e}");
         let e = RigData::parse("r.csv", "time_s,acceleration_m_s2\n0,1\n").unwrap_err();
         assert!(
             e.to_string().contains("missing column 'pressure_kpa'"),

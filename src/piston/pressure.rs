@@ -103,6 +103,11 @@ impl PressureCurve {
             msg: "is empty; expected the header 'crank_angle_deg,pressure_bar'".into(),
         })?;
         let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+        let wanted = ["crank_angle_deg", "pressure_bar"];
+        if let Some(c) = crate::text::repeated_column(&cols, &wanted) {
+            let msg = format!("the header names column '{c}' twice: give each column once");
+            return Err(line_err(hl + 1, msg));
+        }
         let ia = cols.iter().position(|c| *c == "crank_angle_deg");
         let ip = cols.iter().position(|c| *c == "pressure_bar");
         let (Some(ia), Some(ip)) = (ia, ip) else {
@@ -388,6 +393,9 @@ mod tests {
                 .to_string();
             assert!(e.contains("p.csv") && e.contains("whole 0-720 deg"), "{e}");
         }
+        let e = PressureCurve::parse(p, "crank_angle_deg,pressure_bar,pressure_bar\n0,1,2\n")
+            .unwrap_err();
+        assert!(e.to_string().contains("'pressure_bar' twice"), "{e}");
         let e = PressureCurve::parse(p, "crank_angle_deg,pressure_bar\n0,1\n10,NaN\n")
             .unwrap_err()
             .to_string();

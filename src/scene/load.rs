@@ -208,16 +208,29 @@ impl Checker<'_> {
             ))
         }
     }
+    /// A length given in mm, in metres: positive and within [`LENGTH_MM`] (1e-9 mm walls
+    /// made degenerate elements named by no key, 1e308 mm lengths overflowed).
     pub(super) fn mm(&self, key: &str, v: f64) -> Result<f64, SceneError> {
-        Ok(self.positive(key, v)? * 1e-3)
+        self.positive(key, v)?;
+        Ok(self.within(key, v, LENGTH_MM)? * 1e-3)
     }
 }
+
+/// Lengths a scene may give in mm: from 10 um (below any machined or cast feature) to 30 m
+/// (a marine engine's block is ~20 m long).
+pub(super) const LENGTH_MM: (f64, f64) = (1e-2, 3e4);
 
 /// The analysis points must fit on the liner: first + (n - 1) spacing < length, checked before
 /// their depths are listed (a count of 9e18 was allocated).
 pub(super) fn check_analysis_points(c: &Checker<'_>, l: &raw::RawLiner) -> Result<(), SceneError> {
     c.positive("liner.length_mm", l.length_mm)?;
-    let spacing = c.positive("liner.analysis_spacing_mm", l.analysis_spacing_mm)?;
+    c.positive("liner.analysis_spacing_mm", l.analysis_spacing_mm)?;
+    // points closer than 1 mm are one point to the mesh (1e-9 mm gave four identical ones)
+    let spacing = c.within(
+        "liner.analysis_spacing_mm",
+        l.analysis_spacing_mm,
+        (1.0, LENGTH_MM.1),
+    )?;
     let first = c.positive("liner.analysis_first_depth_mm", l.analysis_first_depth_mm)?;
     let fit = ((l.length_mm - first) / spacing).floor() + 1.0;
     if l.analysis_points as f64 > fit.max(0.0) {

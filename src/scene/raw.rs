@@ -166,7 +166,8 @@ pub struct RawCrankcase {
     /// engine frame, in mm whatever the mesh's unit), e.g. the fixed set named in `fix`.
     #[serde(default)]
     pub sets: BTreeMap<String, RawBoxSet>,
-    /// Deck plate thickness below the liner flange seat \[mm\].
+    /// Deck plate thickness below the liner flange seat \[mm\]. This and the other crankcase
+    /// walls, rails and bay depth lie in [1 mm, 5 bores].
     pub deck_thickness_mm: f64,
     /// Water-jacket outer wall thickness at the thrust/anti-thrust side, at the cylinder centre
     /// line \[mm\] (the wall thickens towards the cylinder junctions).
@@ -181,9 +182,11 @@ pub struct RawCrankcase {
     pub rail_width_mm: f64,
     pub rail_height_mm: f64,
     /// Head-bolt clamp force carried by each liner flange \[kN\] (bolt preload from torque:
-    /// F = T / (k d)); pushes the flange down and pulls the deck up (the bolt reaction).
+    /// F = T / (k d)); pushes the flange down and pulls the deck up (the bolt reaction); in
+    /// (0, 5000] (engines clamp a liner with 50-300 kN).
     pub flange_clamp_kn: f64,
-    /// Node sets held fixed (engine mounting); the parametric mesh offers `pan_rail`.
+    /// Node sets held fixed (engine mounting), at least one; the parametric mesh offers
+    /// `pan_rail`.
     #[serde(default)]
     pub fix: Vec<String>,
     /// Optional mesh file (Gmsh MSH 4.1 `.msh`, Nastran `.bdf`/`.nas`, Abaqus `.inp`; path relative to the scene file) replacing the parametric
@@ -225,7 +228,7 @@ pub struct RawRom {
     /// Highest frequency of interest \[Hz\] (spectra, responses), > 0.
     #[serde(default = "default_band")]
     pub band_hz: f64,
-    /// Cut-off of part and system modes as a multiple of `band_hz`, >= 1 (default 2.5).
+    /// Cut-off of part and system modes as a multiple of `band_hz`, in [1, 10] (default 2.5).
     #[serde(default = "default_cutoff_factor")]
     pub cutoff_factor: f64,
     /// Highest circumferential harmonic N of the interface fields, >= 1.
@@ -323,7 +326,8 @@ pub struct RawEngine {
     pub bore_mm: f64,
     /// Piston stroke \[mm\].
     pub stroke_mm: f64,
-    /// Connecting-rod length, centre to centre \[mm\]; longer than half the stroke.
+    /// Connecting-rod length, centre to centre \[mm\]; longer than half the stroke, at most 10
+    /// strokes.
     pub rod_length_mm: f64,
     /// Distance between neighbouring bore axes \[mm\]; larger than the liner flange diameter.
     pub cylinder_pitch_mm: f64,
@@ -389,7 +393,7 @@ pub struct RawLiner {
     pub pilot_diameter_mm: Option<f64>,
     /// Depth of the first analysis point below the liner top \[mm\].
     pub analysis_first_depth_mm: f64,
-    /// Spacing of the analysis points, top to bottom \[mm\] (paper: 25).
+    /// Spacing of the analysis points, top to bottom \[mm\] (paper: 25), at least 1.
     pub analysis_spacing_mm: f64,
     /// Number of analysis points (paper: 4).
     pub analysis_points: usize,
@@ -491,7 +495,7 @@ pub struct RawPiston {
     /// Cold diametral clearance at the widest skirt height \[um\], >= 0; at most 2 % of the bore
     /// (warned above 0.5 %: running clearances are 0.05-0.2 %).
     pub clearance_um: f64,
-    /// Radial barrel drop at the farther skirt end \[um\], >= 0 (from the widest height,
+    /// Radial barrel drop at the farther skirt end \[um\], in [0, 5000] (from the widest height,
     /// `barrel_max_below_pin_mm`).
     #[serde(default)]
     pub barrel_um: f64,
@@ -500,7 +504,7 @@ pub struct RawPiston {
     /// bottom).
     #[serde(default)]
     pub barrel_max_below_pin_mm: f64,
-    /// Ovality: thrust-axis minus pin-axis skirt diameter \[um\], >= 0.
+    /// Ovality: thrust-axis minus pin-axis skirt diameter \[um\], in [0, 5000].
     #[serde(default)]
     pub ovality_um: f64,
     /// Skirt slices per side, >= 10.
@@ -701,7 +705,8 @@ pub struct RawCombustion {
     pub intake_bar: f64,
     /// Exhaust back-pressure above intake \[bar\].
     pub exhaust_over_intake_bar: f64,
-    /// Start of combustion [deg crank angle; firing TDC = 360] and duration \[deg\].
+    /// Start of combustion [deg crank angle; firing TDC = 360] and duration \[deg\] (in (0,
+    /// 720]).
     pub start_deg: f64,
     pub duration_deg: f64,
     /// Wiebe parameters a (> 0) and m (>= 0).

@@ -156,6 +156,13 @@ pub(super) fn validate_engine(c: &Checker<'_>, e: &raw::RawEngine) -> Result<Eng
             "must exceed half the stroke (crank radius), or the crank cannot turn",
         ));
     }
+    // engines' rods are 1.3-2 strokes long; at 1e9 mm the rod stood still and every peak was 0
+    if engine.rod_length > 10.0 * engine.stroke {
+        return Err(c.err(
+            "engine.rod_length_mm",
+            "must be at most 10 strokes (engines' rods are 1.3-2 strokes long)",
+        ));
+    }
     Ok(engine)
 }
 
@@ -302,11 +309,11 @@ pub(super) fn validate_rom(
     liner: &Part,
 ) -> Result<Rom, SceneError> {
     let band_hz = c.positive("rom.band_hz", r.band_hz)?;
-    if !(r.cutoff_factor.is_finite() && r.cutoff_factor >= 1.0) {
+    if !(r.cutoff_factor.is_finite() && (1.0..=10.0).contains(&r.cutoff_factor)) {
         return Err(c.err(
             "rom.cutoff_factor",
             format!(
-                "must be at least 1, got {}",
+                "must lie in [1, 10] (modes far above the band only cost), got {}",
                 crate::text::exact(r.cutoff_factor)
             ),
         ));
@@ -491,7 +498,7 @@ pub(super) fn validate_cavitation(
             };
             c.err(key, e.to_string())
         })?;
-    let gap = c.mm("cavitation.gap_mm", r.gap_mm)?;
+    c.positive("cavitation.gap_mm", r.gap_mm)?;
     bounded(
         c,
         "cavitation.gap_mm",
@@ -499,6 +506,7 @@ pub(super) fn validate_cavitation(
         MAX_GAP_MM,
         "a coolant jacket is a few mm wide",
     )?;
+    let gap = c.mm("cavitation.gap_mm", r.gap_mm)?;
     bounded(
         c,
         "cavitation.static_pressure_kpa",
@@ -698,9 +706,9 @@ fn validate_skirt(
         top_above_pin,
         slices: p.slices,
         clearance: c.nonneg("piston.clearance_um", p.clearance_um)? * 1e-6,
-        barrel: c.nonneg("piston.barrel_um", p.barrel_um)? * 1e-6,
+        barrel: c.within("piston.barrel_um", p.barrel_um, SKIRT_PROFILE_UM)? * 1e-6,
         barrel_max_below_pin: barrel_max_below_pin(c, p, skirt_length, top_above_pin)?,
-        ovality: c.nonneg("piston.ovality_um", p.ovality_um)? * 1e-6,
+        ovality: c.within("piston.ovality_um", p.ovality_um, SKIRT_PROFILE_UM)? * 1e-6,
         piston_expansion: expansion(
             "piston.thermal.piston_expansion_per_k",
             th.piston_expansion_per_k,
@@ -722,6 +730,10 @@ fn validate_skirt(
 
 /// `[piston]`: masses, geometry (the pin inside the liner at TDC, the offset within the rod's
 /// reach), skirt profile, slices and thermal state.
+/// Skirt profile depths accepted \[um\] (`piston.barrel_um`, `piston.ovality_um`): profiles
+/// are 10-500 um; 1e308 um gave a 306-digit hot clearance and no slap at all.
+const SKIRT_PROFILE_UM: (f64, f64) = (0.0, 5000.0);
+
 pub(super) fn validate_piston(
     c: &Checker<'_>,
     p: &raw::RawPiston,
@@ -1036,7 +1048,12 @@ pub(super) fn validate_operating(
             cb.exhaust_over_intake_bar,
         )? * 1e5,
         start_deg: cb.start_deg,
-        duration_deg: c.positive("operating.combustion.duration_deg", cb.duration_deg)?,
+        // a burn lasts 40-120 deg; one longer than the cycle is no burn
+        duration_deg: c.within(
+            "operating.combustion.duration_deg",
+            c.positive("operating.combustion.duration_deg", cb.duration_deg)?,
+            (0.0, 720.0),
+        )?,
         a: c.positive("operating.combustion.wiebe_a", cb.wiebe_a)?,
         m: c.nonneg("operating.combustion.wiebe_m", cb.wiebe_m)?,
         heat_j: c.nonneg("operating.combustion.heat_release_j", cb.heat_release_j)?,
@@ -1255,6 +1272,7 @@ pub(super) fn validate_crankcase(
             "the crankcase needs a liner flange to seat on (flange diameter > outer diameter)",
         ));
     }
+    crankcase_proportions(c, &geometry, engine.bore)?;
     if geometry.seat_z - geometry.deck_thickness
         <= geometry.guide_bottom + geometry.guide_height + 1e-9
     {
@@ -1282,7 +1300,14 @@ pub(super) fn validate_crankcase(
         Some(f) => CrankcaseSource::File(mesh_file(c, "crankcase.mesh_file", base, f)?),
         None => CrankcaseSource::Parametric { geometry, meshing },
     };
-    let clamp_force = c.positive("crankcase.flange_clamp_kn", cc.flange_clamp_kn)? * 1e3;
+    c.positive("crankcase.flange_clamp_kn", cc.flange_clamp_kn)?;
+    // a liner's clamp is 50-300 kN; 1e5 kN pushed the flange through its seat (deep
+    // penetration blamed on the contact)
+    let clamp_force = c.within(
+        "crankcase.flange_clamp_kn",
+        cc.flange_clamp_kn,
+        (0.0, MAX_CLAMP_KN),
+    )? * 1e3;
     let file = matches!(source, CrankcaseSource::File(_));
     Ok(Crankcase {
         material: match &cc.material {
@@ -1296,7 +1321,7 @@ pub(super) fn validate_crankcase(
         mesh_unit: mesh_unit(c, "crankcase.mesh_unit", &cc.mesh_unit, file)?,
         box_sets: box_sets(c, "crankcase.sets", &cc.sets)?,
         source,
-        fix: cc.fix.clone(),
+        fix: non_empty_fix(c, &cc.fix)?,
         clamp_force,
     })
 }
@@ -1382,6 +1407,51 @@ fn max_penetration(c: &Checker<'_>, um: f64) -> Result<f64, SceneError> {
     }
     Ok(c.positive(key, um)? * 1e-6)
 }
+
+/// Refuses crankcase walls, deck, rails and bay depth that no engine has: thinner than
+/// [`MIN_WALL_MM`] (a 1e-9 mm deck made degenerate elements, named by no key) or larger than
+/// [`MAX_WALL_BORES`] bores (a 14 m front wall on a 115 mm bore ran without a word).
+fn crankcase_proportions(
+    c: &Checker<'_>,
+    g: &CrankcaseGeometry,
+    bore: f64,
+) -> Result<(), SceneError> {
+    let lengths = [
+        ("crankcase.deck_thickness_mm", g.deck_thickness),
+        ("crankcase.jacket_wall_mm", g.jacket_wall),
+        ("crankcase.skirt_depth_mm", g.skirt_depth),
+        ("crankcase.front_wall_mm", g.front_wall),
+        ("crankcase.rear_wall_mm", g.rear_wall),
+        ("crankcase.rail_width_mm", g.rail_width),
+        ("crankcase.rail_height_mm", g.rail_height),
+    ];
+    let hi = MAX_WALL_BORES * bore * 1e3;
+    for (key, v) in lengths {
+        c.within(key, v * 1e3, (MIN_WALL_MM, hi))?;
+    }
+    Ok(())
+}
+
+/// The largest liner clamp accepted \[kN\] (engines clamp a liner with 50-300 kN).
+const MAX_CLAMP_KN: f64 = 5000.0;
+
+/// The crankcase's fixed node sets: at least one (without, the engine floats: the reduced
+/// stiffness was singular, a failure named by no key).
+fn non_empty_fix(c: &Checker<'_>, fix: &[String]) -> Result<Vec<String>, SceneError> {
+    if fix.is_empty() {
+        return Err(c.err(
+            "crankcase.fix",
+            "is empty: the engine must be held (name node sets of its mounts, e.g. [\"pan_rail\"])",
+        ));
+    }
+    Ok(fix.to_vec())
+}
+
+/// The thinnest crankcase wall accepted \[mm\] (cast walls are 3 mm and more).
+const MIN_WALL_MM: f64 = 1.0;
+/// The largest crankcase wall, deck, rail or bay depth accepted, in bores (an engine's crank
+/// bay is about 1.5 bores deep, its end walls a fifth of a bore thick).
+const MAX_WALL_BORES: f64 = 5.0;
 
 /// A mesh file's path: the name `f` (not blank: an empty one joined the scene's directory,
 /// "cannot read mesh file small/") in the scene's directory `base`, a file that is there (a
