@@ -329,18 +329,20 @@ pub fn check_output_file(path: &Path) -> Result<(), WriteError> {
 /// The first entry of directory `dir` that is not a regular file (a directory, a device, a
 /// link to one) and whose name matches one of `outputs` (a name, or `prefix*suffix`).
 fn taken_output(dir: &Path, outputs: &[&str]) -> Option<PathBuf> {
-    let matches = |name: &str| {
-        outputs.iter().any(|o| match o.split_once('*') {
-            Some((pre, suf)) => {
-                name.len() >= pre.len() + suf.len() && name.starts_with(pre) && name.ends_with(suf)
-            }
-            None => name == *o,
-        })
-    };
     std::fs::read_dir(dir).ok()?.flatten().find_map(|e| {
         let name = e.file_name().to_string_lossy().into_owned();
         let file = std::fs::metadata(e.path()).is_ok_and(|m| m.is_file());
-        (matches(&name) && !file).then(|| e.path())
+        (is_output(&name, outputs) && !file).then(|| e.path())
+    })
+}
+
+/// Whether file name `name` is one of `outputs` (names, or patterns with one `*`).
+fn is_output<S: AsRef<str>>(name: &str, outputs: &[S]) -> bool {
+    outputs.iter().any(|o| match o.as_ref().split_once('*') {
+        Some((pre, suf)) => {
+            name.len() >= pre.len() + suf.len() && name.starts_with(pre) && name.ends_with(suf)
+        }
+        None => name == o.as_ref(),
     })
 }
 
@@ -437,6 +439,8 @@ pub struct OutputDir {
     target: PathBuf,
     staging: PathBuf,
     committed: bool,
+    /// The names the command writes (for the files an earlier run left: [`OutputDir::commit`]).
+    outputs: Vec<String>,
 }
 
 impl OutputDir {
@@ -472,6 +476,7 @@ impl OutputDir {
             target: target.to_path_buf(),
             staging,
             committed: false,
+            outputs: outputs.iter().map(|o| o.to_string()).collect(),
         })
     }
 
@@ -518,13 +523,43 @@ impl OutputDir {
             }
             names.push((entry.path(), to));
         }
-        for (from, to) in names {
-            std::fs::rename(&from, &to).map_err(|e| fail(&to, e))?;
+        for (from, to) in &names {
+            std::fs::rename(from, to).map_err(|e| fail(to, e))?;
         }
         let _ = std::fs::remove_dir(&self.staging);
         unregister(&self.staging);
         self.committed = true;
+        self.warn_of_older_outputs(&names);
         Ok(())
+    }
+
+    /// Warns of the files of the target directory that this command writes by name but this
+    /// run did not (`written`): an earlier run's `--maps` or sampled sweep, which would read as
+    /// this run's. They are left in place (a pattern such as `*.png` may match a file of the
+    /// user's).
+    fn warn_of_older_outputs(&self, written: &[(PathBuf, PathBuf)]) {
+        let Ok(entries) = std::fs::read_dir(&self.target) else {
+            return;
+        };
+        let mut older: Vec<String> = entries
+            .flatten()
+            .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| is_output(n, &self.outputs))
+            .filter(|n| {
+                !written
+                    .iter()
+                    .any(|(_, to)| to.file_name().is_some_and(|f| f == n.as_str()))
+            })
+            .collect();
+        if !older.is_empty() {
+            older.sort();
+            log::warn!(
+                "{}: {} not written by this run (left by an earlier one)",
+                self.target.display(),
+                older.join(", ")
+            );
+        }
     }
 }
 

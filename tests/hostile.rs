@@ -454,6 +454,37 @@ fn small_rom_cache() -> (tempfile::TempDir, String) {
     (cache, cache_dir)
 }
 
+/// Regression (session 70's hostile sweep): a run into a directory that an earlier run of the
+/// command filled left that run's other files beside its own without a word (`--maps`
+/// images beside a run without maps); they are named as an earlier run's, and left.
+#[test]
+fn regression_outputs_of_an_earlier_run_are_named() {
+    let (_cache, cache_dir) = small_rom_cache();
+    let out = tempfile::tempdir().unwrap();
+    let o = out.path().to_str().unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["simulate", SMALL, "--cache-dir", &cache_dir, "--out", o];
+        args.extend([
+            "--set",
+            "transient.cycles=2",
+            "--set",
+            "transient.averaged_cycles=1",
+        ]);
+        args.extend(extra);
+        let (code, _, err) = linercav(&args);
+        assert_eq!(code, 0, "{err}");
+        err
+    };
+    let first = run(&["--maps"]);
+    assert!(!first.contains("earlier"), "{first}");
+    let second = run(&[]);
+    assert!(
+        second.contains("liner_maps.png, liner_maps.vtu not written by this run"),
+        "{second}"
+    );
+    assert!(out.path().join("liner_maps.png").exists(), "left in place");
+}
+
 /// Names in a directory with their contents (directories as "<dir>").
 fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut v: Vec<(String, Vec<u8>)> = match std::fs::read_dir(dir) {

@@ -236,6 +236,9 @@ fn read_bare_mesh(
             flag: "--youngs/--poisson/--density".into(),
             msg: m.to_string(),
         })?;
+        if let Some(w) = m.structural_warning("--youngs") {
+            log::warn!("{w}");
+        }
     }
     read_mesh(
         &MeshSource::File(mesh.to_path_buf()),

@@ -136,6 +136,18 @@ impl RigData {
                     });
                 }
             }
+            // the wall pressure is absolute (a negative one is a gauge reading or a sign
+            // slip: every event read as cavitating)
+            if v[2] < 0.0 {
+                return Err(CalibrationError::Line {
+                    file: file.into(),
+                    line: ln + 1,
+                    msg: format!(
+                        "pressure_kpa {} is negative: the column holds the absolute wall pressure",
+                        crate::text::num(v[2])
+                    ),
+                });
+            }
             if let Some(&last) = d.time.last() {
                 if v[0] <= last {
                     return Err(CalibrationError::Line {
@@ -395,6 +407,9 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("'time_s' twice"), "{e}");
+        let e =
+            RigData::parse("r.csv", "time_s,acceleration_m_s2,pressure_kpa\n0,1,-2\n").unwrap_err();
+        assert!(e.to_string().contains("is negative"), "{e}");
         let e = RigData::parse("r.csv", "time_s,acceleration_m_s2\n0,1\n").unwrap_err();
         assert!(
             e.to_string().contains("missing column 'pressure_kpa'"),

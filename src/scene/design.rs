@@ -282,6 +282,17 @@ impl Design {
             }
         };
         let keys = design.keys();
+        // where and within what a study runs is no input of its runs (`limits.max_hours=1,2`
+        // and `rom.cache_dir=/a,/b` ran)
+        if let Some(k) = keys.iter().find(|k| {
+            ["limits", "rom.cache_dir"]
+                .iter()
+                .any(|o| super::overrides::within(o, k) || super::overrides::within(k, o))
+        }) {
+            return Err(DesignError::Design(format!(
+                "'{k}' is not an input of the runs (limits and the cache directory hold for the whole study): fix it with --set"
+            )));
+        }
         // a key twice, or a table and a key inside it (the run's value would hang on their
         // order)
         for (i, k) in keys.iter().enumerate() {
@@ -632,6 +643,23 @@ mod tests {
         assert!(e.contains("is too large"), "{e}");
         let e = whole_number(" 12 ").unwrap();
         assert_eq!(e, 12);
+    }
+
+    /// Regression (session 70's hostile sweep): `--vary limits.max_hours=1,2` and
+    /// `--vary rom.cache_dir=/a,/b` ran (the second wrote a cache into each directory).
+    #[test]
+    fn regression_limits_and_the_cache_directory_are_not_varied() {
+        for arg in [
+            "limits.max_hours=1,2",
+            "rom.cache_dir=/a,/b",
+            "limits={max_hours=1},{max_hours=2}",
+        ] {
+            let e = Design::from_args(&[arg.into()], None, &[], None)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("is not an input of the runs"), "{arg}: {e}");
+        }
+        assert!(Design::from_args(&["rom.band_hz=4000,5000".into()], None, &[], None).is_ok());
     }
 
     /// Regression: a value given twice in two spellings (80,8e1 or 80,80.0) ran twice.

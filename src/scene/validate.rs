@@ -450,12 +450,64 @@ fn lubrication_of(l: raw::RawLubrication) -> spec::Lubrication {
     }
 }
 
-/// Thresholds written by `linercav calibrate --json`.
+/// Thresholds written by `linercav calibrate --json`, with the coolant state they were
+/// measured at (absent from a hand-written file).
 #[derive(serde::Deserialize)]
 pub(super) struct CalibrationThresholds {
     onset_m_s2: f64,
     high_risk_m_s2: f64,
     k_p_pa_per_m_s2: f64,
+    #[serde(default)]
+    gap_mm: Option<f64>,
+    #[serde(default)]
+    coolant: Option<CalibratedCoolant>,
+}
+
+/// The coolant state of a calibration (`calibrate --json`'s `coolant`).
+#[derive(serde::Deserialize)]
+struct CalibratedCoolant {
+    temp_c: f64,
+    glycol: f64,
+    static_pa: f64,
+}
+
+/// How the coolant state of calibration `t` differs from the scene's (`coolant`, `gap` in m):
+/// gap and static pressure by more than 2 %, temperature by more than 2 K, glycol by more
+/// than 0.01; each as "what: calibrated, scene".
+fn calibration_state_differences(
+    t: &CalibrationThresholds,
+    coolant: &crate::coolant::Coolant,
+    gap: f64,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    let rel = |a: f64, b: f64| (a - b).abs() > 0.02 * a.abs().max(b.abs());
+    if let Some(g) = t.gap_mm.filter(|&g| rel(g, gap * 1e3)) {
+        out.push(format!("gap {} mm, scene {} mm", num(g), num(gap * 1e3)));
+    }
+    if let Some(k) = &t.coolant {
+        if (k.temp_c - coolant.temp_c).abs() > 2.0 {
+            out.push(format!(
+                "{} C, scene {} C",
+                num(k.temp_c),
+                num(coolant.temp_c)
+            ));
+        }
+        if rel(k.static_pa, coolant.static_pa) {
+            out.push(format!(
+                "{} kPa, scene {} kPa",
+                num(k.static_pa * 1e-3),
+                num(coolant.static_pa * 1e-3)
+            ));
+        }
+        if (k.glycol - coolant.glycol).abs() > 0.01 {
+            out.push(format!(
+                "glycol {}, scene {}",
+                num(k.glycol),
+                num(coolant.glycol)
+            ));
+        }
+    }
+    out
 }
 
 /// Largest coolant gap accepted \[mm\] (`cavitation.gap_mm`).
@@ -528,7 +580,17 @@ pub(super) fn validate_cavitation(
             f,
             "thresholds from k_p_pa_per_m_s2, onset_m_s2 and high_risk_m_s2",
         )?;
-        calibration_thresholds(c, &base.join(f))?
+        let (spec, t) = calibration_thresholds(c, &base.join(f))?;
+        let differs = calibration_state_differences(&t, &coolant, gap);
+        if !differs.is_empty() {
+            // (a calibration made with another coolant was applied without a word)
+            log::warn!(
+                "{}: cavitation.calibration_file {f} was measured at another coolant state ({}): its onset and high-risk thresholds are the rig's at that state",
+                c.path.display(),
+                differs.join("; ")
+            );
+        }
+        spec
     } else {
         if let Some(k) = r.k_p_pa_per_m_s2 {
             if !(k.is_finite() && k >= 0.0) {
@@ -586,7 +648,7 @@ pub(super) fn validate_cavitation(
 pub(super) fn calibration_thresholds(
     c: &Checker<'_>,
     path: &Path,
-) -> Result<ThresholdSpec, SceneError> {
+) -> Result<(ThresholdSpec, CalibrationThresholds), SceneError> {
     let key = "cavitation.calibration_file";
     let text = crate::files::read_text(path, crate::files::LIMIT_TEXT)
         .map_err(|e| c.err(key, format!("cannot read {}: {e}", path.display())))?;
@@ -635,11 +697,12 @@ pub(super) fn calibration_thresholds(
             ),
         ));
     }
-    Ok(ThresholdSpec::Calibrated {
+    let spec = ThresholdSpec::Calibrated {
         onset_m_s2: t.onset_m_s2,
         high_risk_m_s2: t.high_risk_m_s2,
         k_p_pa_per_m_s2: t.k_p_pa_per_m_s2,
-    })
+    };
+    Ok((spec, t))
 }
 
 pub(super) fn validate_simulation(
@@ -1497,4 +1560,33 @@ pub(super) fn path_value<'f>(
         ));
     }
     Ok(f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression (session 70's hostile sweep): a calibration measured at a 4.7 mm gap, 90 C
+    /// and 240 kPa was applied to a scene at 20 mm without a word; each difference is named,
+    /// and the same state (within 2 %, 2 K) gives none.
+    #[test]
+    fn regression_a_calibration_at_another_coolant_state_is_named() {
+        let t: CalibrationThresholds = serde_json::from_str(
+            r#"{"onset_m_s2": 900, "high_risk_m_s2": 1200, "k_p_pa_per_m_s2": 138,
+                "gap_mm": 4.7, "coolant": {"temp_c": 90, "glycol": 0, "static_pa": 240000,
+                "density_kg_m3": 965}, "events": 25}"#,
+        )
+        .unwrap();
+        let at = |temp, static_pa| crate::coolant::Coolant::new(temp, 0.0, static_pa).unwrap();
+        assert!(calibration_state_differences(&t, &at(90.5, 241e3), 4.75e-3).is_empty());
+        let d = calibration_state_differences(&t, &at(20.0, 500e3), 20e-3);
+        assert_eq!(d.len(), 3, "{d:?}");
+        assert!(d[0].contains("gap 4.7 mm, scene 20 mm"), "{d:?}");
+        // a hand-written file (the thresholds only) states no coolant
+        let bare: CalibrationThresholds = serde_json::from_str(
+            r#"{"onset_m_s2": 900, "high_risk_m_s2": 1200, "k_p_pa_per_m_s2": 138}"#,
+        )
+        .unwrap();
+        assert!(calibration_state_differences(&bare, &at(20.0, 500e3), 20e-3).is_empty());
+    }
 }
