@@ -111,43 +111,7 @@ impl RigData {
                     msg: crate::text::field_count_message(fields.len(), names.len()),
                 });
             }
-            let mut v = [0.0; 3];
-            for k in 0..3 {
-                let s = fields.get(idx[k]).ok_or_else(|| CalibrationError::Line {
-                    file: file.into(),
-                    line: ln + 1,
-                    msg: format!(
-                        "{} fields, column '{}' is field {}",
-                        fields.len(),
-                        COLUMNS[k],
-                        idx[k] + 1
-                    ),
-                })?;
-                v[k] = s.parse::<f64>().map_err(|_| CalibrationError::Line {
-                    file: file.into(),
-                    line: ln + 1,
-                    msg: format!("'{s}' in column '{}' is not a number", COLUMNS[k]),
-                })?;
-                if !v[k].is_finite() {
-                    return Err(CalibrationError::Line {
-                        file: file.into(),
-                        line: ln + 1,
-                        msg: format!("{} in column '{}' (need finite values)", v[k], COLUMNS[k]),
-                    });
-                }
-            }
-            // the wall pressure is absolute (a negative one is a gauge reading or a sign
-            // slip: every event read as cavitating)
-            if v[2] < 0.0 {
-                return Err(CalibrationError::Line {
-                    file: file.into(),
-                    line: ln + 1,
-                    msg: format!(
-                        "pressure_kpa {} is negative: the column holds the absolute wall pressure",
-                        crate::text::num(v[2])
-                    ),
-                });
-            }
+            let v = row_values(file, ln + 1, &fields, &idx)?;
             if let Some(&last) = d.time.last() {
                 if v[0] <= last {
                     return Err(CalibrationError::Line {
@@ -218,6 +182,54 @@ pub struct Calibration {
     pub coolant: Coolant,
     pub gap_mm: f64,
     pub event_list: Vec<Event>,
+}
+
+/// The three values (time, acceleration, pressure) of rig-data line `line` (`fields`, the
+/// columns at `idx`): numbers, finite, the absolute pressure not negative.
+fn row_values(
+    file: &str,
+    line: usize,
+    fields: &[&str],
+    idx: &[usize; 3],
+) -> Result<[f64; 3], CalibrationError> {
+    let mut v = [0.0; 3];
+    for k in 0..3 {
+        let s = fields.get(idx[k]).ok_or_else(|| CalibrationError::Line {
+            file: file.into(),
+            line,
+            msg: format!(
+                "{} fields, column '{}' is field {}",
+                fields.len(),
+                COLUMNS[k],
+                idx[k] + 1
+            ),
+        })?;
+        v[k] = s.parse::<f64>().map_err(|_| CalibrationError::Line {
+            file: file.into(),
+            line,
+            msg: format!("'{s}' in column '{}' is not a number", COLUMNS[k]),
+        })?;
+        if !v[k].is_finite() {
+            return Err(CalibrationError::Line {
+                file: file.into(),
+                line,
+                msg: format!("{} in column '{}' (need finite values)", v[k], COLUMNS[k]),
+            });
+        }
+    }
+    // the wall pressure is absolute (a negative one is a gauge reading or a sign
+    // slip: every event read as cavitating)
+    if v[2] < 0.0 {
+        return Err(CalibrationError::Line {
+            file: file.into(),
+            line,
+            msg: format!(
+                "pressure_kpa {} is negative: the column holds the absolute wall pressure",
+                crate::text::num(v[2])
+            ),
+        });
+    }
+    Ok(v)
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

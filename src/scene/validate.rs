@@ -534,6 +534,40 @@ fn bounded(c: &Checker<'_>, key: &str, v: f64, max: f64, why: &str) -> Result<()
     Ok(())
 }
 
+/// The thresholds of the scene's calibration file `f` (not beside the scene's own threshold
+/// keys), with a warning when the file's coolant state differs from the scene's (`coolant`,
+/// `gap` in m).
+fn calibration_spec(
+    c: &Checker<'_>,
+    base: &Path,
+    (r, f): (&raw::RawCavitation, &str),
+    (coolant, gap): (&crate::coolant::Coolant, f64),
+) -> Result<ThresholdSpec, SceneError> {
+    if r.k_p_pa_per_m_s2.is_some() || r.onset_m_s2.is_some() || r.high_risk_m_s2.is_some() {
+        return Err(c.err(
+            "cavitation.calibration_file",
+            "give either a calibration file or k_p_pa_per_m_s2/onset_m_s2/high_risk_m_s2, not both",
+        ));
+    }
+    let f = path_value(
+        c,
+        "cavitation.calibration_file",
+        f,
+        "thresholds from k_p_pa_per_m_s2, onset_m_s2 and high_risk_m_s2",
+    )?;
+    let (spec, t) = calibration_thresholds(c, &base.join(f))?;
+    let differs = calibration_state_differences(&t, coolant, gap);
+    if !differs.is_empty() {
+        // (a calibration made with another coolant was applied without a word)
+        log::warn!(
+            "{}: cavitation.calibration_file {f} was measured at another coolant state ({}): its onset and high-risk thresholds are the rig's at that state",
+            c.path.display(),
+            differs.join("; ")
+        );
+    }
+    Ok(spec)
+}
+
 pub(super) fn validate_cavitation(
     c: &Checker<'_>,
     base: &Path,
@@ -568,29 +602,7 @@ pub(super) fn validate_cavitation(
         "a cooling system holds 1-3 bar",
     )?;
     let thresholds = if let Some(f) = &r.calibration_file {
-        if r.k_p_pa_per_m_s2.is_some() || r.onset_m_s2.is_some() || r.high_risk_m_s2.is_some() {
-            return Err(c.err(
-                "cavitation.calibration_file",
-                "give either a calibration file or k_p_pa_per_m_s2/onset_m_s2/high_risk_m_s2, not both",
-            ));
-        }
-        let f = path_value(
-            c,
-            "cavitation.calibration_file",
-            f,
-            "thresholds from k_p_pa_per_m_s2, onset_m_s2 and high_risk_m_s2",
-        )?;
-        let (spec, t) = calibration_thresholds(c, &base.join(f))?;
-        let differs = calibration_state_differences(&t, &coolant, gap);
-        if !differs.is_empty() {
-            // (a calibration made with another coolant was applied without a word)
-            log::warn!(
-                "{}: cavitation.calibration_file {f} was measured at another coolant state ({}): its onset and high-risk thresholds are the rig's at that state",
-                c.path.display(),
-                differs.join("; ")
-            );
-        }
-        spec
+        calibration_spec(c, base, (r, f), (&coolant, gap))?
     } else {
         if let Some(k) = r.k_p_pa_per_m_s2 {
             if !(k.is_finite() && k >= 0.0) {
