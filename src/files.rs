@@ -74,14 +74,18 @@ pub fn stop_cleanly() {
     std::process::exit(130);
 }
 
-/// What an abort (an allocation beyond the memory a cap leaves: Rust's allocation-failure
-/// handler aborts) leaves undone: removes the temporary files and directories and the new,
-/// empty output directories, as [`stop_cleanly`] does, but only when their registries are
-/// free at once (the aborting thread may hold one; waiting would hang the abort). Called from
-/// the command line's SIGABRT handler, which then lets the abort go on.
-pub fn remove_temporaries_at_abort() {
-    let Ok(mut temporaries) = TEMPORARIES.try_lock() else {
-        return;
+/// Before the process exits on a failed allocation (from any thread): removes the temporary
+/// files and directories and the new, empty output directories, as [`stop_cleanly`] does,
+/// and keeps the registries locked until the process ends (nothing new is made or moved
+/// meanwhile). Returns false, removing nothing, when a lock is not free at once (a move of
+/// outputs under way, or the failing thread holding a registry: waiting could hang).
+pub fn remove_temporaries_for_exit() -> bool {
+    let (Ok(moving), Ok(mut temporaries), Ok(mut dirs)) = (
+        COMMITTING.try_lock(),
+        TEMPORARIES.try_lock(),
+        NEW_DIRS.try_lock(),
+    ) else {
+        return false;
     };
     for p in temporaries.drain(..) {
         if p.is_dir() {
@@ -90,11 +94,11 @@ pub fn remove_temporaries_at_abort() {
             let _ = std::fs::remove_file(&p);
         }
     }
-    if let Ok(mut dirs) = NEW_DIRS.try_lock() {
-        for d in dirs.drain(..).rev() {
-            let _ = std::fs::remove_dir(&d);
-        }
+    for d in dirs.drain(..).rev() {
+        let _ = std::fs::remove_dir(&d);
     }
+    std::mem::forget((moving, temporaries, dirs));
+    true
 }
 
 /// An output file that could not be written.
@@ -336,6 +340,52 @@ fn taken_output(dir: &Path, outputs: &[&str]) -> Option<PathBuf> {
     })
 }
 
+/// Removes the staging directories of `target` (beside it in `parent`, or inside it) that
+/// processes no longer running left: an abort (an allocation the standard library could not
+/// make) ends a run without its cleanup. A directory whose process id is alive, or reused by
+/// another process, is left.
+fn remove_stale_staging(target: &Path, parent: &Path) {
+    let Some(name) = target.file_name().map(|n| n.to_string_lossy().into_owned()) else {
+        return;
+    };
+    let beside = format!(".{name}.");
+    let stale = |dir: &Path, pid_of: &dyn Fn(&str) -> Option<i32>| {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
+        for e in entries.flatten() {
+            let n = e.file_name().to_string_lossy().into_owned();
+            let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+            if let Some(pid) = pid_of(&n).filter(|&p| is_dir && !process_alive(p)) {
+                log::warn!(
+                    "{}: removing a staging directory left by process {pid}",
+                    e.path().display()
+                );
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    };
+    stale(parent, &|n| {
+        n.strip_prefix(beside.as_str())?
+            .strip_suffix(".tmp")?
+            .parse()
+            .ok()
+    });
+    stale(target, &|n| {
+        n.strip_prefix(".linercav-staging.")?.parse().ok()
+    });
+}
+
+/// Whether process `pid` exists (signal 0: EPERM means it does, under another user).
+fn process_alive(pid: i32) -> bool {
+    if pid <= 0 {
+        return true;
+    }
+    // SAFETY: kill with signal 0 sends nothing; it only checks that the process exists
+    let r = unsafe { libc::kill(pid, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+}
+
 /// Whether file name `name` is one of `outputs` (names, or patterns with one `*`).
 fn is_output<S: AsRef<str>>(name: &str, outputs: &[S]) -> bool {
     outputs.iter().any(|o| match o.as_ref().split_once('*') {
@@ -465,6 +515,7 @@ impl OutputDir {
             )));
         }
         std::fs::create_dir_all(&parent).map_err(fail)?;
+        remove_stale_staging(target, &parent);
         let staging = if target.is_dir() {
             target.join(format!(".linercav-staging.{}", std::process::id()))
         } else {
@@ -533,10 +584,10 @@ impl OutputDir {
         Ok(())
     }
 
-    /// Warns of the files of the target directory that this command writes by name but this
-    /// run did not (`written`): an earlier run's `--maps` or sampled sweep, which would read as
-    /// this run's. They are left in place (a pattern such as `*.png` may match a file of the
-    /// user's).
+    /// Warns of the files of the target directory that this command writes by name (its exact
+    /// names, not its patterns such as `*.png`, which other commands' files match) but this run
+    /// did not (`written`): an earlier run's `--maps` or sampled sweep, which would read as
+    /// this run's. They are left in place.
     fn warn_of_older_outputs(&self, written: &[(PathBuf, PathBuf)]) {
         let Ok(entries) = std::fs::read_dir(&self.target) else {
             return;
@@ -545,7 +596,7 @@ impl OutputDir {
             .flatten()
             .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
             .map(|e| e.file_name().to_string_lossy().into_owned())
-            .filter(|n| is_output(n, &self.outputs))
+            .filter(|n| self.outputs.iter().any(|o| !o.contains('*') && o == n))
             .filter(|n| {
                 !written
                     .iter()
@@ -555,7 +606,7 @@ impl OutputDir {
         if !older.is_empty() {
             older.sort();
             log::warn!(
-                "{}: {} not written by this run (left by an earlier one)",
+                "{}: {} not written by this run (an earlier run's)",
                 self.target.display(),
                 older.join(", ")
             );
@@ -569,5 +620,31 @@ impl Drop for OutputDir {
             let _ = std::fs::remove_dir_all(&self.staging);
             unregister(&self.staging);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression (session 70's hostile sweep): an aborted run's staging directory stayed
+    /// beside its output (`.fo_x.PID.tmp`) through later runs; the next output directory made
+    /// there removes those of processes no longer running, and keeps this process's own.
+    #[test]
+    fn regression_a_dead_run_s_staging_is_removed_by_the_next() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("out");
+        let dead = dir.path().join(".out.999999999.tmp");
+        let ours = dir.path().join(format!(".out.{}.tmp", std::process::id()));
+        let other = dir.path().join(".other.999999999.tmp");
+        for d in [&dead, &ours, &other] {
+            std::fs::create_dir(d).unwrap();
+        }
+        remove_stale_staging(&target, dir.path());
+        assert!(!dead.exists(), "a dead process's staging is removed");
+        assert!(
+            ours.exists() && other.exists(),
+            "live or unrelated ones stay"
+        );
     }
 }

@@ -516,6 +516,35 @@ fn regression_empty_or_missing_mesh_file_is_refused_by_key() {
     }
 }
 
+/// Regression (session 70's review): the material bounds (E, density, wave speed) held a
+/// deck's dummy materials too, which carry no solid (a "massless" MAT1 of 1e-3 kg/m^3 for
+/// connectors refused the whole deck); only the materials solid elements use are checked,
+/// and those are refused with their name.
+#[test]
+fn regression_only_the_materials_of_solids_are_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = dir.path().join("dummy.bdf");
+    let write = |pid_mat: &str| {
+        std::fs::write(
+            &deck,
+            format!(
+                "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\n\
+                 GRID,5,,1.,1.,1.\nCTETRA,1,1,1,2,3,4\nCTETRA,2,1,2,3,4,5\nPSOLID,1,{pid_mat}\n\
+                 MAT1,1,2.1e11,,0.3,7850.\nMAT1,2,2.1e13,,0.3,1e-3\nENDDATA\n"
+            ),
+        )
+        .unwrap();
+    };
+    let args = ["modes", "--mesh", deck.to_str().unwrap(), "--count", "2"];
+    write("1");
+    let (code, _, err) = common::linercav(&args);
+    assert_eq!(code, 0, "{err}");
+    write("2");
+    let (code, _, err) = common::linercav(&args);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("'MAT1 2'") && err.contains("density"), "{err}");
+}
+
 /// Regression: a material given on the command line (or in the scene) over a deck that
 /// defines other constants replaced them silently (noted in the log only); it is warned of,
 /// naming the deck's material, and the same constants as the deck's are not.

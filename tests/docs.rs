@@ -127,7 +127,8 @@ fn render(
         "# Scene reference\n\nGenerated from `src/scene/raw.rs` by `tests/docs.rs` \
          (`LINERCAV_UPDATE_DOCS=1 cargo test --release --test docs`); do not edit by hand.\n\n\
          Units: SI unless the key names another (`_mm`, `_um`, `_deg`, `_c`, `_bar`, `_kpa`, \
-         `_kn`, `_gb`, ...). *required*: the key must be given (in its section, when the section \
+         `_kn`, `_gb`, ...); a length in mm lies in [0.01, 30000] unless its row says more. \
+         *required*: the key must be given (in its section, when the section \
          is used). `--set KEY=VALUE` overrides any key. Values are checked when the scene is \
          loaded (ranges in the descriptions, refusals with the key named); see the README's \
          \"Bad input, limits, exit codes\".\n",

@@ -5,7 +5,8 @@ pub mod progress;
 
 /// Installs the front end: progress on a terminal ([`progress::indicator`]), the removal of
 /// temporary files when SIGINT, SIGTERM or SIGHUP stops the process
-/// ([`linercav::files::stop_cleanly`]) or an abort ends it ([`on_abort`]), and SIGXFSZ ignored: a write beyond the file-size
+/// ([`linercav::files::stop_cleanly`]) or an allocation fails ([`out_of_memory_is_an_error`]),
+/// and SIGXFSZ ignored: a write beyond the file-size
 /// limit (`ulimit -f`, a scheduler's) then fails as an error, which removes the temporary
 /// file and names the output, where the signal killed the process and left the temporary.
 pub fn install() {
@@ -16,36 +17,15 @@ pub fn install() {
         libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
     }
     out_of_memory_is_an_error();
-    // SAFETY: `on_abort` only writes a fixed message, removes files through locks it does not
-    // wait for, and re-raises the signal with its default action.
-    unsafe {
-        libc::signal(
-            libc::SIGABRT,
-            on_abort as extern "C" fn(libc::c_int) as *const () as libc::sighandler_t,
-        );
-    }
 }
 
-/// SIGABRT (an allocation that failed beyond the estimate: exit 134): says so, removes the
-/// temporaries ([`linercav::files::remove_temporaries_at_abort`]; a staged output directory
-/// was left behind) and goes on with the abort.
-extern "C" fn on_abort(_: libc::c_int) {
-    const MSG: &[u8] = b"linercav: aborted (out of memory beyond the estimate, or an internal error); temporary files removed, outputs left as they were\n";
-    // SAFETY: write(2) of a static buffer; signal(2) and raise(3) restore and deliver the
-    // default action (the process ends with SIGABRT, as without this handler)
-    unsafe {
-        libc::write(2, MSG.as_ptr().cast(), MSG.len());
-        linercav::files::remove_temporaries_at_abort();
-        libc::signal(libc::SIGABRT, libc::SIG_DFL);
-        libc::raise(libc::SIGABRT);
-    }
-}
-
-/// A panic that is an allocation failure (faer's and the standard library's fallible
-/// allocations unwrap theirs: "AllocError", "capacity overflow") ends the run as a failure,
-/// exit 1, with what failed and where, its temporaries removed; a run the estimates let
-/// through should not get there, but a machine's memory can change under a run. Every other
-/// panic keeps the default report (a bug: exit 101).
+/// A panic that is an allocation failure (faer unwraps its fallible allocations' `AllocError`)
+/// ends the run as a failure, exit 1, with what failed and where, its temporaries removed
+/// ([`linercav::files::remove_temporaries_for_exit`]); a run the estimates let through should
+/// not get there, but a machine's memory can change under a run. Every other panic keeps the
+/// default report (a bug, "capacity overflow" from an unchecked size among them: exit 101).
+/// An allocation the standard library cannot make aborts (exit 134); its staging directory
+/// is removed by the next run into the same place ([`linercav::files::OutputDir::create`]).
 fn out_of_memory_is_an_error() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
@@ -55,13 +35,18 @@ fn out_of_memory_is_an_error() {
             .map(String::as_str)
             .or_else(|| payload.downcast_ref::<&str>().copied())
             .unwrap_or("");
-        if msg.contains("AllocError") || msg.contains("capacity overflow") {
-            linercav::files::remove_temporaries_at_abort();
+        if msg.contains("AllocError") {
+            let removed = linercav::files::remove_temporaries_for_exit();
             let at = info
                 .location()
                 .map(|l| format!(" at {}:{}", l.file(), l.line()))
                 .unwrap_or_default();
-            eprintln!("error: out of memory: an allocation failed{at} ({msg}): the run needed more than its estimate or the machine had less than it reported; temporary files removed, outputs left as they were");
+            let left = if removed {
+                "temporary files removed, outputs left as they were"
+            } else {
+                "temporary files may be left (a move of outputs was under way)"
+            };
+            eprintln!("error: out of memory: an allocation failed{at} ({msg}): the run needed more than its estimate or the machine had less than it reported; {left}");
             std::process::exit(1);
         }
         default(info);

@@ -115,7 +115,11 @@ pub fn resolve_material(
             mesh.element_name(e)
         )));
     }
-    for m in &mesh.materials {
+    // only the materials solid elements use: a deck's dummy materials of beams and
+    // connectors ("massless", "rigid") carry no solid
+    let used: std::collections::BTreeSet<u32> = mesh.element_material.iter().copied().collect();
+    let solid = |k: &usize| used.contains(&(*k as u32));
+    for (_, m) in mesh.materials.iter().enumerate().filter(|(k, _)| solid(k)) {
         m.elastic
             .validate()
             .map_err(|e| {
@@ -128,14 +132,21 @@ pub fn resolve_material(
     let unusual: Vec<String> = mesh
         .materials
         .iter()
-        .filter_map(|m| {
+        .enumerate()
+        .filter(|(k, _)| solid(k))
+        .filter_map(|(_, m)| {
             m.elastic
                 .structural_warning(&format!("the deck's material '{}'", m.name))
         })
         .collect();
     let warning =
         (!unusual.is_empty()).then(|| format!("{}: {}", path.display(), unusual.join("; ")));
-    Ok((mesh.materials[0].elastic, MaterialSource::Deck, warning))
+    let nominal = (0..mesh.materials.len()).find(solid).unwrap_or(0);
+    Ok((
+        mesh.materials[nominal].elastic,
+        MaterialSource::Deck,
+        warning,
+    ))
 }
 
 /// The warning for a given material `m` that replaces deck materials of `mesh` with other

@@ -319,6 +319,20 @@ pub fn load_meshes(scene: &Scene) -> Result<EngineMeshes> {
     load_meshes_for(scene, budget::Split::of(scene))
 }
 
+/// Refuses an engine model (its ROM, its full model) of a crankcase held by no node set:
+/// its reduced stiffness was singular, a failure named by no key. The meshes alone
+/// (`export-mesh`, a free-free crankcase deck) need none.
+pub fn check_held(scene: &Scene) -> Result<()> {
+    if crankcase_of(scene)?.fix.is_empty() {
+        return Err(SceneRomError::Scene(SceneError::Field {
+            path: scene.path.clone(),
+            key: "crankcase.fix".into(),
+            msg: "is empty: the engine must be held (name node sets of its mounts, e.g. [\"pan_rail\"])".into(),
+        }));
+    }
+    Ok(())
+}
+
 /// [`load_meshes`] for the reduction `split` says (a component task sizes only its own
 /// component once a mesh file is read).
 fn load_meshes_for(scene: &Scene, split: budget::Split) -> Result<EngineMeshes> {
@@ -617,6 +631,7 @@ fn cache_entry(scene: &Scene, description: &str, opts: &CacheOptions) -> (PathBu
 /// Refuses a ROM build of `scene` that its limits do not allow: nothing is built that the
 /// machine cannot hold or whose result cannot be stored.
 pub fn check_build_limits(scene: &Scene) -> Result<()> {
+    check_held(scene)?;
     if let Some(est) = budget::rom_build(scene, budget::Split::of(scene)) {
         Limits::of(scene).check(scene, &est)?;
     }
@@ -741,6 +756,7 @@ pub fn reduce_component(scene: &Scene, opts: &CacheOptions, index: usize) -> Res
     if let Some(est) = budget::rom_build(scene, split) {
         Limits::of(scene).check(scene, &est)?;
     }
+    check_held(scene)?;
     let em = load_meshes_for(scene, split)?;
     let mut inputs = rom_inputs(scene, &em, false);
     inputs.part_cache = Some(dir);
@@ -771,6 +787,7 @@ pub struct SceneFullModes {
 /// scene's shift, certified (Sturm count with the scene's guard modes): the reference of
 /// `modes --assembly --full` and `rom-tradeoff`.
 pub fn full_modes(scene: &Scene, count: usize) -> Result<SceneFullModes> {
+    check_held(scene)?;
     let em = load_meshes(scene)?;
     let inp = rom_inputs(scene, &em, false);
     let axis_x = inp.axis_x.clone();

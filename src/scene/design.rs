@@ -547,15 +547,22 @@ impl Shard {
                     problem: format!("the array must be a contiguous range like --array=0-9 (or give {flag} I/N)"),
                 });
             }
-            let count = max
-                .checked_sub(min)
-                .and_then(|d| d.checked_add(1))
-                .filter(|_| id >= min && id <= max);
-            let count = count.ok_or_else(|| DesignError::Environment {
-                var: "SLURM_ARRAY_TASK_ID",
-                value: id.to_string(),
-                problem: format!("outside SLURM_ARRAY_TASK_MIN..MAX = {min}..{max}"),
-            })?;
+            if id < min || id > max {
+                return Err(DesignError::Environment {
+                    var: "SLURM_ARRAY_TASK_ID",
+                    value: id.to_string(),
+                    problem: format!("outside SLURM_ARRAY_TASK_MIN..MAX = {min}..{max}"),
+                });
+            }
+            let count = (max - min)
+                .checked_add(1)
+                .ok_or_else(|| DesignError::Environment {
+                    var: "SLURM_ARRAY_TASK_MAX",
+                    value: max.to_string(),
+                    problem: format!(
+                        "the range {min}..{max} holds more tasks than this machine counts"
+                    ),
+                })?;
             if let Some(c) = number("SLURM_ARRAY_TASK_COUNT")?.filter(|&c| c != count) {
                 return Err(DesignError::Environment {
                     var: "SLURM_ARRAY_TASK_COUNT",

@@ -182,10 +182,11 @@ pub struct RawCrankcase {
     pub rail_width_mm: f64,
     pub rail_height_mm: f64,
     /// Head-bolt clamp force carried by each liner flange \[kN\] (bolt preload from torque:
-    /// F = T / (k d)); pushes the flange down and pulls the deck up (the bolt reaction); in
-    /// (0, 5000] (engines clamp a liner with 50-300 kN).
+    /// F = T / (k d)); pushes the flange down and pulls the deck up (the bolt reaction); > 0
+    /// and at most 500 MPa over the bore area (5.2 MN at 115 mm; engines clamp with 10-40 MPa).
     pub flange_clamp_kn: f64,
-    /// Node sets held fixed (engine mounting), at least one; the parametric mesh offers
+    /// Node sets held fixed (engine mounting; at least one for the engine's ROM and its full
+    /// model, none for a free-free `modes --part crankcase`); the parametric mesh offers
     /// `pan_rail`.
     #[serde(default)]
     pub fix: Vec<String>,
@@ -345,8 +346,9 @@ pub struct RawMaterial {
     /// Poisson's ratio, in (-1, 0.5).
     pub poisson: f64,
     /// Density [kg/m^3], in [1, 1e5]; with E, a bar wave speed sqrt(E / rho) of at most 50
-    /// km/s (diamond's is 17 km/s: E and rho from two unit systems are refused). The same
-    /// bounds hold for a deck's materials and `--youngs/--density`.
+    /// km/s (diamond's is 17 km/s: mm-t-s constants read as SI are refused; E in MPa beside
+    /// rho in kg/m^3 is warned of by the modulus range). The same bounds hold for the
+    /// materials of a deck's solids and `--youngs/--density`.
     pub density_kg_m3: f64,
 }
 
@@ -705,9 +707,9 @@ pub struct RawCombustion {
     pub intake_bar: f64,
     /// Exhaust back-pressure above intake \[bar\].
     pub exhaust_over_intake_bar: f64,
-    /// Start of combustion [deg crank angle; firing TDC = 360] and duration \[deg\] (in (0,
-    /// 720]).
+    /// Start of combustion [deg crank angle; firing TDC = 360].
     pub start_deg: f64,
+    /// Duration of combustion \[deg\], in (0, 720].
     pub duration_deg: f64,
     /// Wiebe parameters a (> 0) and m (>= 0).
     pub wiebe_a: f64,

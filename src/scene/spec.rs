@@ -25,7 +25,7 @@ pub enum ElasticError {
     Poisson(f64),
     #[error("density must lie in [1, 1e5] kg/m^3, got {}", crate::text::exact(*.0))]
     Density(f64),
-    #[error("E {} Pa and density {} kg/m^3 give a bar wave speed sqrt(E / rho) of {} m/s, above the {} m/s no solid reaches (diamond: 18,600 m/s): are E and the density in one unit system?", crate::text::num(*young), crate::text::num(*density), crate::text::num(*speed), crate::text::num(MAX_WAVE_SPEED))]
+    #[error("E {} Pa and density {} kg/m^3 give a bar wave speed sqrt(E / rho) of {} m/s, above the {} m/s no solid reaches (diamond: 17,300 m/s): are E and the density in one unit system?", crate::text::num(*young), crate::text::num(*density), crate::text::num(*speed), crate::text::num(MAX_WAVE_SPEED))]
     WaveSpeed {
         young: f64,
         density: f64,
@@ -33,10 +33,11 @@ pub enum ElasticError {
     },
 }
 
-/// The largest bar wave speed sqrt(E / rho) a material may have \[m/s\]: 2.7 times diamond's
-/// (1.05e12 Pa, 3,515 kg/m^3: 17,300 m/s; steel 5,200). Constants from two unit systems (E in
-/// MPa with rho in kg/m^3 read as SI, or mm-t-s constants in a deck read in metres) lie 1e3 to
-/// 1e6 times off.
+/// The largest bar wave speed sqrt(E / rho) a material may have \[m/s\]: 2.9 times diamond's
+/// (1.05e12 Pa, 3,515 kg/m^3: 17,300 m/s; steel 5,200). mm-t-s constants read as SI (E in
+/// MPa, rho in t/mm^3) give 1e6 times too fast a wave; E in MPa beside rho in kg/m^3 gives
+/// 1,000 times too slow a one, which [`Elastic::structural_warning`] warns of. At steel's
+/// density this bound caps E near 2e13 Pa.
 pub const MAX_WAVE_SPEED: f64 = 5e4;
 
 /// Young's moduli of structural metals and composites \[Pa\] (outside: a warning).

@@ -281,6 +281,7 @@ pub fn compare(
     // --- full-order window
     let t_full = Instant::now();
     progress("full-order window: assembling the full model");
+    crate::reduce::scene_rom::check_held(scene)?;
     let em = load_meshes(scene)?;
     let inp = rom_inputs(scene, &em, false);
     let sys = FullSystem::build(&inp)?;
