@@ -43,7 +43,7 @@ pub fn read(path: &std::path::Path) -> Result<Mesh, collect::DeckError> {
 
 /// A mesh file and every file it includes (Nastran `INCLUDE`, Abaqus `*INCLUDE`), nested, each
 /// once (by its canonical path: `d/../a.inp` is `a.inp`), in the order found: what a cache key
-/// must hash. At most [`DECK_FILES`] files and [`crate::files::LIMIT_MESH`] bytes are scanned;
+/// must hash. At most `DECK_FILES` (4096) files and [`crate::files::LIMIT_MESH`] bytes are scanned;
 /// unreadable includes, cycles and deep nesting are left to the reader to report.
 pub fn deck_files(path: &std::path::Path) -> Vec<std::path::PathBuf> {
     let canonical = |p: &std::path::Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.into());

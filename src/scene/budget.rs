@@ -259,7 +259,7 @@ pub fn engine_dofs(scene: &Scene) -> Option<f64> {
 const FE_MODEL_FLOOR_BYTES: f64 = 0.6e9;
 
 /// A modal solve or ROM build of a model with `dofs` full DOFs n: memory and time scale as
-/// nested-dissection fill, M = M_0 (n / n_0)^{4/3} + [`FE_MODEL_FLOOR_BYTES`] and
+/// nested-dissection fill, M = M_0 (n / n_0)^{4/3} + `FE_MODEL_FLOOR_BYTES` and
 /// t = t_0 (n / n_0)^{3/2}, from the default engine's build (also for a mesh read from a file,
 /// sized once read).
 pub fn fe_model(dofs: usize, what: &'static str) -> Estimate {
