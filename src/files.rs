@@ -60,16 +60,7 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 pub fn stop_cleanly() {
     let _moving = lock(&COMMITTING);
     let mut temporaries = lock(&TEMPORARIES);
-    for p in temporaries.drain(..) {
-        if p.is_dir() {
-            let _ = std::fs::remove_dir_all(&p);
-        } else {
-            let _ = std::fs::remove_file(&p);
-        }
-    }
-    for d in lock(&NEW_DIRS).drain(..).rev() {
-        let _ = std::fs::remove_dir(&d);
-    }
+    remove_registered(&mut temporaries, &mut lock(&NEW_DIRS));
     eprintln!("\nstopped by a signal; temporary files removed, outputs left as they were");
     std::process::exit(130);
 }
@@ -87,6 +78,14 @@ pub fn remove_temporaries_for_exit() -> bool {
     ) else {
         return false;
     };
+    remove_registered(&mut temporaries, &mut dirs);
+    std::mem::forget((moving, temporaries, dirs));
+    true
+}
+
+/// Removes the registered temporary files and directories and the new output directories
+/// that are still empty (deepest first), emptying both lists.
+fn remove_registered(temporaries: &mut Vec<PathBuf>, new_dirs: &mut Vec<PathBuf>) {
     for p in temporaries.drain(..) {
         if p.is_dir() {
             let _ = std::fs::remove_dir_all(&p);
@@ -94,11 +93,9 @@ pub fn remove_temporaries_for_exit() -> bool {
             let _ = std::fs::remove_file(&p);
         }
     }
-    for d in dirs.drain(..).rev() {
+    for d in new_dirs.drain(..).rev() {
         let _ = std::fs::remove_dir(&d);
     }
-    std::mem::forget((moving, temporaries, dirs));
-    true
 }
 
 /// An output file that could not be written.
@@ -160,16 +157,15 @@ pub fn read_regular_within(path: &Path, limit: u64, factor: u64) -> Result<Vec<u
             limit,
         });
     }
-    let no_memory = || {
-        let (available, bound) = crate::machine::available_memory_from();
-        ReadError::NoMemory {
-            size: meta.len(),
-            need: meta.len().saturating_mul(factor),
-            available,
-            bound,
-        }
+    let need = meta.len().saturating_mul(factor);
+    let (available, bound) = crate::machine::available_memory_from();
+    let no_memory = || ReadError::NoMemory {
+        size: meta.len(),
+        need,
+        available,
+        bound,
     };
-    if meta.len().saturating_mul(factor) > crate::machine::available_memory() {
+    if need > available {
         return Err(no_memory());
     }
     use std::io::Read;
@@ -387,12 +383,12 @@ fn process_alive(pid: i32) -> bool {
 }
 
 /// Whether file name `name` is one of `outputs` (names, or patterns with one `*`).
-fn is_output<S: AsRef<str>>(name: &str, outputs: &[S]) -> bool {
-    outputs.iter().any(|o| match o.as_ref().split_once('*') {
+fn is_output(name: &str, outputs: &[&str]) -> bool {
+    outputs.iter().any(|o| match o.split_once('*') {
         Some((pre, suf)) => {
             name.len() >= pre.len() + suf.len() && name.starts_with(pre) && name.ends_with(suf)
         }
-        None => name == o.as_ref(),
+        None => name == *o,
     })
 }
 

@@ -118,35 +118,31 @@ pub fn resolve_material(
     // only the materials solid elements use: a deck's dummy materials of beams and
     // connectors ("massless", "rigid") carry no solid
     let used: std::collections::BTreeSet<u32> = mesh.element_material.iter().copied().collect();
-    let solid = |k: &usize| used.contains(&(*k as u32));
-    for (_, m) in mesh.materials.iter().enumerate().filter(|(k, _)| solid(k)) {
-        m.elastic
-            .validate()
-            .map_err(|e| {
-                bad(format!(
-                    "the deck's material '{}': {e} (constants in the deck's unit system: a deck in m takes Pa and kg/m^3, a deck in mm MPa and t/mm^3; or give {key} to override it)",
-                    m.name
-                ))
-            })?;
-    }
-    let unusual: Vec<String> = mesh
-        .materials
+    let solids: Vec<&super::DeckMaterial> = used
         .iter()
-        .enumerate()
-        .filter(|(k, _)| solid(k))
-        .filter_map(|(_, m)| {
+        .filter_map(|&k| mesh.materials.get(k as usize))
+        .collect();
+    for m in &solids {
+        m.elastic.validate().map_err(|e| {
+            bad(format!(
+                "the deck's material '{}': {e} (constants in the deck's unit system: a deck in m takes Pa and kg/m^3, a deck in mm MPa and t/mm^3; or give {key} to override it)",
+                m.name
+            ))
+        })?;
+    }
+    let unusual: Vec<String> = solids
+        .iter()
+        .filter_map(|m| {
             m.elastic
                 .structural_warning(&format!("the deck's material '{}'", m.name))
         })
         .collect();
     let warning =
         (!unusual.is_empty()).then(|| format!("{}: {}", path.display(), unusual.join("; ")));
-    let nominal = (0..mesh.materials.len()).find(solid).unwrap_or(0);
-    Ok((
-        mesh.materials[nominal].elastic,
-        MaterialSource::Deck,
-        warning,
-    ))
+    let nominal = solids
+        .first()
+        .map_or(mesh.materials[0].elastic, |m| m.elastic);
+    Ok((nominal, MaterialSource::Deck, warning))
 }
 
 /// The warning for a given material `m` that replaces deck materials of `mesh` with other
