@@ -1116,14 +1116,25 @@ fn verification_slap_events_match_a_sixteenth_step_run() {
 /// chain: each point's node is the surface row equal to its point row (1e-9 of the row's
 /// norm: roundoff of products over ~3,000 coordinates), and in every averaged cycle the peak
 /// negative acceleration there equals the point's (mean and largest per-cycle peak within
-/// 1e-9 relative, the same roundoff carried through a linear filter).
+/// 1e-9 relative, the same roundoff carried through a linear filter). Also with the modes
+/// above two thirds of the ROM's integrated statically (`transient.mode_cutoff_hz`): their
+/// static part joins the point and the surface residual apart.
 #[test]
 fn verification_liner_maps_equal_the_point_outputs_at_the_points() {
     let rom = small_rom();
+    let cut = rom.frequencies_hz[2 * rom.frequencies_hz.len() / 3];
+    for modes_below_hz in [None, Some(cut)] {
+        println!("modes below {modes_below_hz:?} Hz");
+        maps_equal_points(rom, modes_below_hz);
+    }
+}
+
+fn maps_equal_points(rom: &EngineRom, modes_below_hz: Option<f64>) {
     let r = simulate(&[], |s| {
         s.tolerance = None;
         s.step_error = false;
         s.surface_maps = true;
+        s.modes_below_hz = modes_below_hz;
     })
     .unwrap();
     assert_eq!(r.surface.len(), rom.cylinders.len());

@@ -760,8 +760,8 @@ pub struct RawTransient {
     /// through penetrations of a few um); deeper stops the run.
     pub max_penetration_um: f64,
     /// Integrate system modes up to this frequency \[Hz\] only; the static part of the modes
-    /// above joins the residual flexibility. Default: every mode of the ROM (up to the
-    /// ROM cut-off).
+    /// above joins the residual flexibility (at the contact, the analysis points and the liner
+    /// maps). Default: every mode of the ROM (up to the ROM cut-off).
     #[serde(default)]
     pub mode_cutoff_hz: Option<f64>,
     /// Accuracy of the peaks: the largest acceptable estimated relative step error of the

@@ -411,9 +411,12 @@ fn truncated_liner(
     let mut rflex = Dense::from_shape_fn((nc, nc), |(a, b)| r[[off + a, off + b]]);
     let np = crom.point_modes.nrows();
     let points = Dense::from_shape_fn((np, nm), |(i, j)| crom.point_modes[[i, j]]);
-    let mut point_residual = crom.point_residual.clone();
     // dropped modes join the static correction: R += phi phi^T / w^2 (contact x contact and
     // points x contact), as the cycle does for `mode_cutoff_hz`
+    let mut point_residual = crom.point_residual.clone();
+    if nm < all {
+        point_residual += &crom.static_part(&crom.point_modes, &rom.frequencies_hz, nm);
+    }
     let contact_row = |i: usize, j: usize| {
         if i < nt {
             crom.thrust_modes[[i, j]]
@@ -427,9 +430,6 @@ fn truncated_liner(
             let ra_ = contact_row(a, j) / w2;
             for b in 0..nc {
                 rflex[[a, b]] += ra_ * contact_row(b, j);
-            }
-            for p in 0..np {
-                point_residual[[p, a]] += crom.point_modes[[p, j]] * ra_;
             }
         }
     }

@@ -168,6 +168,43 @@ impl EngineRom {
     }
 }
 
+impl CylinderRom {
+    /// The quasi-static response at `rows` (rows x modes: the point or surface mode rows) to
+    /// this cylinder's contact forces of the ROM modes from `first` on [m/N] (rows x contact
+    /// DOFs, thrust then anti-thrust):
+    ///
+    ///   S = sum_{j >= first} r_j c_j^T / omega_j^2,   omega_j = 2 pi `frequencies_hz`\[j\],
+    ///
+    /// r_j and c_j the j-th columns of `rows` and of the contact DOFs' mode rows. A transient
+    /// that integrates only the first `first` modes (`transient.mode_cutoff_hz`) adds S to the
+    /// residual rows (`point_residual`, `surface.residual`): the modes it drops respond
+    /// statically, as in the contact's residual flexibility.
+    pub fn static_part(&self, rows: &Dense, frequencies_hz: &[f64], first: usize) -> Dense {
+        let (nt, na) = (self.thrust_z.len(), self.antithrust_z.len());
+        let contact = |a: usize, j: usize| {
+            if a < nt {
+                self.thrust_modes[[a, j]]
+            } else {
+                self.antithrust_modes[[a - nt, j]]
+            }
+        };
+        let mut s = Dense::zeros((rows.nrows(), nt + na));
+        for (j, f) in frequencies_hz.iter().enumerate().skip(first) {
+            let w2 = (2.0 * std::f64::consts::PI * f).powi(2);
+            for a in 0..nt + na {
+                let ca = contact(a, j) / w2;
+                if ca == 0.0 {
+                    continue;
+                }
+                for p in 0..rows.nrows() {
+                    s[[p, a]] += rows[[p, j]] * ca;
+                }
+            }
+        }
+        s
+    }
+}
+
 /// A stored matrix has the expected dimensions and finite entries.
 pub(super) fn check_dense(what: &str, d: &Dense, rows: usize, cols: usize) -> Result<(), Invalid> {
     if d.nrows() != rows || d.ncols() != cols || !d.is_standard_layout() {
@@ -220,5 +257,95 @@ impl EngineRom {
                 }
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A cylinder of `nt` + `na` contact DOFs, `np` points and `nm` modes with pseudo-random
+    /// rows.
+    fn cylinder(nt: usize, na: usize, np: usize, nm: usize) -> CylinderRom {
+        let mut seed = 7u64;
+        let mut rows = |r: usize| {
+            Dense::from_shape_fn((r, nm), |_| {
+                seed = seed
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+        };
+        CylinderRom {
+            cylinder: 1,
+            axis_x: 0.0,
+            thrust_z: vec![0.0; nt],
+            antithrust_z: vec![0.0; na],
+            thrust_modes: rows(nt),
+            antithrust_modes: rows(na),
+            point_modes: rows(np),
+            crankcase_point_modes: rows(1),
+            preload_thrust: vec![0.0; nt],
+            preload_antithrust: vec![0.0; na],
+            preload_points: vec![0.0; np],
+            point_residual: Dense::zeros((np, nt + na)),
+            contact_offset: 0,
+            surface: SurfaceRows::default(),
+        }
+    }
+
+    /// Verification: the static part of the modes from `first` on equals the matrix form
+    /// Phi_p,d Omega_d^-2 Phi_c,d^T (the contact rows stacked thrust, then anti-thrust), and
+    /// the kept modes' static flexibility plus it is the same for every cut (the points' static
+    /// response does not depend on how many modes are integrated). Roundoff tolerance: sums of
+    /// at most 9 products of O(1e-8) terms, 1e-12 relative.
+    #[test]
+    fn verification_static_part_of_dropped_modes_is_the_modal_sum() {
+        let (nt, na, np, nm) = (5, 4, 3, 9);
+        let c = cylinder(nt, na, np, nm);
+        let f: Vec<f64> = (0..nm).map(|j| 1000.0 * (j + 1) as f64).collect();
+        let w2: Vec<f64> = f
+            .iter()
+            .map(|f| (2.0 * std::f64::consts::PI * f).powi(2))
+            .collect();
+        let contact = ndarray::concatenate(
+            ndarray::Axis(0),
+            &[c.thrust_modes.view(), c.antithrust_modes.view()],
+        )
+        .unwrap();
+        let whole = c.static_part(&c.point_modes, &f, 0);
+        let scale = whole.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for first in 0..=nm {
+            let scaled = Dense::from_shape_fn((np, nm), |(p, j)| {
+                if j >= first {
+                    c.point_modes[[p, j]] / w2[j]
+                } else {
+                    0.0
+                }
+            });
+            let matrix_form = scaled.dot(&contact.t());
+            let part = c.static_part(&c.point_modes, &f, first);
+            let kept = &whole - &part;
+            let kept_direct = Dense::from_shape_fn((np, nt + na), |(p, a)| {
+                (0..first)
+                    .map(|j| c.point_modes[[p, j]] * contact[[a, j]] / w2[j])
+                    .sum::<f64>()
+            });
+            for ((x, y), (k, kd)) in part
+                .iter()
+                .zip(&matrix_form)
+                .zip(kept.iter().zip(&kept_direct))
+            {
+                assert!((x - y).abs() <= 1e-12 * scale, "first {first}: {x} vs {y}");
+                assert!(
+                    (k - kd).abs() <= 1e-12 * scale,
+                    "first {first}: {k} vs {kd}"
+                );
+            }
+        }
+        assert!(c
+            .static_part(&c.point_modes, &f, nm)
+            .iter()
+            .all(|v| *v == 0.0));
     }
 }

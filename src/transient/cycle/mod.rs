@@ -66,6 +66,9 @@ type SliceMeta = (usize, bool, usize, f64);
 #[derive(Clone)]
 struct Cyl<'a> {
     rom: &'a CylinderRom,
+    /// R_pc of the analysis points with the static part of the modes the run does not
+    /// integrate ([`CylinderRom::static_part`]).
+    point_residual: Dense,
     /// Firing phase [deg].
     phase: f64,
     body: Body,
@@ -212,8 +215,13 @@ impl<'a> EngineRun<'a> {
                     .position(|&f| f == c.cylinder)
                     .unwrap_or(0);
                 let phase = 720.0 * k as f64 / n as f64;
+                let mut point_residual = c.point_residual.clone();
+                if nm < rom.frequencies_hz.len() {
+                    point_residual += &c.static_part(&c.point_modes, &rom.frequencies_hz, nm);
+                }
                 Cyl {
                     rom: c,
+                    point_residual,
                     phase,
                     body: body_at_rest(setup.piston, -phase),
                 }
@@ -315,7 +323,7 @@ impl<'a> EngineRun<'a> {
                 )
             })
             .unzip();
-        residual_displacement(&rom.point_residual, &locs, &forces)
+        residual_displacement(&self.cyls[c].point_residual, &locs, &forces)
     }
 
     /// Runs `settings.cycles` cycles and returns the peaks averaged over the last

@@ -26,7 +26,7 @@
 #[allow(unused_imports)]
 use super::*;
 use crate::linalg::kernels::dot;
-use crate::reduce::rom::SurfaceRows;
+use crate::reduce::rom::{CylinderRom, SurfaceRows};
 use crate::transient::signal::BatchLowPass;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
@@ -129,7 +129,11 @@ impl SurfaceRecord {
         let nb = run.structure.integrator.eta.len();
         let len = spc + 2 * margin;
         let mut mapper = Mapper {
-            surfaces: run.cyls.iter().map(|c| c.rom.surface.clone()).collect(),
+            surfaces: run
+                .cyls
+                .iter()
+                .map(|c| integrated_surface(c.rom, &run.setup.rom.frequencies_hz, nb))
+                .collect(),
             nb,
             ncon: ncon.clone(),
             projectors: run.cyls.iter().map(|_| None).collect(),
@@ -375,6 +379,17 @@ struct Projector {
     /// b_n = |Q^T w_n| (with its roundoff allowance) and |w_n|.
     tail: Vec<f64>,
     norm: Vec<f64>,
+}
+
+/// Cylinder `c`'s wet-surface rows for a run that integrates the first `nb` of the ROM's
+/// modes (`frequencies_hz`): the static part of the others joins the residual,
+/// R_nc + sum_{j >= nb} phi_nj c_j^T / omega_j^2 ([`CylinderRom::static_part`]).
+fn integrated_surface(c: &CylinderRom, frequencies_hz: &[f64], nb: usize) -> SurfaceRows {
+    let mut s = c.surface.clone();
+    if nb < frequencies_hz.len() {
+        s.residual += &c.static_part(&s.modes, frequencies_hz, nb);
+    }
+    s
 }
 
 /// The message of a failed eigen-decomposition of the weighted surface rows.
