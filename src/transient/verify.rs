@@ -408,31 +408,15 @@ fn truncated_liner(
     let rows = from_rows(nc, nm, data);
     let r = &rom.residual_flexibility;
     let off = crom.contact_offset;
-    let mut rflex = Dense::from_shape_fn((nc, nc), |(a, b)| r[[off + a, off + b]]);
     let np = crom.point_modes.nrows();
     let points = Dense::from_shape_fn((np, nm), |(i, j)| crom.point_modes[[i, j]]);
     // dropped modes join the static correction: R += phi phi^T / w^2 (contact x contact and
     // points x contact), as the cycle does for `mode_cutoff_hz`
-    let mut point_residual = crom.point_residual.clone();
-    if nm < all {
-        point_residual += &crom.static_part(&crom.point_modes, &rom.frequencies_hz, nm);
-    }
-    let contact_row = |i: usize, j: usize| {
-        if i < nt {
-            crom.thrust_modes[[i, j]]
-        } else {
-            crom.antithrust_modes[[i - nt, j]]
-        }
-    };
-    for j in nm..all {
-        let w2 = (two_pi * rom.frequencies_hz[j]).powi(2);
-        for a in 0..nc {
-            let ra_ = contact_row(a, j) / w2;
-            for b in 0..nc {
-                rflex[[a, b]] += ra_ * contact_row(b, j);
-            }
-        }
-    }
+    let every_contact_mode = Dense::from_shape_fn((nc, all), |(a, j)| crom.contact_mode(a, j));
+    let dropped = crom.static_part(&every_contact_mode, &rom.frequencies_hz, nm);
+    let rflex = Dense::from_shape_fn((nc, nc), |(a, b)| r[[off + a, off + b]] + dropped[[a, b]]);
+    let point_residual =
+        &crom.point_residual + &crom.static_part(&crom.point_modes, &rom.frequencies_hz, nm);
     let rom_preload: Vec<f64> = crom
         .preload_thrust
         .iter()

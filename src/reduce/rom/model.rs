@@ -169,6 +169,16 @@ impl EngineRom {
 }
 
 impl CylinderRom {
+    /// Mode `j`'s displacement at contact DOF `a` (thrust nodes, then anti-thrust).
+    pub fn contact_mode(&self, a: usize, j: usize) -> f64 {
+        let nt = self.thrust_z.len();
+        if a < nt {
+            self.thrust_modes[[a, j]]
+        } else {
+            self.antithrust_modes[[a - nt, j]]
+        }
+    }
+
     /// The quasi-static response at `rows` (rows x modes: the point or surface mode rows) to
     /// this cylinder's contact forces of the ROM modes from `first` on [m/N] (rows x contact
     /// DOFs, thrust then anti-thrust):
@@ -180,19 +190,12 @@ impl CylinderRom {
     /// residual rows (`point_residual`, `surface.residual`): the modes it drops respond
     /// statically, as in the contact's residual flexibility.
     pub fn static_part(&self, rows: &Dense, frequencies_hz: &[f64], first: usize) -> Dense {
-        let (nt, na) = (self.thrust_z.len(), self.antithrust_z.len());
-        let contact = |a: usize, j: usize| {
-            if a < nt {
-                self.thrust_modes[[a, j]]
-            } else {
-                self.antithrust_modes[[a - nt, j]]
-            }
-        };
-        let mut s = Dense::zeros((rows.nrows(), nt + na));
+        let nc = self.thrust_z.len() + self.antithrust_z.len();
+        let mut s = Dense::zeros((rows.nrows(), nc));
         for (j, f) in frequencies_hz.iter().enumerate().skip(first) {
             let w2 = (2.0 * std::f64::consts::PI * f).powi(2);
-            for a in 0..nt + na {
-                let ca = contact(a, j) / w2;
+            for a in 0..nc {
+                let ca = self.contact_mode(a, j) / w2;
                 if ca == 0.0 {
                     continue;
                 }

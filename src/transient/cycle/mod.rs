@@ -215,10 +215,8 @@ impl<'a> EngineRun<'a> {
                     .position(|&f| f == c.cylinder)
                     .unwrap_or(0);
                 let phase = 720.0 * k as f64 / n as f64;
-                let mut point_residual = c.point_residual.clone();
-                if nm < rom.frequencies_hz.len() {
-                    point_residual += &c.static_part(&c.point_modes, &rom.frequencies_hz, nm);
-                }
+                let point_residual =
+                    &c.point_residual + &c.static_part(&c.point_modes, &rom.frequencies_hz, nm);
                 Cyl {
                     rom: c,
                     point_residual,

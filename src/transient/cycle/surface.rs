@@ -385,11 +385,10 @@ struct Projector {
 /// modes (`frequencies_hz`): the static part of the others joins the residual,
 /// R_nc + sum_{j >= nb} phi_nj c_j^T / omega_j^2 ([`CylinderRom::static_part`]).
 fn integrated_surface(c: &CylinderRom, frequencies_hz: &[f64], nb: usize) -> SurfaceRows {
-    let mut s = c.surface.clone();
-    if nb < frequencies_hz.len() {
-        s.residual += &c.static_part(&s.modes, frequencies_hz, nb);
+    SurfaceRows {
+        residual: &c.surface.residual + &c.static_part(&c.surface.modes, frequencies_hz, nb),
+        ..c.surface.clone()
     }
-    s
 }
 
 /// The message of a failed eigen-decomposition of the weighted surface rows.
