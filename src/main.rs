@@ -447,7 +447,8 @@ struct SimulateArgs {
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// Also run the full-order FE model on a window around firing TDC of the first
-    /// cylinder (330-420 deg) and report the ROM's error and speed-up there.
+    /// cylinder (330-420 deg, both models at the slap sub-step, step_deg / slap_substeps) and
+    /// report the ROM's error, its step uncertainty and the speed-up there.
     #[arg(long)]
     full_order: bool,
     /// Also repeat every cycle at half the step (about twice the transient's time) and

@@ -34,6 +34,10 @@ fn comparison(sets: &[&str]) -> linercav::transient::verify::FullOrderReport {
 }
 
 fn print_points(c: &linercav::transient::verify::FullOrderReport) {
+    eprintln!(
+        "step {:.4} deg: the ROM's peaks move {:.2e} at half of it",
+        c.step_deg, c.rom_step_change
+    );
     for p in &c.points {
         eprintln!(
             "point {}: full {:.1} rom {:.1} ({:.2e})",
@@ -53,8 +57,9 @@ fn verification_rom_matches_the_full_order_model_on_the_window() {
         c.preload_error
     );
     // Peak negative acceleration in the band, every analysis point: the 2 % floor
-    // (measured 0.14 % with residual vectors at every bore-line node; without them, static
-    // correction only, 11 %: the slap's contact frequency, ~5 kHz, sits at this ROM's cut-off).
+    // (measured 0.18 % at the window's 1/12 deg, 0.14 % at the base step, with residual
+    // vectors at every bore-line node; without them, static correction only, 11 % at the base
+    // step: the slap's contact frequency, ~5 kHz, sits at this ROM's cut-off).
     print_points(&c);
     assert!(
         c.rom_error_peak_negative < 0.02,
@@ -62,6 +67,20 @@ fn verification_rom_matches_the_full_order_model_on_the_window() {
         c.rom_error_peak_negative
     );
     assert!(c.steps > 300);
+    // The window runs at the cycle's slap sub-step (the scene's 1/4 deg over its 3 sub-steps),
+    // and that step must be converged well below the 2 % the comparison bounds, or the error
+    // above would mix the two models' step errors into the structural one: the ROM's peaks
+    // at half the step within 1 %.
+    assert!(
+        (c.step_deg - 0.25 / 3.0).abs() < 1e-12,
+        "step {}",
+        c.step_deg
+    );
+    assert!(
+        c.rom_step_change < 0.01,
+        "the ROM's peaks move {:.3e} at half the window's step",
+        c.rom_step_change
+    );
 }
 
 #[test]
@@ -75,6 +94,7 @@ fn verification_hht_alpha_runs_the_same_scheme_in_both_models() {
         "transient.hht_alpha=-0.1",
     ]);
     assert_eq!(c.scheme.alpha, -0.1);
+    print_points(&c);
     assert!(
         c.rom_error_peak_negative < 0.02,
         "ROM error {:.3e}",
@@ -88,7 +108,10 @@ fn verification_coolant_layer_enters_both_models() {
     // wall mass per area) in the liner's reduction and in the full model alike: the ROM must
     // stay within the same 2 % of the full model. The layer moves the full model's peaks by
     // 9-29 % against the dry one (measured), so a layer missing from either model fails by an
-    // order of magnitude more than the bound (measured agreement 0.58 %).
+    // order of magnitude more than the bound. Measured at the window's step (1/12 deg) 1.77 %,
+    // at 1/24 and 1/48 deg 1.74 and 1.58 % (the ROM's own step change 1.5, 0.6, 0.3 %); at
+    // the base step 1/4 deg it read 0.50 % only because the two models' step errors (the
+    // ROM's peaks move 8 % from 1/4 to 1/8 deg) cancelled there.
     let c = comparison(&[
         "rom.residual_vector_spacing=1",
         "cavitation.coolant_mass=layer",
