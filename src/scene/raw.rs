@@ -759,9 +759,10 @@ pub struct RawTransient {
     /// Largest acceptable skirt penetration \[um\], at least 0.1 (the contact carries its load
     /// through penetrations of a few um); deeper stops the run.
     pub max_penetration_um: f64,
-    /// Integrate system modes up to this frequency \[Hz\] only; the static part of the modes
-    /// above joins the residual flexibility (at the contact, the analysis points and the liner
-    /// maps). Default: every mode of the ROM (up to the ROM cut-off).
+    /// Integrate system modes up to this frequency \[Hz\] only; the modes above respond
+    /// statically to every cylinder's contact forces (at the contact, the liner's and the
+    /// crankcase's analysis points and the liner maps). Default: every mode of the ROM (up to
+    /// the ROM cut-off).
     #[serde(default)]
     pub mode_cutoff_hz: Option<f64>,
     /// Accuracy of the peaks: the largest acceptable estimated relative step error of the

@@ -185,10 +185,11 @@ impl CylinderRom {
     ///
     ///   S = sum_{j >= first} r_j c_j^T / omega_j^2,   omega_j = 2 pi `frequencies_hz`\[j\],
     ///
-    /// r_j and c_j the j-th columns of `rows` and of the contact DOFs' mode rows. A transient
-    /// that integrates only the first `first` modes (`transient.mode_cutoff_hz`) adds S to the
-    /// residual rows (`point_residual`, `surface.residual`): the modes it drops respond
-    /// statically, as in the contact's residual flexibility.
+    /// r_j and c_j the j-th columns of `rows` and of the contact DOFs' mode rows. A window that
+    /// integrates only the first `first` modes (`simulate --full-order` with
+    /// `transient.mode_cutoff_hz`) adds S to the residual rows: the modes it drops respond
+    /// statically, as in the contact's residual flexibility (the engine cycle sums the same
+    /// through the dropped modes' quasi-static coordinates, with every cylinder's forces).
     pub fn static_part(&self, rows: &Dense, frequencies_hz: &[f64], first: usize) -> Dense {
         let nc = self.thrust_z.len() + self.antithrust_z.len();
         let mut s = Dense::zeros((rows.nrows(), nc));

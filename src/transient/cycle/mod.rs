@@ -66,9 +66,6 @@ type SliceMeta = (usize, bool, usize, f64);
 #[derive(Clone)]
 struct Cyl<'a> {
     rom: &'a CylinderRom,
-    /// R_pc of the analysis points with the static part of the modes the run does not
-    /// integrate ([`CylinderRom::static_part`]).
-    point_residual: Dense,
     /// Firing phase [deg].
     phase: f64,
     body: Body,
@@ -95,6 +92,11 @@ pub struct EngineRun<'a> {
     prev_state: Vec<SliceState>,
     /// Loaded locations of the last step (cylinder index, location, force).
     prev_loaded: Vec<(usize, Location, f64)>,
+    /// The modes the run does not integrate (`transient.mode_cutoff_hz`), quasi-static: their
+    /// contact rows over omega_j^2 (contact DOFs x dropped modes, [`dropped_rows`]) and their
+    /// coordinates under the last step's contact forces ([`EngineRun::set_loaded`]).
+    dropped_rows: Dense,
+    pub(super) dropped_static: Vec<f64>,
     /// Base steps still to be sub-stepped after the last contact onset, and the base step
     /// being advanced [s].
     substeps_left: usize,
@@ -140,6 +142,21 @@ fn contact_data(rom: &EngineRom, nm: usize) -> (Dense, Vec<f64>) {
         }
     }
     (rows, pre)
+}
+
+/// The contact rows of the modes from `nm` on over their omega_j^2, c_j / omega_j^2 (contact
+/// DOFs x the modes not integrated; no columns when every mode is): with them the quasi-static
+/// coordinates of those modes under contact forces F are q_j = c_j^T F / omega_j^2.
+fn dropped_rows(rom: &EngineRom, nm: usize) -> Dense {
+    let all = rom.frequencies_hz.len();
+    if nm == all {
+        return Dense::zeros((rom.residual_flexibility.nrows(), 0));
+    }
+    let (rows, _) = contact_data(rom, all);
+    Dense::from_shape_fn((rows.nrows(), all - nm), |(r, k)| {
+        let w = 2.0 * std::f64::consts::PI * rom.frequencies_hz[nm + k];
+        rows[[r, nm + k]] / (w * w)
+    })
 }
 
 /// How many of the ROM's modes (ascending) the transient integrates: those up to
@@ -215,11 +232,8 @@ impl<'a> EngineRun<'a> {
                     .position(|&f| f == c.cylinder)
                     .unwrap_or(0);
                 let phase = 720.0 * k as f64 / n as f64;
-                let point_residual =
-                    &c.point_residual + &c.static_part(&c.point_modes, &rom.frequencies_hz, nm);
                 Cyl {
                     rom: c,
-                    point_residual,
                     phase,
                     body: body_at_rest(setup.piston, -phase),
                 }
@@ -246,6 +260,8 @@ impl<'a> EngineRun<'a> {
             last_forces: Vec::new(),
             prev_state: vec![SliceState::APART; 2 * nslices * ncyl],
             prev_loaded: Vec::new(),
+            dropped_static: vec![0.0; rom.frequencies_hz.len() - nm],
+            dropped_rows: dropped_rows(rom, nm),
             substeps_left: 0,
             base_step: 0.0,
             events: EventRecorder::new(ncyl),
@@ -281,8 +297,13 @@ impl<'a> EngineRun<'a> {
     }
 
     /// Displacements of cylinder index `c`'s analysis points (points), + toward the coolant:
-    /// on the liner u_p = sum_j phi_pj eta_j + R_pc F (the integrated modes and the residual
-    /// response to the last contact forces); at the crankcase's facing points the modal sum.
+    /// on the liner
+    ///
+    ///   u_p = sum_{j < nb} phi_pj eta_j + sum_{j >= nb} phi_pj q_j + R_pc F_c,
+    ///
+    /// the integrated modes, the quasi-static coordinates q_j of the modes not integrated
+    /// under every cylinder's last contact forces (`EngineRun::loaded`) and the residual
+    /// response to this cylinder's; at the crankcase's facing points the two modal sums.
     pub fn point_displacements(&self, c: usize, crankcase: bool) -> Vec<f64> {
         let rom = self.cyls[c].rom;
         let m = if crankcase {
@@ -291,8 +312,11 @@ impl<'a> EngineRun<'a> {
             &rom.point_modes
         };
         let eta = &self.structure.integrator.eta;
-        let nb = eta.len();
-        let modal = (0..m.nrows()).map(|p| contact::dot(&row(m, p)[..nb], &eta[..nb]));
+        let (nb, q) = (eta.len(), &self.dropped_static);
+        let modal = (0..m.nrows()).map(|p| {
+            let r = row(m, p);
+            contact::dot(&r[..nb], &eta[..nb]) + contact::dot(&r[nb..nb + q.len()], q)
+        });
         if crankcase {
             return modal.collect();
         }
@@ -321,7 +345,36 @@ impl<'a> EngineRun<'a> {
                 )
             })
             .unzip();
-        residual_displacement(&self.cyls[c].point_residual, &locs, &forces)
+        residual_displacement(&rom.point_residual, &locs, &forces)
+    }
+
+    /// The last step's contact forces: (cylinder index, location on the contact DOFs of the
+    /// ROM's residual flexibility, force \[N\]).
+    pub fn loaded(&self) -> &[(usize, Location, f64)] {
+        &self.prev_loaded
+    }
+
+    /// Makes `loaded` (cylinder index, location, force) the last step's contact forces and
+    /// sets the quasi-static coordinates of the modes not integrated under them,
+    /// q_j = sum_e (c_j)_e F_e / omega_j^2 over the loaded contact DOFs e of every cylinder
+    /// (nothing to do when every mode is integrated).
+    pub(super) fn set_loaded(&mut self, loaded: Vec<(usize, Location, f64)>) {
+        self.prev_loaded = loaded;
+        if self.dropped_static.is_empty() {
+            return;
+        }
+        self.dropped_static.fill(0.0);
+        for (_, at, f) in &self.prev_loaded {
+            for k in 0..2 {
+                let w = at.weights[k] * f;
+                if w != 0.0 {
+                    let r = row(&self.dropped_rows, at.dofs[k]);
+                    for (q, c) in self.dropped_static.iter_mut().zip(r) {
+                        *q += w * c;
+                    }
+                }
+            }
+        }
     }
 
     /// Runs `settings.cycles` cycles and returns the peaks averaged over the last

@@ -302,7 +302,7 @@ impl<'a> EngineRun<'a> {
             }
             self.stats.coupling_lag_m = self.stats.coupling_lag_m.max(lag);
         }
-        self.prev_loaded = loaded;
+        self.set_loaded(loaded);
         self.prev_state.fill(SliceState::APART);
         for (k, &(b, side, i, _)) in meta.iter().enumerate() {
             self.prev_state[(2 * b + usize::from(!side)) * ns + i] = after[k];

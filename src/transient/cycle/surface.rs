@@ -2,8 +2,9 @@
 //! wet outer surface, formed as the analysis points' are.
 //!
 //! A surface node's displacement is u_n(t) = r_n . x(t), r_n = [phi_n | R_nc] its ROM row
-//! ([`crate::reduce::rom::SurfaceRows`]) and x = [eta; F_c] the modal coordinates and the
-//! cylinder's contact loads. Its output acceleration is the point outputs' chain applied to
+//! ([`crate::reduce::rom::SurfaceRows`]) and x = [eta; q; F_c] the modal coordinates (the
+//! integrated modes' eta, then the quasi-static q of those not integrated, as the points have
+//! them: [`EngineRun::point_displacements`]) and the cylinder's contact loads. Its output acceleration is the point outputs' chain applied to
 //! u_n: the fourth-order second difference d, then the zero-phase FIR h (taps h_k, k = -L..L).
 //! Both are linear and time-invariant, so y_n(t) = r_n . xbar(t), xbar = h * d(x).
 //!
@@ -26,7 +27,7 @@
 #[allow(unused_imports)]
 use super::*;
 use crate::linalg::kernels::dot;
-use crate::reduce::rom::{CylinderRom, SurfaceRows};
+use crate::reduce::rom::SurfaceRows;
 use crate::transient::signal::BatchLowPass;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
@@ -126,14 +127,11 @@ impl SurfaceRecord {
             .iter()
             .map(|c| c.rom.thrust_z.len() + c.rom.antithrust_z.len())
             .collect();
-        let nb = run.structure.integrator.eta.len();
+        // every mode's coordinate: the integrated ones and the quasi-static rest
+        let nb = run.structure.integrator.eta.len() + run.dropped_static.len();
         let len = spc + 2 * margin;
         let mut mapper = Mapper {
-            surfaces: run
-                .cyls
-                .iter()
-                .map(|c| integrated_surface(c.rom, &run.setup.rom.frequencies_hz, nb))
-                .collect(),
+            surfaces: run.cyls.iter().map(|c| c.rom.surface.clone()).collect(),
             nb,
             ncon: ncon.clone(),
             projectors: run.cyls.iter().map(|_| None).collect(),
@@ -188,6 +186,7 @@ impl SurfaceRecord {
             return;
         }
         self.eta.extend_from_slice(&run.structure.integrator.eta);
+        self.eta.extend_from_slice(&run.dropped_static);
         for (c, loads) in self.loads.iter_mut().enumerate() {
             let off = loads.len();
             loads.resize(off + self.ncon[c], 0.0);
@@ -379,16 +378,6 @@ struct Projector {
     /// b_n = |Q^T w_n| (with its roundoff allowance) and |w_n|.
     tail: Vec<f64>,
     norm: Vec<f64>,
-}
-
-/// Cylinder `c`'s wet-surface rows for a run that integrates the first `nb` of the ROM's
-/// modes (`frequencies_hz`): the static part of the others joins the residual,
-/// R_nc + sum_{j >= nb} phi_nj c_j^T / omega_j^2 ([`CylinderRom::static_part`]).
-fn integrated_surface(c: &CylinderRom, frequencies_hz: &[f64], nb: usize) -> SurfaceRows {
-    SurfaceRows {
-        residual: &c.surface.residual + &c.static_part(&c.surface.modes, frequencies_hz, nb),
-        ..c.surface.clone()
-    }
 }
 
 /// The message of a failed eigen-decomposition of the weighted surface rows.
