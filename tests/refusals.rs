@@ -217,6 +217,25 @@ fn regression_the_full_engine_and_exported_meshes_are_sized_before_they_are_made
     assert!(!msh.exists());
 }
 
+/// Regression: the full-order window steps at the slap sub-step, so its time grows with
+/// `transient.slap_substeps`; it was sized by its model alone. The default engine's window at
+/// 64 sub-steps (23,040 steps of one factor solve, about 2.4 h on the 2-core machine) under
+/// `limits.max_hours = 1` is refused before any work (exit 2), naming the step's keys.
+#[test]
+fn regression_the_full_order_windows_stepping_is_held_to_the_time_limit() {
+    let args = [
+        "simulate",
+        "models/engine.toml",
+        "--full-order",
+        "--set",
+        "transient.slap_substeps=64",
+        "--set",
+        "limits.max_hours=1",
+    ];
+    let err = refused(&args, 2, "limits.max_hours");
+    assert!(err.contains("transient.slap_substeps"), "{err}");
+}
+
 /// `modes` of the small engine's liner read from the hex20 fixture under
 /// `limits.max_memory_gb` = `gb`: (exit code, stdout, stderr).
 fn modes_of_the_liner_fixture(gb: &str) -> (i32, String, String) {

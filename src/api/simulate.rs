@@ -66,7 +66,7 @@ pub struct SimulateRequest {
 }
 
 /// Refuses a run its scene's limits do not allow: the transient (three times with the step
-/// check, plus the ranking's time) and the full-order window.
+/// check, plus the ranking's time) and the full-order window (its model and its stepping).
 fn check_limits(
     req: &SimulateRequest,
     scene: &crate::scene::Scene,
@@ -84,7 +84,13 @@ fn check_limits(
         limits.check(scene, &est)?;
     }
     let window = crate::scene::budget::full_model(scene, "the full-order window", true);
-    if let Some(est) = window.filter(|_| req.full_order) {
+    if let Some(mut est) = window.filter(|_| req.full_order) {
+        // the window steps at the slap sub-step: its stepping, one factor solve a step
+        let t = &sim.transient;
+        let step = crate::transient::verify::sub_step_deg(t.step_deg, t.slap_substeps);
+        let dofs = crate::scene::budget::engine_dofs(scene).unwrap_or(0.0);
+        est.seconds += crate::transient::verify::window_stepping_seconds(dofs, step);
+        est.keys = "liner.mesh.* / crankcase.mesh.*, transient.step_deg, transient.slap_substeps";
         limits.check(scene, &est)?;
     }
     Ok(())

@@ -360,7 +360,21 @@ pub fn compare(
 /// 1/12 deg 0.58 %, at 1/16 deg 0.95 %, the full model's peaks within 0.3 % between the last
 /// two; docs/physics.md). `transient.slap_substeps = 1` runs the window at the base step.
 pub fn window_step_deg(settings: &CycleSettings) -> f64 {
-    settings.step_deg / settings.slap_substeps.max(1) as f64
+    sub_step_deg(settings.step_deg, settings.slap_substeps)
+}
+
+/// The slap sub-step \[deg\] of base step `step_deg` in `substeps` (at least 1).
+pub fn sub_step_deg(step_deg: f64, substeps: usize) -> f64 {
+    step_deg / substeps.max(1) as f64
+}
+
+/// The full-order window's stepping on `dofs` DOFs at `step_deg` \[s\]: one solve with
+/// K_eff's factor per step, (`WINDOW_DEG` span / step) steps at 0.38 s per step on the
+/// default engine's 351,522 DOFs (2-core machine: 412 s for the 1080 steps at 1/12 deg),
+/// scaled as the factor's entries, (dofs / 351,522)^(4/3).
+pub fn window_stepping_seconds(dofs: f64, step_deg: f64) -> f64 {
+    let steps = (WINDOW_DEG.1 - WINDOW_DEG.0) / step_deg;
+    steps * 0.38 * (dofs / 351_522.0).powf(4.0 / 3.0)
 }
 
 /// The largest relative change of the points' peak negative acceleration from the ROM's
