@@ -87,7 +87,7 @@ fn check_limits(
     if let Some(mut est) = window.filter(|_| req.full_order) {
         // the window steps at the slap sub-step: its stepping, one factor solve a step
         let t = &sim.transient;
-        let step = crate::transient::verify::sub_step_deg(t.step_deg, t.slap_substeps);
+        let step = crate::transient::verify::window_step_deg(t.step_deg, t.slap_substeps);
         let dofs = crate::scene::budget::engine_dofs(scene).unwrap_or(0.0);
         est.seconds += crate::transient::verify::window_stepping_seconds(dofs, step);
         est.keys = "liner.mesh.* / crankcase.mesh.*, transient.step_deg, transient.slap_substeps";

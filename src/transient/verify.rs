@@ -266,7 +266,7 @@ pub fn compare(
         onset_correction: false,
         ..settings.clone()
     };
-    let step_deg = window_step_deg(settings);
+    let step_deg = window_step_deg(settings.step_deg, settings.slap_substeps);
     let rw = rom_window(scene, rom, piston, settings, None, Some(step_deg))?;
     let half = rom_window(scene, rom, piston, settings, None, Some(0.5 * step_deg))?;
     let rom_step_change = step_change(&rw, &half);
@@ -359,13 +359,8 @@ pub fn compare(
 /// acceleration rule's period error is large (the default engine at its 1/4 deg: 1.58 %, at
 /// 1/12 deg 0.58 %, at 1/16 deg 0.95 %, the full model's peaks within 0.3 % between the last
 /// two; docs/physics.md). `transient.slap_substeps = 1` runs the window at the base step.
-pub fn window_step_deg(settings: &CycleSettings) -> f64 {
-    sub_step_deg(settings.step_deg, settings.slap_substeps)
-}
-
-/// The slap sub-step \[deg\] of base step `step_deg` in `substeps` (at least 1).
-pub fn sub_step_deg(step_deg: f64, substeps: usize) -> f64 {
-    step_deg / substeps.max(1) as f64
+pub fn window_step_deg(step_deg: f64, slap_substeps: usize) -> f64 {
+    step_deg / slap_substeps.max(1) as f64
 }
 
 /// The full-order window's stepping on `dofs` DOFs at `step_deg` \[s\]: one solve with

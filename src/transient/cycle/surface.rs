@@ -4,8 +4,8 @@
 //! A surface node's displacement is u_n(t) = r_n . x(t), r_n = [phi_n | R_nc] its ROM row
 //! ([`crate::reduce::rom::SurfaceRows`]) and x = [eta; q; F_c] the modal coordinates (the
 //! integrated modes' eta, then the quasi-static q of those not integrated, as the points have
-//! them: [`EngineRun::point_displacements`]) and the cylinder's contact loads. Its output acceleration is the point outputs' chain applied to
-//! u_n: the fourth-order second difference d, then the zero-phase FIR h (taps h_k, k = -L..L).
+//! them: [`EngineRun::point_displacements`]) and the cylinder's contact loads. Its output
+//! acceleration is the point outputs' chain applied to u_n: the fourth-order second difference d, then the zero-phase FIR h (taps h_k, k = -L..L).
 //! Both are linear and time-invariant, so y_n(t) = r_n . xbar(t), xbar = h * d(x).
 //!
 //! The minimum over a cycle's S samples for N nodes would take N S m products (m = modes +
