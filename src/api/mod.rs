@@ -619,7 +619,7 @@ pub fn half_step_check(
     rom: &EngineRom,
     piston: &Piston,
     base: &CycleResult,
-    on_step: impl FnMut(usize, usize),
+    on_step: impl FnMut(usize, usize) + Send,
 ) -> Result<(CycleResult, f64)> {
     let t = Instant::now();
     let step_deg = base.stats.dt_s * scene.engine.speed_rpm * 6.0;

@@ -609,13 +609,6 @@ fn mirrored_samples() -> impl Iterator<Item = (f64, f64)> {
     })
 }
 
-/// Which derivatives a film evaluation forms.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Derivatives {
-    Rates,
-    All,
-}
-
 /// The film of one piston's skirt (built once), SI.
 #[derive(Clone, Debug)]
 pub struct Film {
@@ -698,24 +691,7 @@ impl Film {
     /// Film forces on the consecutive slices `first..first + pen.len()` of one side at
     /// penetrations `pen` \[m\] and rates `rate` [m/s], the piston's upward velocity `dz` [m/s].
     pub fn side(&self, first: usize, pen: &[f64], rate: &[f64], dz: f64) -> SideFilm {
-        self.side_with(first, pen, rate, dz, Derivatives::All)
-    }
-
-    /// The side's film forces and their derivatives by the rates; of dF/dp only the asperity
-    /// contact's (diagonal) part.
-    pub fn side_rates(&self, first: usize, pen: &[f64], rate: &[f64], dz: f64) -> SideFilm {
-        self.side_with(first, pen, rate, dz, Derivatives::Rates)
-    }
-
-    fn side_with(
-        &self,
-        first: usize,
-        pen: &[f64],
-        rate: &[f64],
-        dz: f64,
-        derivatives: Derivatives,
-    ) -> SideFilm {
-        self.side_over(first, (pen, rate, dz), derivatives, mirrored_samples())
+        self.side_over(first, (pen, rate, dz), mirrored_samples())
     }
 
     /// The side's film summed over the sample `lines` (angle in degrees, how many lines it
@@ -724,7 +700,6 @@ impl Film {
         &self,
         first: usize,
         (pen, rate, dz): (&[f64], &[f64], f64),
-        derivatives: Derivatives,
         lines: impl Iterator<Item = (f64, f64)>,
     ) -> SideFilm {
         let n = pen.len();
@@ -780,7 +755,7 @@ impl Film {
                 wt: &wt,
                 dh: &dh,
             };
-            self.add_sample(&line, &sample, (&slope, &q, dz), &mut out, derivatives);
+            self.add_sample(&line, &sample, (&slope, &q, dz), &mut out);
         }
         out
     }
@@ -830,9 +805,8 @@ impl Film {
         self.wetting(-pen).0 > 0.0
     }
 
-    /// Adds one sample line's cavitated pressure force and (with `derivatives`) its
-    /// derivatives to `out`: the source S_i = w_i raw_i (w the wetted fraction, raw = dh/dt +
-    /// (U/2) dh/dx), the pressure A P = m S under the Reynolds condition
+    /// Adds one sample line's cavitated pressure force and its derivatives to `out`: the
+    /// source S_i = w_i raw_i (w the wetted fraction, raw = dh/dt + (U/2) dh/dx), the pressure A P = m S under the Reynolds condition
     /// ([`reynolds_condition`]: P >= 0, free nodes F and cavitated nodes at P = 0), the force
     /// F = a Q diag(w) P (a = R dpsi cos psi, Q the slices' integration weights), and for a
     /// change dr = m dS - dA P of the system's right-hand side by one penetration or rate (three
@@ -848,7 +822,6 @@ impl Film {
         sample: &Sample<'_>,
         (slope, q, dz): (&Slopes, &[[f64; 3]], f64),
         out: &mut SideFilm,
-        derivatives: Derivatives,
     ) {
         let Sample {
             c, count, raw, wt, ..
@@ -882,22 +855,20 @@ impl Film {
                     column(k),
                 );
             }
-            if derivatives == Derivatives::All {
-                let mut target = out.d_pen.column_mut(k);
-                let target = target.as_mut_slice();
-                for (j, rj) in self.pen_rhs(k, line, (&t, &p), sample, (slope, dz)) {
-                    if rj != 0.0 {
-                        axpy(target, rj, column(j));
-                    }
+            let mut target = out.d_pen.column_mut(k);
+            let target = target.as_mut_slice();
+            for (j, rj) in self.pen_rhs(k, line, (&t, &p), sample, (slope, dz)) {
+                if rj != 0.0 {
+                    axpy(target, rj, column(j));
                 }
-                // the wetted fraction's own change at node k: P_k dw_k/dh (-c), integrated by
-                // the rows of Q that reach node k
-                if wt[k].1 != 0.0 {
-                    let e = p[k] * wt[k].1 * (-c);
-                    for i in k.saturating_sub(1)..(k + 2).min(n) {
-                        let weight = q[i][1 + k - i];
-                        target[i] += w * (weight * e);
-                    }
+            }
+            // the wetted fraction's own change at node k: P_k dw_k/dh (-c), integrated by the
+            // rows of Q that reach node k
+            if wt[k].1 != 0.0 {
+                let e = p[k] * wt[k].1 * (-c);
+                for i in k.saturating_sub(1)..(k + 2).min(n) {
+                    let weight = q[i][1 + k - i];
+                    target[i] += w * (weight * e);
                 }
             }
         }
@@ -1054,7 +1025,7 @@ mod tests {
         let pen: Vec<f64> = (0..n).map(|i| -2e-6 - 4e-6 * i as f64).collect();
         let rate: Vec<f64> = (0..n).map(|i| 0.02 - 0.003 * i as f64).collect();
         let all = SAMPLE_DEG.iter().map(|&d| (d, 1.0));
-        let each = film.side_over(0, (&pen, &rate, 3.0), Derivatives::All, all);
+        let each = film.side_over(0, (&pen, &rate, 3.0), all);
         let mirrored = film.side(0, &pen, &rate, 3.0);
         assert!(each.engaged && mirrored.engaged);
         let close = |a: &[f64], b: &[f64], what: &str| {

@@ -209,6 +209,10 @@ pub struct StepResult {
     pub clamped: Vec<bool>,
     /// The oil film's part of every slice force \[N\] (0 for a dry skirt).
     pub film: Vec<f64>,
+    /// The film evaluated at the step's end state, F_end (each engaged side's force at the
+    /// converged iterate, where the Newton iteration last linearised it; 0 off an engaged
+    /// side): `film` differs from it by the iteration's residual.
+    pub film_end: Vec<f64>,
     pub iterations: usize,
 }
 
@@ -561,8 +565,8 @@ pub fn step(
             && (films.is_empty() || st.laws_agree(&pieces, (&forces, acc.as_ref()), (&pen, &rates)))
         {
             let mut res = st.result(&q, &active, &fa, &pieces, (forces, pen, rates), it);
-            // the film part of the forces the step carries (the film at its end differs by
-            // the Newton residual, measured again as stats.film_mismatch)
+            // the film part of the forces the step carries (the film at its end, `film_end`,
+            // differs by the Newton residual: stats.film_mismatch)
             if let Some(last) = acc {
                 res.film = last.film;
             }
@@ -1035,6 +1039,18 @@ impl<'s, 'a> Step<'s, 'a> {
         })
     }
 
+    /// The film force of every slice at the films' linearisation point, F0 (0 off an engaged
+    /// side).
+    fn film_at_linearisation(&self) -> Vec<f64> {
+        let mut out = vec![0.0; self.slices.len()];
+        for blk in &self.blocks {
+            for (&i, &f) in blk.slices.iter().zip(&blk.f0) {
+                out[i] = f;
+            }
+        }
+        out
+    }
+
     /// The film force of every slice at penetrations `pen` and rates `rates` (0 off a film).
     fn film_forces(&self, pen: &[f64], rates: &[f64]) -> Vec<f64> {
         let mut out = vec![0.0; self.slices.len()];
@@ -1203,6 +1219,7 @@ impl<'s, 'a> Step<'s, 'a> {
             damper,
             clamped: pieces.iter().map(|st| st.clamped).collect(),
             film,
+            film_end: self.film_at_linearisation(),
             iterations,
         }
     }

@@ -67,7 +67,7 @@ pub fn run_cycle(
     rom: &EngineRom,
     piston: &Piston,
     settings: CycleSettings,
-    on_step: impl FnMut(usize, usize),
+    on_step: impl FnMut(usize, usize) + Send,
 ) -> Result<CycleResult, TransientError> {
     run_with_tolerance(
         &setup_of(scene, rom, piston),
@@ -130,7 +130,7 @@ pub fn run_half_step(
     piston: &Piston,
     mut settings: CycleSettings,
     step_deg: f64,
-    on_step: impl FnMut(usize, usize),
+    on_step: impl FnMut(usize, usize) + Send,
 ) -> Result<CycleResult, TransientError> {
     settings.step_deg = step_deg / 2.0;
     settings.tolerance = None;

@@ -36,7 +36,6 @@ use crate::linalg::dense::{from_row_vecs, row, values_mut, Dense};
 use crate::piston::Piston;
 use crate::reduce::rom::{CylinderRom, EngineRom};
 use ndarray::Array2;
-use rayon::prelude::*;
 
 mod events;
 mod record;
@@ -58,6 +57,7 @@ use statistics::*;
 pub use surface::SurfacePeaks;
 use surface::SurfaceRecord;
 pub use tolerance::run_with_tolerance;
+use windows::StepErrorRuns;
 
 /// A step's slice as the records see it: cylinder index, thrust side, skirt slice, height.
 type SliceMeta = (usize, bool, usize, f64);
@@ -388,21 +388,54 @@ impl<'a> EngineRun<'a> {
     /// last cycle. Only that rolling segment of the record is kept.
     pub fn run(
         mut self,
-        mut on_step: impl FnMut(usize, usize),
+        on_step: impl FnMut(usize, usize) + Send,
     ) -> Result<CycleResult, TransientError> {
         let spc = (720.0 / self.settings.step_deg).round() as usize;
         let dt = self.base_dt();
         self.stats.dt_s = dt;
         let cycles = self.settings.cycles.max(1);
-        let averaged = self.settings.averaged_cycles.clamp(1, cycles);
         let margin = self.output_margin(dt);
+        let (starts, window_steps) = self.step_error_plan(cycles, spc, margin);
+        let windows = StepErrorRuns::new(window_steps, dt);
+        // the step-error windows run on the other core while the cycles go on
+        let (acc, surface) = rayon::scope(|scope| {
+            let starts: &[usize] = match self.settings.step_error {
+                true => &starts,
+                false => &[],
+            };
+            let out = self.cycles_loop((spc, margin, dt), starts, on_step, |c, snap| {
+                windows.start(scope, c, snap)
+            });
+            if out.is_err() {
+                windows.cancel();
+            }
+            out
+        })?;
+        let step_error = windows.results()?;
+        self.conclude(acc, step_error, surface)
+    }
+
+    /// The cycles of [`EngineRun::run`] at `dt` (`spc` steps a cycle, the output filter's
+    /// reach `margin`): every step recorded, each cycle's outputs and peaks formed once the
+    /// run is `margin` past its end, the averaged cycles' peaks, spectra and surface maps
+    /// kept. At global step `starts[c]` the state is handed to `on_window(c, state)` (cylinder
+    /// c's step-error window starts there).
+    fn cycles_loop(
+        &mut self,
+        (spc, margin, dt): (usize, usize, f64),
+        starts: &[usize],
+        mut on_step: impl FnMut(usize, usize),
+        mut on_window: impl FnMut(usize, Self),
+    ) -> Result<(Averaged, Option<SurfaceRecord>), TransientError> {
+        let cycles = self.settings.cycles.max(1);
+        let averaged = self.settings.averaged_cycles.clamp(1, cycles);
         let total = cycles * spc + margin;
-        let mut record = Record::new(&self, ((cycles - 1) * spc).saturating_sub(margin));
+        let mut record = Record::new(self, ((cycles - 1) * spc).saturating_sub(margin));
         let mut surface = match self.settings.surface_maps
             && self.cyls.iter().any(|c| !c.rom.surface.nodes.is_empty())
         {
             true => Some(SurfaceRecord::new(
-                &self,
+                self,
                 ((cycles - averaged) * spc).saturating_sub(margin),
                 (spc, margin, dt),
             )?),
@@ -417,13 +450,9 @@ impl<'a> EngineRun<'a> {
         };
         let mut building: Option<Series> = None;
         let mut pending: Option<(usize, Series)> = None;
-        let (starts, window_steps) = self.step_error_plan(cycles, spc, margin);
-        let mut snapshots: Vec<(usize, EngineRun<'a>)> = Vec::new();
         for g in 0..total {
-            for (c, &g0) in starts.iter().enumerate() {
-                if g == g0 && self.settings.step_error {
-                    snapshots.push((c, self.clone()));
-                }
+            for (c, _) in starts.iter().enumerate().filter(|&(_, &g0)| g == g0) {
+                on_window(c, self.clone());
             }
             let cycle = g / spc;
             if g % spc == 0 && cycle < cycles {
@@ -433,9 +462,9 @@ impl<'a> EngineRun<'a> {
                 building = Some(self.empty_series(spc));
             }
             self.checked_step(((g + 1) as f64) * dt)?;
-            record.push(&self, g);
+            record.push(self, g);
             if let Some(s) = surface.as_mut() {
-                s.push(&self, g);
+                s.push(self, g);
             }
             if let Some(series) = building.as_mut().filter(|_| cycle < cycles) {
                 self.sample(series, cycle);
@@ -455,7 +484,7 @@ impl<'a> EngineRun<'a> {
                 continue;
             }
             let (k, mut series) = pending.take().expect("ready");
-            record.outputs(&self, &mut series, k, k + 1 == cycles, (spc, margin, dt));
+            record.outputs(self, &mut series, k, k + 1 == cycles, (spc, margin, dt));
             let peaks = self.peaks(&series, k);
             if let Some(prev) = &acc.prev_peaks {
                 self.stats.cycle_change = largest_change(&peaks, prev);
@@ -471,8 +500,7 @@ impl<'a> EngineRun<'a> {
             acc.prev_peaks = Some(peaks);
             acc.last_series = Some(series);
         }
-        let step_error = self.step_errors(snapshots, window_steps, dt)?;
-        self.conclude(acc, step_error, surface)
+        Ok((acc, surface))
     }
 
     /// The run's result from the averaged cycles: energy balance, spectra, mean peaks with

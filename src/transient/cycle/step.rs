@@ -421,6 +421,7 @@ impl<'a> EngineRun<'a> {
     ) -> Result<contact::StepResult, Failure> {
         let mut out = contact::StepResult {
             film: vec![0.0; slices.len()],
+            film_end: vec![0.0; slices.len()],
             bodies: bodies.to_vec(),
             forces: vec![0.0; slices.len()],
             penetrations: vec![0.0; slices.len()],
@@ -503,6 +504,7 @@ impl<'a> EngineRun<'a> {
                 out.damper[k] = r.damper[j];
                 out.clamped[k] = r.clamped[j];
                 out.film[k] = r.film[j];
+                out.film_end[k] = r.film_end[j];
             }
             out.iterations = out.iterations.max(r.iterations);
         }
@@ -616,20 +618,15 @@ impl Failure {
 /// about 34 N on a side at rest).
 const FILM_CHECK_FLOOR_N: f64 = 200.0;
 
-/// How well a step resolved the oil film: each engaged side's film F_end evaluated at the
-/// step's end (the solution's penetrations and rates) against the forces F_used the step used
-/// (`res.film`, the film linearised at the predictor),
+/// How well a step resolved the oil film: each engaged side's film F_end at the step's end
+/// (`res.film_end`, the film evaluated at the converged state, where the Newton iteration
+/// linearised it last) against the forces F_used the step carries (`res.film`),
 ///   m = max over sides of max_i |F_end,i - F_used,i| / max(sum_i F_end,i, sum_i F_used,i),
 /// sides whose film force is below [`FILM_CHECK_FLOOR_N`] left out (0 without a film).
 pub(super) fn film_mismatch(films: &[contact::FilmGroup<'_>], res: &contact::StepResult) -> f64 {
     let mut worst_side = 0.0f64;
     for g in films {
-        let pen: Vec<f64> = g.slices.iter().map(|&i| res.penetrations[i]).collect();
-        let rate: Vec<f64> = g.slices.iter().map(|&i| res.rates[i]).collect();
-        let end = g
-            .film
-            .side_rates(g.first, &pen, &rate, g.axial_velocity)
-            .force;
+        let end: Vec<f64> = g.slices.iter().map(|&i| res.film_end[i]).collect();
         let used: Vec<f64> = g.slices.iter().map(|&i| res.film[i]).collect();
         let total = end.iter().sum::<f64>().max(used.iter().sum::<f64>());
         if total < FILM_CHECK_FLOOR_N {

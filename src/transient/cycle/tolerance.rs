@@ -11,7 +11,7 @@ pub fn run_with_tolerance(
     setup: &EngineSetup<'_>,
     mut settings: CycleSettings,
     max_refinements: usize,
-    mut on_step: impl FnMut(usize, usize),
+    mut on_step: impl FnMut(usize, usize) + Send,
 ) -> Result<CycleResult, TransientError> {
     let mut refinements = 0;
     loop {

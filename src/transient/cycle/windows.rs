@@ -3,6 +3,8 @@
 //! comparisons).
 
 use super::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
 
 impl<'a> EngineRun<'a> {
     /// Where each cylinder's step-error window starts in the last cycle (global step) and its
@@ -129,33 +131,85 @@ impl<'a> EngineRun<'a> {
         Ok(self.events.done)
     }
 
-    /// The half-step estimate's windows: each snapshot's window run at h and h/2
-    /// ([`EngineRun::window_peaks`]). The windows are independent runs from their own states,
-    /// so they run on every core; the first failing window in time order is reported, as a
-    /// serial run would.
-    pub(super) fn step_errors(
-        &self,
-        snapshots: Vec<(usize, EngineRun<'a>)>,
+    /// The half-step estimate's window of cylinder index `c` from this state: its peaks at
+    /// `dt` and at `dt` / 2 ([`EngineRun::window_peaks`]), the two runs side by side.
+    fn step_error(
+        self,
+        c: usize,
         window_steps: usize,
         dt: f64,
-    ) -> Result<Vec<StepError>, TransientError> {
-        let ids: Vec<usize> = self.cyls.iter().map(|c| c.rom.cylinder).collect();
-        snapshots
-            .into_par_iter()
-            .map(|(c, snap)| {
-                let half = snap.clone();
-                let (peak_h, peak_half_h) = rayon::join(
-                    move || snap.window_peaks(c, window_steps, dt),
-                    move || half.window_peaks(c, 2 * window_steps, 0.5 * dt),
-                );
-                Ok(StepError {
-                    cylinder: ids[c],
-                    peak_h: peak_h?,
-                    peak_half_h: peak_half_h?,
-                })
-            })
-            .collect::<Vec<Result<StepError, TransientError>>>()
+    ) -> Result<StepError, TransientError> {
+        let cylinder = self.cyls[c].rom.cylinder;
+        let half = self.clone();
+        let (peak_h, peak_half_h) = rayon::join(
+            move || self.window_peaks(c, window_steps, dt),
+            move || half.window_peaks(c, 2 * window_steps, 0.5 * dt),
+        );
+        Ok(StepError {
+            cylinder,
+            peak_h: peak_h?,
+            peak_half_h: peak_half_h?,
+        })
+    }
+}
+
+/// The half-step estimate's windows of a run ([`EngineRun::step_error`]), each started as a
+/// task as soon as the run reaches its state, so that they run on the other core while the
+/// cycles go on. The windows are independent runs from their own states: the results are
+/// the same bits as one after the other, and the first failing window in time order is the
+/// one reported, as a serial run would.
+pub(super) struct StepErrorRuns {
+    window_steps: usize,
+    dt: f64,
+    /// Each window's result in the order started (None until it has run).
+    slots: Mutex<Vec<Option<Result<StepError, TransientError>>>>,
+    /// Set when the run failed: windows not yet begun are skipped.
+    cancelled: AtomicBool,
+}
+
+impl StepErrorRuns {
+    pub(super) fn new(window_steps: usize, dt: f64) -> Self {
+        Self {
+            window_steps,
+            dt,
+            slots: Mutex::new(Vec::new()),
+            cancelled: AtomicBool::new(false),
+        }
+    }
+
+    /// Starts cylinder index `c`'s window from `state` as a task of `scope`.
+    pub(super) fn start<'s, 'a: 's>(
+        &'s self,
+        scope: &rayon::Scope<'s>,
+        c: usize,
+        state: EngineRun<'a>,
+    ) {
+        let slot = {
+            let mut slots = self.slots.lock().expect("no window panicked");
+            slots.push(None);
+            slots.len() - 1
+        };
+        scope.spawn(move |_| {
+            if self.cancelled.load(Ordering::Relaxed) {
+                return;
+            }
+            let result = state.step_error(c, self.window_steps, self.dt);
+            self.slots.lock().expect("no window panicked")[slot] = Some(result);
+        });
+    }
+
+    /// Skips the windows that have not begun (the run failed).
+    pub(super) fn cancel(&self) {
+        self.cancelled.store(true, Ordering::Relaxed);
+    }
+
+    /// Every window's step error in the order started; the first failure in that order.
+    pub(super) fn results(self) -> Result<Vec<StepError>, TransientError> {
+        self.slots
+            .into_inner()
+            .expect("no window panicked")
             .into_iter()
+            .map(|r| r.expect("every window ran (the run did not fail)"))
             .collect()
     }
 }
