@@ -308,8 +308,10 @@ pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
 
 /// Checks, before work starts, that output file `path` can be written: its directory can be
 /// made and written ([`check_writable`]) and `path` is not something else than a file (a
-/// `--vtu /proc/x.vtu` was refused only after its modal solve).
-pub fn check_output_file(path: &Path) -> Result<(), WriteError> {
+/// `--vtu /proc/x.vtu` was refused only after its modal solve). Returns the directories it
+/// made: they are removed again, when empty, unless kept ([`NewDirs::keep`]) once the file
+/// is written, so a run that fails leaves no empty directory behind.
+pub fn check_output_file(path: &Path) -> Result<NewDirs, WriteError> {
     if path.exists() && !path.is_file() {
         return Err(WriteError {
             path: path.to_path_buf(),
@@ -323,7 +325,13 @@ pub fn check_output_file(path: &Path) -> Result<(), WriteError> {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    check_writable(dir)
+    if dir.exists() && !dir.is_dir() {
+        // said by check_writable, before anything is made
+        check_writable(dir)?;
+    }
+    let made = NewDirs::create(dir)?;
+    check_writable(dir)?;
+    Ok(made)
 }
 
 /// The first entry of directory `dir` that is not a regular file (a directory, a device, a

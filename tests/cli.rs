@@ -246,6 +246,18 @@ fn contract_bad_input_is_refused_cleanly() {
     let mut a = with(bad_s, &STEEL);
     a.extend(["--vtu", vtu_s]);
     refused(&a, "bad.msh", Some(&vtu));
+    // a VTU in directories that do not exist yet: the failed run removes those it made
+    let deep = dir.path().join("new").join("sub").join("modes.vtu");
+    let mut a = with(bad_s, &STEEL);
+    a.extend([
+        "--vtu",
+        Box::leak(deep.to_str().unwrap().to_string().into_boxed_str()),
+    ]);
+    refused(&a, "bad.msh", None);
+    assert!(
+        !dir.path().join("new").exists(),
+        "a failed run left the directories it made for its VTU"
+    );
     let v22 = dir.path().join("old.msh");
     std::fs::write(&v22, text.replacen("4.1 0 8", "2.2 0 8", 1)).unwrap();
     let v22_s: &'static str = Box::leak(v22.to_str().unwrap().to_string().into_boxed_str());

@@ -83,9 +83,11 @@ fn checked_shift(req: &ModesRequest, part: &super::LoadedPart) -> Result<f64> {
 
 /// Runs the modal analysis; `started` is the process start so `seconds` covers everything.
 pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
-    if let Some(path) = &req.vtu {
-        crate::files::check_output_file(path)?;
-    }
+    // directories made for the VTU are removed again if the run fails
+    let vtu_dirs = match &req.vtu {
+        Some(path) => Some(crate::files::check_output_file(path)?),
+        None => None,
+    };
     let progress = Progress::new();
     progress.phase("reading mesh");
     let part = load_part(&req.input, &req.extra_fix)?;
@@ -132,6 +134,9 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
         let shapes: Vec<&[f64]> = (0..n).map(|j| sol.modes.vector(j)).collect();
         let freqs: Vec<f64> = (0..n).map(|j| sol.modes.frequency_hz(j)).collect();
         vtu::write_part_modes(path, &model.mesh, &model.dofs, &shapes, &freqs)?;
+    }
+    if let Some(d) = vtu_dirs {
+        d.keep();
     }
     let max_residual = crate::eigen::certify::worst(sol.residuals.iter().copied());
     let mut warnings = part.checks.warnings;
@@ -302,9 +307,10 @@ pub fn run_assembly(
             msg: "must be at least 1".into(),
         });
     }
-    if let Some(path) = vtu_path {
-        crate::files::check_output_file(path)?;
-    }
+    let vtu_dirs = match vtu_path {
+        Some(path) => Some(crate::files::check_output_file(path)?),
+        None => None,
+    };
     if full {
         // the whole engine's FE model is sized before it is made (per_sector = 2000 aborted in
         // an allocation after 22 s under a 6 GB cap)
@@ -313,6 +319,9 @@ pub fn run_assembly(
             crate::scene::budget::Limits::of(scene).check(scene, &est)?;
         }
         let r = super::full_modes::run(scene, count, vtu_path)?;
+        if let Some(d) = vtu_dirs {
+            d.keep();
+        }
         return Ok(AssemblyReport {
             frequencies_hz: r.frequencies_hz,
             dofs: r.dofs,
@@ -327,23 +336,17 @@ pub fn run_assembly(
     let (rom, cache_state) = if let Some(path) = vtu_path {
         // mode shapes on the meshes need the full bases: build in this run
         let (b, lm, cm) = super::rom::build_rom_with_progress(scene, true)?;
-        let n = count.min(b.rom.frequencies_hz.len());
-        super::full_modes::write_vtu(path, scene, &lm, &cm, &b, n)?;
+        enough_system_modes(&b.rom, count)?;
+        super::full_modes::write_vtu(path, scene, &lm, &cm, &b, count)?;
+        if let Some(d) = vtu_dirs {
+            d.keep();
+        }
         (b.rom, "bypassed")
     } else {
         let l = super::rom::get_rom_with_progress(scene, cache)?;
         (l.rom, l.cache)
     };
-    if rom.frequencies_hz.len() < count {
-        return Err(Error::Argument {
-            flag: format!("--count {count}"),
-            msg: format!(
-                "the ROM holds {} system modes below its cut-off {:.0} Hz; ask for fewer or raise rom.band_hz",
-                rom.frequencies_hz.len(),
-                rom.info.cutoff_hz
-            ),
-        });
-    }
+    enough_system_modes(&rom, count)?;
     Ok(AssemblyReport {
         frequencies_hz: rom.frequencies_hz[..count].to_vec(),
         dofs: rom.info.reduced_dofs,
@@ -354,4 +357,20 @@ pub fn run_assembly(
         sturm_count_ok: None,
         full_dofs: Some(rom.info.full_dofs),
     })
+}
+
+/// Refuses `--count` beyond the system modes `rom` holds below its cut-off (checked before a
+/// VTU of them is written).
+fn enough_system_modes(rom: &crate::reduce::rom::EngineRom, count: usize) -> Result<()> {
+    if rom.frequencies_hz.len() < count {
+        return Err(crate::error::Error::Argument {
+            flag: format!("--count {count}"),
+            msg: format!(
+                "the ROM holds {} system modes below its cut-off {:.0} Hz; ask for fewer or raise rom.band_hz",
+                rom.frequencies_hz.len(),
+                rom.info.cutoff_hz
+            ),
+        });
+    }
+    Ok(())
 }
