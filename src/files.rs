@@ -52,17 +52,18 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 }
 
 /// What a stopping signal (SIGINT, SIGTERM, SIGHUP) does: removes this process's temporary
-/// files and directories (and its new, still empty output directories) and exits with 130. A
+/// files and directories (and its new, still empty output directories) and exits with `code`
+/// (128 + the signal's number, as a shell reports a process the signal ended). A
 /// move of staged outputs in progress is finished first; both locks are then held until the
 /// process ends, so the working thread can neither make a new temporary nor move an output
 /// while (or after) they are removed. The command-line front end installs it as the signal
 /// handler.
-pub fn stop_cleanly() {
+pub fn stop_cleanly(code: i32) -> ! {
     let _moving = lock(&COMMITTING);
     let mut temporaries = lock(&TEMPORARIES);
     remove_registered(&mut temporaries, &mut lock(&NEW_DIRS));
     eprintln!("\nstopped by a signal; temporary files removed, outputs left as they were");
-    std::process::exit(130);
+    std::process::exit(code);
 }
 
 /// Before the process exits on a failed allocation (from any thread): removes the temporary

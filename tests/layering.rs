@@ -192,7 +192,7 @@ fn verification_the_library_does_not_use_the_front_ends_crates() {
             continue;
         }
         let code = code_of(f);
-        for krate in ["clap", "indicatif", "ctrlc", "mimalloc"] {
+        for krate in ["clap", "indicatif", "signal_hook", "mimalloc"] {
             if code.contains(&format!("{krate}::")) || code.contains(&format!("use {krate}")) {
                 users.push(format!("{}: {krate}", f.display()));
             }

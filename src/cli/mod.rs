@@ -11,12 +11,28 @@ pub mod progress;
 /// file and names the output, where the signal killed the process and left the temporary.
 pub fn install() {
     linercav::api::progress::set_front_end(progress::indicator);
-    let _ = ctrlc::set_handler(linercav::files::stop_cleanly);
+    stop_on_signals();
     // SAFETY: sets the disposition of one signal to "ignore"; no handler code runs.
     unsafe {
         libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
     }
     out_of_memory_is_an_error();
+}
+
+/// SIGINT, SIGTERM and SIGHUP stop the process cleanly ([`linercav::files::stop_cleanly`],
+/// exit 128 + the signal's number as a shell reports it: 130, 143, 129), from a thread that
+/// waits for them (no work in the signal handler itself). A second signal during the cleanup
+/// waits for it.
+fn stop_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            linercav::files::stop_cleanly(128 + signal);
+        }
+    });
 }
 
 /// A panic that is an allocation failure (faer unwraps its fallible allocations' `AllocError`)
