@@ -294,10 +294,7 @@ pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
     // a path that exists as something else than a directory ("File exists (os error 17)"
     // from create_dir_all) is said as such
     if dir.exists() && !dir.is_dir() {
-        return Err(fail(std::io::Error::new(
-            std::io::ErrorKind::AlreadyExists,
-            "exists and is not a directory: give a directory",
-        )));
+        return Err(exists_as_other(dir, "a directory"));
     }
     std::fs::create_dir_all(dir).map_err(fail)?;
     let probe = dir.join(format!(".probe.{}.tmp", std::process::id()));
@@ -307,6 +304,19 @@ pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
     removed.map_err(fail)
 }
 
+/// The error for `path`, which exists as something else than `wanted` ("a directory", "a
+/// file's path"): "exists and is not a directory: give a directory".
+fn exists_as_other(path: &Path, wanted: &str) -> WriteError {
+    let what = wanted.strip_suffix("'s path").unwrap_or(wanted);
+    WriteError {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            format!("exists and is not {what}: give {wanted}"),
+        ),
+    }
+}
+
 /// Checks, before work starts, that output file `path` can be written: its directory can be
 /// made and written ([`check_writable`]) and `path` is not something else than a file (a
 /// `--vtu /proc/x.vtu` was refused only after its modal solve). Returns the directories it
@@ -314,21 +324,15 @@ pub fn check_writable(dir: &Path) -> Result<(), WriteError> {
 /// is written, so a run that fails leaves no empty directory behind.
 pub fn check_output_file(path: &Path) -> Result<NewDirs, WriteError> {
     if path.exists() && !path.is_file() {
-        return Err(WriteError {
-            path: path.to_path_buf(),
-            source: std::io::Error::new(
-                std::io::ErrorKind::AlreadyExists,
-                "exists and is not a file: give a file's path",
-            ),
-        });
+        return Err(exists_as_other(path, "a file's path"));
     }
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
+    // said before anything is made
     if dir.exists() && !dir.is_dir() {
-        // said by check_writable, before anything is made
-        check_writable(dir)?;
+        return Err(exists_as_other(dir, "a directory"));
     }
     let made = NewDirs::create(dir)?;
     check_writable(dir)?;

@@ -48,12 +48,12 @@ fn default_rom() -> &'static linercav::reduce::rom::EngineRom {
 
 #[test]
 fn regression_default_engine_peaks_match_the_baseline() {
-    let scene = Scene::load(Path::new(SCENE), &[]).unwrap();
-    let piston = piston_of(&scene).unwrap();
-    let settings = settings_of(simulation(&scene).unwrap(), scene.rom.band_hz);
-    let res = run_cycle(&scene, default_rom(), &piston, settings, |_, _| {}).unwrap();
+    // the default scene's run, shared with the validation tests below (the same scene, ROM
+    // and settings as `simulate models/engine.toml`)
+    let (scene, res) = default_run();
+    let piston = piston_of(scene).unwrap();
     // the records `simulate --json` prints
-    let report = SimulateReport::new(&scene, &piston, &res, "test", 0.0);
+    let report = SimulateReport::new(scene, &piston, res, "test", 0.0);
     // the contact law never pulls: no slice force below zero at any step of any cycle
     assert!(
         report.stats.min_slice_force_n >= 0.0,
