@@ -13,6 +13,7 @@ use crate::fem::model::{FeModel, Timings};
 use crate::linalg::factor::{Analysis, FactorError};
 use crate::linalg::sparse::{Pattern, StiffnessMass, SymCsc};
 use crate::linalg::spill::{lower_shifted, spill_threshold};
+use crate::linalg::tripled::Product;
 use crate::scene::budget::SolveSizes;
 use std::time::Instant;
 
@@ -112,7 +113,9 @@ impl FeModel {
             // they wait on disk when the factor is large and the temporary directory has room
             model_resident: factor_entries.saturating_mul(8) < spill_threshold()
                 || !crate::linalg::spill::room_for(model),
-            mass: 16 * mass_entries,
+            // with its tripled form for the Lanczos products (linalg::tripled): a third of
+            // the entries at 12 bytes
+            mass: 16 * mass_entries + 4 * mass_entries,
             // row indices and values of the lower triangle and the diagonal
             lower: 8 * (nnz + n),
             // the check's block of 2 nev columns with its product buffers, or ARPACK's basis,
@@ -467,7 +470,8 @@ fn watched_solve(
             .expect("the factor lives until the iteration has converged")
             .solve_vec(x);
     };
-    let run = solve_modes_watched(n, settings, |x, y| mass.matvec(x, y), solve, watch)?;
+    let product = Product::new(mass);
+    let run = solve_modes_watched(n, settings, |x, y| product.apply(x, y), solve, watch)?;
     let Watched::Done(modes) = run else {
         // the first restart's bound leaves the shift in doubt: the block check decides
         let Some(llt) = factor.into_inner() else {
@@ -518,7 +522,8 @@ fn check_then_solve(
     }
     let t = Instant::now();
     let solve = move |x: &mut [f64]| llt.solve_vec(x);
-    let modes = solve_modes(n, settings, |x, y| mass.matvec(x, y), solve)?;
+    let product = Product::new(mass);
+    let modes = solve_modes(n, settings, |x, y| product.apply(x, y), solve)?;
     log::info!("{}", modes.work_summary());
     Ok((Ok(modes), (t_check, t.elapsed().as_secs_f64())))
 }

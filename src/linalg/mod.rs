@@ -10,6 +10,7 @@ pub mod sparse;
 pub mod spill;
 pub mod touch;
 pub mod tree_solve;
+pub mod tripled;
 
 /// Makes faer's dense operations that take no explicit parallelism (products by `*`, dense
 /// Cholesky and eigen-decompositions) run on the calling thread, once per process. Their

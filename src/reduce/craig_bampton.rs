@@ -340,7 +340,7 @@ fn fixed_interface_modes(
     if count == 0 {
         return Ok((Vec::new(), Mat::zeros(nb, 0)));
     }
-    let mass = inner.km.pattern.compress(&inner.km.m);
+    let product = crate::linalg::tripled::Product::owning(inner.km.pattern.compress(&inner.km.m));
     // certified by the count: the `count` lowest computed must all lie below the cut-off (a
     // mode the iteration skipped shows as one above it); else solved again with a margin and
     // another start vector
@@ -351,7 +351,7 @@ fn fixed_interface_modes(
         let modes = solve_modes(
             nb,
             &settings,
-            |x, y| mass.matvec(x, y),
+            |x, y| product.apply(x, y),
             |x| llt.solve_vec(x),
         )
         .map_err(|source| ReduceError::Eigen {
