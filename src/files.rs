@@ -62,7 +62,11 @@ pub fn stop_cleanly(code: i32) -> ! {
     let _moving = lock(&COMMITTING);
     let mut temporaries = lock(&TEMPORARIES);
     remove_registered(&mut temporaries, &mut lock(&NEW_DIRS));
-    eprintln!("\nstopped by a signal; temporary files removed, outputs left as they were");
+    // best effort: a standard error that cannot be written does not change the exit
+    let _ = writeln!(
+        std::io::stderr(),
+        "\nstopped by a signal; temporary files removed, outputs left as they were"
+    );
     std::process::exit(code);
 }
 
@@ -253,6 +257,14 @@ pub fn write_all_atomic(files: Vec<(PathBuf, Filler<'_>)>) -> Result<(), WriteEr
     for (path, fill) in files {
         let tmp = temp_path(&path);
         let r = (|| {
+            // a device, a pipe or a directory is never replaced by a file (checked up front
+            // by the commands, [`check_output_file`]; here for every writer)
+            if std::fs::metadata(&path).is_ok_and(|m| !m.is_file()) {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::AlreadyExists,
+                    "exists and is not a file: give a file's path",
+                ));
+            }
             let file = make_registered(&tmp, |p| std::fs::File::create(p))?;
             let mut w = BufWriter::with_capacity(1 << 20, file);
             fill(&mut w)?;
@@ -337,6 +349,29 @@ pub fn check_output_file(path: &Path) -> Result<NewDirs, WriteError> {
     let made = NewDirs::create(dir)?;
     check_writable(dir)?;
     Ok(made)
+}
+
+/// Refuses output file `path` when it is one of the run's input files `inputs` (the same file
+/// by device and inode, whatever the paths say), which writing it would replace.
+pub fn check_not_an_input(path: &Path, inputs: &[&Path]) -> Result<(), WriteError> {
+    use std::os::unix::fs::MetadataExt;
+    let Ok(out) = std::fs::metadata(path) else {
+        return Ok(());
+    };
+    let same = |m: &std::fs::Metadata| (m.dev(), m.ino()) == (out.dev(), out.ino());
+    match inputs
+        .iter()
+        .find(|i| std::fs::metadata(i).is_ok_and(|m| same(&m)))
+    {
+        Some(input) => Err(WriteError {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                format!("is the input {}: give another path", input.display()),
+            ),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// The first entry of directory `dir` that is not a regular file (a directory, a device, a

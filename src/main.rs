@@ -7,7 +7,7 @@ use clap::{Args, Parser, Subcommand};
 use linercav::api::{cavitation, export, modes, rom, simulate, sweep, ModelInput};
 use linercav::error::Error;
 use linercav::scene::spec::Elastic;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// mimalloc instead of the system allocator: the transient's contact step makes a few hundred
@@ -110,9 +110,9 @@ struct Cli {
 struct ModelArgs {
     /// Scene file (TOML).
     scene: Option<PathBuf>,
-    /// Part of the scene to analyse.
-    #[arg(long, default_value = "liner")]
-    part: String,
+    /// Part of the scene to analyse: liner (the default) or crankcase.
+    #[arg(long)]
+    part: Option<String>,
     /// Override any scene field: --set liner.mesh.radial=3 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
@@ -139,13 +139,35 @@ struct ModelArgs {
 }
 
 impl ModelArgs {
+    /// Refuses the material flags of a bare mesh (`--youngs`, `--poisson`, `--density`) with
+    /// a scene, whose parts take their materials from the scene (they were ignored); and, with
+    /// `unit`, `--unit mm` too (a scene's unit is its own; `export-mesh` writes in `--unit`).
+    fn refuse_mesh_flags(&self, unit: bool) -> Result<(), Error> {
+        let given = [
+            ("--youngs", self.youngs.is_some()),
+            ("--poisson", self.poisson.is_some()),
+            ("--density", self.density.is_some()),
+            ("--unit", unit && self.unit != "m"),
+        ];
+        match given.iter().find(|g| g.1) {
+            Some((flag, _)) => Err(Error::Argument {
+                flag: flag.to_string(),
+                msg: "applies to --mesh only: a scene's parts take their materials and unit from the scene (set them there, or with --set)".into(),
+            }),
+            None => Ok(()),
+        }
+    }
+
     fn input(&self) -> Result<ModelInput, Error> {
         match (&self.scene, &self.mesh) {
-            (Some(scene), None) => Ok(ModelInput::Scene {
-                scene: scene.clone(),
-                part: self.part.clone(),
-                sets: self.sets.clone(),
-            }),
+            (Some(scene), None) => {
+                self.refuse_mesh_flags(false)?;
+                Ok(ModelInput::Scene {
+                    scene: scene.clone(),
+                    part: self.part.clone().unwrap_or_else(|| "liner".into()),
+                    sets: self.sets.clone(),
+                })
+            }
             (None, Some(mesh)) => {
                 let unit =
                     linercav::mesh::MeshUnit::parse(&self.unit).ok_or_else(|| Error::Argument {
@@ -477,16 +499,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             options,
             cache,
         } => modes_command(&model, options, &cache, started)?,
-        Command::ExportMatrices { model, out } => {
-            let r = export::export_matrices(&model.input()?, &model.fix, &out)?;
-            println!(
-                "wrote {} and {} ({} DOFs, {} lower-triangle entries)",
-                r.files[0].display(),
-                r.files[1].display(),
-                r.dofs,
-                r.nnz_lower
-            );
-        }
+        Command::ExportMatrices { model, out } => export_matrices_command(&model, &out)?,
         Command::Report {
             scene,
             sets,
@@ -494,8 +507,11 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             cache,
         } => {
             let r = linercav::api::summary::run(&scene, &sets, &out, &cache.options())?;
-            print!("{}", r.to_text());
-            println!("report written to {}", out.display());
+            say(&format!(
+                "{}report written to {}\n",
+                r.to_text(),
+                out.display()
+            ))?;
         }
         Command::Rom {
             scene,
@@ -512,7 +528,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             json,
         } => {
             let r = linercav::api::rom_tradeoff::run(&scene, &sets, &factors, out.as_deref())?;
-            print_report(json, &r, || r.to_text());
+            print_report(json, &r, || r.to_text())?;
         }
         Command::Shapes {
             scene,
@@ -524,7 +540,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
         Command::Sweep(args) => sweep_command(args, started)?,
         Command::SweepMerge { parts, out, json } => {
             let r = sweep::merge(&parts, &out, started)?;
-            print_report(json, &r, || r.to_text());
+            print_report(json, &r, || r.to_text())?;
         }
         Command::Coolant {
             temp_c,
@@ -534,7 +550,7 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
             json,
         } => {
             let r = cavitation::coolant(temp_c, static_kpa, glycol, gap_mm)?;
-            print_report(json, &r, || r.to_text());
+            print_report(json, &r, || r.to_text())?;
         }
         Command::Calibrate {
             data,
@@ -556,19 +572,43 @@ fn run(cli: Cli, started: Instant) -> Result<(), Error> {
                 png,
             };
             let r = cavitation::calibrate(&req)?;
-            print_report(json, &r, || cavitation::calibration_text(&r));
+            print_report(json, &r, || cavitation::calibration_text(&r))?;
         }
         Command::ExportMesh {
             model,
             no_sets,
             out,
-        } => {
-            let unit = linercav::mesh::MeshUnit::parse(&model.unit).unwrap_or_default();
-            let n = export::export_mesh(&model.input()?, &out, unit, !no_sets)?;
-            println!("wrote {} ({n} nodes)", out.display());
-        }
+        } => export_mesh_command(&model, no_sets, &out)?,
     }
     Ok(())
+}
+
+/// `export-matrices`: K.mtx and M.mtx of a part or a mesh.
+fn export_matrices_command(model: &ModelArgs, out: &Path) -> Result<(), Error> {
+    if model.scene.is_some() {
+        model.refuse_mesh_flags(true)?;
+    }
+    let r = export::export_matrices(&model.input()?, &model.fix, out)?;
+    say(&format!(
+        "wrote {} and {} ({} DOFs, {} lower-triangle entries)\n",
+        r.files[0].display(),
+        r.files[1].display(),
+        r.dofs,
+        r.nnz_lower
+    ))
+}
+
+/// `export-mesh`: a part's or a mesh's mesh as a deck in `--unit`.
+fn export_mesh_command(model: &ModelArgs, no_sets: bool, out: &Path) -> Result<(), Error> {
+    if !model.fix.is_empty() {
+        return Err(Error::Argument {
+            flag: "--fix".into(),
+            msg: "does not apply to export-mesh: the mesh is written with its node sets (clamping is a choice of an analysis)".into(),
+        });
+    }
+    let unit = linercav::mesh::MeshUnit::parse(&model.unit).unwrap_or_default();
+    let n = export::export_mesh(&model.input()?, out, unit, !no_sets)?;
+    say(&format!("wrote {} ({n} nodes)\n", out.display()))
 }
 
 /// `sweep`: a designed study of the scene (grid, sample or adaptive refinement), printed (or as
@@ -589,7 +629,7 @@ fn sweep_command(args: SweepArgs, started: Instant) -> Result<(), Error> {
         runs: args.runs,
     };
     let r = sweep::run(&req, started)?;
-    print_report(args.json, &r, || r.to_text());
+    print_report(args.json, &r, || r.to_text())?;
     Ok(())
 }
 
@@ -606,7 +646,7 @@ fn simulate_command(args: SimulateArgs, started: Instant) -> Result<(), Error> {
         rank: args.rank,
     };
     let report = simulate::run(&req, started)?;
-    print_report(args.json, &report, || report.to_text());
+    print_report(args.json, &report, || report.to_text())?;
     Ok(())
 }
 
@@ -623,14 +663,14 @@ fn rom_command(
     let sc = linercav::api::load_scene(scene, sets)?;
     if let Some(c) = component {
         let done = rom::reduce_component(&sc, &cache.options(), c)?;
-        print_report(json, &done, || rom::component_text(&done));
+        print_report(json, &done, || rom::component_text(&done))?;
         return Ok(());
     }
     let loaded = rom::get_rom_with_progress(&sc, &cache.options())?;
     let mut report = rom::RomReport::new(&loaded);
     report.seconds = started.elapsed().as_secs_f64();
     report.substructured = linercav::scene::budget::Split::substructured(&sc);
-    print_report(json, &report, || report.to_text());
+    print_report(json, &report, || report.to_text())?;
     Ok(())
 }
 
@@ -648,7 +688,7 @@ fn shapes_command(
         cylinders: loaded.rom.cylinders.iter().map(|c| c.cylinder).collect(),
         cache: loaded.cache,
     };
-    print_report(json, &report, || report.to_text());
+    print_report(json, &report, || report.to_text())?;
     Ok(())
 }
 
@@ -705,6 +745,20 @@ fn modes_command(
             flag: "--assembly".into(),
             msg: "needs a scene file".into(),
         })?;
+        // the coupled engine has no part to choose or fix, and no shift to keep
+        let single = [
+            ("--part", model.part.is_some()),
+            ("--fix", !model.fix.is_empty()),
+            ("--shift-hz", shift_hz.is_some()),
+            ("--keep-shift", keep_shift),
+        ];
+        if let Some((flag, _)) = single.iter().find(|g| g.1) {
+            return Err(Error::Argument {
+                flag: flag.to_string(),
+                msg: "applies to a part's modes, not to --assembly (the coupled engine)".into(),
+            });
+        }
+        model.refuse_mesh_flags(true)?;
         let scene = linercav::api::load_scene(&scene_path, &model.sets)?;
         let report = modes::run_assembly(
             &scene,
@@ -714,9 +768,12 @@ fn modes_command(
             &cache.options(),
             started,
         )?;
-        print_report(json, &report, || report.to_text());
+        print_report(json, &report, || report.to_text())?;
         linercav::eigen::certify::system_verdict(report.sturm_count_ok)?;
         return Ok(());
+    }
+    if model.scene.is_some() {
+        model.refuse_mesh_flags(true)?;
     }
     let req = modes::ModesRequest {
         input: model.input()?,
@@ -731,11 +788,11 @@ fn modes_command(
         keep_shift,
     };
     let report = modes::run(&req, started)?;
-    print_report(json, &report, || report.to_text());
+    print_report(json, &report, || report.to_text())?;
     // warnings go to standard error, as every command's do (the text and the JSON are the
     // result; the JSON also lists them)
     for w in &report.warnings {
-        eprintln!("warning: {w}");
+        tell(&format!("warning: {w}\n"));
     }
     linercav::eigen::certify::verdict(
         report.sturm.as_ref(),
@@ -745,16 +802,41 @@ fn modes_command(
     Ok(())
 }
 
-/// Prints a report as JSON (`--json`) or as text.
-fn print_report<T: serde::Serialize>(json: bool, report: &T, text: impl FnOnce() -> String) {
+/// Prints a report as JSON (`--json`) or as text ([`say`]).
+fn print_report<T: serde::Serialize>(
+    json: bool,
+    report: &T,
+    text: impl FnOnce() -> String,
+) -> Result<(), Error> {
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(report).expect("serialisable")
-        );
+        say(&(serde_json::to_string_pretty(report).expect("serialisable") + "\n"))
     } else {
-        print!("{}", text());
+        say(&text())
     }
+}
+
+/// Writes `text` to standard output. A reader that went away (a closed pipe: `| head`) ends
+/// the process as SIGPIPE would, with 141 (128 + 13; the outputs are written by then); any
+/// other failure (a full disk) is an error naming standard output (exit 2), not a panic.
+fn say(text: &str) -> Result<(), Error> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(141),
+        Err(source) => Err(linercav::files::WriteError {
+            path: "standard output".into(),
+            source,
+        }
+        .into()),
+    }
+}
+
+/// Writes `text` to standard error, best effort: a standard error that cannot be written (a
+/// full disk) loses the message but does not end the run or change its exit code.
+fn tell(text: &str) {
+    use std::io::Write;
+    let _ = std::io::stderr().lock().write_all(text.as_bytes());
 }
 
 /// OpenBLAS (ARPACK's BLAS) starts its worker threads when the library loads, before `main`,
@@ -793,12 +875,12 @@ impl log::Log for StderrLog {
         }
         let msg = r.args().to_string();
         if r.level() > log::Level::Warn {
-            eprintln!("{msg}");
+            tell(&format!("{msg}\n"));
             return;
         }
         let mut said = self.said.lock().unwrap_or_else(|p| p.into_inner());
         if said.insert(msg.clone()) {
-            eprintln!("warning: {msg}");
+            tell(&format!("warning: {msg}\n"));
         }
     }
     fn flush(&self) {}
@@ -847,18 +929,18 @@ fn main() {
     }
     if let Err(e) = check_sets().and_then(|()| run(cli, started)) {
         let mut said = e.to_string();
-        eprint!("error: {said}");
+        let mut message = format!("error: {said}");
         let mut source = std::error::Error::source(&e);
         while let Some(s) = source {
             // a cause whose text the message already carries is not repeated
             let text = s.to_string();
             if !said.contains(&text) {
-                eprint!("\n  caused by: {text}");
+                message.push_str(&format!("\n  caused by: {text}"));
                 said.push_str(&text);
             }
             source = s.source();
         }
-        eprintln!();
+        tell(&(message + "\n"));
         std::process::exit(e.exit_code());
     }
 }

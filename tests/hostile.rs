@@ -1070,3 +1070,79 @@ fn under_limit(
     }
     c.output().unwrap()
 }
+
+/// Regression (session 74's hostile sweep): `calibrate --png /dev/null` replaced the device
+/// with a PNG file (and a FIFO given to `export-mesh --out` became a regular file); an output
+/// path naming the run's own input (`--vtu mesh.inp`, `--png data.csv`) overwrote the input;
+/// a full standard output (`> /dev/full`) panicked with 101. Now each exits 2 naming the
+/// path, and the device, pipe or input is left as it was.
+#[test]
+fn regression_outputs_never_replace_a_device_a_pipe_or_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let path = |n: &str| d.join(n).to_str().unwrap().to_string();
+    let fifo = path("pipe.msh");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let mesh = path("copy.msh");
+    std::fs::copy(MESH, &mesh).unwrap();
+    let data = path("rig.csv");
+    std::fs::write(&data, "time_s,acceleration_m_s2,pressure_kpa\n").unwrap();
+    let calibrate = |png: &str| {
+        let mut a = vec!["calibrate", "--data", &data, "--gap-mm", "4.7"];
+        a.extend(["--static-kpa", "240", "--temp-c", "90", "--png", png]);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let on_mesh = |command: &str, input: &str, rest: &[&str]| {
+        let mut a = vec![command, "--mesh", input];
+        a.extend(STEEL);
+        a.extend(rest);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let export = |input: &str, out: &str| on_mesh("export-mesh", input, &["--out", out]);
+    let vtu = on_mesh("modes", &mesh, &["--count", "6", "--vtu", &mesh]);
+    let cases: [(Vec<String>, &str, &str); 5] = [
+        (export(MESH, &fifo), &fifo, "exists and is not a file"),
+        (export(&mesh, &mesh), &mesh, "is the input"),
+        (vtu, &mesh, "is the input"),
+        (calibrate(&data), &data, "is the input"),
+        (
+            calibrate("/dev/null"),
+            "/dev/null",
+            "exists and is not a file",
+        ),
+    ];
+    let before = std::fs::read(&mesh).unwrap();
+    for (args, target, says) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, _, err) = linercav(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(
+            err.contains(target) && err.contains(says),
+            "{args:?}: {err}"
+        );
+    }
+    use std::os::unix::fs::FileTypeExt;
+    let kind = |p: &str| std::fs::metadata(p).unwrap().file_type();
+    assert!(kind(&fifo).is_fifo() && kind("/dev/null").is_char_device());
+    assert_eq!(std::fs::read(&mesh).unwrap(), before);
+    assert!(std::fs::read_to_string(&data)
+        .unwrap()
+        .starts_with("time_s"));
+    // a full standard output is an error naming it (exit 2), not a panic
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_linercav"))
+        .args(["coolant", "--temp-c", "90", "--static-kpa", "240"])
+        .stdout(full)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("standard output: cannot write"), "{err}");
+}

@@ -135,6 +135,14 @@ pub fn calibrate(req: &CalibrateRequest) -> Result<Calibration> {
             msg: "must be positive".into(),
         });
     }
+    // the plot's directories are removed again if the run fails
+    let png_dirs = match &req.png {
+        Some(png) => {
+            crate::files::check_not_an_input(png, &[&req.data])?;
+            Some(crate::files::check_output_file(png)?)
+        }
+        None => None,
+    };
     let d = RigData::read(&req.data)?;
     let file = req.data.display().to_string();
     let cal = calibration::calibrate(
@@ -148,6 +156,9 @@ pub fn calibrate(req: &CalibrateRequest) -> Result<Calibration> {
     )?;
     if let Some(png) = &req.png {
         draw_calibration(png, &cal)?;
+    }
+    if let Some(d) = png_dirs {
+        d.keep();
     }
     Ok(cal)
 }

@@ -84,6 +84,9 @@ pub fn export_mesh(input: &ModelInput, out: &Path, unit: MeshUnit, sets: bool) -
             msg: "unknown format: expected .msh (Gmsh MSH 4.1), .bdf or .nas (Nastran bulk data) or .inp (Abaqus input)".into(),
         });
     }
+    crate::files::check_not_an_input(out, &[input.path()])?;
+    // directories made for the file are removed again if the run fails
+    let dirs = crate::files::check_output_file(out)?;
     let (mesh, material) = match input {
         ModelInput::Scene { scene, part, sets }
             if part == "crankcase" || has_crankcase(scene, sets)? =>
@@ -120,6 +123,7 @@ pub fn export_mesh(input: &ModelInput, out: &Path, unit: MeshUnit, sets: bool) -
         material,
     };
     write_mesh(out, &mesh, &opts)?;
+    dirs.keep();
     Ok(mesh.nodes.len())
 }
 

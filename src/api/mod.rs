@@ -111,6 +111,16 @@ pub enum ModelInput {
     },
 }
 
+impl ModelInput {
+    /// The file the model is read from: the scene or the mesh.
+    pub fn path(&self) -> &Path {
+        match self {
+            ModelInput::Scene { scene, .. } => scene,
+            ModelInput::Mesh { mesh, .. } => mesh,
+        }
+    }
+}
+
 /// The limits of work on a bare mesh: the machine's ([`crate::scene::budget::Limits::machine`])
 /// with `limits.max_memory_gb=GB` and `limits.max_hours=H` from `sets` (the only scene keys
 /// that apply without a scene); any other key, or a value that is not a positive number, is

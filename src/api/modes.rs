@@ -85,7 +85,10 @@ fn checked_shift(req: &ModesRequest, part: &super::LoadedPart) -> Result<f64> {
 pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
     // directories made for the VTU are removed again if the run fails
     let vtu_dirs = match &req.vtu {
-        Some(path) => Some(crate::files::check_output_file(path)?),
+        Some(path) => {
+            crate::files::check_not_an_input(path, &[req.input.path()])?;
+            Some(crate::files::check_output_file(path)?)
+        }
         None => None,
     };
     let progress = Progress::new();
@@ -308,7 +311,10 @@ pub fn run_assembly(
         });
     }
     let vtu_dirs = match vtu_path {
-        Some(path) => Some(crate::files::check_output_file(path)?),
+        Some(path) => {
+            crate::files::check_not_an_input(path, &[&scene.path])?;
+            Some(crate::files::check_output_file(path)?)
+        }
         None => None,
     };
     if full {

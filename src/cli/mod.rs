@@ -62,7 +62,9 @@ fn out_of_memory_is_an_error() {
             } else {
                 "temporary files may be left (a move of outputs was under way)"
             };
-            eprintln!("error: out of memory: an allocation failed{at} ({msg}): the run needed more than its estimate or the machine had less than it reported; {left}");
+            // best effort (a standard error that cannot be written keeps the exit code)
+            use std::io::Write as _;
+            let _ = writeln!(std::io::stderr(), "error: out of memory: an allocation failed{at} ({msg}): the run needed more than its estimate or the machine had less than it reported; {left}");
             std::process::exit(1);
         }
         default(info);

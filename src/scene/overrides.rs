@@ -66,8 +66,8 @@ pub fn within(outer: &str, inner: &str) -> bool {
             .is_some_and(|r| r.starts_with('.'))
 }
 
-/// Parses the value part of an override: a TOML value, or the text as a string where it is not
-/// one. A value that brings more than itself is refused (TOML after it on another line, or a
+/// Parses the value part of an override: a TOML value, a number where the text is one that
+/// TOML does not read (`80.`, `1e400`, 100000000000000000000), or the text as a string. A value that brings more than itself is refused (TOML after it on another line, or a
 /// comment: `--set 'a=1\n[b]\nc=2'` set a and dropped the rest without a word).
 pub fn parse_value(text: &str) -> Result<Value, String> {
     if text.contains(['\n', '\r']) {
@@ -84,7 +84,12 @@ pub fn parse_value(text: &str) -> Result<Value, String> {
             }
             Ok(v)
         }
-        Err(_) => Ok(Value::String(text.to_string())),
+        // a number TOML does not write so (`80.`, an integer beyond 64 bits) is the number,
+        // which the key's own check then judges, not a string ("invalid type: string")
+        Err(_) => Ok(match text.trim().parse::<f64>() {
+            Ok(x) => Value::Float(x),
+            Err(_) => Value::String(text.to_string()),
+        }),
     }
 }
 
@@ -187,6 +192,20 @@ mod tests {
         assert_eq!(t["a"]["b"].as_float(), Some(2.5));
         assert_eq!(t["a"]["c"]["d"].as_str(), Some("hex20"));
         assert_eq!(t["e"].as_array().unwrap().len(), 2);
+    }
+
+    /// Regression (session 74's hostile sweep): `80.` and an integer beyond 64 bits were taken
+    /// as strings ("invalid type: string", naming no number); they are the numbers, and a
+    /// word stays a string.
+    #[test]
+    fn regression_numbers_toml_does_not_write_are_numbers() {
+        let mut t = Table::new();
+        apply(&mut t, "a=80.").unwrap();
+        apply(&mut t, "b=100000000000000000000").unwrap();
+        apply(&mut t, "c=hex20").unwrap();
+        assert_eq!(t["a"].as_float(), Some(80.0));
+        assert_eq!(t["b"].as_float(), Some(1e20));
+        assert_eq!(t["c"].as_str(), Some("hex20"));
     }
 
     #[test]
