@@ -29,10 +29,11 @@ pub fn run(
     factors: &[f64],
     out: Option<&Path>,
 ) -> Result<RomTradeoff> {
-    if factors.is_empty() || factors.iter().any(|f| !(f.is_finite() && *f >= 1.0)) {
+    let max = crate::scene::CUTOFF_FACTOR_MAX;
+    if factors.is_empty() || factors.iter().any(|f| !(1.0..=max).contains(f)) {
         return Err(Error::Argument {
             flag: format!("--factors {factors:?}"),
-            msg: "cut-off factors must be numbers >= 1".into(),
+            msg: format!("cut-off factors must be numbers in [1, {max}]"),
         });
     }
     // the same factor twice builds the same ROM twice

@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 mod load;
 mod model;
 mod validate;
+pub use validate::CUTOFF_FACTOR_MAX;
 
 #[allow(unused_imports)]
 use load::*;

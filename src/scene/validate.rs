@@ -300,6 +300,10 @@ pub(super) fn validate_liner_meshing(
     Ok(meshing)
 }
 
+/// The largest `rom.cutoff_factor` (and `rom-tradeoff --factors`): modes far above the band
+/// only cost.
+pub const CUTOFF_FACTOR_MAX: f64 = 10.0;
+
 /// `[rom]`: band, cut-off, interface harmonics (resolved by the liner ring), cylinders, cache.
 pub(super) fn validate_rom(
     c: &Checker<'_>,
@@ -309,11 +313,11 @@ pub(super) fn validate_rom(
     liner: &Part,
 ) -> Result<Rom, SceneError> {
     let band_hz = c.positive("rom.band_hz", r.band_hz)?;
-    if !(r.cutoff_factor.is_finite() && (1.0..=10.0).contains(&r.cutoff_factor)) {
+    if !(r.cutoff_factor.is_finite() && (1.0..=CUTOFF_FACTOR_MAX).contains(&r.cutoff_factor)) {
         return Err(c.err(
             "rom.cutoff_factor",
             format!(
-                "must lie in [1, 10] (modes far above the band only cost), got {}",
+                "must lie in [1, {CUTOFF_FACTOR_MAX}] (modes far above the band only cost), got {}",
                 crate::text::exact(r.cutoff_factor)
             ),
         ));
