@@ -260,10 +260,7 @@ pub fn write_all_atomic(files: Vec<(PathBuf, Filler<'_>)>) -> Result<(), WriteEr
             // a device, a pipe or a directory is never replaced by a file (checked up front
             // by the commands, [`check_output_file`]; here for every writer)
             if std::fs::metadata(&path).is_ok_and(|m| !m.is_file()) {
-                return Err(std::io::Error::new(
-                    std::io::ErrorKind::AlreadyExists,
-                    "exists and is not a file: give a file's path",
-                ));
+                return Err(exists_as_other(&path, "a file's path").source);
             }
             let file = make_registered(&tmp, |p| std::fs::File::create(p))?;
             let mut w = BufWriter::with_capacity(1 << 20, file);
