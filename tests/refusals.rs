@@ -99,6 +99,34 @@ fn regression_a_refinement_too_narrow_for_its_runs_is_refused() {
     assert!(err.contains("too narrow"), "{err}");
 }
 
+/// Regression: `sweep --refine piston.slices=10:12 --runs 5` (a key of whole numbers) ran
+/// the first batch and then failed at its first midpoint, 11.5; it is refused before any run,
+/// naming the key, the value it cannot take and `--vary`, and no output directory is made.
+#[test]
+fn regression_a_refinement_of_a_whole_number_key_is_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("refined");
+    let err = refused(
+        &[
+            "sweep",
+            SMALL,
+            "--refine",
+            "piston.slices=10:12",
+            "--runs",
+            "5",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        2,
+        "--refine",
+    );
+    assert!(
+        err.contains("piston.slices") && err.contains("whole number") && err.contains("--vary"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}
+
 /// A path as a TOML string literal.
 fn toml_string(p: &Path) -> String {
     format!("\"{}\"", p.display())

@@ -679,6 +679,33 @@ fn quantities(run: &SweepRun) -> Vec<(f64, f64)> {
 /// Names of [`quantities`] in `sweep.json`'s `maximum`.
 const REFINED: [&str; 2] = ["peak_slap_force_n", "peak_negative_m_s2"];
 
+/// Refuses, before any run, a `--refine` key the refinement cannot place runs on: the scene
+/// is read with the key at a value inside the range that is no whole number (0.382 of the way
+/// from LO to HI), as the refinement's midpoints will be. A key of whole numbers (a count such
+/// as `piston.slices`) is refused there, naming `--vary` for it, instead of after the first
+/// runs.
+fn refine_probe(req: &SweepRequest, range: &crate::scene::design::Range) -> Result<()> {
+    // the scene's own faults are its own
+    Scene::load(&req.scene, &req.sets)?;
+    let probe = range.lo + (range.hi - range.lo) * 0.381_966;
+    let mut sets = req.sets.clone();
+    sets.push(format!("{}={probe}", range.key));
+    match Scene::load(&req.scene, &sets) {
+        Ok(_) => Ok(()),
+        Err(e) => Err(Error::Argument {
+            flag: "--refine".into(),
+            msg: format!(
+                "{}={}:{}: the refinement places runs between the ends (such as {probe}), \
+                 which the scene refuses: {e} (a key of whole numbers takes --vary with its \
+                 values instead)",
+                range.key,
+                crate::text::exact(range.lo),
+                crate::text::exact(range.hi)
+            ),
+        }),
+    }
+}
+
 /// The key, range and run count of `sweep --refine`, refused by flag when misused.
 fn refine_args(req: &SweepRequest, spec: &str) -> Result<(crate::scene::design::Range, usize)> {
     if !req.vary.is_empty() || req.sample.is_some() || !req.ranges.is_empty() || req.seed.is_some()
@@ -714,6 +741,7 @@ fn refine_args(req: &SweepRequest, spec: &str) -> Result<(crate::scene::design::
             ),
         });
     }
+    refine_probe(req, &range)?;
     let runs = match req.runs {
         Some(n) if (3..=1000).contains(&n) => n,
         other => {
