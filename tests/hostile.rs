@@ -393,6 +393,39 @@ fn regression_decimal_comma_csv_is_refused() {
     assert!(e.to_string().contains("decimal commas"), "{e}");
 }
 
+/// Regression (session 74's hostile sweep): a scene given as `/dev/stdin` with the file
+/// redirected to the process took `/dev` as its directory: its relative mesh path was looked
+/// for in /dev and its ROM cache went to /dev/.linercav-cache. The file's own directory is
+/// used, as when it is named: the liner mesh beside it is found and the modes solved.
+#[test]
+fn regression_a_scene_redirected_to_stdin_keeps_its_own_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("engine.toml");
+    std::fs::copy(SMALL, &scene).unwrap();
+    std::fs::copy(
+        "tests/fixtures/liner_hex20.msh",
+        dir.path().join("liner.msh"),
+    )
+    .unwrap();
+    let elsewhere = tempfile::tempdir().unwrap();
+    let run = |path: &str, stdin: std::process::Stdio| {
+        let out = Command::new(env!("CARGO_BIN_EXE_linercav"))
+            .args(["modes", path, "--part", "liner", "--count", "4"])
+            .args(["--set", "liner.mesh_file=\"liner.msh\"", "--json"])
+            .current_dir(elsewhere.path())
+            .stdin(stdin)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(0), "{path}: {err}");
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (json["dofs"].clone(), json["frequencies_hz"].clone())
+    };
+    let redirected = run("/dev/stdin", std::fs::File::open(&scene).unwrap().into());
+    let named = run(scene.to_str().unwrap(), std::process::Stdio::null());
+    assert_eq!(redirected, named);
+}
+
 /// Regression: one output name taken by a directory let the other files be written; now
 /// nothing is written and the exit code is 2 (as for every unwritable output).
 #[test]

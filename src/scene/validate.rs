@@ -35,7 +35,8 @@ pub(super) fn validate(path: &Path, raw: RawScene) -> Result<Scene, SceneError> 
     let l = &raw.liner;
     let geometry = validate_liner_geometry(&c, l, &engine)?;
     let meshing = validate_liner_meshing(&c, l)?;
-    let base = path.parent().unwrap_or(Path::new("."));
+    let base = scene_base(path);
+    let base = base.as_path();
     let liner_geometry = geometry.clone();
     let source = match &l.mesh_file {
         Some(f) => MeshSource::File(mesh_file(&c, "liner.mesh_file", base, f)?),
@@ -1535,6 +1536,22 @@ const MIN_WALL_MM: f64 = 1.0;
 /// The largest crankcase wall, deck, rail or bay depth accepted, in bores (an engine's crank
 /// bay is about 1.5 bores deep, its end walls a fifth of a bore thick).
 const MAX_WALL_BORES: f64 = 5.0;
+
+/// The directory a scene's relative paths (meshes, pressure and calibration files, the ROM
+/// cache) are taken from: the scene file's. A scene named by `/dev/stdin` or `/dev/fd/N` (a
+/// file redirected to the process) takes the directory of the file behind it (its cache
+/// went to `/dev/.linercav-cache`), the current directory when there is none.
+fn scene_base(path: &Path) -> std::path::PathBuf {
+    if path.starts_with("/dev") || path.starts_with("/proc") {
+        return match std::fs::canonicalize(path) {
+            Ok(real) if !real.starts_with("/dev") && !real.starts_with("/proc") => {
+                real.parent().map_or_else(|| ".".into(), Path::to_path_buf)
+            }
+            _ => ".".into(),
+        };
+    }
+    path.parent().unwrap_or(Path::new(".")).to_path_buf()
+}
 
 /// A mesh file's path: the name `f` (not blank: an empty one joined the scene's directory,
 /// "cannot read mesh file small/") in the scene's directory `base`, a file that is there (a
