@@ -72,6 +72,15 @@ pub fn joined<T: std::fmt::Display>(items: &[T], sep: &str) -> String {
         .join(sep)
 }
 
+/// At most `max` characters of `s` for a message, the rest counted: a one-line file (no line
+/// ends it knows, e.g. CR-only) put its whole text, 100 MB, into a header message.
+pub fn clipped(s: &str, max: usize) -> String {
+    match s.char_indices().nth(max) {
+        None => s.to_string(),
+        Some((cut, _)) => format!("{}... ({} more bytes)", &s[..cut], s.len() - cut),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::num;

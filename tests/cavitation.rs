@@ -9,20 +9,21 @@ use common::linercav;
 /// `linercav calibrate` of `csv` for the reference coolant (4.7 mm, 240 kPa, 90 C) with JSON
 /// on stdout and the figure at `png`.
 fn calibrate_reference(csv: &Path, png: &Path) -> (i32, String, String) {
-    linercav(&[
+    calibrate_at(csv, "240", &["--json", "--png", png.to_str().unwrap()])
+}
+
+/// `linercav calibrate` of `csv` at 4.7 mm, 90 C and `static_kpa`, with `extra` arguments.
+fn calibrate_at(csv: &Path, static_kpa: &str, extra: &[&str]) -> (i32, String, String) {
+    let mut args = vec![
         "calibrate",
         "--data",
         csv.to_str().unwrap(),
         "--gap-mm",
         "4.7",
-        "--static-kpa",
-        "240",
-        "--temp-c",
-        "90",
-        "--json",
-        "--png",
-        png.to_str().unwrap(),
-    ])
+    ];
+    args.extend_from_slice(&["--static-kpa", static_kpa, "--temp-c", "90"]);
+    args.extend_from_slice(extra);
+    linercav(&args)
 }
 
 /// Reference coolant by hand (steam tables, 90 C): p_v = 70.18 kPa, rho = 965.3 kg/m^3,
@@ -104,6 +105,48 @@ fn synthetic(path: &Path, neg_lo: f64, neg_hi: f64, n: usize) -> (f64, f64, f64)
     let high = (ps - pv) / (ks[0] + rho * h);
     let mean_k = ks.iter().sum::<f64>() / ks.len() as f64;
     (onset, high, mean_k)
+}
+
+/// Regression (session 75's hostile sweep): rig data recorded at 240 kPa calibrated with
+/// `--static-kpa 600` exited 0 with k_p = -61.7 Pa/(m/s^2) (R^2 -1.28) and a negative model
+/// threshold, a JSON the scene then refused; `--static-kpa 1e9` was taken although the scene
+/// key stops at 10000 kPa. Both are refused, exit 2, naming the static pressure.
+#[test]
+fn regression_calibrate_refuses_a_static_pressure_the_record_contradicts() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("rig.csv");
+    synthetic(&csv, 300.0, 2000.0, 40);
+    for (kpa, shown) in [
+        ("600", "static pressure 600.0 kPa"),
+        ("1e9", "--static-kpa"),
+    ] {
+        let (code, out, err) = calibrate_at(&csv, kpa, &[]);
+        assert_eq!(code, 2, "{kpa}: {out} {err}");
+        assert!(err.contains(shown), "{kpa}: {err}");
+        assert!(out.is_empty(), "{out}");
+    }
+}
+
+/// Regression (session 75's hostile sweep): the missing-column message quoted the whole
+/// header line, and a file with no line end it knows (CR only, or one line) is all header: a
+/// 100 MB file gave a 100 MB message. The header is cut at 200 characters, the rest counted.
+#[test]
+fn regression_a_one_line_file_gives_a_short_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("cr.csv");
+    let mut text = String::from("time_s,acceleration_m_s2,pressure_kpa");
+    for i in 0..50_000 {
+        text.push_str(&format!("\r{i},1,240"));
+    }
+    std::fs::write(&csv, &text).unwrap();
+    let (code, _, err) = calibrate_at(&csv, "240", &[]);
+    assert_eq!(code, 2, "{}", &err[..err.len().min(500)]);
+    assert!(
+        err.len() < 1000 && err.contains("more bytes"),
+        "{} bytes: {}",
+        err.len(),
+        &err[..err.len().min(500)]
+    );
 }
 
 /// Regression: rig data saved with a byte-order mark and CRLF line ends (a spreadsheet's "CSV

@@ -487,6 +487,54 @@ fn small_rom_cache() -> (tempfile::TempDir, String) {
     (cache, cache_dir)
 }
 
+/// Regression (session 75's hostile sweep): a pipe (FIFO) at a ROM entry's lock path made
+/// `simulate` wait forever, silently (opening it for writing waits for a reader). It is
+/// refused at once, exit 2, naming the lock file; the pipe is left as it was. (Killed after
+/// 60 s so that a regression fails instead of hanging the suite.)
+#[test]
+fn regression_a_pipe_at_the_cache_lock_is_refused_not_waited_on() {
+    let (_cache, dir) = small_rom_cache();
+    let roms: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with("rom-"))
+        .collect();
+    assert_eq!(roms.len(), 1, "{roms:?}");
+    std::fs::remove_file(&roms[0]).unwrap();
+    let lock = roms[0].with_extension("lock");
+    let made = Command::new("mkfifo").arg(&lock).status().unwrap();
+    assert!(made.success());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_linercav"))
+        .args(["simulate", SMALL, "--cache-dir", &dir])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            child.kill().unwrap();
+            panic!("simulate still waiting on the pipe after 60 s");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&*lock.to_string_lossy()) && err.contains("not a regular file"),
+        "{err}"
+    );
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::symlink_metadata(&lock)
+        .unwrap()
+        .file_type()
+        .is_fifo());
+}
+
 /// Regression (session 70's hostile sweep): a run into a directory that an earlier run of the
 /// command filled left that run's other files beside its own without a word (`--maps`
 /// images beside a run without maps); they are named as an earlier run's, and left.

@@ -1304,3 +1304,36 @@ fn regression_a_cache_dir_that_is_not_a_directory_is_said_so() {
         "/dev/null: cannot write: exists and is not a directory",
     );
 }
+
+/// Regression (session 75's hostile sweep): a scheduler's task variable that is not UTF-8
+/// (`SLURM_ARRAY_TASK_ID=$'\xff'`, `JOB_COMPLETION_INDEX=$'\xff'` with `--shards 2`) was
+/// taken as unset: the task ran the whole unsharded sweep and exited 0. It is refused, exit
+/// 2, naming the variable, before any run (nothing on stdout, no output directory).
+#[test]
+fn regression_a_task_variable_that_is_not_utf8_is_refused() {
+    use std::os::unix::ffi::OsStrExt;
+    let bad = std::ffi::OsStr::from_bytes(b"\xff");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("w");
+    let cases: [(&str, &[&str]); 2] = [
+        ("SLURM_ARRAY_TASK_ID", &[]),
+        ("JOB_COMPLETION_INDEX", &["--shards", "2"]),
+    ];
+    for (var, extra) in cases {
+        let o = Command::new(env!("CARGO_BIN_EXE_linercav"))
+            .args(["sweep", SMALL, "--vary", "piston.clearance_um=40,80,120"])
+            .args(["--out", out.to_str().unwrap()])
+            .args(extra)
+            .env_remove("SLURM_ARRAY_TASK_ID")
+            .env_remove("JOB_COMPLETION_INDEX")
+            .env(var, bad)
+            .env("SLURM_ARRAY_TASK_MIN", "1")
+            .env("SLURM_ARRAY_TASK_MAX", "2")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{var}: {err}");
+        assert!(err.contains(var) && err.contains("whole number"), "{err}");
+        assert!(o.stdout.is_empty() && !out.exists(), "{var}");
+    }
+}

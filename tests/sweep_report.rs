@@ -424,6 +424,64 @@ fn changes_against_the_base(one_cycle: bool) {
     }
 }
 
+/// Regression (session 75's hostile sweep): a grid over `rom.cylinders` (`[]` and `[2]`)
+/// panicked drawing its picture (exit 101, nothing written: the plot took every run to model
+/// the first run's cylinders), in the other order it drew cylinder 1's values as cylinder 2's,
+/// and a run of cylinder 2 alone was compared with the base design's cylinder 1. Now exit 0,
+/// the picture written, and every row's change is its peak less the base design's peak of the
+/// same cylinder and point (the base: the scene's own run, all cylinders at 80 um).
+#[test]
+fn regression_a_sweep_over_the_modelled_cylinders_compares_like_cylinders() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, order) in ["[2],[]", "[],[2]"].into_iter().enumerate() {
+        let out = dir.path().join(format!("sw{k}"));
+        let vary = format!("rom.cylinders={order}");
+        let args = [
+            "sweep",
+            SCENE,
+            "--vary",
+            &vary,
+            "--vary",
+            "piston.clearance_um=40,80",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        let (code, _, err) = linercav(&args);
+        assert_eq!(code, 0, "{order}: {err}");
+        assert!(is_png(&out.join("sweep_piston_clearance_um.png")));
+        let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+        let rows: Vec<Vec<String>> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect();
+        // columns: rom.cylinders, clearance, cylinder, point, peak_negative_m_s2, ...
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let change = header.iter().position(|h| *h == "change_m_s2").unwrap();
+        let base = |cyl: &str, point: &str| -> f64 {
+            let r = rows
+                .iter()
+                .find(|r| r[0] == "[]" && r[1] == "80" && r[2] == cyl && r[3] == point)
+                .expect("the base design's row");
+            r[4].parse().unwrap()
+        };
+        let alone: Vec<&Vec<String>> = rows.iter().filter(|r| r[0] == "[2]").collect();
+        assert!(
+            !alone.is_empty() && alone.iter().all(|r| r[2] == "2"),
+            "{alone:?}"
+        );
+        for r in &rows {
+            let peak: f64 = r[4].parse().unwrap();
+            let d: f64 = r[change].parse().unwrap();
+            // the CSV carries 3 decimals of each
+            assert!(
+                (d - (peak - base(&r[2], &r[3]))).abs() < 2e-3,
+                "{order}: {r:?}"
+            );
+        }
+    }
+}
+
 /// `sweep --refine KEY=LO:HI --runs N` (issue 38): N distinct runs within [LO, HI], written as a
 /// one-key grid; sweep.json's `maximum` names, for the largest slap force and the largest peak
 /// acceleration, the run that holds it (checked against the runs' own records) with a location

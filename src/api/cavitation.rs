@@ -35,8 +35,20 @@ pub struct CoolantReport {
     pub k_p_pa_per_m_s2: f64,
 }
 
-/// Coolant state from command-line values, errors naming the option.
+/// Coolant state from command-line values, errors naming the option; the static pressure
+/// within the scene's bound for `cavitation.static_pressure_kpa` (a 1e9 kPa rig pressure was
+/// taken).
 pub fn coolant_of(temp_c: f64, static_kpa: f64, glycol: f64) -> Result<Coolant> {
+    let most = crate::scene::MAX_STATIC_KPA;
+    if static_kpa > most {
+        return Err(Error::Argument {
+            flag: format!("--static-kpa {}", num(static_kpa)),
+            msg: format!(
+                "must be at most {} kPa (as cavitation.static_pressure_kpa)",
+                num(most)
+            ),
+        });
+    }
     Coolant::new(temp_c, glycol, static_kpa * 1e3).map_err(|e| Error::Argument {
         flag: format!(
             "--temp-c {} --static-kpa {} --glycol {}",

@@ -256,7 +256,7 @@ pub fn reduce_component(
     let count = names.len();
     let task = if arg == "auto" {
         Shard::from_env_as(
-            &|k| std::env::var(k).ok(),
+            &crate::scene::design::scheduler_var,
             (Some(count), "the engine's components"),
             "--component",
         )?.ok_or_else(|| {

@@ -138,7 +138,7 @@ pub fn run(req: &SweepRequest, started: Instant) -> Result<SweepReport> {
     check_shard_flags(req)?;
     let shard = match &req.shard {
         Some(s) => Some(Shard::parse("--shard", s)?),
-        None => Shard::from_env(&|k| std::env::var(k).ok(), req.shards)?,
+        None => Shard::from_env(&crate::scene::design::scheduler_var, req.shards)?,
     };
     if shard.is_some() && req.out.is_none() {
         return Err(Error::Argument {

@@ -98,7 +98,7 @@ impl RigData {
                     .ok_or_else(|| CalibrationError::Column {
                         file: file.into(),
                         column: col,
-                        found: names.join(", "),
+                        found: crate::text::clipped(&names.join(", "), 200),
                     })?;
         }
         let mut d = RigData::default();
@@ -359,6 +359,15 @@ pub fn calibrate(file: &str, d: &RigData, s: &Settings) -> Result<Calibration, C
     let Some((k_p, fit_r2)) = fit_k_p(&events, c.static_pa) else {
         return Err(err("no positive acceleration peaks to fit k_p".into()));
     };
+    // the wall pressure rises with the positive acceleration: a fit below zero says the
+    // record's pressures lie below the static pressure given (wrong --static-kpa, or a
+    // pressure channel in other units); its thresholds would be nonsense
+    if k_p.is_nan() || k_p < 0.0 {
+        return Err(err(format!(
+            "the pressure peaks fall below the static pressure {:.1} kPa as the acceleration grows (k_p = {k_p:.4e} Pa/(m/s^2), R^2 = {fit_r2:.3}): is --static-kpa the rig's static pressure, and the pressure column in kPa?",
+            c.static_pa / 1e3
+        )));
+    }
     let cav: Vec<f64> = events
         .iter()
         .filter(|e| e.ca < 1.0)

@@ -111,10 +111,7 @@ impl PressureCurve {
         let ia = cols.iter().position(|c| *c == "crank_angle_deg");
         let ip = cols.iter().position(|c| *c == "pressure_bar");
         let (Some(ia), Some(ip)) = (ia, ip) else {
-            return Err(line_err(
-                hl + 1,
-                format!("header must name the columns 'crank_angle_deg' and 'pressure_bar', got '{header}'"),
-            ));
+            return Err(line_err(hl + 1, missing_columns(header)));
         };
         let (mut angles_deg, mut pa) = (Vec::new(), Vec::new());
         for (i, l) in lines {
@@ -312,6 +309,15 @@ fn coverage_gap(angles: &[f64]) -> Option<String> {
             MAX_GAP_DEG
         )
     })
+}
+
+/// The message for a header without the two columns (quoted at most 200 characters: a file
+/// without a line end it knows is one header line).
+fn missing_columns(header: &str) -> String {
+    format!(
+        "header must name the columns 'crank_angle_deg' and 'pressure_bar', got '{}'",
+        crate::text::clipped(header, 200)
+    )
 }
 
 #[cfg(test)]

@@ -204,7 +204,12 @@ impl BuildLock {
     /// Takes the lock of the cache entry `path`, waiting for a holder; `on_wait` runs once
     /// when it has to wait.
     pub fn acquire(path: &Path, on_wait: impl FnOnce(&Path)) -> Result<Self, WriteError> {
-        use std::os::unix::fs::MetadataExt;
+        use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
+        let not_a_file = || {
+            std::io::Error::other(
+                "exists and is not a regular file (a pipe, socket or device): remove it",
+            )
+        };
         let lock = path.with_extension("lock");
         let fail = |source| WriteError {
             path: lock.clone(),
@@ -213,12 +218,21 @@ impl BuildLock {
         let mut on_wait = Some(on_wait);
         let mut waited = false;
         loop {
+            // not blocking on a pipe put at the lock's path (its open waited for a reader
+            // forever); anything but a file there is refused
             let file = std::fs::OpenOptions::new()
                 .create(true)
                 .truncate(false)
                 .write(true)
+                .custom_flags(libc::O_NONBLOCK)
                 .open(&lock)
-                .map_err(fail)?;
+                .map_err(|e| match e.raw_os_error() {
+                    Some(libc::ENXIO) => fail(not_a_file()),
+                    _ => fail(e),
+                })?;
+            if !file.metadata().map_err(fail)?.is_file() {
+                return Err(fail(not_a_file()));
+            }
             if flock(&file, libc::LOCK_EX | libc::LOCK_NB).is_err() {
                 if let Some(f) = on_wait.take() {
                     f(&lock);

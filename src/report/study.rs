@@ -81,13 +81,18 @@ impl Change {
 }
 
 impl SweepRun {
-    /// Sets the changes of every cylinder and point against `base` (a run of the same engine).
+    /// Sets the changes of every cylinder and point against `base` (a run of the same engine),
+    /// each cylinder against the base's cylinder of the same number (a run may model fewer
+    /// cylinders, `rom.cylinders` varied: it was compared by position, its cylinder 2 with the
+    /// base's cylinder 1); none for a cylinder the base does not model.
     pub fn set_changes(&mut self, base: &SweepRun) {
         self.changes = self
             .cylinders
             .iter()
-            .zip(&base.cylinders)
-            .map(|(c, b)| {
+            .map(|c| {
+                let Some(b) = base.cylinders.iter().find(|b| b.cylinder == c.cylinder) else {
+                    return Vec::new();
+                };
                 c.points
                     .iter()
                     .zip(&b.points)
@@ -298,28 +303,44 @@ pub fn draw_key(
     key: usize,
 ) -> Result<(), WriteError> {
     let groups = key_groups(keys, lines, sample, key);
-    let runs: Vec<&RunLine> = groups.iter().flat_map(|g| g.1.iter().copied()).collect();
-    let ncyl = runs.first().map(|r| r.cylinders.len()).unwrap_or(0);
+    // every cylinder of any run, by number: runs may model different cylinders
+    // (`rom.cylinders` varied), so a run's c-th cylinder is found by its number
+    let mut cylinders: Vec<usize> = groups
+        .iter()
+        .flat_map(|g| {
+            g.1.iter()
+                .flat_map(|r| r.cylinders.iter().map(|c| c.cylinder))
+        })
+        .collect();
+    cylinders.sort_unstable();
+    cylinders.dedup();
     let series = |f: &dyn Fn(&RunLine, usize) -> f64| -> Vec<Series> {
         let mut all = Vec::new();
         for (gi, (label, group)) in groups.iter().enumerate() {
-            for c in 0..ncyl {
-                let mut name = format!("cylinder {}", runs[0].cylinders[c].cylinder);
+            for (color, &cyl) in cylinders.iter().enumerate() {
+                let points: Vec<(f64, f64)> = group
+                    .iter()
+                    .filter_map(|r| {
+                        let c = r.cylinders.iter().position(|x| x.cylinder == cyl)?;
+                        Some((numeric(&r.values[key])?, f(r, c)))
+                    })
+                    .collect();
+                if points.is_empty() {
+                    continue;
+                }
+                let mut name = format!("cylinder {cyl}");
                 if groups.len() > 1 {
                     name = format!("{name}, {label}");
                 }
                 all.push(Series {
                     name,
-                    points: group
-                        .iter()
-                        .filter_map(|r| Some((numeric(&r.values[key])?, f(r, c))))
-                        .collect(),
+                    points,
                     mark: match (sample, gi % 3) {
                         (true, _) | (false, 2) => Mark::Dots,
                         (false, 0) => Mark::LineDots,
                         (false, _) => Mark::DashedDots,
                     },
-                    color: c,
+                    color,
                 });
             }
         }

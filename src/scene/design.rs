@@ -621,6 +621,13 @@ impl Shard {
     }
 }
 
+/// The process's environment variable `name` for [`Shard::from_env`]: a value that is not
+/// UTF-8 is the value with its bad bytes replaced (refused as no whole number, naming the
+/// variable); it was taken as unset, and the task ran the whole unsharded sweep.
+pub fn scheduler_var(name: &str) -> Option<String> {
+    std::env::var_os(name).map(|v| v.to_string_lossy().into_owned())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 mod load;
 mod model;
 mod validate;
-pub use validate::CUTOFF_FACTOR_MAX;
+pub use validate::{CUTOFF_FACTOR_MAX, MAX_STATIC_KPA};
 
 #[allow(unused_imports)]
 use load::*;

@@ -517,8 +517,9 @@ fn calibration_state_differences(
 
 /// Largest coolant gap accepted \[mm\] (`cavitation.gap_mm`).
 const MAX_GAP_MM: f64 = 100.0;
-/// Largest static coolant pressure accepted \[kPa\] (`cavitation.static_pressure_kpa`).
-const MAX_STATIC_KPA: f64 = 10_000.0;
+/// Largest static coolant pressure accepted \[kPa\] (`cavitation.static_pressure_kpa`, and
+/// `calibrate --static-kpa`).
+pub const MAX_STATIC_KPA: f64 = 10_000.0;
 /// Largest wall-pressure transfer accepted \[Pa per m/s^2\] (`cavitation.k_p_pa_per_m_s2`): at 1000
 /// m/s^2 it would be 1 GPa.
 const MAX_K_P: f64 = 1e6;
