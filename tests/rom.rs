@@ -920,6 +920,20 @@ fn rom_difference(
     (n, worst_f, worst_mac)
 }
 
+/// The small engine's crankcase in 2 components with `sets` against the one-piece ROM `one`
+/// below half the cut-off ([`rom_difference`]), printed under `label`.
+fn split_against(
+    one: &linercav::reduce::rom::EngineRom,
+    sets: &[&str],
+    label: &str,
+) -> (usize, f64, f64) {
+    let sc = scene(&[&["rom.crankcase_components=2"], sets].concat());
+    let r = build_rom(&sc, false, None, &|_| {}).unwrap().0.rom;
+    let (n, f, mac) = rom_difference(&r, one, one.info.cutoff_hz / 2.0);
+    println!("{label}: worst frequency {f:.2e}, MAC {mac:.9}");
+    (n, f, mac)
+}
+
 /// Floor of issue 37 for the substructured path against the one-piece reduction: the small
 /// engine's crankcase cut into two components (one cylinder each) with every cut DOF kept
 /// (exact coupling at the cut) gives the system frequencies below half the cut-off within 1e-5
@@ -930,7 +944,10 @@ fn rom_difference(
 /// times the cut-off (`rom.component_cutoff_factor`) must at least halve the difference (the
 /// default engine in 3 components: 1.05e-5 -> 5.6e-7).
 /// Then the reduced cuts (20, 40, 80 shapes): the difference must shrink as the shapes grow
-/// (interface reduction converges) and every build is refused nothing.
+/// (interface reduction converges) and every build is refused nothing. Last, 20 slab shapes
+/// enriched by 60 from the first assembly's imbalance at the cut (`rom.cut_enrichment`): the
+/// enrichment must remove at least 80 % of the 20 shapes' difference and beat 80 slab shapes
+/// (the same count), or it adds nothing the slab's next modes would not.
 #[test]
 fn verification_substructured_crankcase_matches_one_piece() {
     let one = build_rom(&scene(&[]), false, None, &|_| {}).unwrap().0.rom;
@@ -948,31 +965,105 @@ fn verification_substructured_crankcase_matches_one_piece() {
         (p.stats.full_dofs, p.stats.interior_dofs)
     };
     assert_eq!(stats(&split), stats(&one));
-    let raised = scene(&[
-        "rom.crankcase_components=2",
-        "rom.cut_shapes=100000",
-        "rom.component_cutoff_factor=1.5",
-    ]);
-    let raised = build_rom(&raised, false, None, &|_| {}).unwrap().0.rom;
-    let (_, f15, mac15) = rom_difference(&raised, &one, half);
-    println!("exact cut, components' modes to 1.5 x the cut-off: worst frequency {f15:.2e}, MAC {mac15:.9}");
+    let (_, f15, mac15) = split_against(
+        &one,
+        &["rom.cut_shapes=100000", "rom.component_cutoff_factor=1.5"],
+        "exact cut, components' modes to 1.5 x the cut-off",
+    );
     assert!(f15 < 0.5 * f, "{f15:e} against {f:e}");
     assert!(mac15 > 0.999, "MAC {mac15}");
     let mut errors = Vec::new();
     for shapes in [20, 40, 80] {
-        let sc = scene(&[
-            "rom.crankcase_components=2",
-            &format!("rom.cut_shapes={shapes}"),
-        ]);
-        let r = build_rom(&sc, false, None, &|_| {}).unwrap().0.rom;
-        let (_, f, mac) = rom_difference(&r, &one, half);
-        println!("{shapes} shapes per cut: worst frequency {f:.2e}, MAC {mac:.6}");
-        errors.push(f);
+        let set = format!("rom.cut_shapes={shapes}");
+        let label = format!("{shapes} shapes per cut");
+        errors.push(split_against(&one, &[&set], &label).1);
     }
     assert!(
         errors[2] < 0.5 * errors[0],
         "reduced cuts do not converge: {errors:?}"
     );
+    let (_, f, mac) = split_against(
+        &one,
+        &["rom.cut_shapes=20", "rom.cut_enrichment=60"],
+        "20 shapes enriched by 60",
+    );
+    assert!(
+        f < 0.2 * errors[0],
+        "{f:e} against 20 shapes' {:e}",
+        errors[0]
+    );
+    assert!(f < errors[2], "{f:e} against 80 shapes' {:e}", errors[2]);
+    assert!(mac > 0.999, "MAC {mac}");
+}
+
+/// `linercav rom` on the small engine with the cache in `dir` and `args` after it, outside any
+/// scheduler's task: (exit code, stdout, stderr).
+fn rom_in_cache(dir: &str, args: &[&str]) -> (i32, String, String) {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_linercav"))
+        .args(["rom", SMALL, "--cache-dir", dir])
+        .args(args)
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("JOB_COMPLETION_INDEX")
+        .output()
+        .unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// A `rom --json` run (`(code, stdout, stderr)`) after a job array's tasks: exit 0, every
+/// part from the cache, and the frequencies of a build of the small engine with `sets` without
+/// the cache (same code on the same inputs: 1e-6).
+fn assert_assembled_from_cache((code, out, err): (i32, String, String), sets: &[&str]) {
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for p in v["parts"].as_array().unwrap() {
+        assert_eq!(p["source"], "Cached", "{p}");
+    }
+    let fresh = build_rom(&scene(sets), false, None, &|_| {}).unwrap().0.rom;
+    let f = v["first_frequencies_hz"].as_array().unwrap();
+    assert!(f.len() >= 10);
+    for (a, b) in f.iter().zip(&fresh.frequencies_hz) {
+        let a = a.as_f64().unwrap();
+        assert!((a - b).abs() <= 1e-6 * b, "{a} vs {b}");
+    }
+}
+
+/// Enriched cut shapes (`rom.cut_enrichment`) through the component cache and a job array's
+/// tasks: the crankcase's second component task finds no enriched shapes, makes them (the
+/// first pass of both components) and stores them; the third reads them; the plain `rom`
+/// after the tasks assembles everything from the cache with the frequencies of a build without
+/// the cache (same code on the same inputs; 1e-6 as the other cache contracts); a changed
+/// enrichment is a different ROM (its key changes).
+#[test]
+fn contract_enriched_cuts_through_the_cache_and_tasks() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let sets = [
+        "rom.crankcase_components=2",
+        "rom.cut_shapes=20",
+        "rom.cut_enrichment=10",
+    ];
+    let set_args: Vec<&str> = sets.iter().flat_map(|s| ["--set", s]).collect();
+    let run = |extra: &[&str]| rom_in_cache(d, &[&set_args, extra].concat());
+    for i in [2, 3, 1] {
+        let (code, _, err) = run(&["--component", &format!("{i}/3")]);
+        assert_eq!(code, 0, "{err}");
+    }
+    let enriched = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter(|e| {
+            let name = e.as_ref().unwrap().file_name();
+            name.to_string_lossy()
+                .starts_with("cut-crankcase-1-enriched-")
+        })
+        .count();
+    assert_eq!(enriched, 1, "one enriched entry for the one cut");
+    assert_assembled_from_cache(run(&["--json"]), &sets);
+    let plain = key_description(&scene(&sets[..2])).unwrap();
+    assert_ne!(plain, key_description(&scene(&sets)).unwrap());
 }
 
 /// `rom --component` on a substructured crankcase (issue 37, item 4): the engine then has
@@ -991,21 +1082,7 @@ fn contract_rom_component_tasks_of_a_substructured_crankcase() {
         "--set",
         "rom.cut_shapes=40",
     ];
-    let run = |extra: &[&str]| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_linercav"))
-            .args(["rom", SMALL, "--cache-dir", d])
-            .args(split)
-            .args(extra)
-            .env_remove("SLURM_ARRAY_TASK_ID")
-            .env_remove("JOB_COMPLETION_INDEX")
-            .output()
-            .unwrap();
-        (
-            o.status.code().unwrap_or(-1),
-            String::from_utf8_lossy(&o.stdout).into_owned(),
-            String::from_utf8_lossy(&o.stderr).into_owned(),
-        )
-    };
+    let run = |extra: &[&str]| rom_in_cache(d, &[&split[..], extra].concat());
     let (code, _, err) = run(&["--component", "1/2"]);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("liner, crankcase.1, crankcase.2"), "{err}");
@@ -1014,25 +1091,8 @@ fn contract_rom_component_tasks_of_a_substructured_crankcase() {
         assert_eq!(code, 0, "{err}");
         assert!(out.contains(&format!("({name})")), "{out}");
     }
-    let (code, out, err) = run(&["--json"]);
-    assert_eq!(code, 0, "{err}");
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    for p in v["parts"].as_array().unwrap() {
-        assert_eq!(p["source"], "Cached", "{p}");
-    }
-    let fresh = build_rom(
-        &scene(&["rom.crankcase_components=2", "rom.cut_shapes=40"]),
-        false,
-        None,
-        &|_| {},
-    )
-    .unwrap()
-    .0
-    .rom;
-    let f = v["first_frequencies_hz"].as_array().unwrap();
-    assert!(f.len() >= 10);
-    for (a, b) in f.iter().zip(&fresh.frequencies_hz) {
-        let a = a.as_f64().unwrap();
-        assert!((a - b).abs() <= 1e-6 * b, "{a} vs {b}");
-    }
+    assert_assembled_from_cache(
+        run(&["--json"]),
+        &["rom.crankcase_components=2", "rom.cut_shapes=40"],
+    );
 }

@@ -268,6 +268,43 @@ pub fn cached_matrix(
     Ok((m, Source::Reduced))
 }
 
+/// The matrices of cache files `files` under `key` in `dir` when every one has a valid entry,
+/// else all made by `make` (one per file, and stored when `dir` is given). A corrupt entry is
+/// reported and all are made again.
+pub fn cached_matrices(
+    dir: Option<&Path>,
+    files: &[String],
+    key: &str,
+    make: impl FnOnce() -> Result<Vec<Mat<f64>>, PartCacheError>,
+) -> Result<(Vec<Mat<f64>>, Source), PartCacheError> {
+    let Some(dir) = dir else {
+        return Ok((make()?, Source::Reduced));
+    };
+    let paths: Vec<PathBuf> = files
+        .iter()
+        .map(|f| dir.join(format!("{f}-{key}.bin")))
+        .collect();
+    let mut found = Vec::with_capacity(files.len());
+    for path in &paths {
+        match cache::load::<StoredMatrix>(path, key)? {
+            Lookup::Hit(stored) => found.push(to_faer(&stored.0)),
+            Lookup::Corrupt(reason) => {
+                log::warn!("{}: {reason}; computing it again", path.display());
+                break;
+            }
+            Lookup::Miss => break,
+        }
+    }
+    if found.len() == files.len() {
+        return Ok((found, Source::Cached));
+    }
+    let made = make()?;
+    for (path, m) in paths.iter().zip(&made) {
+        cache::store(path, key, &StoredMatrix(from_faer(m)))?;
+    }
+    Ok((made, Source::Reduced))
+}
+
 /// Path of a part's entry in the cache directory.
 pub fn path_for(dir: &Path, part: &str, key: &str) -> PathBuf {
     dir.join(format!("part-{part}-{key}.bin"))

@@ -528,6 +528,9 @@ pub fn key_description(scene: &Scene) -> Result<String> {
         if scene.rom.component_cutoff_factor != 1.0 {
             d["component_cutoff_factor"] = serde_json::json!(scene.rom.component_cutoff_factor);
         }
+        if scene.rom.cut_enrichment > 0 {
+            d["cut_enrichment"] = serde_json::json!(scene.rom.cut_enrichment);
+        }
     }
     // only when present, so the keys of dry scenes stay those of earlier builds
     let surface = liner_surface_mass(scene);
@@ -600,6 +603,7 @@ pub fn rom_inputs<'a>(scene: &Scene, em: &'a EngineMeshes, keep_bases: bool) -> 
         crankcase_components: scene.rom.crankcase_components,
         cut_shapes: scene.rom.cut_shapes,
         component_cutoff_factor: scene.rom.component_cutoff_factor,
+        cut_enrichment: scene.rom.cut_enrichment,
         keep_bases,
         part_cache: None,
     }

@@ -419,6 +419,8 @@ pub struct Split {
     pub cut_shapes: usize,
     /// `rom.component_cutoff_factor`.
     pub cutoff_factor: f64,
+    /// `rom.cut_enrichment`.
+    pub enrichment: usize,
     /// One task of a component job array (`rom --component`, 0-based: the liner, then the
     /// crankcase's components): only its own reduction is estimated.
     #[serde(skip)]
@@ -430,6 +432,7 @@ impl Split {
         components: 1,
         cut_shapes: 0,
         cutoff_factor: 1.0,
+        enrichment: 0,
         task: None,
     };
 
@@ -439,6 +442,7 @@ impl Split {
             components: scene.rom.crankcase_components,
             cut_shapes: scene.rom.cut_shapes,
             cutoff_factor: scene.rom.component_cutoff_factor,
+            enrichment: scene.rom.cut_enrichment,
             task: None,
         }
     }
@@ -501,11 +505,18 @@ pub fn rom_split(
         components,
         cut_shapes,
         cutoff_factor,
+        enrichment,
         task,
     } = split;
     let (cyl, n) = (cylinders.max(1) as f64, components.max(1) as f64);
     let share = (cyl / n).ceil() / cyl;
-    let shapes = cut_columns(crankcase_dofs, cut_shapes);
+    let shapes = cut_columns(crankcase_dofs, cut_shapes, enrichment);
+    // an enriched split reduces every component twice (the first pass has the slab's shapes)
+    let passes = if components > 1 && enrichment > 0 {
+        2.0
+    } else {
+        1.0
+    };
     let (cuts, modes) = if components > 1 {
         (2.0 * shapes, 100.0 * cutoff_factor.powi(3))
     } else {
@@ -521,7 +532,7 @@ pub fn rom_split(
     };
     let cc = piece + 6.0 * 8.0 * n_a * n_a;
     let liner = part_reduction_bytes(liner_dofs, liner_columns(interface_cols / cyl, liner_loads));
-    let t = |dofs: f64| REF_ROM_SECONDS * (dofs / REF_ROM_DOFS).powf(1.5);
+    let t = reduction_seconds;
     let split = if components > 1 {
         format!(
             ", in {components} components of about {} DOFs",
@@ -536,37 +547,13 @@ pub fn rom_split(
     // build's sum of both parts hides it), so twice the part plus 0.1 GB, never more than
     // the whole build
     if let Some(task) = task {
-        let (part, dofs) = if task == 0 {
-            (liner, liner_dofs)
-        } else {
-            (piece, piece_dofs)
-        };
-        return Estimate {
-            what: "the component task",
-            memory: (2.0 * part + 0.1e9).min(cc + liner),
-            seconds: t(dofs),
-            keys: if task == 0 {
-                "liner.mesh.* (element counts and sizes)"
-            } else if components < cylinders {
-                "rom.crankcase_components (more, smaller components) or crankcase.mesh.* (element counts and sizes)"
-            } else {
-                "crankcase.mesh.* (element counts and sizes; the crankcase is in as many components as it has cylinders)"
-            },
-            detail: format!(
-                "{} of about {} DOFs",
-                if task == 0 {
-                    "the liner"
-                } else {
-                    "a crankcase component"
-                },
-                num(dofs.round())
-            ),
-        };
+        let parts = ((liner, liner_dofs), (piece, piece_dofs), cc + liner);
+        return task_estimate(task, parts, (components, cylinders), (passes - 1.0) * n);
     }
     Estimate {
         what: "the ROM build",
         memory: cc + liner,
-        seconds: n * t(piece_dofs) + t(liner_dofs),
+        seconds: passes * n * t(piece_dofs) + t(liner_dofs),
         // the larger part's remedy first: substructuring bounds the crankcase, not a liner
         keys: if liner > cc {
             "liner.mesh.* (element counts and sizes; the liner is reduced in one piece), rom.crankcase_components (the crankcase cut into up to engine.cylinders components: memory bounded by one), crankcase.mesh.* or rom.interface_harmonics"
@@ -582,15 +569,69 @@ pub fn rom_split(
     }
 }
 
+/// Seconds of one part's (or component's) reduction of `dofs` DOFs, scaled from the measured
+/// reference as dofs^1.5.
+fn reduction_seconds(dofs: f64) -> f64 {
+    REF_ROM_SECONDS * (dofs / REF_ROM_DOFS).powf(1.5)
+}
+
+/// A component task's estimate (`task` 0 the liner, else a crankcase piece): `parts` the
+/// liner's and a piece's bytes and DOFs and the whole build's bytes; `first_passes` the
+/// components' first passes it may make (an enriched split without its shapes cached).
+fn task_estimate(
+    task: usize,
+    ((liner, liner_dofs), (piece, piece_dofs), whole): ((f64, f64), (f64, f64), f64),
+    (components, cylinders): (usize, usize),
+    first_passes: f64,
+) -> Estimate {
+    let t = reduction_seconds;
+    let (part, dofs) = if task == 0 {
+        (liner, liner_dofs)
+    } else {
+        (piece, piece_dofs)
+    };
+    Estimate {
+        what: "the component task",
+        memory: (2.0 * part + 0.1e9).min(whole),
+        // without the enriched shapes cached, the task makes them: every component's first pass
+        seconds: if task == 0 {
+            t(dofs)
+        } else {
+            (first_passes + 1.0) * t(dofs)
+        },
+        keys: if task == 0 {
+            "liner.mesh.* (element counts and sizes)"
+        } else if components < cylinders {
+            "rom.crankcase_components (more, smaller components) or crankcase.mesh.* (element counts and sizes)"
+        } else {
+            "crankcase.mesh.* (element counts and sizes; the crankcase is in as many components as it has cylinders)"
+        },
+        detail: format!(
+            "{} of about {} DOFs",
+            if task == 0 {
+                "the liner"
+            } else {
+                "a crankcase component"
+            },
+            num(dofs.round())
+        ),
+    }
+}
+
 /// Columns one cut between components carries. A cut of at most 2 `cut_shapes` + 16 DOFs
 /// keeps every one (`reduce::substructure::cut_shapes`), so up to that many; a larger cut
-/// carries `cut_shapes`. The cut's DOFs are not known before the mesh: estimated as
+/// carries `cut_shapes` (counted as that bound) and the `enrichment` added to them. The cut's DOFs are not known before the mesh: estimated as
 /// 2 n^(2/3) for a part of n DOFs, an estimate, not a bound (a cube's section is 1.44
 /// n^(2/3); measured cuts: 939 DOFs at 76k and 15,777 at 2.7M against 3,600 and 39,000 so
 /// estimated, but the test engine with a 500 mm skirt holds 3,597 against 4,300).
-pub fn cut_columns(part_dofs: f64, cut_shapes: usize) -> f64 {
+pub fn cut_columns(part_dofs: f64, cut_shapes: usize, enrichment: usize) -> f64 {
     let kept_whole = 2.0 * cut_shapes as f64 + 16.0;
-    kept_whole.min(2.0 * part_dofs.max(0.0).powf(2.0 / 3.0))
+    let cut = 2.0 * part_dofs.max(0.0).powf(2.0 / 3.0);
+    if cut <= kept_whole {
+        cut
+    } else {
+        kept_whole + enrichment as f64
+    }
 }
 
 /// The ROM build of a scene with generated meshes cut as `split` asks (usually
@@ -757,6 +798,7 @@ mod tests {
             components: 2,
             cut_shapes,
             cutoff_factor: 1.0,
+            enrichment: 0,
             task: None,
         };
         let est = |shapes| rom_split(14_400.0, (9_216.0, 55.0), 216.0, 2, split(shapes)).memory;

@@ -99,6 +99,8 @@ pub struct Rom {
     pub cut_shapes: usize,
     /// Components' modes up to this multiple of `cutoff_hz`.
     pub component_cutoff_factor: f64,
+    /// Shapes added to each cut from a first assembly's imbalance (0: none).
+    pub cut_enrichment: usize,
     /// Modelled cylinders, 1-based, ascending.
     pub cylinders: Vec<usize>,
     pub cache_dir: PathBuf,

@@ -267,6 +267,16 @@ pub struct RawRom {
     /// dominates and a higher factor buys nothing (docs/physics.md).
     #[serde(default = "default_component_cutoff_factor")]
     pub component_cutoff_factor: f64,
+    /// Shapes added to each cut between crankcase components from a first assembly: the cut's
+    /// force imbalance under the part's static shapes and modes, answered by the slab around
+    /// the cut, its leading directions (0: none, the default; at most 10000). The components
+    /// are reduced twice (about twice the build time; the enriched shapes are cached with the
+    /// crankcase, so a liner-only what-if does not repeat it). On the default engine in 3
+    /// components with 200 slab shapes, 100 added shapes take the system frequencies below
+    /// half the cut-off from 5.1e-3 (worst) and 3.3e-4 (median) of the one-piece build to
+    /// 2.1e-5 and 3.7e-6, MAC >= 0.9999 for every mode (docs/physics.md).
+    #[serde(default)]
+    pub cut_enrichment: usize,
     /// Cylinders whose liners are modelled (1-based, each once); empty = all.
     #[serde(default)]
     pub cylinders: Vec<usize>,
@@ -285,6 +295,7 @@ impl Default for RawRom {
             crankcase_components: default_components(),
             cut_shapes: default_cut_shapes(),
             component_cutoff_factor: default_component_cutoff_factor(),
+            cut_enrichment: 0,
             cylinders: Vec::new(),
             cache_dir: default_cache_dir(),
         }

@@ -306,6 +306,46 @@ pub(super) fn validate_liner_meshing(
 pub const CUTOFF_FACTOR_MAX: f64 = 10.0;
 
 /// `[rom]`: band, cut-off, interface harmonics (resolved by the liner ring), cylinders, cache.
+/// The crankcase's substructuring keys (`rom.crankcase_components`, `rom.cut_shapes`,
+/// `rom.component_cutoff_factor`, `rom.cut_enrichment`); returns the components' cut-off factor.
+fn validate_split(c: &Checker<'_>, r: &raw::RawRom, engine: &Engine) -> Result<f64, SceneError> {
+    if r.crankcase_components == 0 || r.crankcase_components > engine.cylinders {
+        return Err(c.err(
+            "rom.crankcase_components",
+            format!(
+                "must be 1..={} (the crankcase is cut midway between bores), got {}",
+                engine.cylinders, r.crankcase_components
+            ),
+        ));
+    }
+    if r.cut_shapes < 6 {
+        return Err(c.err(
+            "rom.cut_shapes",
+            format!(
+                "must be at least 6 (a cut's six rigid motions), got {}; 20 or more for results within about 1 % (docs/physics.md)",
+                r.cut_shapes
+            ),
+        ));
+    }
+    let f = r.component_cutoff_factor;
+    if !(1.0..=4.0).contains(&f) {
+        return Err(c.err(
+            "rom.component_cutoff_factor",
+            format!("must be in [1, 4], got {}", crate::text::exact(f)),
+        ));
+    }
+    if r.cut_enrichment > MAX_CUT_ENRICHMENT {
+        return Err(c.err(
+            "rom.cut_enrichment",
+            format!(
+                "must be 0..={MAX_CUT_ENRICHMENT} (shapes added per cut; 0: none), got {}",
+                r.cut_enrichment
+            ),
+        ));
+    }
+    Ok(f)
+}
+
 pub(super) fn validate_rom(
     c: &Checker<'_>,
     r: &raw::RawRom,
@@ -363,31 +403,7 @@ pub(super) fn validate_rom(
             format!("cylinder {bad} does not exist (1..={})", engine.cylinders),
         ));
     }
-    if r.crankcase_components == 0 || r.crankcase_components > engine.cylinders {
-        return Err(c.err(
-            "rom.crankcase_components",
-            format!(
-                "must be 1..={} (the crankcase is cut midway between bores), got {}",
-                engine.cylinders, r.crankcase_components
-            ),
-        ));
-    }
-    if r.cut_shapes < 6 {
-        return Err(c.err(
-            "rom.cut_shapes",
-            format!(
-                "must be at least 6 (a cut's six rigid motions), got {}; 20 or more for results within about 1 % (docs/physics.md)",
-                r.cut_shapes
-            ),
-        ));
-    }
-    let f = r.component_cutoff_factor;
-    if !(1.0..=4.0).contains(&f) {
-        return Err(c.err(
-            "rom.component_cutoff_factor",
-            format!("must be in [1, 4], got {}", crate::text::exact(f)),
-        ));
-    }
+    let f = validate_split(c, r, engine)?;
     let rom = Rom {
         band_hz,
         cutoff_hz: band_hz * r.cutoff_factor,
@@ -396,6 +412,7 @@ pub(super) fn validate_rom(
         crankcase_components: r.crankcase_components,
         cut_shapes: r.cut_shapes,
         component_cutoff_factor: f,
+        cut_enrichment: r.cut_enrichment,
         cylinders,
         cache_dir: base.join(path_value(
             c,
@@ -520,6 +537,9 @@ const MAX_GAP_MM: f64 = 100.0;
 /// Largest static coolant pressure accepted \[kPa\] (`cavitation.static_pressure_kpa`, and
 /// `calibrate --static-kpa`).
 pub const MAX_STATIC_KPA: f64 = 10_000.0;
+
+/// Largest `rom.cut_enrichment` (shapes added per cut).
+const MAX_CUT_ENRICHMENT: usize = 10_000;
 /// Largest wall-pressure transfer accepted \[Pa per m/s^2\] (`cavitation.k_p_pa_per_m_s2`): at 1000
 /// m/s^2 it would be 1 GPa.
 const MAX_K_P: f64 = 1e6;

@@ -46,6 +46,8 @@ pub struct RomInputs<'a> {
     pub cut_shapes: usize,
     /// Components' modes up to this multiple of `cutoff_hz`.
     pub component_cutoff_factor: f64,
+    /// Shapes added to each cut from a first assembly (0: none).
+    pub cut_enrichment: usize,
     /// Keep full bases for recovery (mode shapes on the meshes).
     pub keep_bases: bool,
     /// The component cache directory: each part's reduction read from it or stored in it
@@ -511,5 +513,6 @@ pub(super) fn crankcase_split(inp: &RomInputs<'_>) -> Option<crate::reduce::subs
         cuts_x,
         cut_shapes: inp.cut_shapes,
         component_cutoff_factor: inp.component_cutoff_factor,
+        enrichment: inp.cut_enrichment,
     })
 }

@@ -43,6 +43,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
+mod enrich;
+
 /// How a part is cut into components.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Split {
@@ -54,6 +56,9 @@ pub struct Split {
     /// step cuts the assembled model at the part's cut-off, so components that carry modes
     /// above it leave the assembled spectrum below it converged.
     pub component_cutoff_factor: f64,
+    /// Shapes added to each cut from a first assembly's force imbalance at the cut (0: none;
+    /// `substructure/enrich.rs`).
+    pub enrichment: usize,
 }
 
 /// One component: its mesh (own node numbering) and each of its nodes' index in the part.
@@ -358,24 +363,39 @@ fn cut_shapes(p: &Part<'_>, slab: &Slab, count: usize) -> Result<Mat<f64>, Reduc
             .binary_search_by_key(&r, |&(row, _)| row)
             .map_or(0.0, |k| x[(pairs[k].1, j)])
     });
-    let svd = traces.thin_svd().map_err(|e| {
+    directions(p.name, "cut shapes", &traces, (1e-8, usize::MAX))
+}
+
+/// The leading left singular vectors of `m` (`what` names them in an error): those above
+/// `rel` times the largest singular value, at most `count`, each scaled to a largest entry
+/// of 1.
+fn directions(
+    part: &str,
+    what: &str,
+    m: &Mat<f64>,
+    (rel, count): (f64, usize),
+) -> Result<Mat<f64>, ReduceError> {
+    let svd = m.thin_svd().map_err(|e| {
         other(
-            p.name,
-            format!("substructuring: the cut shapes' SVD failed: {e:?}"),
+            part,
+            format!("substructuring: the {what}' SVD failed: {e:?}"),
         )
     })?;
     let s = svd.S().column_vector();
     let smax = (0..s.nrows()).map(|i| s[i]).fold(0.0f64, f64::max);
-    let kept: Vec<usize> = (0..s.nrows()).filter(|&i| s[i] > 1e-8 * smax).collect();
+    let kept: Vec<usize> = (0..s.nrows())
+        .filter(|&i| s[i] > rel * smax)
+        .take(count)
+        .collect();
     let u = svd.U();
-    let mut psi = Mat::from_fn(3 * cut.len(), kept.len(), |r, c| u[(r, kept[c])]);
-    for j in 0..psi.ncols() {
-        let m = (0..psi.nrows()).fold(0.0f64, |m, i| m.max(psi[(i, j)].abs()));
-        for i in 0..psi.nrows() {
-            psi[(i, j)] /= m.max(f64::MIN_POSITIVE);
+    let mut out = Mat::from_fn(m.nrows(), kept.len(), |r, c| u[(r, kept[c])]);
+    for j in 0..out.ncols() {
+        let top = (0..out.nrows()).fold(0.0f64, |t, i| t.max(out[(i, j)].abs()));
+        for i in 0..out.nrows() {
+            out[(i, j)] /= top.max(f64::MIN_POSITIVE);
         }
     }
-    Ok(psi)
+    Ok(out)
 }
 
 /// Passes of the cut slab's subspace iteration
@@ -538,8 +558,17 @@ fn reduce_component(
     settings: &CbSettings,
     dir: Option<&Path>,
 ) -> Result<(PartReduction, Source), PartCacheError> {
+    let cb = CbSettings {
+        cutoff_hz: settings.cutoff_hz * factor,
+        keep_basis: false,
+    };
+    reduce_cached(&component(p, prep, c), &cb, dir)
+}
+
+/// Component `c` of a prepared split of part `p` as a part of its own.
+fn component<'a>(p: &Part<'a>, prep: &'a Prepared, c: usize) -> Part<'a> {
     let (comp, cp) = (&prep.comps[c], &prep.cparts[c]);
-    let sub = Part {
+    Part {
         name: &cp.name,
         mesh: &comp.mesh,
         material: p.material,
@@ -548,12 +577,7 @@ fn reduce_component(
         interfaces: &cp.interfaces,
         loads: &cp.loads,
         outputs: &cp.outputs,
-    };
-    let cb = CbSettings {
-        cutoff_hz: settings.cutoff_hz * factor,
-        keep_basis: false,
-    };
-    reduce_cached(&sub, &cb, dir)
+    }
 }
 
 /// One component (`c`, 0-based) of a split part reduced into the component cache `dir` with
@@ -566,7 +590,10 @@ pub fn reduce_one(
     dir: Option<&Path>,
     c: usize,
 ) -> Result<(PartReduction, Source), PartCacheError> {
-    let prep = prepare(p, split, dir, &|j| j + 1 == c || j == c)?;
+    let mut prep = prepare(p, split, dir, &|j| j + 1 == c || j == c)?;
+    if split.enrichment > 0 {
+        enrich::enrich(p, &mut prep, split, settings, dir)?;
+    }
     reduce_component(p, &prep, (c, split.component_cutoff_factor), settings, dir)
 }
 
@@ -582,7 +609,10 @@ pub fn reduce_split(
 ) -> Result<(PartReduction, Source), PartCacheError> {
     let t0 = Instant::now();
     let part = p.name;
-    let prep = prepare(p, split, dir, &|_| true)?;
+    let mut prep = prepare(p, split, dir, &|_| true)?;
+    if split.enrichment > 0 {
+        enrich::enrich(p, &mut prep, split, settings, dir)?;
+    }
     let mut reductions = Vec::with_capacity(prep.comps.len());
     let mut all_cached = true;
     for c in 0..prep.comps.len() {
@@ -630,6 +660,10 @@ struct Assembled {
     loads: Mat<f64>,
     outputs: Mat<f64>,
     interface_cols: Vec<std::ops::Range<usize>>,
+    /// Columns of each cut's shapes.
+    cut_cols: Vec<std::ops::Range<usize>>,
+    /// Each component's coordinates' columns.
+    maps: Vec<Vec<usize>>,
 }
 
 fn assemble(
@@ -700,6 +734,8 @@ fn assemble(
         loads,
         outputs,
         interface_cols: block_cols[..p.interfaces.len()].to_vec(),
+        cut_cols: block_cols[p.interfaces.len()..].to_vec(),
+        maps,
     }
 }
 
@@ -777,6 +813,49 @@ fn residual_static(
     u
 }
 
+/// The assembled components' interior (coordinates i of [b | i]): K_ii's solver, the static
+/// constraint shapes X = -K_ii^-1 K_ib and the modes of K_ii phi = lambda M_ii phi up to the
+/// cut-off (M-normalised).
+struct Interior {
+    solver: InteriorSolve,
+    x: Mat<f64>,
+    lambdas: Vec<f64>,
+    phi_k: Mat<f64>,
+}
+
+impl Interior {
+    fn of(part: &str, a: &Assembled, cutoff_hz: f64) -> Result<Self, ReduceError> {
+        let (n, nb) = (a.k.nrows(), a.nb);
+        let ni = n - nb;
+        let sub =
+            |x: &Mat<f64>, c0: usize, nc: usize| x.as_ref().submatrix(nb, c0, ni, nc).to_owned();
+        let (k_ii, k_ib, m_ii) = (sub(&a.k, nb, ni), sub(&a.k, 0, nb), sub(&a.m, nb, ni));
+        let fail = |what: &str| {
+            other(
+                part,
+                format!("substructuring: the assembled components' {what}"),
+            )
+        };
+        let solver = InteriorSolve::new(&k_ii, &m_ii).ok_or_else(|| {
+            fail("interior stiffness is not positive definite (the interfaces do not hold it)")
+        })?;
+        let mut x = solver.solve(&k_ib);
+        for v in x.col_iter_mut().flat_map(|c| c.iter_mut()) {
+            *v = -*v;
+        }
+        let omega_c2 = (2.0 * std::f64::consts::PI * cutoff_hz).powi(2);
+        let sys = super::engine::system_modes(k_ii, &m_ii, omega_c2)
+            .map_err(|e| fail(&format!("interior modes: {e}")))?;
+        let nk = sys.lambdas.iter().take_while(|&&l| l <= omega_c2).count();
+        Ok(Self {
+            solver,
+            x,
+            lambdas: sys.lambdas[..nk].to_vec(),
+            phi_k: sys.vectors.as_ref().subcols(0, nk).to_owned(),
+        })
+    }
+}
+
 /// The second Craig-Bampton step on the assembled components (module doc): T = [[I, 0, 0],
 /// [X, Phi_k, Phi_a]] and K_r = T^T K_A T, M_r = T^T M_A T with the loads and output rows
 /// carried through T.
@@ -788,31 +867,15 @@ fn second_level(
 ) -> Result<PartReduction, ReduceError> {
     let (n, nb) = (a.k.nrows(), a.nb);
     let ni = n - nb;
-    let sub = |x: &Mat<f64>, r0: usize, nr: usize, c0: usize, nc: usize| {
-        x.as_ref().submatrix(r0, c0, nr, nc).to_owned()
-    };
-    let (k_ii, k_ib) = (sub(&a.k, nb, ni, nb, ni), sub(&a.k, nb, ni, 0, nb));
-    let (m_ii, m_ib) = (sub(&a.m, nb, ni, nb, ni), sub(&a.m, nb, ni, 0, nb));
-    let fail = |what: &str| {
-        other(
-            part,
-            format!("substructuring: the assembled components' {what}"),
-        )
-    };
-    let solver = InteriorSolve::new(&k_ii, &m_ii).ok_or_else(|| {
-        fail("interior stiffness is not positive definite (the interfaces do not hold it)")
-    })?;
-    let solve = |rhs: &Mat<f64>| solver.solve(rhs);
-    let mut x = solve(&k_ib);
-    for v in x.col_iter_mut().flat_map(|c| c.iter_mut()) {
-        *v = -*v;
-    }
-    let omega_c2 = (2.0 * std::f64::consts::PI * cutoff_hz).powi(2);
-    let sys = super::engine::system_modes(k_ii.clone(), &m_ii, omega_c2)
-        .map_err(|e| fail(&format!("interior modes: {e}")))?;
-    let nk = sys.lambdas.iter().take_while(|&&l| l <= omega_c2).count();
-    let lambdas = sys.lambdas[..nk].to_vec();
-    let phi_k = sys.vectors.as_ref().subcols(0, nk).to_owned();
+    let Interior {
+        solver,
+        x,
+        lambdas,
+        phi_k,
+    } = Interior::of(part, &a, cutoff_hz)?;
+    let nk = lambdas.len();
+    let m_ii = a.m.as_ref().submatrix(nb, nb, ni, ni).to_owned();
+    let m_ib = a.m.as_ref().submatrix(nb, 0, ni, nb).to_owned();
     // attachment candidates: the loads' interior rows, then the interface inertia M_ib + M_ii X
     let nl = a.loads.ncols();
     let mut f = Mat::<f64>::zeros(ni, nl + nb);
