@@ -125,7 +125,7 @@ fn enriched_shapes(
     let (v, lambdas) = low_fields(&a, &inner);
     let mut out = Vec::with_capacity(prep.cuts.len());
     for (j, psi) in slab_psi.iter().enumerate() {
-        let r = imbalance(j, &a, &passes, (&v, &lambdas));
+        let r = imbalance((j, psi.nrows()), &a, &passes, (&v, &lambdas));
         let traces = super::ab(
             psi.as_ref(),
             v.as_ref().subrows(a.cut_cols[j].start, a.cut_cols[j].len()),
@@ -150,16 +150,16 @@ fn enriched_shapes(
     Ok(out)
 }
 
-/// The force imbalance at cut `j` of every field of `v` (columns, eigenvalues `lambdas`):
+/// The force imbalance at cut `j` (of `rows` rows) of every field of `v` (columns, eigenvalues `lambdas`):
 /// r = sum over the cut's components of (K Phi_c - lambda M Phi_c) y_c on the cut's rows, y_c
 /// the field's coordinates of component c in the assembly `a`.
 fn imbalance(
-    j: usize,
+    (j, rows): (usize, usize),
     a: &super::Assembled,
     passes: &[CutRows],
     (v, lambdas): (&Mat<f64>, &[f64]),
 ) -> Mat<f64> {
-    let mut r = Mat::<f64>::zeros(0, 0);
+    let mut r = Mat::<f64>::zeros(rows, v.ncols());
     for (c, pass) in passes.iter().enumerate() {
         let y = Mat::from_fn(a.maps[c].len(), v.ncols(), |i, k| v[(a.maps[c][i], k)]);
         for (_, kr, mr) in pass.iter().filter(|(cut, _, _)| *cut == j) {
@@ -167,12 +167,7 @@ fn imbalance(
             for (k, lam) in lambdas.iter().enumerate() {
                 my.col_mut(k).iter_mut().for_each(|x| *x *= lam);
             }
-            let term = super::ab(kr.as_ref(), y.as_ref()) - my;
-            if r.nrows() == 0 {
-                r = term;
-            } else {
-                r += term;
-            }
+            r += super::ab(kr.as_ref(), y.as_ref()) - my;
         }
     }
     r
