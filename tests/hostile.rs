@@ -1016,7 +1016,8 @@ fn regression_step_error_window_at_high_speed() {
 
 /// Doubtful values are warned about, not refused, and the default scene has none: a clearance
 /// worn past 0.5 % of the bore; a pin offset beyond 5 % of it; an average that takes in the first cycle, which starts from
-/// rest (a one-cycle run has no other and is not warned about).
+/// rest (a one-cycle run has no other and is not warned about); a cut enrichment on a
+/// crankcase in one piece.
 #[test]
 fn contract_doubtful_values_are_warned_about() {
     use linercav::scene::Scene;
@@ -1045,6 +1046,13 @@ fn contract_doubtful_values_are_warned_about() {
         "{all:?}"
     );
     assert!(warnings(&["transient.cycles=1", "transient.averaged_cycles=1"]).is_empty());
+    // an enrichment of cuts that a one-piece crankcase does not have is said to do nothing
+    let ignored = warnings(&["rom.cut_enrichment=100"]);
+    assert!(
+        ignored.iter().any(|w| w.contains("rom.cut_enrichment")),
+        "{ignored:?}"
+    );
+    assert!(warnings(&["rom.cut_enrichment=100", "rom.crankcase_components=3"]).is_empty());
 }
 
 /// Regression (issue 40, found in session 38): under an address-space limit as a batch

@@ -1032,10 +1032,11 @@ fn assert_assembled_from_cache((code, out, err): (i32, String, String), sets: &[
 }
 
 /// Enriched cut shapes (`rom.cut_enrichment`) through the component cache and a job array's
-/// tasks: the crankcase's second component task finds no enriched shapes, makes them (the
-/// first pass of both components) and stores them; the third reads them; the plain `rom`
-/// after the tasks assembles everything from the cache with the frequencies of a build without
-/// the cache (same code on the same inputs; 1e-6 as the other cache contracts); a changed
+/// tasks: the crankcase's two component tasks, started together, find no enriched shapes;
+/// exactly one makes them (the first pass of both components) and stores them, the other
+/// waits on the entry's lock (or arrives after) and reads them; the plain `rom` after the
+/// tasks assembles everything from the cache with the frequencies of a build without the
+/// cache (same code on the same inputs; 1e-6 as the other cache contracts); a changed
 /// enrichment is a different ROM (its key changes).
 #[test]
 fn contract_enriched_cuts_through_the_cache_and_tasks() {
@@ -1048,10 +1049,20 @@ fn contract_enriched_cuts_through_the_cache_and_tasks() {
     ];
     let set_args: Vec<&str> = sets.iter().flat_map(|s| ["--set", s]).collect();
     let run = |extra: &[&str]| rom_in_cache(d, &[&set_args, extra].concat());
-    for i in [2, 3, 1] {
-        let (code, _, err) = run(&["--component", &format!("{i}/3")]);
-        assert_eq!(code, 0, "{err}");
-    }
+    let made: Vec<bool> = std::thread::scope(|s| {
+        let tasks = [2, 3].map(|i| s.spawn(move || run(&["--component", &format!("{i}/3"), "-v"])));
+        tasks
+            .into_iter()
+            .map(|t| {
+                let (code, _, err) = t.join().unwrap();
+                assert_eq!(code, 0, "{err}");
+                err.contains("cut shapes enriched by")
+            })
+            .collect()
+    });
+    assert_eq!(made.iter().filter(|&&m| m).count(), 1, "{made:?}");
+    let (code, _, err) = run(&["--component", "1/3"]);
+    assert_eq!(code, 0, "{err}");
     let enriched = std::fs::read_dir(dir.path())
         .unwrap()
         .filter(|e| {

@@ -161,6 +161,13 @@ impl RomReport {
                 c.cut_shapes.saturating_mul(2).saturating_add(16),
                 c.cutoff_factor
             );
+            if c.enrichment > 0 {
+                let _ = writeln!(
+                    s,
+                    "  cut shapes enriched: up to {} added per cut from a first assembly's imbalance (rom.cut_enrichment)",
+                    c.enrichment
+                );
+            }
         }
         if let Some(found) = &self.interfaces {
             s.push_str(&interfaces_text(found));

@@ -247,30 +247,24 @@ impl Entry for StoredMatrix {
 }
 
 /// The matrix of cache file `file` under `key` in `dir` when a valid entry exists, else made by
-/// `make` (and stored when `dir` is given). A corrupt entry is reported and replaced.
+/// `make` (and stored when `dir` is given; by one process at a time). A corrupt entry is
+/// reported and replaced ([`cached_matrices`] of one file).
 pub fn cached_matrix(
     dir: Option<&Path>,
     file: &str,
     key: &str,
     make: impl FnOnce() -> Result<Mat<f64>, super::craig_bampton::ReduceError>,
 ) -> Result<(Mat<f64>, Source), PartCacheError> {
-    let Some(dir) = dir else {
-        return Ok((make()?, Source::Reduced));
-    };
-    let path = dir.join(format!("{file}-{key}.bin"));
-    match cache::load::<StoredMatrix>(&path, key)? {
-        Lookup::Hit(stored) => return Ok((to_faer(&stored.0), Source::Cached)),
-        Lookup::Corrupt(reason) => log::warn!("{}: {reason}; computing it again", path.display()),
-        Lookup::Miss => {}
-    }
-    let m = make()?;
-    cache::store(&path, key, &StoredMatrix(from_faer(&m)))?;
-    Ok((m, Source::Reduced))
+    let (mut made, source) = cached_matrices(dir, &[file.to_string()], key, || Ok(vec![make()?]))?;
+    Ok((made.remove(0), source))
 }
 
 /// The matrices of cache files `files` under `key` in `dir` when every one has a valid entry,
 /// else all made by `make` (one per file, and stored when `dir` is given). A corrupt entry is
-/// reported and all are made again.
+/// reported and all are made again. One process makes them at a time: processes that miss
+/// the entries at once (the component tasks of an array job on a shared cache directory)
+/// queue on a lock beside the first file ([`super::cache::BuildLock`]) and then read what
+/// the first stored, instead of each making them.
 pub fn cached_matrices(
     dir: Option<&Path>,
     files: &[String],
@@ -284,25 +278,46 @@ pub fn cached_matrices(
         .iter()
         .map(|f| dir.join(format!("{f}-{key}.bin")))
         .collect();
-    let mut found = Vec::with_capacity(files.len());
-    for path in &paths {
-        match cache::load::<StoredMatrix>(path, key)? {
-            Lookup::Hit(stored) => found.push(to_faer(&stored.0)),
-            Lookup::Corrupt(reason) => {
-                log::warn!("{}: {reason}; computing it again", path.display());
-                break;
-            }
-            Lookup::Miss => break,
-        }
-    }
-    if found.len() == files.len() {
+    if let Some(found) = load_matrices(&paths, key)? {
         return Ok((found, Source::Cached));
+    }
+    let Some(first) = paths.first() else {
+        return Ok((make()?, Source::Reduced));
+    };
+    let lock = cache::BuildLock::acquire(first, |l| {
+        log::warn!(
+            "another process is making the cache entries {} (lock {}); waiting for it",
+            files.join(", "),
+            l.display()
+        )
+    })?;
+    if lock.waited {
+        if let Some(found) = load_matrices(&paths, key)? {
+            return Ok((found, Source::Cached));
+        }
     }
     let made = make()?;
     for (path, m) in paths.iter().zip(&made) {
         cache::store(path, key, &StoredMatrix(from_faer(m)))?;
     }
     Ok((made, Source::Reduced))
+}
+
+/// The matrices at `paths` under `key` when every one has a valid entry (a corrupt one is
+/// reported), else None.
+fn load_matrices(paths: &[PathBuf], key: &str) -> Result<Option<Vec<Mat<f64>>>, PartCacheError> {
+    let mut found = Vec::with_capacity(paths.len());
+    for path in paths {
+        match cache::load::<StoredMatrix>(path, key)? {
+            Lookup::Hit(stored) => found.push(to_faer(&stored.0)),
+            Lookup::Corrupt(reason) => {
+                log::warn!("{}: {reason}; computing it again", path.display());
+                return Ok(None);
+            }
+            Lookup::Miss => return Ok(None),
+        }
+    }
+    Ok(Some(found))
 }
 
 /// Path of a part's entry in the cache directory.

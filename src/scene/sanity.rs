@@ -71,6 +71,12 @@ pub fn review(scene: &Scene) -> Result<Vec<String>, SceneError> {
             num(g.pilot_diameter * 1e3)
         ));
     }
+    if scene.rom.cut_enrichment > 0 && scene.rom.crankcase_components == 1 {
+        warnings.push(format!(
+            "rom.cut_enrichment = {} has no effect: the crankcase is reduced in one piece (rom.crankcase_components = 1), so it has no cuts to enrich",
+            scene.rom.cut_enrichment
+        ));
+    }
     if let Some(sim) = &scene.simulation {
         piston(scene, sim, &mut warnings)?;
         step(scene, &sim.transient, &mut warnings)?;
