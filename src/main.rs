@@ -698,7 +698,7 @@ struct ModesOptions {
     /// Number of modes (rigid-body modes included).
     #[arg(long)]
     count: usize,
-    /// Shift frequency f_s of sigma = -(2 pi f_s)^2 [Hz] (default: the scene's, or 100).
+    /// Shift frequency f_s of sigma = -(2 pi f_s)^2 [Hz] (default: the scene's, or 100); one so close to zero that rigid-body modes' residuals are round-off against it (below 1e-8 of the model's eigenvalue scale) is moved away from it, with a warning.
     #[arg(long, value_name = "HZ")]
     shift_hz: Option<f64>,
     /// Solve at the shift as given, even far below the wanted modes (by default such a shift

@@ -264,6 +264,44 @@ fn verification_a_shift_far_below_the_modes_is_moved_to_them() {
     );
 }
 
+/// A shift too close to zero for a free body is moved to -SHIFT_FLOOR times the eigenvalue
+/// scale, where the rigid-body modes' residuals (measured against |sigma| ||M phi||) are
+/// no longer round-off against it: a free-free block asked at 0.01 Hz (1e-12 of its scale)
+/// is solved and certified (residuals below the certificate's 1e-6, the Sturm count holds)
+/// with the dense oracle's eigenvalues to 1e-9 of the largest wanted (its accuracy, as
+/// above); solved at the shift as given (`place` false, `--keep-shift`) the same modes fail
+/// the residual bound, which is what the move is for.
+#[test]
+fn verification_a_shift_too_close_to_zero_is_moved_away_from_it() {
+    use linercav::eigen::certify::RESIDUAL_BOUND;
+    use linercav::eigen::modal::SHIFT_FLOOR;
+    let mesh = box_mesh(ElementKind::Hex20, [3, 2, 1], [0.3, 0.2, 0.1], 0.1);
+    let mut model = FeModel::build(mesh, &STEEL, &[]).unwrap();
+    let dense = dense_eigenvalues(
+        &model.km.pattern.to_dense(&model.km.k),
+        &model.km.pattern.to_dense(&model.km.m),
+    );
+    let tiny = -(2.0 * std::f64::consts::PI * 0.01_f64).powi(2);
+    let scale = model.km.eigenvalue_scale();
+    let sol = model.modes(10, tiny, 4).unwrap();
+    assert_eq!(sol.sigma, -SHIFT_FLOOR * scale);
+    let worst = sol.residuals.iter().copied().fold(0.0, f64::max);
+    assert!(worst < RESIDUAL_BOUND, "{:?}", sol.residuals);
+    assert!(sol.sturm.as_ref().is_some_and(|s| s.ok), "{:?}", sol.sturm);
+    let top = dense[9];
+    for (j, &lam) in sol.modes.eigenvalues.iter().enumerate() {
+        assert!(
+            (lam - dense[j]).abs() < 1e-9 * top,
+            "mode {j}: {lam} vs {}",
+            dense[j]
+        );
+    }
+    let kept = model.modes_at(10, tiny, 4, false).unwrap();
+    let worst_kept = kept.residuals.iter().copied().fold(0.0, f64::max);
+    println!("worst residual {worst:e} at the floor, {worst_kept:e} at the shift as given");
+    assert!(worst_kept > RESIDUAL_BOUND, "{:?}", kept.residuals);
+}
+
 /// The certified solve factorises the lower triangle of K - sigma M only
 /// (`linalg::spill::lower_shifted`): the same matrix as both triangles up to the assembly's
 /// roundoff (K_ij and K_ji are summed in different orders, so they can differ in the last

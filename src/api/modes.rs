@@ -143,14 +143,8 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
     }
     let max_residual = crate::eigen::certify::worst(sol.residuals.iter().copied());
     let mut warnings = part.checks.warnings;
+    warnings.extend(moved_shift_warning(shift_hz, sigma, sol.sigma, req.count));
     let used_hz = (-sol.sigma).max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
-    if sol.sigma != sigma {
-        warnings.push(format!(
-            "the shift {shift_hz} Hz lay far below the lowest {} modes: they were solved at {} Hz (--shift-hz near the lowest modes saves the extra factorisation)",
-            req.count,
-            crate::text::num(used_hz)
-        ));
-    }
     Ok(ModesReport {
         frequencies_hz: (0..sol.modes.count())
             .map(|j| sol.modes.frequency_hz(j))
@@ -177,6 +171,23 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
         warnings,
         material,
     })
+}
+
+/// The warning for a shift the solve moved: away from zero (`eigen::modal::SHIFT_FLOOR`) or
+/// up toward the `count` wanted modes from far below them; None when it solved at `sigma`.
+fn moved_shift_warning(shift_hz: f64, sigma: f64, used: f64, count: usize) -> Option<String> {
+    let used_hz = crate::text::num((-used).max(0.0).sqrt() / (2.0 * std::f64::consts::PI));
+    if used < sigma {
+        Some(format!(
+            "the shift {shift_hz} Hz lay so close to zero that rigid-body modes' residuals are round-off against it: the modes were solved at {used_hz} Hz (--keep-shift solves at the shift as given)"
+        ))
+    } else if used != sigma {
+        Some(format!(
+            "the shift {shift_hz} Hz lay far below the lowest {count} modes: they were solved at {used_hz} Hz (--shift-hz near the lowest modes saves the extra factorisation)"
+        ))
+    } else {
+        None
+    }
 }
 
 impl ModesReport {

@@ -164,6 +164,11 @@ pub fn certified_modes(
     place: bool,
     trial: Option<SmoothFields>,
 ) -> Result<(ModalSolution, Timings), ModalError> {
+    let sigma = if place {
+        floored_shift(sigma, km.eigenvalue_scale())
+    } else {
+        sigma
+    };
     // the shift is checked on the first solve; re-solves keep the one it chose. The trial
     // block is let go before the first factorisation.
     let mut trial = trial;
@@ -175,6 +180,34 @@ pub fn certified_modes(
         lanczos(km, analysis, nev, attempt as u64, placement)
     };
     certify_with_recovery(km, analysis, count, sigma, guard, solve)
+}
+
+/// A negative shift is kept at least this fraction of the eigenvalue scale trace(K) / trace(M)
+/// below zero (`floored_shift`, in [`certified_modes`]). Closer to zero a free body's
+/// rigid-body modes, whose residuals the certificate measures against |sigma| ||M phi||
+/// ([`certify`]), fail it on round-off alone: K phi of a rigid mode is a sum of terms of the
+/// order of the largest eigenvalues that cancel, leaving about 7e-4 ||M phi|| on the default
+/// liner (scale 3.6e12; relative residuals 1.7e-5 at 1 Hz, 1.7e-3 at 0.1 Hz, certified from
+/// 5 Hz, 2.2e-10 of the scale, 1.7e-9 at the default 100 Hz). At 1e-8 of the scale (30 Hz
+/// there) that round-off is 40-50 times below the certificate's bound (2.6e-8 on a free
+/// test block); the shift is below zero, hence below every eigenvalue, whatever the model.
+pub const SHIFT_FLOOR: f64 = 1e-8;
+
+/// `sigma`, or -[`SHIFT_FLOOR`] `scale` when a negative `sigma` lies closer to zero than that
+/// (logged; `modes` warns of it): the modes are the same, solved at a shift their certificate
+/// can judge.
+fn floored_shift(sigma: f64, scale: f64) -> f64 {
+    let floor = -SHIFT_FLOOR * scale;
+    if !(sigma < 0.0 && sigma > floor) {
+        return sigma;
+    }
+    log::info!(
+        "the shift {} Hz lies so close to zero that a rigid-body mode's residual is round-off against it (below {:.1} Hz, 1e-8 of the model's eigenvalue scale): solving at {:.1} Hz instead (--keep-shift solves at the shift as given)",
+        crate::text::num(shift_hz(sigma)),
+        shift_hz(floor),
+        shift_hz(floor)
+    );
+    floor
 }
 
 /// How [`lanczos`] treats the shift it is given.
