@@ -1155,7 +1155,7 @@ fn regression_cavitation_values_are_bounded_and_a_calibration_file_is_named() {
 /// of named entries) and "expected a sequence" (an array); each is now said as the scene
 /// writes it. A calibration file given as a JSON array was taken as its three values in the
 /// code's field order (a wrong-length one said "expected struct CalibrationThresholds"): it
-/// is refused, asking for an object.
+/// is refused, asking for an object; one that gives a threshold twice is refused, naming it.
 #[test]
 fn regression_wrong_types_are_named_as_the_scene_writes_them() {
     for (set, key, said) in [
@@ -1181,6 +1181,18 @@ fn regression_wrong_types_are_named_as_the_scene_writes_them() {
     );
     assert!(err.contains("expected an object"), "{err}");
     assert!(!err.contains("struct"), "{err}");
+    // a threshold given twice: the last won silently (session 75's sweep)
+    std::fs::write(
+        &cal,
+        r#"{"onset_m_s2": 1000, "high_risk_m_s2": 1300, "k_p_pa_per_m_s2": 138, "onset_m_s2": 5}"#,
+    )
+    .unwrap();
+    let err = refused(
+        &["simulate", SMALL, "--set", &set],
+        2,
+        "cavitation.calibration_file",
+    );
+    assert!(err.contains("duplicate field `onset_m_s2`"), "{err}");
 }
 
 /// Regression: the documented `crankcase.mesh.element = "tet10"` failed on every engine tried

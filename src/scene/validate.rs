@@ -700,14 +700,13 @@ pub(super) fn calibration_thresholds(
         )
     };
     // an object only: serde would also take the three values as an array, in an order the
-    // file does not show
-    let value: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| not_calibration(e.to_string()))?;
-    if !value.is_object() {
+    // file does not show. Read straight into the thresholds, whose fields serde checks for
+    // duplicates (through a JSON value the last of two `onset_m_s2` won silently).
+    if !text.trim_start().starts_with('{') {
         return Err(not_calibration("expected an object".into()));
     }
     let t: CalibrationThresholds =
-        serde_json::from_value(value).map_err(|e| not_calibration(e.to_string()))?;
+        serde_json::from_str(&text).map_err(|e| not_calibration(e.to_string()))?;
     for (name, v) in [
         ("onset_m_s2", t.onset_m_s2),
         ("high_risk_m_s2", t.high_risk_m_s2),
