@@ -416,6 +416,35 @@ fn regression_an_output_name_taken_by_a_directory_is_found_before_any_work() {
     assert_eq!(std::fs::read_dir(cache.path()).unwrap().count(), 0);
 }
 
+/// Regression (session 75's sweep): a sharded sweep checked only its own runs' values, so the
+/// shard without the bad run exited 0 and the bad value surfaced in the other shard only (the
+/// merge then lacked a part). Every shard now refuses it before its own runs, as the whole
+/// sweep does, naming the key, with no ROM built.
+#[test]
+fn regression_every_shard_refuses_a_bad_value_in_any_shards_runs() {
+    for shard in ["1/2", "2/2"] {
+        let cache = tempfile::tempdir().unwrap();
+        let out = tempfile::tempdir().unwrap();
+        refused(
+            &[
+                "sweep",
+                SMALL,
+                "--vary",
+                "piston.clearance_um=60,-5",
+                "--shard",
+                shard,
+                "--cache-dir",
+                cache.path().to_str().unwrap(),
+                "--out",
+                out.path().to_str().unwrap(),
+            ],
+            2,
+            "piston.clearance_um",
+        );
+        assert_eq!(std::fs::read_dir(cache.path()).unwrap().count(), 0);
+    }
+}
+
 /// Regression: a shard run that failed, or was stopped by SIGTERM, left its (new) part
 /// directory behind, empty.
 #[test]

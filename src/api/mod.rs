@@ -393,6 +393,31 @@ pub fn load_part(input: &ModelInput, extra_fix: &[String]) -> Result<LoadedPart>
 
 /// `e` of the variant with the overrides `extra`, named by them (a sampled run's value is not
 /// the range the user gave: the run says which value failed); the base scene's as it is.
+/// Loads the variant `extra` of the scene at `path` with the overrides `base` and checks what
+/// its runs read before any ROM is built (its simulation and piston: the pressure curve, the
+/// hot skirt); a failure names the variant.
+fn load_variant(path: &Path, base: &[String], extra: &[String]) -> Result<Scene> {
+    let mut sets = base.to_vec();
+    sets.extend(extra.iter().cloned());
+    let sc = load_scene(path, &sets).map_err(|e| run_named(extra, e))?;
+    simulation(&sc).map_err(|e| run_named(extra, e.into()))?;
+    crate::piston::setup::piston_of(&sc).map_err(|e| run_named(extra, e.into()))?;
+    Ok(sc)
+}
+
+/// Checks each of `variants` as [`Variants::prepare`] does and keeps nothing: a sweep's shard
+/// refuses a bad value in another shard's runs as the whole sweep would, before its own.
+pub fn check_variants_load(
+    path: &Path,
+    base: &[String],
+    variants: impl Iterator<Item = Vec<String>>,
+) -> Result<()> {
+    for extra in variants {
+        load_variant(path, base, &extra)?;
+    }
+    Ok(())
+}
+
 fn run_named(extra: &[String], e: Error) -> Error {
     if extra.is_empty() {
         return e;
@@ -492,15 +517,7 @@ impl Variants {
     ) -> Result<Self> {
         let scenes: Vec<Scene> = variants
             .iter()
-            .map(|extra| {
-                let mut sets = base.to_vec();
-                sets.extend(extra.iter().cloned());
-                let sc = load_scene(path, &sets).map_err(|e| run_named(extra, e))?;
-                simulation(&sc).map_err(|e| run_named(extra, e.into()))?;
-                // its piston too (the pressure curve, the hot skirt), before any ROM is built
-                crate::piston::setup::piston_of(&sc).map_err(|e| run_named(extra, e.into()))?;
-                Ok(sc)
-            })
+            .map(|extra| load_variant(path, base, extra))
             .collect::<Result<_>>()?;
         let descriptions: Vec<String> = scenes
             .iter()

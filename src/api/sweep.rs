@@ -333,15 +333,20 @@ fn execute(
     sharded: bool,
 ) -> Result<Executed> {
     let keys = design.keys();
-    let extra: Vec<Vec<String>> = indices
-        .iter()
-        .map(|&k| {
-            keys.iter()
-                .zip(&all[k])
-                .map(|(key, x)| format!("{key}={x}"))
-                .collect()
-        })
-        .collect();
+    let sets_of = |k: usize| -> Vec<String> {
+        keys.iter()
+            .zip(&all[k])
+            .map(|(key, x)| format!("{key}={x}"))
+            .collect()
+    };
+    let extra: Vec<Vec<String>> = indices.iter().map(|&k| sets_of(k)).collect();
+    // a shard checks the other shards' runs too, as the whole sweep would: a bad value (a
+    // pressure file of NaN) stops every shard before its runs, not only the shard it is in
+    if sharded {
+        let own: std::collections::HashSet<usize> = indices.iter().copied().collect();
+        let others = (0..all.len()).filter(|k| !own.contains(k)).map(sets_of);
+        super::check_variants_load(&req.scene, &req.sets, others)?;
+    }
     // the base design (the scene without the design's values) runs too, last: every run's
     // change is measured against it (each shard runs it: the runs are deterministic)
     let mut extra = extra;
