@@ -202,9 +202,8 @@ fn floored_shift(sigma: f64, scale: f64) -> f64 {
         return sigma;
     }
     log::info!(
-        "the shift {} Hz lies so close to zero that a rigid-body mode's residual is round-off against it (below {:.1} Hz, 1e-8 of the model's eigenvalue scale): solving at {:.1} Hz instead (--keep-shift solves at the shift as given)",
+        "the shift {} Hz lies so close to zero that a rigid-body mode's residual is round-off against it: solving at {:.1} Hz instead, 1e-8 of the model's eigenvalue scale (--keep-shift solves at the shift as given)",
         crate::text::num(shift_hz(sigma)),
-        shift_hz(floor),
         shift_hz(floor)
     );
     floor
