@@ -570,7 +570,8 @@ fn regression_a_slowly_falling_shift_check_is_not_settled() {
 /// certified, exit 0.
 #[test]
 fn regression_a_shift_near_zero_on_a_free_body_is_certified() {
-    for hz in ["1", "0.01"] {
+    // 1e-300 Hz squares to -0 (underflow): "not positive definite" before it was moved too
+    for hz in ["1", "0.01", "1e-300"] {
         let mut args = vec!["modes", "--mesh", "tests/fixtures/block_tet10.msh"];
         args.extend(STEEL);
         args.extend(["--count", "10", "--shift-hz", hz, "--json"]);
@@ -580,6 +581,32 @@ fn regression_a_shift_near_zero_on_a_free_body_is_certified() {
         assert!(v["shift_hz"].as_f64().unwrap() > 1.0, "{v}");
         assert!(v["warnings"].to_string().contains("close to zero"), "{v}");
     }
+}
+
+/// Regression (session 78, a hostile-input sweep): `--shift-hz 1e9 --keep-shift` (sigma =
+/// -(2 pi 1e9)^2, far below zero) gave a free block's rigid-body modes at 14-38 Hz, certified,
+/// exit 0: eigenvalues sigma + 1 / theta carry an error of eps |sigma| (8.7e3 rad^2/s^2 here),
+/// and the residuals, measured against |sigma| ||M phi||, passed as round-off. They are now
+/// measured against min(|sigma|, lambda_top) ||M phi|| (`eigen::certify`), and the Sturm
+/// count's hundreds of eigenvalues below its shift start no re-solve (on the test engine's
+/// liner a re-solve for 5,985 ran past 2 minutes): exit 1, the count named. Without
+/// `--keep-shift` the shift is placed near the modes and certified.
+#[test]
+fn regression_a_shift_far_below_zero_kept_as_given_is_not_certified() {
+    let mut args = vec!["modes", "--mesh", "tests/fixtures/block_tet10.msh"];
+    args.extend(STEEL);
+    args.extend(["--count", "10", "--shift-hz", "1e9"]);
+    let mut kept = args.clone();
+    kept.push("--keep-shift");
+    let out = linercav(&kept);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("certification failed"), "{err}");
+    assert!(err.contains("not solving again"), "{err}");
+    args.push("--json");
+    let v = json(&linercav(&args));
+    assert_eq!(v["sturm_count_ok"], true, "{v}");
+    assert!(v["max_residual"].as_f64().unwrap() < 1e-6, "{v}");
 }
 
 /// Regression (session 62): fewer modes than a free body's six rigid-body modes (`--count 1`

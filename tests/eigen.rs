@@ -302,6 +302,73 @@ fn verification_a_shift_too_close_to_zero_is_moved_away_from_it() {
     assert!(worst_kept > RESIDUAL_BOUND, "{:?}", kept.residuals);
 }
 
+/// A free body so slender that its wanted modes all lie far below the floor's fraction of its
+/// eigenvalue scale (a 400-cell hex8 bar, 400:1, whose first bending modes sit near 1e-9 of
+/// the scale): the placement, which moves a far shift to a quarter of the highest wanted
+/// eigenvalue, stops at the floor (-SHIFT_FLOOR times the scale) instead of going inside it,
+/// where the rigid-body modes' residuals are round-off against |sigma|. Solved from the
+/// default 100 Hz, the modes are certified (residuals below the certificate's bound, the
+/// Sturm count holds), at the floor, with the elastic eigenvalues of an independent solve at
+/// twice the floor's distance (another factor, no placement) to 10 eps times the scale (a
+/// backward-stable factor solves K - sigma M to about eps ||K||, which leaves eigenvalues
+/// this far below the scale determined to about eps times the scale, not relatively: 1e-12
+/// of it here, so relative agreement is not to be had) and the six rigid-body modes' at
+/// round-off in both (below 1e-6 of the floor; eps times the scale is 2e-8 of it). Solved at
+/// the quarter of the highest wanted mode, where
+/// the placement went before, the certificate fails: what the stop is for.
+#[test]
+fn verification_a_placed_shift_stops_at_the_floor_on_a_slender_free_body() {
+    use linercav::eigen::certify::RESIDUAL_BOUND;
+    use linercav::eigen::modal::SHIFT_FLOOR;
+    let mesh = box_mesh(ElementKind::Hex8, [1600, 1, 1], [16.0, 0.01, 0.01], 0.0);
+    let mut model = FeModel::build(mesh, &STEEL, &[]).unwrap();
+    let scale = model.km.eigenvalue_scale();
+    let floor = -SHIFT_FLOOR * scale;
+    let sigma = -(2.0 * std::f64::consts::PI * 100.0_f64).powi(2);
+    assert!(sigma < floor, "the default shift lies beyond the floor");
+    let sol = model.modes(10, sigma, 4).unwrap();
+    let top = sol.modes.eigenvalues[9];
+    println!(
+        "scale {scale:e}, floor {floor:e}, top wanted {top:e} ({:e} of the scale), shift used {:e}, residuals {:?}",
+        top / scale,
+        sol.sigma,
+        sol.residuals
+    );
+    assert!(
+        -0.25 * top > floor,
+        "the test needs the wanted modes inside the floor's reach: {top:e} vs {floor:e}"
+    );
+    let worst = sol.residuals.iter().copied().fold(0.0, f64::max);
+    assert!(worst < RESIDUAL_BOUND, "{:?}", sol.residuals);
+    assert!(sol.sturm.as_ref().is_some_and(|s| s.ok), "{:?}", sol.sturm);
+    assert!(sol.sigma <= floor, "{:e} vs floor {floor:e}", sol.sigma);
+    let other = model.modes_at(10, 2.0 * floor, 4, false).unwrap();
+    for (j, (&a, &b)) in sol
+        .modes
+        .eigenvalues
+        .iter()
+        .zip(&other.modes.eigenvalues)
+        .enumerate()
+    {
+        if j < 6 {
+            // the rigid-body modes: eigenvalues at round-off (about eps times the scale)
+            assert!(
+                a.abs().max(b.abs()) < 1e-6 * -floor,
+                "rigid mode {j}: {a} vs {b}"
+            );
+        } else {
+            assert!(
+                (a - b).abs() < 10.0 * f64::EPSILON * scale,
+                "mode {j}: {a} vs {b}"
+            );
+        }
+    }
+    let inside = model.modes_at(10, -0.25 * top, 4, false).unwrap();
+    let worst_inside = inside.residuals.iter().copied().fold(0.0, f64::max);
+    println!("worst residual {worst:e} at the floor, {worst_inside:e} at a quarter of the top");
+    assert!(worst_inside > RESIDUAL_BOUND, "{:?}", inside.residuals);
+}
+
 /// The certified solve factorises the lower triangle of K - sigma M only
 /// (`linalg::spill::lower_shifted`): the same matrix as both triangles up to the assembly's
 /// roundoff (K_ij and K_ji are summed in different orders, so they can differ in the last

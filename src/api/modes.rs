@@ -177,6 +177,7 @@ pub fn run(req: &ModesRequest, started: Instant) -> Result<ModesReport> {
 /// up toward the `count` wanted modes from far below them; None when it solved at `sigma`.
 fn moved_shift_warning(shift_hz: f64, sigma: f64, used: f64, count: usize) -> Option<String> {
     let used_hz = crate::text::num((-used).max(0.0).sqrt() / (2.0 * std::f64::consts::PI));
+    let shift_hz = crate::text::num(shift_hz);
     if used < sigma {
         Some(format!(
             "the shift {shift_hz} Hz lay so close to zero that rigid-body modes' residuals are round-off against it: the modes were solved at {used_hz} Hz (--keep-shift solves at the shift as given)"

@@ -134,6 +134,16 @@ pub const TRIAL_DEGREE: usize = 3;
 /// computed (modes the Lanczos iteration missed): at most this many times.
 const RECOVERY_ATTEMPTS: usize = 2;
 
+/// Missed modes a re-solve goes after, at most, for a solve of `nev` modes: max(nev, 16). An
+/// iteration skips a mode or a cluster of a few (a multiplicity, a near-degenerate pair); a
+/// count of thousands more than were computed (`--shift-hz 1e9 --keep-shift` on the test
+/// engine's liner: 5,995 below the check's shift, 10 computed, and a re-solve for all of them
+/// that ran past 2 minutes) means a shift above the wanted modes, which a re-solve of that
+/// size would not mend in any time a user waits for.
+fn recoverable(nev: usize) -> usize {
+    nev.max(16)
+}
+
 /// A free body's rigid-body modes (three translations, three rotations): how many more a
 /// solve whose modes were all rigid asks for.
 const RIGID_MODES: usize = 6;
@@ -198,7 +208,8 @@ pub const SHIFT_FLOOR: f64 = 1e-8;
 /// can judge.
 fn floored_shift(sigma: f64, scale: f64) -> f64 {
     let floor = -SHIFT_FLOOR * scale;
-    if !(sigma < 0.0 && sigma > floor) {
+    // a shift of a few 1e-160 Hz or less squares to -0 (underflow): moved as well
+    if !(sigma <= 0.0 && sigma > floor) {
         return sigma;
     }
     log::info!(
@@ -221,6 +232,9 @@ struct Placement {
     watch: bool,
     /// Seconds spent placing the shift before any factorisation.
     seconds: f64,
+    /// The closest to zero a move may bring the shift (-[`SHIFT_FLOOR`] times the eigenvalue
+    /// scale; 0 when the shift is not placed).
+    floor: f64,
 }
 
 impl Placement {
@@ -231,6 +245,7 @@ impl Placement {
             checks: 0,
             watch: false,
             seconds: 0.0,
+            floor: 0.0,
         }
     }
 
@@ -243,7 +258,8 @@ impl Placement {
     fn of(km: &StiffnessMass, trial: Option<SmoothFields>, nev: usize, sigma: f64) -> Self {
         let t = Instant::now();
         let bound = trial.and_then(|x| super::trial::trial_bound(km, &x, nev));
-        let moved = bound.and_then(|b| moved_shift(b, sigma));
+        let floor = -SHIFT_FLOOR * km.eigenvalue_scale();
+        let moved = bound.and_then(|b| moved_shift(b, sigma, floor));
         if let Some(b) = bound {
             log::info!(
                 "smooth trial fields: lambda_{nev} <= {b:.4e} ({:.2} s)",
@@ -264,6 +280,7 @@ impl Placement {
             checks: PLACEMENT_ROUNDS,
             watch: moved.is_none() && !in_doubt,
             seconds: t.elapsed().as_secs_f64(),
+            floor,
         }
     }
 }
@@ -326,6 +343,16 @@ fn certify_with_recovery(
         let sturm = sturm_check(km, analysis, (&mut all, spare), (count, zero))?;
         timings.certification += t.elapsed().as_secs_f64();
         let retry = match &sturm {
+            Some(st) if st.found > st.expected + recoverable(nev) => {
+                log::warn!(
+                    "the Sturm count at {:.1} Hz found {} eigenvalues below, {} were computed: far more than an iteration skips (at most {} are solved for again), so the shift lies above the wanted modes; not solving again (lower the shift)",
+                    st.shift_hz,
+                    st.found,
+                    st.expected,
+                    recoverable(nev)
+                );
+                None
+            }
             Some(st) if st.found > st.expected && attempt < RECOVERY_ATTEMPTS => {
                 Some((st.found, st.expected, st.shift_hz))
             }
@@ -410,14 +437,14 @@ fn lanczos(
             // the caller's shift is watched; a moved one is checked before the iteration
             // (its bound refined on the new factor)
             if checks > 0 && !watching {
-                let (result, (tf, te)) = check_then_solve(&mass, llt, &settings)?;
+                let (result, (tf, te)) = check_then_solve(&mass, llt, &settings, placement.floor)?;
                 t_factor += tf;
                 t_eigen += te;
                 return Ok::<_, ModalError>(result);
             }
             let t = Instant::now();
             let ((result, spent), values) =
-                watched_solve(&mass, llt, &settings, watching, recycle)?;
+                watched_solve(&mass, llt, &settings, (watching, placement.floor), recycle)?;
             // a block check's seconds count with the factorisation's, as above
             t_eigen += t.elapsed().as_secs_f64() - spent.0;
             t_factor += spent.0;
@@ -475,7 +502,7 @@ fn watched_solve(
     mass: &SymCsc,
     llt: crate::linalg::factor::Llt<'_>,
     settings: &EigenSettings,
-    watching: bool,
+    (watching, floor): (bool, f64),
     recycle: bool,
 ) -> Result<(Checked, Option<Vec<f64>>), ModalError> {
     let (nev, sigma, n) = (settings.count, settings.sigma, mass.pattern.n);
@@ -512,14 +539,14 @@ fn watched_solve(
         log::info!(
             "Lanczos stopped at its first restart (lambda_{nev} <= {bound:.4e}, shift {sigma:.4e})"
         );
-        return Ok((check_then_solve(mass, llt, settings)?, None));
+        return Ok((check_then_solve(mass, llt, settings, floor)?, None));
     };
     log::info!("{}", modes.work_summary());
     // converged before its first restart: its own eigenvalues judge the shift
     let top = modes.eigenvalues.get(nev.saturating_sub(1)).copied();
     let result = match top
         .filter(|&t| watching && !watched && above_roundoff(t, -sigma))
-        .and_then(|top| moved_shift(top, sigma))
+        .and_then(|top| moved_shift(top, sigma, floor))
     {
         // converged eigenvalues: the new shift needs no check
         Some(sigma) => Err(Moved {
@@ -542,10 +569,11 @@ fn check_then_solve(
     mass: &crate::linalg::sparse::SymCsc,
     llt: crate::linalg::factor::Llt<'_>,
     settings: &EigenSettings,
+    floor: f64,
 ) -> Result<Checked, ModalError> {
     let (nev, sigma, n) = (settings.count, settings.sigma, mass.pattern.n);
     let t = Instant::now();
-    let better = placed_shift(mass, &llt, nev, sigma);
+    let better = placed_shift(mass, &llt, nev, (sigma, floor));
     let t_check = t.elapsed().as_secs_f64();
     log::info!("shift check {t_check:.2} s");
     crate::machine::release_memory();

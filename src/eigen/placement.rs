@@ -61,9 +61,14 @@ pub fn above_roundoff(value: f64, scale: f64) -> bool {
 }
 
 /// The shift [`placed_shift`] moves to, given `top`, an estimate or upper bound of the highest
-/// wanted eigenvalue: -[`SHIFT_FRACTION`] top when -sigma > [`SHIFT_REACH`] top, else None.
-pub fn moved_shift(top: f64, sigma: f64) -> Option<f64> {
-    (sigma < 0.0 && top > 0.0 && -sigma > SHIFT_REACH * top).then_some(-SHIFT_FRACTION * top)
+/// wanted eigenvalue: min(-[`SHIFT_FRACTION`] top, `floor`) when -sigma > [`SHIFT_REACH`] top
+/// and that lies closer to zero than sigma, else None. `floor` (<= 0; 0 for none) is the
+/// closest to zero a shift may come ([`crate::eigen::modal::SHIFT_FLOOR`]): a free body whose
+/// wanted modes all lie below it (a slender bar of fine elements) is solved there, where its
+/// rigid-body modes' residuals are not round-off against |sigma|.
+pub fn moved_shift(top: f64, sigma: f64, floor: f64) -> Option<f64> {
+    let to = (-SHIFT_FRACTION * top).min(floor);
+    (sigma < 0.0 && top > 0.0 && -sigma > SHIFT_REACH * top && to > sigma).then_some(to)
 }
 
 /// A shift [`placed_shift`] moved to.
@@ -136,7 +141,7 @@ pub fn placed_shift(
     mass: &SymCsc,
     llt: &crate::linalg::factor::Llt<'_>,
     nev: usize,
-    sigma: f64,
+    (sigma, floor): (f64, f64),
 ) -> Option<Moved> {
     let n = mass.pattern.n;
     let nev = nev.min(n.saturating_sub(1));
@@ -174,7 +179,7 @@ pub fn placed_shift(
         let scale = ritz[ritz.len() - 1].max(-sigma);
         let top = Some(theta_max).filter(|&t| above_roundoff(t, scale));
         let moved = |settled| {
-            top.and_then(|t| moved_shift(t, sigma))
+            top.and_then(|t| moved_shift(t, sigma, floor))
                 .map(|sigma| Moved { sigma, settled })
         };
         if pass == SHIFT_CHECK_PASSES {
