@@ -657,3 +657,98 @@ fn regression_a_decks_own_guide_and_fixed_sets_are_listed() {
         .unwrap()
         .contains("fixed"));
 }
+
+/// Regression (session 78, a hostile-input sweep): a liner deck's own sets were taken as given,
+/// and a liner deck under a generated crankcase was not compared with the scene's liner. All
+/// of these ran with exit 0 and moved results without a word: the bore lines swapped (every
+/// peak changed), an analysis point of two nodes (point 1 reported point 2's response), an
+/// analysis point on the bore, and a scene wall 5.5 mm thicker than the deck's (the crankcase
+/// built around a liner that was not there: first system mode 524.0 -> 509.6 Hz). Each is now
+/// refused, exit 2, naming the set or the scene key; points swapped in depth are warned of,
+/// naming both depths (a deck may place its sensors where the engine has them).
+#[test]
+fn regression_a_liner_decks_sets_and_size_are_checked_against_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = std::fs::read_to_string("tests/fixtures/liner_hex20.inp").unwrap();
+    let point_1 = "*NSET, NSET=point_1\n891\n";
+    assert!(deck.contains(point_1), "the fixture's point_1");
+    let swap =
+        |text: &str, a: &str, b: &str| text.replace(a, "\u{0}").replace(b, a).replace('\u{0}', b);
+    let scene = |file: &str, sets: &[&str]| -> Vec<String> {
+        let mut args = vec![
+            "rom".to_string(),
+            SMALL.to_string(),
+            "--no-cache".to_string(),
+            "--set".to_string(),
+            format!("liner.mesh_file=\"{}\"", dir.path().join(file).display()),
+            // stops after the meshes are read and checked
+            "--set".to_string(),
+            "limits.max_memory_gb=0.01".to_string(),
+        ];
+        for s in sets {
+            args.extend(["--set".to_string(), s.to_string()]);
+        }
+        args
+    };
+    let cases: [(&str, String, &[&str], &str); 4] = [
+        (
+            "bore_swap.inp",
+            swap(&deck, "NSET=bore_thrust\n", "NSET=bore_antithrust\n"),
+            &[],
+            "'bore_thrust' must lie on the bore, thrust side",
+        ),
+        (
+            "two.inp",
+            deck.replace(point_1, "*NSET, NSET=point_1\n891,779\n"),
+            &[],
+            "'point_1' holds 2 nodes",
+        ),
+        (
+            "inner.inp",
+            deck.replace(point_1, "*NSET, NSET=point_1\n892\n"),
+            &[],
+            "'point_1' must be a node of the outer (coolant) wall",
+        ),
+        (
+            "thick.inp",
+            deck.clone(),
+            &["liner.outer_diameter_mm=146"],
+            "scene key liner.pilot_diameter_mm",
+        ),
+    ];
+    for (file, text, sets, says) in &cases {
+        std::fs::write(dir.path().join(file), text).unwrap();
+        let args = scene(file, sets);
+        let args: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+        let (code, _, err) = linercav(&args);
+        assert_eq!(code, 2, "{file}: {err}");
+        assert!(err.contains(says) && err.contains(*file), "{file}: {err}");
+    }
+    // the fixture as it is passes these checks (and stops at the memory limit)
+    let args = scene("thick.inp", &[]);
+    let args: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+    let (_, _, err) = linercav(&args);
+    assert!(
+        err.contains("limits.max_memory_gb") && !err.contains("warning"),
+        "{err}"
+    );
+    // points 1 and 4 swapped: warned of, both depths named
+    let p4 = "*NSET, NSET=point_4\n";
+    let swapped = deck.replace(point_1, "*NSET, NSET=point_1\nP4\n");
+    let at4 = deck[deck.find(p4).unwrap() + p4.len()..]
+        .lines()
+        .next()
+        .unwrap()
+        .to_string();
+    let swapped = swapped
+        .replace(&format!("{p4}{at4}\n"), &format!("{p4}891\n"))
+        .replace("point_1\nP4\n", &format!("point_1\n{at4}\n"));
+    std::fs::write(dir.path().join("swap.inp"), swapped).unwrap();
+    let args = scene("swap.inp", &[]);
+    let args: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+    let (_, _, err) = linercav(&args);
+    assert!(
+        err.contains("'point_1' lies 115 mm below") && err.contains("put point 1 at 40 mm"),
+        "{err}"
+    );
+}

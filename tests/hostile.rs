@@ -155,6 +155,13 @@ fn regression_hostile_scene_values_are_refused_before_work() {
             vec!["operating.combustion.duration_deg=50000"],
             "operating.combustion.duration_deg",
         ),
+        // session 78: 0.01 deg fell between the curve's integration steps (the motored
+        // curve's peak, exit 0)
+        (
+            "simulate",
+            vec!["operating.combustion.duration_deg=0.01"],
+            "operating.combustion.duration_deg",
+        ),
         (
             "simulate",
             vec!["liner.analysis_spacing_mm=1e-9"],
@@ -1017,7 +1024,7 @@ fn regression_step_error_window_at_high_speed() {
 /// Doubtful values are warned about, not refused, and the default scene has none: a clearance
 /// worn past 0.5 % of the bore; a pin offset beyond 5 % of it; an average that takes in the first cycle, which starts from
 /// rest (a one-cycle run has no other and is not warned about); a cut enrichment on a
-/// crankcase in one piece.
+/// crankcase in one piece; fewer than 20 shapes per cut between components.
 #[test]
 fn contract_doubtful_values_are_warned_about() {
     use linercav::scene::Scene;
@@ -1053,6 +1060,11 @@ fn contract_doubtful_values_are_warned_about() {
         "{ignored:?}"
     );
     assert!(warnings(&["rom.cut_enrichment=100", "rom.crankcase_components=3"]).is_empty());
+    // few shapes per cut: percent-level coupling error (session 78: 6 was accepted silently)
+    let few = warnings(&["rom.crankcase_components=2", "rom.cut_shapes=6"]);
+    assert!(few.iter().any(|w| w.contains("rom.cut_shapes")), "{few:?}");
+    assert!(warnings(&["rom.crankcase_components=2", "rom.cut_shapes=20"]).is_empty());
+    assert!(warnings(&["rom.cut_shapes=6"]).is_empty());
 }
 
 /// Regression (issue 40, found in session 38): under an address-space limit as a batch

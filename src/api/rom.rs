@@ -168,6 +168,11 @@ impl RomReport {
                     c.enrichment
                 );
             }
+            // the estimated error above is the modal truncation's alone
+            let _ = writeln!(
+                s,
+                "  the estimated error does not count the cuts' (measured on the default engine in 3 components: 3.3e-4 median, 5.1e-3 worst with 200 shapes per cut; 2.1e-5 worst with 100 added by rom.cut_enrichment; docs/physics.md)"
+            );
         }
         if let Some(found) = &self.interfaces {
             s.push_str(&interfaces_text(found));

@@ -395,6 +395,84 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
     out
 }
 
+/// Checks the liner deck's own line and point sets (`found`: where each set came from) in the
+/// liner's frame against what they stand for, since they are taken as given: the bore lines
+/// `bore_thrust` / `bore_antithrust` on the bore r_i on the thrust (+y) / anti-thrust (-y)
+/// side and `outer_thrust` on the outer wall r_o on +y, every node (within the shape's
+/// tolerance, |x| not checked: a deck's line may run beside the thrust line); each `point_k`
+/// one node on the outer wall on +y. Refused otherwise: the contact forces would act on the
+/// wrong side (a deck with the bore lines swapped changed every peak without a word), or a
+/// point would report another node's response. A point more than one element (the median
+/// edge) from the scene's depth for it is warned of: reported at the deck's node, not at the
+/// depth the scene's `liner.analysis_*` keys give.
+pub fn check_liner_deck_sets(
+    mesh: &Mesh,
+    s: &LinerShape,
+    t: &LinerTargets<'_>,
+    found: &[FoundSet],
+) -> Result<(), FindError> {
+    let from_deck = |name: &str| found.iter().any(|f| f.name == name && f.source == "deck");
+    let (tol, h) = (s.tol, s.tol / 0.02);
+    let r = |p: &[f64; 3]| p[0].hypot(p[1]);
+    let lines = [
+        (
+            "bore_thrust",
+            s.inner_radius,
+            1.0,
+            "the bore, thrust side (+y)",
+        ),
+        (
+            "bore_antithrust",
+            s.inner_radius,
+            -1.0,
+            "the bore, anti-thrust side (-y)",
+        ),
+        (
+            "outer_thrust",
+            s.outer_radius,
+            1.0,
+            "the outer wall, thrust side (+y)",
+        ),
+    ];
+    let at = |n: usize| {
+        let p = mesh.nodes[n];
+        format!("the node at ({:.6}, {:.6}, {:.6}) m", p[0], p[1], p[2])
+    };
+    for (name, radius, sign, what) in lines.into_iter().filter(|l| from_deck(l.0)) {
+        let nodes = mesh.node_sets.get(name).map_or(&[][..], |v| &v[..]);
+        if let Some(&n) = nodes.iter().find(|&&n| {
+            let p = &mesh.nodes[n];
+            (r(p) - radius).abs() >= tol || sign * p[1] <= 0.0
+        }) {
+            return Err(fail("liner", format!("the deck's set '{name}' must lie on {what} at r = {radius:.6} m in the liner's frame (its own x, y; thrust side +y): {} is not there; name the sets for this frame", at(n))));
+        }
+    }
+    for (k, &d) in t.depths.iter().enumerate() {
+        let name = format!("point_{}", k + 1);
+        if !from_deck(&name) {
+            continue;
+        }
+        let nodes = mesh.node_sets.get(&name).map_or(&[][..], |v| &v[..]);
+        let &[n] = nodes else {
+            return Err(fail("liner", format!("the deck's set '{name}' holds {} nodes: an analysis point is one node on the outer wall", nodes.len())));
+        };
+        let p = mesh.nodes[n];
+        if (r(&p) - s.outer_radius).abs() >= tol || p[1] <= 0.0 {
+            return Err(fail("liner", format!("the deck's set '{name}' must be a node of the outer (coolant) wall r = {:.6} m on the thrust side (+y) in the liner's frame: {} is not", s.outer_radius, at(n))));
+        }
+        let depth = s.length - p[2];
+        if (depth - d).abs() > h {
+            log::warn!(
+                "liner deck: the set '{name}' lies {} mm below the liner top, the scene's liner.analysis_first_depth_mm and liner.analysis_spacing_mm put point {} at {} mm: reported at the deck's node",
+                crate::text::num(depth * 1e3),
+                k + 1,
+                crate::text::num(d * 1e3)
+            );
+        }
+    }
+    Ok(())
+}
+
 /// A line set found with fewer than three nodes (an unstructured mesh has no nodes exactly on
 /// the thrust line) is widened: the surface nodes within h/2 of the line, at each height the
 /// one nearest to it.

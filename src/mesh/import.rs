@@ -20,6 +20,13 @@ pub enum ImportError {
         key: String,
         msg: String,
     },
+    /// A deck that contradicts the scene it is used in.
+    #[error("{}: {msg} (scene key {key})", path.display())]
+    Mismatch {
+        path: PathBuf,
+        key: String,
+        msg: String,
+    },
     #[error("{}: {msg} ({key})", path.display())]
     Material {
         path: PathBuf,
@@ -214,6 +221,9 @@ pub fn complete_engine(
                     source,
                 })?;
             check_bore(p, &s, frame)?;
+            if crankcase_file.is_none() {
+                check_generated_fit(p, &s, &generated_shape)?;
+            }
             found.liner_axis = Some(axis);
             found.liner_centre = Some(centre);
             s
@@ -259,11 +269,69 @@ pub fn complete_engine(
             depths: frame.depths,
         };
         let mut sets = find::liner_sets(liner, &shape, &t);
+        find::check_liner_deck_sets(liner, &shape, &t, &sets).map_err(|source| {
+            ImportError::Find {
+                path: p.to_path_buf(),
+                source,
+            }
+        })?;
         sets.append(&mut found.sets);
         found.sets = sets;
     }
     Ok(found)
 }
+
+/// A liner deck under a generated crankcase: the crankcase is built to the scene's liner
+/// (`scene`: its pilot radius, flange, length and flange underside), so the deck's (`deck`)
+/// must be the same within [`FIT_TOLERANCE`] of each value. A wall 5.5 mm thicker in the
+/// scene than in the deck built the crankcase's bore around a liner that was not there and
+/// moved the first system mode by 3 % without a word.
+fn check_generated_fit(
+    path: &Path,
+    deck: &LinerShape,
+    scene: &LinerShape,
+) -> Result<(), ImportError> {
+    let checks = [
+        (
+            "liner.pilot_diameter_mm (default liner.outer_diameter_mm)",
+            "outer diameter",
+            2.0 * deck.outer_radius,
+            2.0 * scene.pilot_radius,
+        ),
+        (
+            "liner.flange_outer_diameter_mm",
+            "flange diameter",
+            2.0 * deck.flange_radius,
+            2.0 * scene.flange_radius,
+        ),
+        ("liner.length_mm", "length", deck.length, scene.length),
+        (
+            "liner.flange_height_mm",
+            "flange height",
+            deck.length - deck.seat_z,
+            scene.length - scene.seat_z,
+        ),
+    ];
+    for (key, what, d, s) in checks {
+        if (d - s).abs() > FIT_TOLERANCE * s {
+            return Err(ImportError::Mismatch {
+                path: path.to_path_buf(),
+                key: key.into(),
+                msg: format!(
+                    "the liner mesh's {what} is {} mm, the scene's {} mm: the generated crankcase is built to the scene's liner; give the deck's value",
+                    crate::text::num(d * 1e3),
+                    crate::text::num(s * 1e3)
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Relative difference between a liner deck's dimension and the scene's beyond which they are
+/// different parts, not the same drawing rounded: 1 % (0.7 mm on a 135 mm pilot diameter,
+/// several times any fit's clearance).
+const FIT_TOLERANCE: f64 = 0.01;
 
 /// The found bore must be the scene's: a ratio near 1000 or 1/1000 is a unit mistake.
 fn check_bore(path: &Path, s: &LinerShape, frame: &EngineFrame<'_>) -> Result<(), ImportError> {

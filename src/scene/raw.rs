@@ -725,7 +725,8 @@ pub struct RawCombustion {
     pub exhaust_over_intake_bar: f64,
     /// Start of combustion [deg crank angle; firing TDC = 360].
     pub start_deg: f64,
-    /// Duration of combustion \[deg\], in (0, 720].
+    /// Duration of combustion \[deg\], in [5, 720] (burns last 40-120 deg; a shorter one than
+    /// 5 deg falls between the built-in curve's 0.1-deg integration steps).
     pub duration_deg: f64,
     /// Wiebe parameters a (> 0) and m (>= 0).
     pub wiebe_a: f64,

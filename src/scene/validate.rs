@@ -1107,6 +1107,11 @@ fn check_viscosity(c: &Checker<'_>, vogel: [f64; 3], range: (f64, f64)) -> Resul
     ))
 }
 
+/// Shortest burn `operating.combustion.duration_deg` may give \[deg\]: fifty of the built-in
+/// pressure curve's 0.1-deg Runge-Kutta steps (`piston::pressure`), which resolve the Wiebe
+/// heat release; burns last 40-120 deg.
+const MIN_BURN_DEG: f64 = 5.0;
+
 /// `[operating]`: load, combustion model (Wiebe) or measured pressure curve.
 pub(super) fn validate_operating(
     c: &Checker<'_>,
@@ -1149,11 +1154,13 @@ pub(super) fn validate_operating(
             cb.exhaust_over_intake_bar,
         )? * 1e5,
         start_deg: cb.start_deg,
-        // a burn lasts 40-120 deg; one longer than the cycle is no burn
+        // a burn lasts 40-120 deg; one longer than the cycle is no burn, one shorter than
+        // MIN_BURN_DEG falls between the built-in curve's 0.1-deg integration steps (0.01 deg
+        // gave the motored curve's 128 bar peak, exit 0)
         duration_deg: c.within(
             "operating.combustion.duration_deg",
             c.positive("operating.combustion.duration_deg", cb.duration_deg)?,
-            (0.0, 720.0),
+            (MIN_BURN_DEG, 720.0),
         )?,
         a: c.positive("operating.combustion.wiebe_a", cb.wiebe_a)?,
         m: c.nonneg("operating.combustion.wiebe_m", cb.wiebe_m)?,
