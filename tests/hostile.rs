@@ -155,6 +155,18 @@ fn regression_hostile_scene_values_are_refused_before_work() {
             vec!["operating.combustion.duration_deg=50000"],
             "operating.combustion.duration_deg",
         ),
+        // session 78: no piston of this bore (each ran with exit 0 or failed in the solver)
+        ("simulate", vec!["piston.mass_kg=1e-308"], "piston.mass_kg"),
+        (
+            "simulate",
+            vec!["piston.tilt_inertia_kg_m2=4000"],
+            "piston.tilt_inertia_kg_m2",
+        ),
+        (
+            "simulate",
+            vec!["piston.contact_damping_n_s_per_m=1e308"],
+            "piston.contact_damping_n_s_per_m",
+        ),
         // session 78: 0.01 deg fell between the curve's integration steps (the motored
         // curve's peak, exit 0)
         (
@@ -1024,7 +1036,8 @@ fn regression_step_error_window_at_high_speed() {
 /// Doubtful values are warned about, not refused, and the default scene has none: a clearance
 /// worn past 0.5 % of the bore; a pin offset beyond 5 % of it; an average that takes in the first cycle, which starts from
 /// rest (a one-cycle run has no other and is not warned about); a cut enrichment on a
-/// crankcase in one piece; fewer than 20 shapes per cut between components.
+/// crankcase in one piece; fewer than 20 shapes per cut between components; a piston whose
+/// mass, tilt inertia or contact damping lies outside what pistons of its bore have.
 #[test]
 fn contract_doubtful_values_are_warned_about() {
     use linercav::scene::Scene;
@@ -1065,6 +1078,18 @@ fn contract_doubtful_values_are_warned_about() {
     assert!(few.iter().any(|w| w.contains("rom.cut_shapes")), "{few:?}");
     assert!(warnings(&["rom.crankcase_components=2", "rom.cut_shapes=20"]).is_empty());
     assert!(warnings(&["rom.cut_shapes=6"]).is_empty());
+    // a piston light, wobbly or glued for its bore (session 78)
+    for (set, key) in [
+        ("piston.mass_kg=0.2", "piston.mass_kg"),
+        ("piston.tilt_inertia_kg_m2=0.5", "piston.tilt_inertia_kg_m2"),
+        (
+            "piston.contact_damping_n_s_per_m=3e6",
+            "piston.contact_damping_n_s_per_m",
+        ),
+    ] {
+        let w = warnings(&[set]);
+        assert!(w.iter().any(|w| w.contains(key)), "{set}: {w:?}");
+    }
 }
 
 /// Regression (issue 40, found in session 38): under an address-space limit as a batch
