@@ -752,3 +752,67 @@ fn regression_a_liner_decks_sets_and_size_are_checked_against_the_scene() {
         "{err}"
     );
 }
+
+/// Regression (session 78, a hostile-input sweep): a deck's constraints (Abaqus `*BOUNDARY`,
+/// Nastran `SPC1`) are read past, by design (linercav holds the sets named by `--fix` or a
+/// part's `fix` key), but silently: a user who clamped the deck got free-free modes with only
+/// "free-free" in the output to say so. Each is now warned of, naming the file and the line.
+#[test]
+fn regression_a_decks_constraints_not_applied_are_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let nodes = "1, 0., 0., 0.\n2, 1., 0., 0.\n3, 0., 1., 0.\n4, 0., 0., 1.\n5, 1., 1., 1.\n";
+    let inp = format!(
+        "*Node\n{nodes}*Element, type=C3D4, elset=solid\n1, 1, 2, 3, 4\n2, 2, 3, 4, 5\n\
+         *Nset, nset=base\n1, 2, 3\n*Material, name=steel\n*Elastic\n2.1e11, 0.3\n*Density\n7850.\n\
+         *Solid Section, elset=solid, material=steel\n*Step\n*Frequency\n5\n*Boundary\nbase, 1, 3\n*End Step\n"
+    );
+    let bdf =
+        "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\n\
+               GRID,5,,1.,1.,1.\nCTETRA,1,1,1,2,3,4\nCTETRA,2,1,2,3,4,5\nPSOLID,1,1\n\
+               MAT1,1,2.1e11,,0.3,7850.\nSPC1,1,123,1,2,3\nENDDATA\n";
+    for (name, text, says) in [
+        ("bc.inp", inp.as_str(), "bc.inp:21: *BOUNDARY"),
+        ("bc.bdf", bdf, "bc.bdf:11: SPC1"),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let (code, _, err) = linercav(&["modes", "--mesh", path.to_str().unwrap(), "--count", "2"]);
+        assert_eq!(code, 0, "{name}: {err}");
+        assert!(
+            err.contains(says) && err.contains("not applied"),
+            "{name}: {err}"
+        );
+    }
+}
+
+/// Regression (session 78, a hostile-input sweep): a MAT1's G beside E and NU was ignored even
+/// when negative or a third off; it is refused when not positive and warned of beyond 1 % of
+/// E / (2 (1 + NU)) (E and NU are used), and a consistent one passes without a word.
+#[test]
+fn regression_a_mat1_shear_modulus_against_e_and_nu_is_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = |g: &str| {
+        format!(
+            "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\n\
+             GRID,5,,1.,1.,1.\nCTETRA,1,1,1,2,3,4\nCTETRA,2,1,2,3,4,5\nPSOLID,1,1\n\
+             MAT1,1,2.1e11,{g},0.3,7850.\nENDDATA\n"
+        )
+    };
+    let path = dir.path().join("g.bdf");
+    let run = |g: &str| {
+        std::fs::write(&path, deck(g)).unwrap();
+        linercav(&["modes", "--mesh", path.to_str().unwrap(), "--count", "2"])
+    };
+    let (code, _, err) = run("8.08e10");
+    assert!(code == 0 && !err.contains("warning"), "{err}");
+    let (code, _, err) = run("5e10");
+    assert!(
+        code == 0 && err.contains("g.bdf:10: MAT1: G = 5e10 differs"),
+        "{err}"
+    );
+    let (code, _, err) = run("-5e10");
+    assert!(
+        code == 2 && err.contains("g.bdf:10") && err.contains("G (field 4)"),
+        "{err}"
+    );
+}

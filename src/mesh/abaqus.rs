@@ -442,6 +442,8 @@ struct Reader {
     system_values: Vec<f64>,
     /// The material whose options are being read (upper case).
     material: Option<String>,
+    /// The first `*BOUNDARY` (not applied: warned of once the deck is read).
+    boundary: Option<Loc>,
 }
 
 impl Reader {
@@ -468,6 +470,7 @@ impl Reader {
             system: None,
             system_values: Vec::new(),
             material: None,
+            boundary: None,
         }
     }
 
@@ -600,6 +603,10 @@ impl Reader {
             "NODE" | "ELEMENT" | "SYSTEM" => self.mesh_keyword(k, loc),
             "NSET" | "ELSET" => self.set_keyword(k, loc),
             "MATERIAL" | "ELASTIC" | "DENSITY" | "SOLID SECTION" => self.material_keyword(k, loc),
+            "BOUNDARY" => {
+                self.boundary.get_or_insert(loc);
+                Ok(())
+            }
             _ if material_option || IGNORED.contains(&name) => Ok(()),
             _ => Err(self.err(
                 loc,
@@ -1168,6 +1175,9 @@ impl Reader {
     /// assembly's sets of instances, the plain names of single-instance sets, the sections.
     fn finish(mut self) -> Result<Mesh, DeckError> {
         self.check_closed()?;
+        if let Some(loc) = self.boundary {
+            log::warn!("{}", self.err(loc, "*BOUNDARY and the deck's other boundary conditions are not applied: linercav holds only the node sets named by --fix or a part's `fix` key".into()));
+        }
         let mut c = Collected::new(&self.files[0]);
         c.files = self.files.clone();
         let model = std::mem::take(&mut self.model);

@@ -38,7 +38,9 @@
 //! - MAT1 (MID, E, G, NU, RHO): E and NU as given; E blank: E = 2 (1 + NU) G; NU blank:
 //!   NU = E / (2 G) - 1; RHO must be given and positive (the modes need mass); E > 0 and
 //!   -1 < NU < 0.5. Named `MAT1 <mid>`, or by a HyperMesh comment `$HMNAME MAT <mid> "name"`.
-//!   Other fields (G when E and NU are given, expansion, damping, allowables) are ignored.
+//!   G given beside E and NU is not used (the solid is isotropic): refused when not positive,
+//!   warned of when more than 1 % from E / (2 (1 + NU)). Other fields (expansion, damping,
+//!   allowables) are ignored.
 //! - PSOLID (PID, MID, ..., FCTN): every CTETRA/CHEXA with the property gets MAT1 MID (FCTN
 //!   blank or SMECH; fluid elements refused). When the deck has a PSOLID, every element's
 //!   property (a blank PID is the element id) must be one, and a PSOLID's MID a MAT1 of the
@@ -127,7 +129,22 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, DeckError> {
             .map_err(|msg| c.err_at(card.loc, format!("{}: {msg}", card.name)))?;
     }
     finish(m, &reader, &mut c)?;
+    let constraints = ["SPC", "SPC1", "SPCADD", "SPCD", "SUPORT", "SUPORT1"];
+    if let Some(card) = reader
+        .cards
+        .iter()
+        .find(|k| constraints.contains(&k.name.as_str()))
+    {
+        log::warn!("{}", c.err_at(card.loc, not_applied(&card.name)));
+    }
     c.into_mesh()
+}
+
+/// The warning for a deck's constraint card `name`: read past, not applied (a user who
+/// clamped the deck would otherwise get free-free modes, said only as "free-free" in the
+/// output).
+fn not_applied(name: &str) -> String {
+    format!("{name} and the deck's other constraints are not applied: linercav holds only the node sets named by --fix or a part's `fix` key")
 }
 
 /// A message about a card, or its field (0-based data field `k`); the reader adds the file,
@@ -948,6 +965,40 @@ fn mat1_constants(card: &Card) -> R<(f64, f64)> {
     Ok((young, poisson))
 }
 
+/// A MAT1's G (field 4) given beside E and NU, which set the material (`young`, `poisson`):
+/// refused when not positive, warned of (naming the line) when more than 1 % from
+/// E / (2 (1 + NU)) (a database's rounding stays within that): the solid is isotropic and G
+/// is not used, so a G that says otherwise is a material the deck does not get.
+fn given_shear_modulus(card: &Card, (young, poisson): (f64, f64), c: &Collected) -> R<()> {
+    let (Some(g), Some(_), Some(_)) = (
+        card.opt_real(2, "G")?,
+        card.opt_real(1, "E")?,
+        card.opt_real(3, "NU")?,
+    ) else {
+        return Ok(());
+    };
+    if !(g.is_finite() && g > 0.0) {
+        return Err(
+            format!("G (field 4) is {g}, expected a positive shear modulus or a blank").into(),
+        );
+    }
+    let isotropic = young / (2.0 * (1.0 + poisson));
+    if (g - isotropic).abs() > 0.01 * isotropic {
+        log::warn!(
+            "{}",
+            c.err_at(
+                card.loc,
+                format!(
+                    "MAT1: G = {} differs from E / (2 (1 + NU)) = {} by more than 1 %: the solid is isotropic, E and NU are used, G is not",
+                    crate::text::num(g),
+                    crate::text::num(isotropic)
+                )
+            )
+        );
+    }
+    Ok(())
+}
+
 /// MAT1: MID, E, G, NU, RHO (other fields ignored); RHO must be positive.
 fn mat1(card: &Card, m: &mut Model, c: &Collected) -> R<()> {
     let mid = card.id(0, "material id")?;
@@ -960,6 +1011,7 @@ fn mat1(card: &Card, m: &mut Model, c: &Collected) -> R<()> {
     }
     let mat = |e: CardError| CardError(format!("material {mid}: {e}"));
     let (young, poisson) = mat1_constants(card).map_err(mat)?;
+    given_shear_modulus(card, (young, poisson), c).map_err(mat)?;
     let density = match card.opt_real(4, "RHO").map_err(mat)? {
         Some(r) if r > 0.0 => r,
         Some(r) => {
