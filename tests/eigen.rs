@@ -369,6 +369,32 @@ fn verification_a_placed_shift_stops_at_the_floor_on_a_slender_free_body() {
     assert!(worst_inside > RESIDUAL_BOUND, "{:?}", inside.residuals);
 }
 
+/// The same stop on a bar of 400 cells (400:1), whose highest wanted eigenvalue (2.2e-9 of
+/// the scale) lies between the rigid-body cluster's round-off (1e-10 of the scale) and the
+/// floor (1e-8): the residuals' scale is then the floor's distance, not the top eigenvalue
+/// (`eigen::certify`), so the rigid-body modes are judged as at the floor: certified, the
+/// shift at the floor, the Sturm count holding.
+#[test]
+fn verification_a_slender_body_between_round_off_and_the_floor_is_certified() {
+    use linercav::eigen::certify::RESIDUAL_BOUND;
+    use linercav::eigen::modal::SHIFT_FLOOR;
+    let mesh = box_mesh(ElementKind::Hex8, [400, 1, 1], [4.0, 0.01, 0.01], 0.0);
+    let mut model = FeModel::build(mesh, &STEEL, &[]).unwrap();
+    let scale = model.km.eigenvalue_scale();
+    let sigma = -(2.0 * std::f64::consts::PI * 100.0_f64).powi(2);
+    let sol = model.modes(10, sigma, 4).unwrap();
+    let top = sol.modes.eigenvalues[9] / scale;
+    println!("top {top:e} of the scale, residuals {:?}", sol.residuals);
+    assert!(
+        top > 1e-10 && top < SHIFT_FLOOR,
+        "the test needs the window: {top:e}"
+    );
+    let worst = sol.residuals.iter().copied().fold(0.0, f64::max);
+    assert!(worst < RESIDUAL_BOUND, "{:?}", sol.residuals);
+    assert!(sol.sturm.as_ref().is_some_and(|s| s.ok), "{:?}", sol.sturm);
+    assert!(sol.sigma <= -SHIFT_FLOOR * scale, "{:e}", sol.sigma);
+}
+
 /// The certified solve factorises the lower triangle of K - sigma M only
 /// (`linalg::spill::lower_shifted`): the same matrix as both triangles up to the assembly's
 /// roundoff (K_ij and K_ji are summed in different orders, so they can differ in the last

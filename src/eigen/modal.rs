@@ -192,16 +192,7 @@ pub fn certified_modes(
     certify_with_recovery(km, analysis, count, sigma, guard, solve)
 }
 
-/// A negative shift is kept at least this fraction of the eigenvalue scale trace(K) / trace(M)
-/// below zero (`floored_shift`, in [`certified_modes`]). Closer to zero a free body's
-/// rigid-body modes, whose residuals the certificate measures against |sigma| ||M phi||
-/// ([`certify`]), fail it on round-off alone: K phi of a rigid mode is a sum of terms of the
-/// order of the largest eigenvalues that cancel, leaving about 7e-4 ||M phi|| on the default
-/// liner (scale 3.6e12; relative residuals 1.7e-5 at 1 Hz, 1.7e-3 at 0.1 Hz, certified from
-/// 5 Hz, 2.2e-10 of the scale, 1.7e-9 at the default 100 Hz). At 1e-8 of the scale (30 Hz
-/// there) that round-off is 40-50 times below the certificate's bound (2.6e-8 on a free
-/// test block); the shift is below zero, hence below every eigenvalue, whatever the model.
-pub const SHIFT_FLOOR: f64 = 1e-8;
+pub use super::certify::SHIFT_FLOOR;
 
 /// `sigma`, or -[`SHIFT_FLOOR`] `scale` when a negative `sigma` lies closer to zero than that
 /// (logged; `modes` warns of it): the modes are the same, solved at a shift their certificate
@@ -704,12 +695,17 @@ mod tests {
             y
         };
         let norm = |x: &[f64]| x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        // the residuals' scale s = min(|sigma|, max(lambda_top, f)) (`certify` module doc)
+        let top = modes.eigenvalues.iter().fold(0.0f64, |t, &l| t.max(l));
+        let scale = km.eigenvalue_scale();
+        assert!(top > certify::RIGID_FRACTION * scale);
+        let s = top.max(SHIFT_FLOOR * scale).min(1e4);
         let mut worst: f64 = 0.0;
         for i in 0..modes.count() {
             let (kx, mx) = (mul(&k, modes.vector(i)), mul(&m, modes.vector(i)));
             let lam = modes.eigenvalues[i];
             let r: Vec<f64> = kx.iter().zip(&mx).map(|(a, b)| a - lam * b).collect();
-            let expected = norm(&r) / norm(&kx).max(1e4 * norm(&mx)).max(f64::MIN_POSITIVE);
+            let expected = norm(&r) / norm(&kx).max(s * norm(&mx)).max(f64::MIN_POSITIVE);
             assert!(
                 (res[i] - expected).abs() <= 1e-14 * expected,
                 "mode {i}: {} vs {expected}",
