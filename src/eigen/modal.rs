@@ -138,8 +138,9 @@ const RECOVERY_ATTEMPTS: usize = 2;
 /// iteration skips a mode or a cluster of a few (a multiplicity, a near-degenerate pair); a
 /// count of thousands more than were computed (`--shift-hz 1e9 --keep-shift` on the test
 /// engine's liner: 5,995 below the check's shift, 10 computed, and a re-solve for all of them
-/// that ran past 2 minutes) means a shift above the wanted modes, which a re-solve of that
-/// size would not mend in any time a user waits for.
+/// that ran past 2 minutes) means the computed modes are not the lowest (a shift far from
+/// them, whose eigenvalues carry an error of eps |sigma|), which a re-solve of that size would
+/// not mend in any time a user waits for.
 fn recoverable(nev: usize) -> usize {
     nev.max(16)
 }
@@ -336,7 +337,7 @@ fn certify_with_recovery(
         let retry = match &sturm {
             Some(st) if st.found > st.expected + recoverable(nev) => {
                 log::warn!(
-                    "the Sturm count at {:.1} Hz found {} eigenvalues below, {} were computed: far more than an iteration skips (at most {} are solved for again), so the shift lies above the wanted modes; not solving again (lower the shift)",
+                    "the Sturm count at {:.1} Hz found {} eigenvalues below, {} were computed: far more than an iteration skips (at most {} are solved for again), so these are not the lowest modes (a shift far from them); not solving again (a shift near the wanted modes, or without --keep-shift)",
                     st.shift_hz,
                     st.found,
                     st.expected,
