@@ -6,9 +6,9 @@
 //!   eigenvalue scale; s = |sigma| when every computed mode is a rigid-body mode). For
 //!   elastic modes (lambda >> s) this is
 //!   ||K phi - lambda M phi|| / ||K phi||; for rigid-body modes, where K phi ~ 0, the shift
-//!   sets the scale instead of round-off noise. A shift far above the wanted modes sets it no
-//!   higher than they reach: its eigenvalues lambda = sigma + 1 / theta carry an error of eps
-//!   |sigma|, which against |sigma| would pass as round-off (`--shift-hz 1e9 --keep-shift` on
+//!   sets the scale instead of round-off noise. A shift far from the wanted modes (|sigma| far
+//!   beyond them) sets it no higher than they reach: its eigenvalues lambda = sigma + 1 / theta
+//!   carry an error of eps |sigma|, which against |sigma| would pass as round-off (`--shift-hz 1e9 --keep-shift` on
 //!   a block gave its rigid-body modes at 14-38 Hz, certified).
 //! - M-orthonormality: max_ij |phi_i^T M phi_j - delta_ij|.
 //! - Sturm count: with sigma_c inside a spectral gap just above the wanted modes, the number of
@@ -144,8 +144,8 @@ pub const RIGID_FRACTION: f64 = 1e-10;
 
 /// A negative shift is kept at least this fraction of the eigenvalue scale trace(K) / trace(M)
 /// below zero (`floored_shift`, in [`super::modal::certified_modes`]). Closer to zero a free body's
-/// rigid-body modes, whose residuals the certificate measures against |sigma| ||M phi||
-/// (this module), fail it on round-off alone: K phi of a rigid mode is a sum of terms of the
+/// rigid-body modes, whose residuals the certificate measures against |sigma| ||M phi|| (this
+/// module; never against less than this floor's distance), fail it on round-off alone: K phi of a rigid mode is a sum of terms of the
 /// order of the largest eigenvalues that cancel, leaving about 7e-4 ||M phi|| on the default
 /// liner (scale 3.6e12; relative residuals 1.7e-5 at 1 Hz, 1.7e-3 at 0.1 Hz, certified from
 /// 5 Hz, 2.2e-10 of the scale, 1.7e-9 at the default 100 Hz). At 1e-8 of the scale (30 Hz
