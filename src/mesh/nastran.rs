@@ -939,8 +939,9 @@ fn set1(card: &Card, m: &mut Model) -> R<()> {
     Ok(())
 }
 
-/// MAT1's E and NU: as given, or E = 2 (1 + NU) G, or NU = E / (2 G) - 1.
-fn mat1_constants(card: &Card) -> R<(f64, f64)> {
+/// MAT1's E and NU: as given, or E = 2 (1 + NU) G, or NU = E / (2 G) - 1; and G when it is
+/// given beside both (not used; [`given_shear_modulus`] checks it).
+fn mat1_constants(card: &Card) -> R<(f64, f64, Option<f64>)> {
     let e = card.opt_real(1, "E")?;
     let g = card.opt_real(2, "G")?;
     let nu = card.opt_real(3, "NU")?;
@@ -962,19 +963,21 @@ fn mat1_constants(card: &Card) -> R<(f64, f64)> {
             format!("Poisson's ratio is {poisson}{how}, expected a number in (-1, 0.5)").into(),
         );
     }
-    Ok((young, poisson))
+    // G beside E and NU: not used, checked by `given_shear_modulus`
+    let extra = g.filter(|_| e.is_some() && nu.is_some());
+    Ok((young, poisson, extra))
 }
 
 /// A MAT1's G (field 4) given beside E and NU, which set the material (`young`, `poisson`):
 /// refused when not positive, warned of (naming the line) when more than 1 % from
 /// E / (2 (1 + NU)) (a database's rounding stays within that): the solid is isotropic and G
 /// is not used, so a G that says otherwise is a material the deck does not get.
-fn given_shear_modulus(card: &Card, (young, poisson): (f64, f64), c: &Collected) -> R<()> {
-    let (Some(g), Some(_), Some(_)) = (
-        card.opt_real(2, "G")?,
-        card.opt_real(1, "E")?,
-        card.opt_real(3, "NU")?,
-    ) else {
+fn given_shear_modulus(
+    card: &Card,
+    (young, poisson, g): (f64, f64, Option<f64>),
+    c: &Collected,
+) -> R<()> {
+    let Some(g) = g else {
         return Ok(());
     };
     if !(g.is_finite() && g > 0.0) {
@@ -1010,8 +1013,8 @@ fn mat1(card: &Card, m: &mut Model, c: &Collected) -> R<()> {
         .into());
     }
     let mat = |e: CardError| CardError(format!("material {mid}: {e}"));
-    let (young, poisson) = mat1_constants(card).map_err(mat)?;
-    given_shear_modulus(card, (young, poisson), c).map_err(mat)?;
+    let (young, poisson, g) = mat1_constants(card).map_err(mat)?;
+    given_shear_modulus(card, (young, poisson, g), c).map_err(mat)?;
     let density = match card.opt_real(4, "RHO").map_err(mat)? {
         Some(r) if r > 0.0 => r,
         Some(r) => {
