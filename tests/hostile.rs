@@ -294,6 +294,31 @@ fn regression_hostile_scene_values_are_refused_before_work() {
             vec!["piston.pin_diameter_mm=1e-300"],
             "piston.pin_diameter_mm",
         ),
+        // these named another key (transient.step_deg, liner.inner_diameter_mm, the derived
+        // onset), or reached the solver and ended in exit 1
+        ("simulate", vec!["engine.speed_rpm=1"], "engine.speed_rpm"),
+        ("simulate", vec!["rom.band_hz=1e308"], "rom.band_hz"),
+        ("simulate", vec!["engine.bore_mm=0.115"], "engine.bore_mm"),
+        (
+            "simulate",
+            vec!["cavitation.high_risk_m_s2=1e308"],
+            "cavitation.high_risk_m_s2",
+        ),
+        (
+            "simulate",
+            vec!["operating.combustion.wiebe_a=1e308"],
+            "operating.combustion.wiebe_a",
+        ),
+        (
+            "simulate",
+            vec!["operating.combustion.wiebe_m=1e6"],
+            "operating.combustion.wiebe_m",
+        ),
+        (
+            "simulate",
+            vec!["piston.contact_stiffness_n_per_m=1e308"],
+            "piston.contact_stiffness_n_per_m",
+        ),
     ];
     for (cmd, sets, needle) in cases {
         let mut args = vec![cmd, SMALL, "--cache-dir", cache_dir];

@@ -98,7 +98,8 @@ pub struct RawCavitation {
     /// above).
     #[serde(default)]
     pub k_p_pa_per_m_s2: Option<f64>,
-    /// Risk thresholds on the peak negative acceleration [m/s^2]; defaults derived (see above).
+    /// Risk thresholds on the peak negative acceleration [m/s^2], in (0, 1e6]; defaults derived
+    /// (see above).
     #[serde(default)]
     pub onset_m_s2: Option<f64>,
     #[serde(default)]
@@ -226,7 +227,7 @@ pub struct RawCrankcaseMesh {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawRom {
-    /// Highest frequency of interest \[Hz\] (spectra, responses), > 0.
+    /// Highest frequency of interest \[Hz\] (spectra, responses), in (0, 50000].
     #[serde(default = "default_band")]
     pub band_hz: f64,
     /// Cut-off of part and system modes as a multiple of `band_hz`, in [1, 10] (default 2.5).
@@ -336,7 +337,7 @@ pub struct RawEngine {
     pub cylinders: usize,
     /// Firing order, a permutation of 1..=cylinders.
     pub firing_order: Vec<usize>,
-    /// Cylinder bore \[mm\]; must equal the liner's inner diameter.
+    /// Cylinder bore \[mm\], in [20, 1500]; must equal the liner's inner diameter.
     pub bore_mm: f64,
     /// Piston stroke \[mm\].
     pub stroke_mm: f64,
@@ -345,7 +346,7 @@ pub struct RawEngine {
     pub rod_length_mm: f64,
     /// Distance between neighbouring bore axes \[mm\]; larger than the liner flange diameter.
     pub cylinder_pitch_mm: f64,
-    /// Engine speed \[rpm\], > 0, with a mean piston speed 2 stroke n / 60 of at most 30 m/s.
+    /// Engine speed \[rpm\], at least 50, with a mean piston speed 2 stroke n / 60 of at most 30 m/s.
     pub speed_rpm: f64,
 }
 
@@ -529,7 +530,7 @@ pub struct RawPiston {
     pub ovality_um: f64,
     /// Skirt slices per side, >= 10.
     pub slices: usize,
-    /// Penalty stiffness per slice [N/m] (full-arc contact), > 0.
+    /// Penalty stiffness per slice [N/m] (full-arc contact), in (0, 1e12].
     pub contact_stiffness_n_per_m: f64,
     /// Contact damping per slice [N s/m], >= 0: a damping ratio c / (2 sqrt(k m)) on the
     /// piston's mass and the slice's stiffness above 10 is warned of, above 1,000 refused.
@@ -731,7 +732,7 @@ pub struct RawCombustion {
     /// Duration of combustion \[deg\], in [5, 720] (burns last 40-120 deg; a shorter one than
     /// 5 deg falls between the built-in curve's 0.1-deg integration steps).
     pub duration_deg: f64,
-    /// Wiebe parameters a (> 0) and m (>= 0).
+    /// Wiebe parameters a in [0.001, 50] and m in [0, 20].
     pub wiebe_a: f64,
     pub wiebe_m: f64,
     /// Net heat released per cycle at full load \[J\].

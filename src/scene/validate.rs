@@ -125,6 +125,20 @@ pub(super) fn validate_engine(c: &Checker<'_>, e: &raw::RawEngine) -> Result<Eng
         cylinder_pitch: c.mm("engine.cylinder_pitch_mm", e.cylinder_pitch_mm)?,
         speed_rpm: c.positive("engine.speed_rpm", e.speed_rpm)?,
     };
+    // a bore in mm: 0.115 (a bore typed in metres) was blamed on liner.inner_diameter_mm
+    c.within("engine.bore_mm", e.bore_mm, BORE_MM)?;
+    // no engine runs below its cranking speed (1 rpm was blamed on transient.step_deg, whose
+    // fixed angle step is then 42 ms long)
+    if engine.speed_rpm < MIN_SPEED_RPM {
+        return Err(c.err(
+            "engine.speed_rpm",
+            format!(
+                "{} rpm is below any engine's running speed (at least {} rpm; slow marine engines idle near 60)",
+                num(engine.speed_rpm),
+                num(MIN_SPEED_RPM)
+            ),
+        ));
+    }
     // reciprocating engines run below ~10,000 rpm; far above, the step check would blame the
     // step for what is a mistyped speed
     if engine.speed_rpm > 1e5 {
@@ -354,6 +368,13 @@ pub(super) fn validate_rom(
     liner: &Part,
 ) -> Result<Rom, SceneError> {
     let band_hz = c.positive("rom.band_hz", r.band_hz)?;
+    bounded(
+        c,
+        "rom.band_hz",
+        band_hz,
+        MAX_BAND_HZ,
+        "cavitation is judged on responses up to some 10 kHz",
+    )?;
     if !(r.cutoff_factor.is_finite() && (1.0..=CUTOFF_FACTOR_MAX).contains(&r.cutoff_factor)) {
         return Err(c.err(
             "rom.cutoff_factor",
@@ -542,6 +563,31 @@ pub const MAX_STATIC_KPA: f64 = 10_000.0;
 const MAX_CUT_ENRICHMENT: usize = 10_000;
 /// Largest wall-pressure transfer accepted \[Pa per m/s^2\] (`cavitation.k_p_pa_per_m_s2`): at 1000
 /// m/s^2 it would be 1 GPa.
+/// Bores accepted \[mm\]: from a model engine's 20 mm to a slow marine engine's ~1 m.
+const BORE_MM: (f64, f64) = (20.0, 1500.0);
+
+/// The lowest engine speed accepted \[rpm\].
+const MIN_SPEED_RPM: f64 = 50.0;
+
+/// The highest output band accepted \[Hz\]: liner cavitation is judged on responses up to some
+/// 10 kHz, and a shell mesh of an engine resolves no mode near 50 kHz (1e308 Hz was blamed on
+/// transient.step_deg).
+const MAX_BAND_HZ: f64 = 5e4;
+
+/// The highest risk threshold accepted \[m/s^2\]: the peaks of liners at risk are 1e2-1e4
+/// m/s^2 (1e308 left the derived onset infinite: "onset (inf)").
+const MAX_THRESHOLD_M_S2: f64 = 1e6;
+
+/// The highest contact stiffness per slice accepted \[N/m\]: skirt penalties are 1e7-1e10;
+/// 1e308 reached the solver ("did not converge").
+const MAX_CONTACT_STIFFNESS: f64 = 1e12;
+
+/// Wiebe's a and m accepted: a = 6.9 burns 99.9 % (a = 50 burns all but e^-50), m is 0.5-3
+/// for engines; 1e308 reached the solver as a non-finite pressure, m = 1e6 as a burn all at
+/// its end ("deep penetration").
+const WIEBE_A: (f64, f64) = (1e-3, 50.0);
+const WIEBE_M: (f64, f64) = (0.0, 20.0);
+
 const MAX_K_P: f64 = 1e6;
 
 /// Refuses `v` of `key` above `max` (1e9 mm gaps and 1e12 kPa pressures gave a verdict without
@@ -648,14 +694,20 @@ pub(super) fn validate_cavitation(
                 "the gap's coolant gives a few Pa per m/s^2, rig calibrations some hundred",
             )?;
         }
-        let high = r
-            .high_risk_m_s2
-            .map(|v| c.positive("cavitation.high_risk_m_s2", v))
-            .transpose()?;
-        let onset = r
-            .onset_m_s2
-            .map(|v| c.positive("cavitation.onset_m_s2", v))
-            .transpose()?;
+        let threshold = |key: &str, v: Option<f64>| -> Result<Option<f64>, SceneError> {
+            let Some(v) = v else { return Ok(None) };
+            let v = c.positive(key, v)?;
+            bounded(
+                c,
+                key,
+                v,
+                MAX_THRESHOLD_M_S2,
+                "the peaks of liners at risk are 1e2-1e4 m/s^2",
+            )?;
+            Ok(Some(v))
+        };
+        let high = threshold("cavitation.high_risk_m_s2", r.high_risk_m_s2)?;
+        let onset = threshold("cavitation.onset_m_s2", r.onset_m_s2)?;
         ThresholdSpec::Scene {
             onset_m_s2: onset,
             high_risk_m_s2: high,
@@ -822,11 +874,22 @@ fn validate_skirt(
         )?,
         liner_temp_c: temp("piston.thermal.liner_temp_c", th.liner_temp_c)?,
         reference_temp_c: temp("piston.thermal.reference_temp_c", th.reference_temp_c)?,
-        stiffness: c.positive(
-            "piston.contact_stiffness_n_per_m",
-            p.contact_stiffness_n_per_m,
-        )?,
+        stiffness: contact_stiffness(c, p.contact_stiffness_n_per_m)?,
     })
+}
+
+/// `piston.contact_stiffness_n_per_m`: positive, at most [`MAX_CONTACT_STIFFNESS`].
+fn contact_stiffness(c: &Checker<'_>, v: f64) -> Result<f64, SceneError> {
+    let key = "piston.contact_stiffness_n_per_m";
+    let k = c.positive(key, v)?;
+    bounded(
+        c,
+        key,
+        k,
+        MAX_CONTACT_STIFFNESS,
+        "skirt contact penalties are 1e7-1e10 N/m per slice",
+    )?;
+    Ok(k)
 }
 
 /// `[piston]`: masses, geometry (the pin inside the liner at TDC, the offset within the rod's
@@ -1162,8 +1225,8 @@ pub(super) fn validate_operating(
             c.positive("operating.combustion.duration_deg", cb.duration_deg)?,
             (MIN_BURN_DEG, 720.0),
         )?,
-        a: c.positive("operating.combustion.wiebe_a", cb.wiebe_a)?,
-        m: c.nonneg("operating.combustion.wiebe_m", cb.wiebe_m)?,
+        a: c.within("operating.combustion.wiebe_a", cb.wiebe_a, WIEBE_A)?,
+        m: c.within("operating.combustion.wiebe_m", cb.wiebe_m, WIEBE_M)?,
         heat_j: c.nonneg("operating.combustion.heat_release_j", cb.heat_release_j)?,
         polytropic: cb.polytropic,
         evo_deg: cb.evo_deg,
