@@ -122,7 +122,7 @@ pub enum ReadError {
     TooLarge { size: u64, limit: u64 },
     #[error("line {line}: byte 0x{byte:02x} is not UTF-8 text")]
     NotText { line: usize, byte: u8 },
-    #[error("the file has {size} bytes and reading it takes about {:.2} GB, more than the {:.2} GB {bound} leaves", *need as f64 / 1e9, *available as f64 / 1e9)]
+    #[error("the file has {size} bytes and reading it takes about {} GB, more than the {} GB {bound} leaves", crate::text::num(*need as f64 / 1e9), crate::text::num(*available as f64 / 1e9))]
     NoMemory {
         size: u64,
         need: u64,

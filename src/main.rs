@@ -110,7 +110,8 @@ struct Cli {
 struct ModelArgs {
     /// Scene file (TOML).
     scene: Option<PathBuf>,
-    /// Part of the scene to analyse: liner (the default) or crankcase.
+    /// Part of the scene: liner (the default) or crankcase; `modes` takes the liner only (the
+    /// crankcase's modes come with the engine's: --assembly).
     #[arg(long)]
     part: Option<String>,
     /// Override any scene field: --set liner.mesh.radial=3 (repeatable).
@@ -699,7 +700,7 @@ struct ModesOptions {
     #[arg(long)]
     count: usize,
     /// Shift frequency f_s of sigma = -(2 pi f_s)^2 [Hz] (default: the scene's, or 100); one so close to zero that rigid-body modes' residuals are round-off against it (below 1e-8 of the model's eigenvalue scale) is moved away from it, with a warning.
-    #[arg(long, value_name = "HZ")]
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
     shift_hz: Option<f64>,
     /// Solve at the shift as given, even far below the wanted modes (by default such a shift
     /// is moved to them, with a warning).

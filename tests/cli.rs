@@ -609,6 +609,23 @@ fn regression_a_shift_far_below_zero_kept_as_given_is_not_certified() {
     assert!(v["max_residual"].as_f64().unwrap() < 1e-6, "{v}");
 }
 
+/// Regression: a negative `--shift-hz` was taken by the argument parser for a flag
+/// ("unexpected argument '-1'"); it now reaches the shift's own check, which names the flag
+/// and the range, exit 2.
+#[test]
+fn regression_a_negative_shift_gets_the_shifts_own_message() {
+    let mut args = vec!["modes", "--mesh", "tests/fixtures/block_tet10.msh"];
+    args.extend(STEEL);
+    args.extend(["--count", "4", "--shift-hz", "-100"]);
+    let out = linercav(&args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--shift-hz -100: must be a positive number"),
+        "{err}"
+    );
+}
+
 /// Regression (session 62): fewer modes than a free body's six rigid-body modes (`--count 1`
 /// to 5 at the default shift) were all rigid, their computed eigenvalues round-off around
 /// zero, and the Sturm check was placed inside that cluster (at 0.0 Hz: "found 2 eigenvalues
