@@ -816,3 +816,34 @@ fn regression_a_mat1_shear_modulus_against_e_and_nu_is_checked() {
         "{err}"
     );
 }
+
+/// Regression: a liner deck's length was compared with the scene's `liner.length_mm` only under
+/// a generated crankcase. Under a deck crankcase (which is seated on the liner whatever its
+/// length) a 240 mm liner deck in a 260 mm scene ran with exit 0: the transient places the
+/// pistons from the scene's liner top, so they ran 20 mm high on the bore lines and the small
+/// engine's peaks halved. Now refused, exit 2, naming the key and both lengths.
+#[test]
+fn regression_a_liner_decks_length_is_checked_under_a_deck_crankcase() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = decks_scene(dir.path());
+    let run = |sets: &[&str]| {
+        let mut args = vec!["rom", scene.to_str().unwrap(), "--no-cache"];
+        // stops after the meshes are read and checked
+        args.extend(["--set", "limits.max_memory_gb=0.01"]);
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        linercav(&args)
+    };
+    let (code, _, err) = run(&["liner.length_mm=240"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("liner.inp")
+            && err.contains("liner.length_mm")
+            && err.contains("the liner mesh is 260 mm long, the scene's 240 mm"),
+        "{err}"
+    );
+    // the scene's own length passes this check (and stops at the memory limit)
+    let (_, _, err) = run(&[]);
+    assert!(err.contains("limits.max_memory_gb"), "{err}");
+}

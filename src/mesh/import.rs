@@ -221,6 +221,7 @@ pub fn complete_engine(
                     source,
                 })?;
             check_bore(p, &s, frame)?;
+            check_length(p, &s, &generated_shape)?;
             if crankcase_file.is_none() {
                 check_generated_fit(p, &s, &generated_shape)?;
             }
@@ -282,7 +283,8 @@ pub fn complete_engine(
 }
 
 /// A liner deck under a generated crankcase: the crankcase is built to the scene's liner
-/// (`scene`: its pilot radius, flange, length and flange underside), so the deck's (`deck`)
+/// (`scene`: its pilot radius, flange and flange underside; the length is
+/// [`check_length`]'s), so the deck's (`deck`)
 /// must be the same within [`FIT_TOLERANCE`] of each value. A wall 5.5 mm thicker in the
 /// scene than in the deck built the crankcase's bore around a liner that was not there and
 /// moved the first system mode by 3 % without a word.
@@ -304,7 +306,6 @@ fn check_generated_fit(
             2.0 * deck.flange_radius,
             2.0 * scene.flange_radius,
         ),
-        ("liner.length_mm", "length", deck.length, scene.length),
         (
             "liner.flange_height_mm",
             "flange height",
@@ -332,6 +333,25 @@ fn check_generated_fit(
 /// different parts, not the same drawing rounded: 1 % (0.7 mm on a 135 mm pilot diameter,
 /// several times any fit's clearance).
 const FIT_TOLERANCE: f64 = 0.01;
+
+/// A liner deck's length against the scene's `liner.length_mm` (`scene`), within
+/// [`FIT_TOLERANCE`], whatever the crankcase: the transient places the pistons from the
+/// scene's liner top. A 240 mm deck under a 260 mm scene ran the pistons 20 mm high on the
+/// bore lines and halved the small engine's peaks, exit 0.
+fn check_length(path: &Path, deck: &LinerShape, scene: &LinerShape) -> Result<(), ImportError> {
+    if (deck.length - scene.length).abs() <= FIT_TOLERANCE * scene.length {
+        return Ok(());
+    }
+    Err(ImportError::Mismatch {
+        path: path.to_path_buf(),
+        key: "liner.length_mm".into(),
+        msg: format!(
+            "the liner mesh is {} mm long, the scene's {} mm: the pistons run from the scene's liner top (and a generated crankcase is built to it); give the deck's length",
+            crate::text::num(deck.length * 1e3),
+            crate::text::num(scene.length * 1e3)
+        ),
+    })
+}
 
 /// The found bore must be the scene's: a ratio near 1000 or 1/1000 is a unit mistake.
 fn check_bore(path: &Path, s: &LinerShape, frame: &EngineFrame<'_>) -> Result<(), ImportError> {
