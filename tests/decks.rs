@@ -847,3 +847,38 @@ fn regression_a_liner_decks_length_is_checked_under_a_deck_crankcase() {
     let (_, _, err) = run(&[]);
     assert!(err.contains("limits.max_memory_gb"), "{err}");
 }
+
+/// Regression (session 79, a sweep of decks against their scene): a liner deck whose flange is
+/// 3 mm higher than the crankcase deck's counterbore is deep seats the crankcase 3 mm lower,
+/// and its guide bore then reaches below the liner's bottom. Those faces were dropped, the
+/// deck plate's bore under the seat was taken for the guide, and the liner hung from the deck
+/// with its lower end free: slap +30-39 %, point 1 -38 %, exit 0. The guide now counts from the
+/// liner's bottom up, with a warning naming the depth; on the small engine's one-element guide
+/// that leaves too little to couple, and the build stops (exit 2) instead of answering.
+#[test]
+fn regression_a_guide_bore_below_the_liners_bottom_is_not_replaced_by_the_deck_bore() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = decks_scene(dir.path());
+    let liner = dir.path().join("liner.inp");
+    let (code, _, err) = linercav(&[
+        "export-mesh",
+        SMALL,
+        "--part",
+        "liner",
+        "--unit",
+        "mm",
+        "--no-sets",
+        "--set",
+        "liner.flange_height_mm=15",
+        "--out",
+        liner.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = linercav(&["rom", scene.to_str().unwrap(), "--no-cache"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("guide bore reaches 3 mm below the liner's bottom")
+            && err.contains("coupled over z 0..27 mm only"),
+        "{err}"
+    );
+}

@@ -624,10 +624,13 @@ pub fn seat_crankcase(cm: &mut Mesh, axis_x: &[f64], s: &LinerShape) -> Result<f
 }
 
 /// The guide band [z0, z1] of the bore at `xc`: the lowest z-band of crankcase element faces on
-/// the liner's outer radius between the liner's bottom and its seat (module docs).
-pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<[f64; 2]> {
+/// the liner's outer radius between the liner's bottom and its seat (module docs), the faces
+/// cut at the liner's bottom z = 0.
+/// Also returns how far the bore's faces reach below the liner's bottom \[m\] (<= 0: none).
+pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<([f64; 2], f64)> {
     let tol = 0.02 * mesh_size(cm);
     let mut spans: Vec<[f64; 2]> = Vec::new();
+    let mut below = f64::NEG_INFINITY;
     for (kind, nodes) in cm.elements() {
         let on: Vec<f64> = nodes[..kind.num_corners()]
             .iter()
@@ -638,9 +641,13 @@ pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<[f64; 2]> {
         if on.len() >= 3 {
             let lo = on.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = on.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            // faces along the liner, between its bottom and its seat
-            if hi > lo + tol && lo > -tol && hi < s.seat_z + tol {
-                spans.push([lo, hi]);
+            // faces along the liner, between its bottom and its seat; a face reaching below
+            // the liner's bottom (a crankcase seated lower, its guide bore longer than the
+            // liner) counts from the bottom up: dropped, the band above it was taken for the
+            // guide and the liner hung from its deck bore (the small engine's slap +30-39 %)
+            if hi > tol && hi > lo + tol && hi < s.seat_z + tol {
+                below = below.max(-lo);
+                spans.push([lo.max(0.0), hi]);
             }
         }
     }
@@ -657,7 +664,10 @@ pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<[f64; 2]> {
         .copied()
         .filter(|b| b[1] < s.seat_z - tol)
         .collect();
-    below_seat.first().or(bands.first()).copied()
+    below_seat
+        .first()
+        .or(bands.first())
+        .map(|&band| (band, below))
 }
 
 /// The crankcase's interface and point inputs.
@@ -697,9 +707,17 @@ pub fn crankcase_sets(
         if let Some(v) = cm.node_sets.get(&name) {
             out.push(found("crankcase", &name, "deck", v.len(), String::new()));
         } else {
-            let [g0, g1] = guide_band(cm, xc, s).ok_or_else(|| {
+            let ([g0, g1], below) = guide_band(cm, xc, s).ok_or_else(|| {
                 fail("crankcase", format!("cylinder {k}: no bore surface at the liner's outer radius {ro:.6} m below the seat (the liner's guide band) around x = {xc:.6} m, y = 0: check that the deck is in the engine frame (a shift or a tilt of the bore axes), or name the set {name}"))
             })?;
+            if below > tol {
+                log::warn!(
+                    "crankcase: cylinder {k}'s guide bore reaches {} mm below the liner's bottom once the crankcase is seated on the liner's flange: coupled over z {}..{} mm only; check that the two decks' flange heights and liner lengths agree",
+                    crate::text::num(below * 1e3),
+                    crate::text::num(g0 * 1e3),
+                    crate::text::num(g1 * 1e3)
+                );
+            }
             let guide = move |p: &[f64; 3]| {
                 (radius_about(p, xc) - ro).abs() < tol && p[2] > g0 - tol && p[2] < g1 + tol
             };

@@ -14,5 +14,7 @@ pub use inputs::*;
 pub use model::*;
 
 /// Version of the ROM layout; part of the cache key (5: matrices stored as ndarray arrays;
-/// 9: residual vectors and residual flexibility from the dropped modes' exact flexibility).
-pub const ROM_FORMAT: u32 = 9;
+/// 9: residual vectors and residual flexibility from the dropped modes' exact flexibility;
+/// 10: a crankcase deck's guide bore reaching below the liner's bottom no longer replaced by
+/// its deck bore, so an engine ROM built from such decks is not read again).
+pub const ROM_FORMAT: u32 = 10;
