@@ -882,3 +882,30 @@ fn regression_a_guide_bore_below_the_liners_bottom_is_not_replaced_by_the_deck_b
         "{err}"
     );
 }
+
+/// Regression (session 79, a sweep of decks against their scene): with both parts from decks,
+/// the scene's liner pilot diameter, flange diameter and flange height are not used, yet a
+/// scene edited in them ran without a word (the results to the bit the same, only the ROM
+/// rebuilt for the new cache key). Each differing key is now warned of, naming both values.
+#[test]
+fn regression_scene_liner_sizes_unused_under_decks_are_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = decks_scene(dir.path());
+    let run = |sets: &[&str]| {
+        let mut args = vec!["rom", scene.to_str().unwrap(), "--no-cache"];
+        // stops after the meshes are read and checked
+        args.extend(["--set", "limits.max_memory_gb=0.01"]);
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        linercav(&args).2
+    };
+    let err = run(&["liner.outer_diameter_mm=140", "liner.flange_height_mm=15"]);
+    assert!(
+        err.contains("outer diameter is 135 mm, the scene's liner.pilot_diameter_mm")
+            && err.contains("flange height is 12 mm, the scene's liner.flange_height_mm 15 mm")
+            && err.contains("the scene's value is not used"),
+        "{err}"
+    );
+    assert!(!run(&[]).contains("is not used"));
+}

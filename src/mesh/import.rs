@@ -224,6 +224,8 @@ pub fn complete_engine(
             check_length(p, &s, &generated_shape)?;
             if crankcase_file.is_none() {
                 check_generated_fit(p, &s, &generated_shape)?;
+            } else {
+                warn_unused_size(p, &s, &generated_shape);
             }
             found.liner_axis = Some(axis);
             found.liner_centre = Some(centre);
@@ -293,7 +295,42 @@ fn check_generated_fit(
     deck: &LinerShape,
     scene: &LinerShape,
 ) -> Result<(), ImportError> {
-    let checks = [
+    match size_mismatches(deck, scene).into_iter().next() {
+        None => Ok(()),
+        Some((key, what, d, s)) => Err(ImportError::Mismatch {
+            path: path.to_path_buf(),
+            key: key.into(),
+            msg: format!(
+                "the liner mesh's {what} is {} mm, the scene's {} mm: the generated crankcase is built to the scene's liner; give the deck's value",
+                crate::text::num(d * 1e3),
+                crate::text::num(s * 1e3)
+            ),
+        }),
+    }
+}
+
+/// A liner deck under a crankcase deck: the scene's pilot diameter, flange diameter and flange
+/// height are not used (the decks hold the parts); each that differs from the deck's by more
+/// than [`FIT_TOLERANCE`] is warned of, naming the key (a scene edited in the belief that it
+/// changes the liner changed nothing but the cache key).
+fn warn_unused_size(path: &Path, deck: &LinerShape, scene: &LinerShape) {
+    for (key, what, d, s) in size_mismatches(deck, scene) {
+        log::warn!(
+            "{}: the liner mesh's {what} is {} mm, the scene's {key} {} mm: the scene's value is not used (both parts come from decks)",
+            path.display(),
+            crate::text::num(d * 1e3),
+            crate::text::num(s * 1e3)
+        );
+    }
+}
+
+/// The liner sizes in which a deck (`deck`) and the scene (`scene`) differ by more than
+/// [`FIT_TOLERANCE`]: (scene key, what, deck's value, scene's value) \[m\].
+fn size_mismatches(
+    deck: &LinerShape,
+    scene: &LinerShape,
+) -> Vec<(&'static str, &'static str, f64, f64)> {
+    let sizes = [
         (
             "liner.pilot_diameter_mm (default liner.outer_diameter_mm)",
             "outer diameter",
@@ -313,20 +350,10 @@ fn check_generated_fit(
             scene.length - scene.seat_z,
         ),
     ];
-    for (key, what, d, s) in checks {
-        if (d - s).abs() > FIT_TOLERANCE * s {
-            return Err(ImportError::Mismatch {
-                path: path.to_path_buf(),
-                key: key.into(),
-                msg: format!(
-                    "the liner mesh's {what} is {} mm, the scene's {} mm: the generated crankcase is built to the scene's liner; give the deck's value",
-                    crate::text::num(d * 1e3),
-                    crate::text::num(s * 1e3)
-                ),
-            });
-        }
-    }
-    Ok(())
+    sizes
+        .into_iter()
+        .filter(|&(_, _, d, s)| (d - s).abs() > FIT_TOLERANCE * s)
+        .collect()
 }
 
 /// Relative difference between a liner deck's dimension and the scene's beyond which they are
