@@ -826,15 +826,7 @@ fn regression_a_mat1_shear_modulus_against_e_and_nu_is_checked() {
 fn regression_a_liner_decks_length_is_checked_under_a_deck_crankcase() {
     let dir = tempfile::tempdir().unwrap();
     let scene = decks_scene(dir.path());
-    let run = |sets: &[&str]| {
-        let mut args = vec!["rom", scene.to_str().unwrap(), "--no-cache"];
-        // stops after the meshes are read and checked
-        args.extend(["--set", "limits.max_memory_gb=0.01"]);
-        for s in sets {
-            args.extend(["--set", s]);
-        }
-        linercav(&args)
-    };
+    let run = |sets: &[&str]| read_and_checked(&scene, sets);
     let (code, _, err) = run(&["liner.length_mm=240"]);
     assert_eq!(code, 2, "{err}");
     assert!(
@@ -891,15 +883,7 @@ fn regression_a_guide_bore_below_the_liners_bottom_is_not_replaced_by_the_deck_b
 fn regression_scene_liner_sizes_unused_under_decks_are_warned_of() {
     let dir = tempfile::tempdir().unwrap();
     let scene = decks_scene(dir.path());
-    let run = |sets: &[&str]| {
-        let mut args = vec!["rom", scene.to_str().unwrap(), "--no-cache"];
-        // stops after the meshes are read and checked
-        args.extend(["--set", "limits.max_memory_gb=0.01"]);
-        for s in sets {
-            args.extend(["--set", s]);
-        }
-        linercav(&args).2
-    };
+    let run = |sets: &[&str]| read_and_checked(&scene, sets).2;
     let err = run(&["liner.outer_diameter_mm=140", "liner.flange_height_mm=15"]);
     assert!(
         err.contains("outer diameter is 135 mm, the scene's liner.pilot_diameter_mm")
@@ -908,4 +892,15 @@ fn regression_scene_liner_sizes_unused_under_decks_are_warned_of() {
         "{err}"
     );
     assert!(!run(&[]).contains("is not used"));
+}
+
+/// `rom SCENE --no-cache` with `sets`, stopped by a tiny memory limit after the meshes are read
+/// and checked: (exit code, stdout, stderr).
+fn read_and_checked(scene: &Path, sets: &[&str]) -> (i32, String, String) {
+    let mut args = vec!["rom", scene.to_str().unwrap(), "--no-cache"];
+    args.extend(["--set", "limits.max_memory_gb=0.01"]);
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    linercav(&args)
 }
