@@ -561,8 +561,7 @@ pub const MAX_STATIC_KPA: f64 = 10_000.0;
 
 /// Largest `rom.cut_enrichment` (shapes added per cut).
 const MAX_CUT_ENRICHMENT: usize = 10_000;
-/// Largest wall-pressure transfer accepted \[Pa per m/s^2\] (`cavitation.k_p_pa_per_m_s2`): at 1000
-/// m/s^2 it would be 1 GPa.
+
 /// Bores accepted \[mm\]: from a model engine's 20 mm to a slow marine engine's ~1 m.
 const BORE_MM: (f64, f64) = (20.0, 1500.0);
 
@@ -588,6 +587,8 @@ const MAX_CONTACT_STIFFNESS: f64 = 1e12;
 const WIEBE_A: (f64, f64) = (1e-3, 50.0);
 const WIEBE_M: (f64, f64) = (0.0, 20.0);
 
+/// Largest wall-pressure transfer accepted \[Pa per m/s^2\] (`cavitation.k_p_pa_per_m_s2`): at 1000
+/// m/s^2 it would be 1 GPa.
 const MAX_K_P: f64 = 1e6;
 
 /// Refuses `v` of `key` above `max` (1e9 mm gaps and 1e12 kPa pressures gave a verdict without
