@@ -904,3 +904,43 @@ fn read_and_checked(scene: &Path, sets: &[&str]) -> (i32, String, String) {
     }
     linercav(&args)
 }
+
+/// Regression (session 79, a sweep of decks against their scene): a crankcase deck of a
+/// 3-cylinder engine moved so that two of its bores sit on a 2-cylinder scene's axes ran with
+/// its third bore empty, exit 0 (points 3-10 % off). An empty bore of the liner's size beyond
+/// the scene's cylinders is now warned of, naming its axis; the deck as written (no extra bore)
+/// gives no such warning.
+#[test]
+fn regression_an_empty_bore_beyond_the_scenes_cylinders_is_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = decks_scene(dir.path());
+    let deck = dir.path().join("three.inp");
+    let (code, _, err) = linercav(&[
+        "export-mesh",
+        SMALL,
+        "--part",
+        "crankcase",
+        "--unit",
+        "mm",
+        "--no-sets",
+        "--set",
+        "engine.cylinders=3",
+        "--set",
+        "engine.firing_order=[1,3,2]",
+        "--out",
+        deck.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // bores at x = -152, 0, 152 mm moved to -76, 76, 228 (the scene's at -76 and 76)
+    let text = std::fs::read_to_string(&deck).unwrap();
+    let text = text.replace("*END INSTANCE", "76.0, 0.0, 0.0\n*END INSTANCE");
+    std::fs::write(&deck, text).unwrap();
+    let err = read_and_checked(&scene, &["crankcase.mesh_file=\"three.inp\""]).2;
+    assert!(
+        err.contains("three.inp: the crankcase has a bore at x = 228 mm beyond the scene's 2 cylinders (bores at x = -76, 76 mm)"),
+        "{err}"
+    );
+    assert!(!read_and_checked(&scene, &[])
+        .2
+        .contains("beyond the scene's"));
+}

@@ -670,6 +670,33 @@ pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<([f64; 2], f64)>
         .map(|&band| (band, below))
 }
 
+/// Bores of a seated crankcase beyond the scene's cylinders (`axis_x`, at least two, their
+/// spacing the pitch): at x_1 - pitch and x_N + pitch, a hole of the liner's outer radius (no
+/// node within r_o - tol of the axis between the liner's bottom and its seat) ringed by the
+/// crankcase (a node on r = r_o there). Returns their axes \[m\]. A deck of a longer engine
+/// set under the scene's two axes ran with its third bore empty, exit 0 (points 3-10 % off).
+pub fn extra_bores(cm: &Mesh, axis_x: &[f64], s: &LinerShape) -> Vec<f64> {
+    let [first, second, ..] = axis_x else {
+        return Vec::new();
+    };
+    let pitch = second - first;
+    let last = axis_x[axis_x.len() - 1];
+    let tol = 0.02 * mesh_size(cm);
+    let along = |p: &&[f64; 3]| p[2] > tol && p[2] < s.seat_z - tol;
+    [first - pitch, last + pitch]
+        .into_iter()
+        .filter(|&xc| {
+            let mut near = cm.nodes.iter().filter(along).map(|p| radius_about(p, xc));
+            let (mut hole, mut wall) = (true, false);
+            for r in &mut near {
+                hole &= r >= s.outer_radius - tol;
+                wall |= (r - s.outer_radius).abs() < tol;
+            }
+            hole && wall
+        })
+        .collect()
+}
+
 /// The crankcase's interface and point inputs.
 pub struct CrankcaseTargets<'a> {
     pub axis_x: &'a [f64],

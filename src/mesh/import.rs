@@ -257,6 +257,20 @@ pub fn complete_engine(
                 }
             })?,
         );
+        for x in find::extra_bores(crankcase, frame.axis_x, &shape) {
+            log::warn!(
+                "{}: the crankcase has a bore at x = {} mm beyond the scene's {} cylinders (bores at x = {} mm): it stays empty, which changes the crankcase's stiffness; check engine.cylinders and the deck",
+                p.display(),
+                crate::text::num(x * 1e3),
+                frame.axis_x.len(),
+                frame
+                    .axis_x
+                    .iter()
+                    .map(|x| crate::text::num(x * 1e3))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
     }
     if let Some(p) = liner_file {
         let guide = find::named_guide_band(crankcase).ok_or_else(|| ImportError::Find {
