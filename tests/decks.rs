@@ -281,20 +281,7 @@ fn regression_close_counterbores_of_a_deck_are_seated() {
     let pitch = "engine.cylinder_pitch_mm=149";
     let text = small_engine_as_decks(dir.path());
     let cc = dir.path().join("crankcase.bdf");
-    let (code, _, err) = linercav(&[
-        "export-mesh",
-        SMALL,
-        "--part",
-        "crankcase",
-        "--unit",
-        "mm",
-        "--no-sets",
-        "--set",
-        pitch,
-        "--out",
-        cc.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
+    export_mm("crankcase", &[pitch], &cc);
     let sp = dir.path().join("engine.toml");
     std::fs::write(&sp, text).unwrap();
     let sp = sp.display().to_string();
@@ -851,21 +838,11 @@ fn regression_a_liner_decks_length_is_checked_under_a_deck_crankcase() {
 fn regression_a_guide_bore_below_the_liners_bottom_is_not_replaced_by_the_deck_bore() {
     let dir = tempfile::tempdir().unwrap();
     let scene = decks_scene(dir.path());
-    let liner = dir.path().join("liner.inp");
-    let (code, _, err) = linercav(&[
-        "export-mesh",
-        SMALL,
-        "--part",
+    export_mm(
         "liner",
-        "--unit",
-        "mm",
-        "--no-sets",
-        "--set",
-        "liner.flange_height_mm=15",
-        "--out",
-        liner.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
+        &["liner.flange_height_mm=15"],
+        &dir.path().join("liner.inp"),
+    );
     let (code, _, err) = linercav(&["rom", scene.to_str().unwrap(), "--no-cache"]);
     assert_eq!(code, 2, "{err}");
     assert!(
@@ -915,22 +892,11 @@ fn regression_an_empty_bore_beyond_the_scenes_cylinders_is_warned_of() {
     let dir = tempfile::tempdir().unwrap();
     let scene = decks_scene(dir.path());
     let deck = dir.path().join("three.inp");
-    let (code, _, err) = linercav(&[
-        "export-mesh",
-        SMALL,
-        "--part",
+    export_mm(
         "crankcase",
-        "--unit",
-        "mm",
-        "--no-sets",
-        "--set",
-        "engine.cylinders=3",
-        "--set",
-        "engine.firing_order=[1,3,2]",
-        "--out",
-        deck.to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
+        &["engine.cylinders=3", "engine.firing_order=[1,3,2]"],
+        &deck,
+    );
     // bores at x = -152, 0, 152 mm moved to -76, 76, 228 (the scene's at -76 and 76)
     let text = std::fs::read_to_string(&deck).unwrap();
     let text = text.replace("*END INSTANCE", "76.0, 0.0, 0.0\n*END INSTANCE");
@@ -943,4 +909,23 @@ fn regression_an_empty_bore_beyond_the_scenes_cylinders_is_warned_of() {
     assert!(!read_and_checked(&scene, &[])
         .2
         .contains("beyond the scene's"));
+}
+
+/// `export-mesh SMALL --part PART --unit mm --no-sets` with `sets` to `out`, which must succeed.
+fn export_mm(part: &str, sets: &[&str], out: &Path) {
+    let mut args = vec![
+        "export-mesh",
+        SMALL,
+        "--part",
+        part,
+        "--unit",
+        "mm",
+        "--no-sets",
+    ];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    args.extend(["--out", out.to_str().unwrap()]);
+    let (code, _, err) = linercav(&args);
+    assert_eq!(code, 0, "{err}");
 }

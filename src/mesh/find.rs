@@ -686,12 +686,17 @@ pub fn extra_bores(cm: &Mesh, axis_x: &[f64], s: &LinerShape) -> Vec<f64> {
     [first - pitch, last + pitch]
         .into_iter()
         .filter(|&xc| {
-            let mut near = cm.nodes.iter().filter(along).map(|p| radius_about(p, xc));
-            let (mut hole, mut wall) = (true, false);
-            for r in &mut near {
-                hole &= r >= s.outer_radius - tol;
-                wall |= (r - s.outer_radius).abs() < tol;
-            }
+            let (hole, wall) = cm
+                .nodes
+                .iter()
+                .filter(along)
+                .map(|p| radius_about(p, xc))
+                .fold((true, false), |(hole, wall), r| {
+                    (
+                        hole && r >= s.outer_radius - tol,
+                        wall || (r - s.outer_radius).abs() < tol,
+                    )
+                });
             hole && wall
         })
         .collect()
