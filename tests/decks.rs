@@ -13,9 +13,10 @@ use linercav::scene::{CrankcaseSource, MeshSource};
 use std::path::Path;
 
 /// The default engine's generated liner and crankcase (with the generator's sets) and the
-/// scene's frame data.
-fn default_meshes() -> (Mesh, Mesh, LinerShape, Vec<f64>, Vec<f64>, f64) {
-    let scene = load_scene(Path::new("models/engine.toml"), &[]).unwrap();
+/// scene's frame data, the scene's keys set by `sets` (KEY=VALUE).
+fn default_meshes(sets: &[&str]) -> (Mesh, Mesh, LinerShape, Vec<f64>, Vec<f64>, f64) {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let scene = load_scene(Path::new("models/engine.toml"), &sets).unwrap();
     let MeshSource::Liner { geometry, meshing } = &scene.liner.source else {
         panic!("the default liner is parametric")
     };
@@ -54,7 +55,22 @@ fn generated_crankcase(scene: &linercav::scene::Scene) -> Mesh {
 /// by a ring of nodes would be a wrong tolerance or band).
 #[test]
 fn verification_found_sets_equal_the_generators() {
-    let (lm0, cm0, shape0, axis_x, depths, bore) = default_meshes();
+    found_sets_equal_the_generators(&[]);
+}
+
+/// Verification: as above for a stepped liner, its guide band and deck bore on a pilot
+/// diameter 3 mm above the wet wall's (`liner.pilot_diameter_mm = 146`, wet wall 143 mm,
+/// flange 148 mm), as real wet liners are made. Such a deck was refused with a nonsense
+/// measure ("flange height is 260 mm": the pilots were taken for the flange) and no guide.
+#[test]
+fn verification_found_sets_of_a_stepped_liner_equal_the_generators() {
+    found_sets_equal_the_generators(&["liner.pilot_diameter_mm=146"]);
+}
+
+/// The default engine with `sets`, moved out of its frames and stripped of its sets: the
+/// found sets must be the generator's, node for node (see above).
+fn found_sets_equal_the_generators(sets: &[&str]) {
+    let (lm0, cm0, shape0, axis_x, depths, bore) = default_meshes(sets);
     let mut lm = lm0.clone();
     lm.node_sets.clear();
     // liner axis z -> -x: (x, y, z) -> (-z, y, x) about the origin, then translated
@@ -87,6 +103,7 @@ fn verification_found_sets_equal_the_generators() {
         (s.inner_radius, shape0.inner_radius),
         (s.outer_radius, shape0.outer_radius),
         (s.flange_radius, shape0.flange_radius),
+        (s.pilot_radius, shape0.pilot_radius),
         (s.length, shape0.length),
         (s.seat_z, shape0.seat_z),
     ] {
@@ -267,6 +284,50 @@ fn verification_small_engine_as_mm_decks_gives_the_parametric_frequencies() {
     // the liner instance was moved by (100, 50, 300) mm: placing it back is what the equal
     // frequencies above show; the generated engine reports nothing found
     assert!(param["interfaces"].is_null());
+}
+
+/// Verification: the small engine with a stepped liner (`liner.pilot_diameter_mm = 140`: guide
+/// band and deck bore 2.5 mm proud of the 135 mm wet wall), both parts taken out as mm decks
+/// and read back, gives the parametric engine's system frequencies within 1e-6 (the bound and
+/// its reason as in the plain decks' verification above). Before, the deck was refused with a
+/// flange "260 mm" high (the pilots taken for the flange) and no guide bore found.
+#[test]
+fn verification_a_stepped_liner_as_mm_decks_gives_the_parametric_frequencies() {
+    let dir = tempfile::tempdir().unwrap();
+    let sp = decks_scene(dir.path());
+    let pilot = "liner.pilot_diameter_mm=140";
+    export_mm("liner", &[pilot], &dir.path().join("liner.inp"));
+    export_mm("crankcase", &[pilot], &dir.path().join("crankcase.inp"));
+    let sp = sp.display().to_string();
+    let param = json(&linercav_output(&[
+        "rom",
+        SMALL,
+        "--json",
+        "--no-cache",
+        "--set",
+        pilot,
+    ]));
+    let decks = json(&linercav_output(&[
+        "rom",
+        &sp,
+        "--json",
+        "--no-cache",
+        "--set",
+        "crankcase.mesh_file=\"crankcase.inp\"",
+        "--set",
+        pilot,
+    ]));
+    let (a, b) = (frequencies(&param), frequencies(&decks));
+    assert_eq!(a.len(), b.len());
+    for (k, (fa, fb)) in a.iter().zip(&b).enumerate() {
+        assert!(
+            (fa - fb).abs() <= 1e-6 * fa,
+            "mode {k}: {fa} Hz parametric, {fb} Hz decks"
+        );
+    }
+    let liner = &decks["interfaces"]["liner"];
+    assert!((liner["pilot_radius"].as_f64().unwrap() - 0.070).abs() < 1e-9);
+    assert!((liner["outer_radius"].as_f64().unwrap() - 0.0675).abs() < 1e-9);
 }
 
 /// Regression: the small engine with its bores 149 mm apart (the 148 mm flanges' counterbores
@@ -863,7 +924,7 @@ fn regression_scene_liner_sizes_unused_under_decks_are_warned_of() {
     let run = |sets: &[&str]| read_and_checked(&scene, sets).2;
     let err = run(&["liner.outer_diameter_mm=140", "liner.flange_height_mm=15"]);
     assert!(
-        err.contains("outer diameter is 135 mm, the scene's liner.pilot_diameter_mm")
+        err.contains("pilot diameter is 135 mm, the scene's liner.pilot_diameter_mm")
             && err.contains("flange height is 12 mm, the scene's liner.flange_height_mm 15 mm")
             && err.contains("the scene's value is not used"),
         "{err}"

@@ -191,9 +191,10 @@ pub fn interfaces_text(f: &crate::mesh::find::FoundInterfaces) -> String {
     if let Some(l) = &f.liner {
         let _ = writeln!(
             s,
-            "    liner     bore r {:.3} mm, outer r {:.3} mm, flange r {:.3} mm, length {:.3} mm, seat at {:.3} mm",
+            "    liner     bore r {:.3} mm, outer r {:.3} mm, pilot r {:.3} mm, flange r {:.3} mm, length {:.3} mm, seat at {:.3} mm",
             l.inner_radius * 1e3,
             l.outer_radius * 1e3,
+            l.pilot_radius * 1e3,
             l.flange_radius * 1e3,
             l.length * 1e3,
             l.seat_z * 1e3

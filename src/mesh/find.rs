@@ -13,14 +13,19 @@
 //! circle (Kasa fit: x^2 + y^2 = 2 a x + 2 b y + c) through the bore's nodes; its top the end
 //! with the larger radius (the flange). The mesh is moved rigidly into the liner's frame:
 //! p' = R (p - c) - z_min e_z, with R the smallest rotation taking the axis to +z.
-//! Radii: bore r_i = min r, outer wall r_o = max r over the middle 40 % of the length, flange
-//! r_f = max r; the flange underside z_s = min z of the nodes with r > r_o + tol.
+//! Radii from the outer surface (boundary faces facing away from the axis, [`outer_surface`])
+//! as a profile of heights, each its largest radius: the flange is the top run of heights each
+//! wider than every height below it; the pilot r_p is the largest radius below the flange (the
+//! guide band's and deck bore's on a stepped liner); the wet wall r_o is the radius over the
+//! greatest height below the flange (r_p = r_o on a plain tube); bore r_i = min r, flange
+//! r_f = max r; the flange underside z_s = min z of the nodes with r > r_p + tol.
 //!
 //! The crankcase ([`seat_crankcase`]): each bore's counterbore floor is the highest crankcase
 //! node in the annulus r_o - tol <= r <= r_f - tol around the bore axis; the crankcase is moved
 //! along z so that cylinder 1's floor meets the liner's flange underside. The guide band is the
-//! lowest z-band of the crankcase's bore surface r = r_o (element faces with at least three
-//! corners on it) below the seat; the band that meets the seat (a deck bore) is not coupled.
+//! lowest z-band of the crankcase's bore surface r_o <= r <= r_p (element faces with at least
+//! three corners there, [`LinerShape::holds`]) below the seat; the band that meets the seat (a
+//! deck bore) is not coupled.
 //!
 //! Tolerance: tol = 0.02 h, h the median element edge of the part (its local mesh size): well
 //! below a coolant gap and a wall, well above the roundoff of a deck's coordinates.
@@ -56,6 +61,15 @@ pub struct LinerShape {
     pub seat_z: f64,
     /// Tolerance of the liner's surfaces (0.02 of its median element edge).
     pub tol: f64,
+}
+
+impl LinerShape {
+    /// Whether a crankcase surface at radius `r` about a bore axis can hold the liner there:
+    /// r within `tol` of [r_o, r_p], the wet wall to the pilot (a stepped liner's guide band
+    /// and deck bore are at its pilot radii, a plain tube's at r_o).
+    pub fn holds(&self, r: f64, tol: f64) -> bool {
+        r > self.outer_radius - tol && r < self.pilot_radius + tol
+    }
 }
 
 /// How a set came to be: named in the deck, found from the geometry, or a scene box.
@@ -264,40 +278,181 @@ fn measure_liner(mesh: &Mesh, tol: f64) -> Result<LinerShape, FindError> {
     let r = |p: &[f64; 3]| p[0].hypot(p[1]);
     let length = mesh.nodes.iter().map(|p| p[2]).fold(0.0, f64::max);
     let inner = mesh.nodes.iter().map(r).fold(f64::INFINITY, f64::min);
-    let outer = mesh
+    // the middle's largest radius: the wet wall, or a pilot there; it only splits the bore's
+    // faces from the outer ones
+    let middle = mesh
         .nodes
         .iter()
         .filter(|p| p[2] > 0.3 * length && p[2] < 0.7 * length)
         .map(r)
         .fold(0.0, f64::max);
     let flange = mesh.nodes.iter().map(r).fold(0.0, f64::max);
-    if !(inner > 0.0 && outer > inner + tol) {
+    if !(inner > 0.0 && middle > inner + tol) {
         return Err(fail(
             "liner",
-            format!("no tube found: bore radius {inner:.6} m, outer radius {outer:.6} m"),
+            format!("no tube found: bore radius {inner:.6} m, outer radius {middle:.6} m"),
         ));
     }
+    let no_flange = || {
+        fail(
+            "liner",
+            "no top flange found (no node outside the wall's outer radius): name the set 'flange_seat' in the deck".into(),
+        )
+    };
+    let surface = outer_surface(mesh, 0.5 * (inner + middle));
+    let levels = surface_levels(mesh, &surface, tol);
+    let (wall, pilot) = below_flange(&levels, tol).ok_or_else(no_flange)?;
     let seat_z = mesh
         .nodes
         .iter()
-        .filter(|p| r(p) > outer + tol)
+        .filter(|p| r(p) > pilot + tol)
         .map(|p| p[2])
         .fold(f64::INFINITY, f64::min);
-    if flange <= outer + tol || !seat_z.is_finite() {
-        return Err(fail(
-            "liner",
-            "no top flange found (no node outside the wall's outer radius): name the set 'flange_seat' in the deck".into(),
-        ));
+    if flange <= pilot + tol || !seat_z.is_finite() {
+        return Err(no_flange());
     }
     Ok(LinerShape {
         inner_radius: inner,
-        outer_radius: outer,
+        outer_radius: wall,
         flange_radius: flange,
-        pilot_radius: outer,
+        pilot_radius: pilot,
         length,
         seat_z,
         tol,
     })
+}
+
+/// The nodes on the liner's outer surface (own frame): those of boundary faces (faces of one
+/// element only) that face away from the axis, |n . e_r| >= |n| / 2 at the face's centre,
+/// with the centre beyond `mid` (the wall's middle radius: the bore's faces are not taken),
+/// mid-edge nodes of quadratic faces included. A stepped liner's pilots, its tapers and its
+/// flange rim are on it, its flange and shoulder faces (normal along z) are not.
+fn outer_surface(mesh: &Mesh, mid: f64) -> Vec<bool> {
+    let mut count: std::collections::HashMap<Vec<usize>, u32> = std::collections::HashMap::new();
+    for (kind, el) in mesh.elements() {
+        for &face in kind.faces() {
+            let mut key: Vec<usize> = face.iter().map(|&a| el[a]).collect();
+            key.sort_unstable();
+            *count.entry(key).or_default() += 1;
+        }
+    }
+    let mut on = vec![false; mesh.nodes.len()];
+    for (kind, el) in mesh.elements() {
+        for &face in kind.faces() {
+            let c: Vec<[f64; 3]> = face.iter().map(|&a| mesh.nodes[el[a]]).collect();
+            let mut key: Vec<usize> = face.iter().map(|&a| el[a]).collect();
+            key.sort_unstable();
+            if count[&key] != 1 || !faces_out(&c, mid) {
+                continue;
+            }
+            for &a in face {
+                on[el[a]] = true;
+            }
+            for (k, &(a, b)) in kind.mid_edges().iter().enumerate() {
+                if face.contains(&a) && face.contains(&b) {
+                    on[el[kind.num_corners() + k]] = true;
+                }
+            }
+        }
+    }
+    on
+}
+
+/// The liner's outer wall below its flange (`s`, own frame): the [`outer_surface`] nodes
+/// within the pilot radius and at most the seat's height (wet wall, pilots, tapers).
+fn wall_surface(mesh: &Mesh, s: &LinerShape) -> Vec<bool> {
+    let mid = 0.5 * (s.inner_radius + s.outer_radius);
+    let mut on = outer_surface(mesh, mid);
+    for (n, p) in mesh.nodes.iter().enumerate() {
+        on[n] &= p[0].hypot(p[1]) < s.pilot_radius + s.tol && p[2] < s.seat_z + s.tol;
+    }
+    on
+}
+
+/// Whether a face (its corners) faces away from the z axis: its normal n (the cross product
+/// of its diagonals, or of two edges of a triangle) has |n . e_r| >= |n| / 2 at its centre,
+/// and the centre lies beyond the radius `mid`.
+fn faces_out(c: &[[f64; 3]], mid: f64) -> bool {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let (u, v) = match c {
+        [a, b, d] => (sub(*b, *a), sub(*d, *a)),
+        [a, b, d, e] => (sub(*d, *a), sub(*e, *b)),
+        _ => return false,
+    };
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let k = c.len() as f64;
+    let m = [0, 1].map(|i| c.iter().map(|p| p[i]).sum::<f64>() / k);
+    let rm = m[0].hypot(m[1]);
+    let nr = (n[0] * m[0] + n[1] * m[1]) / rm.max(f64::MIN_POSITIVE);
+    let nn = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    rm > mid && nr.abs() >= 0.5 * nn && nn > 0.0
+}
+
+/// The heights of the liner's outer surface (`surface`), bottom to top: [z, r], the nodes
+/// within `tol` in z one level, its radius the largest there.
+fn surface_levels(mesh: &Mesh, surface: &[bool], tol: f64) -> Vec<[f64; 2]> {
+    let mut pts: Vec<[f64; 2]> = (0..mesh.nodes.len())
+        .filter(|&n| surface[n])
+        .map(|n| {
+            let p = mesh.nodes[n];
+            [p[2], p[0].hypot(p[1])]
+        })
+        .collect();
+    pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    let mut levels: Vec<[f64; 2]> = Vec::new();
+    for [z, r] in pts {
+        match levels.last_mut() {
+            Some(l) if z - l[0] < tol => l[1] = l[1].max(r),
+            _ => levels.push([z, r]),
+        }
+    }
+    levels
+}
+
+/// The wet wall's radius r_o and the largest radius r_p below the flange (the pilot of a
+/// stepped liner, r_o on a plain tube), from the outer surface's `levels`. The flange is the
+/// top run of levels each wider, by more than `tol`, than every level below it. The wet wall
+/// is the radius (within `tol`) over the greatest height below the flange: each level
+/// counts half of the gaps to its neighbours. None: no flange.
+fn below_flange(levels: &[[f64; 2]], tol: f64) -> Option<(f64, f64)> {
+    let mut above = vec![f64::INFINITY; levels.len() + 1];
+    for i in (0..levels.len()).rev() {
+        above[i] = above[i + 1].min(levels[i][1]);
+    }
+    // widest[i]: the largest radius of the levels below level i
+    let mut widest = vec![f64::NEG_INFINITY; levels.len() + 1];
+    for i in 0..levels.len() {
+        widest[i + 1] = widest[i].max(levels[i][1]);
+    }
+    let seat = (1..levels.len()).find(|&i| above[i] > widest[i] + tol)?;
+    let pilot = widest[seat];
+    let mut heights: Vec<[f64; 2]> = (0..seat)
+        .map(|i| {
+            let lo = levels[i.saturating_sub(1)][0];
+            let hi = levels[i + 1][0];
+            [levels[i][1], 0.5 * (hi - lo)]
+        })
+        .collect();
+    heights.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    let mut best = [0.0, f64::NEG_INFINITY];
+    let mut k = 0;
+    while k < heights.len() {
+        let group: Vec<[f64; 2]> = heights[k..]
+            .iter()
+            .take_while(|h| h[0] < heights[k][0] + tol)
+            .copied()
+            .collect();
+        let height: f64 = group.iter().map(|h| h[1]).sum();
+        if height > best[1] {
+            best = [group[group.len() - 1][0], height];
+        }
+        k += group.len();
+    }
+    Some((best[0], pilot))
 }
 
 /// The analysis-point and band inputs of the liner's sets.
@@ -313,16 +468,17 @@ pub struct LinerTargets<'a> {
 pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<FoundSet> {
     let tol = s.tol;
     let r = |p: &[f64; 3]| p[0].hypot(p[1]);
-    let on_outer = |p: &[f64; 3]| (r(p) - s.outer_radius).abs() < tol;
+    let outer = wall_surface(mesh, s);
+    let on_outer = |n: usize| outer[n];
     let thrust = |p: &[f64; 3], sign: f64| p[0].abs() < tol && sign * p[1] > 0.0;
     let [g0, g1] = t.guide;
     let pi = std::f64::consts::PI;
     let (ro, rf) = (s.outer_radius, s.flange_radius);
-    type Pred<'p> = Box<dyn Fn(&[f64; 3]) -> bool + 'p>;
+    type Pred<'p> = Box<dyn Fn(usize, &[f64; 3]) -> bool + 'p>;
     let rules: Vec<(String, Pred<'_>, String)> = vec![
         (
             "flange_seat".into(),
-            Box::new(|p| (p[2] - s.seat_z).abs() < tol && r(p) > ro - tol),
+            Box::new(|_, p| (p[2] - s.seat_z).abs() < tol && r(p) > ro - tol),
             format!(
                 "z = {:.6} m, r {:.6}..{:.6} m, area {:.4e} m^2",
                 s.seat_z,
@@ -333,12 +489,12 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
         ),
         (
             "flange_top".into(),
-            Box::new(|p| (p[2] - s.length).abs() < tol && r(p) > ro - tol),
+            Box::new(|_, p| (p[2] - s.length).abs() < tol && r(p) > ro - tol),
             format!("z = {:.6} m", s.length),
         ),
         (
             "lower_guide".into(),
-            Box::new(move |p| on_outer(p) && p[2] > g0 - tol && p[2] < g1 + tol),
+            Box::new(move |n, p| on_outer(n) && p[2] > g0 - tol && p[2] < g1 + tol),
             format!(
                 "r = {ro:.6} m, z {g0:.6}..{g1:.6} m, area {:.4e} m^2",
                 2.0 * pi * ro * (g1 - g0)
@@ -346,22 +502,22 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
         ),
         (
             "bore_thrust".into(),
-            Box::new(|p| (r(p) - s.inner_radius).abs() < tol && thrust(p, 1.0)),
+            Box::new(|_, p| (r(p) - s.inner_radius).abs() < tol && thrust(p, 1.0)),
             format!("r = {:.6} m, +y", s.inner_radius),
         ),
         (
             "bore_antithrust".into(),
-            Box::new(|p| (r(p) - s.inner_radius).abs() < tol && thrust(p, -1.0)),
+            Box::new(|_, p| (r(p) - s.inner_radius).abs() < tol && thrust(p, -1.0)),
             format!("r = {:.6} m, -y", s.inner_radius),
         ),
         (
             "outer_thrust".into(),
-            Box::new(|p| on_outer(p) && thrust(p, 1.0) && p[2] < s.seat_z + tol),
+            Box::new(|n, p| on_outer(n) && thrust(p, 1.0)),
             format!("r = {ro:.6} m, +y, z <= {:.6} m", s.seat_z),
         ),
         (
             super::liner::COOLANT_WETTED.into(),
-            Box::new(move |p| on_outer(p) && p[2] > g1 - tol && p[2] < s.seat_z + tol),
+            Box::new(move |n, p| on_outer(n) && p[2] > g1 - tol),
             format!(
                 "r = {ro:.6} m, z {g1:.6}..{:.6} m, area {:.4e} m^2",
                 s.seat_z,
@@ -376,15 +532,20 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
     for (k, &d) in t.depths.iter().enumerate() {
         let target = [0.0, ro, s.length - d];
         let name = format!("point_{}", k + 1);
-        out.push(add_point(mesh, "liner", &name, target, &|p| on_outer(p)));
+        out.push(add_point(mesh, "liner", &name, target, &|n, _| on_outer(n)));
     }
     let h = s.tol / 0.02;
-    for (name, radius, sign) in [
-        ("bore_thrust", s.inner_radius, 1.0),
-        ("bore_antithrust", s.inner_radius, -1.0),
-        ("outer_thrust", s.outer_radius, 1.0),
+    let on_bore = |_: usize, p: &[f64; 3]| (r(p) - s.inner_radius).abs() < tol;
+    for (name, on, sign) in [
+        (
+            "bore_thrust",
+            &on_bore as &dyn Fn(usize, &[f64; 3]) -> bool,
+            1.0,
+        ),
+        ("bore_antithrust", &on_bore, -1.0),
+        ("outer_thrust", &|n, _| on_outer(n), 1.0),
     ] {
-        widen_line(mesh, &mut out, name, radius, sign, h, s);
+        widen_line(mesh, &mut out, name, on, sign, h);
     }
     for name in ["bore_thrust", "bore_antithrust", "outer_thrust"] {
         let nodes = &mesh.nodes;
@@ -442,7 +603,12 @@ pub fn check_liner_deck_sets(
         let nodes = mesh.node_sets.get(name).map_or(&[][..], |v| &v[..]);
         if let Some(&n) = nodes.iter().find(|&&n| {
             let p = &mesh.nodes[n];
-            (r(p) - radius).abs() >= tol || sign * p[1] <= 0.0
+            let off = if name == "outer_thrust" {
+                !s.holds(r(p), tol)
+            } else {
+                (r(p) - radius).abs() >= tol
+            };
+            off || sign * p[1] <= 0.0
         }) {
             return Err(fail("liner", format!("the deck's set '{name}' must lie on {what} at r = {radius:.6} m in the liner's frame (its own x, y; thrust side +y): {} is not there; name the sets for this frame", at(n))));
         }
@@ -480,10 +646,9 @@ fn widen_line(
     mesh: &mut Mesh,
     out: &mut [FoundSet],
     name: &str,
-    radius: f64,
+    on: &dyn Fn(usize, &[f64; 3]) -> bool,
     sign: f64,
     h: f64,
-    s: &LinerShape,
 ) {
     let Some(f) = out
         .iter_mut()
@@ -497,10 +662,7 @@ fn widen_line(
     let mut cand: Vec<usize> = (0..mesh.nodes.len())
         .filter(|&n| {
             let p = mesh.nodes[n];
-            (p[0].hypot(p[1]) - radius).abs() < s.tol
-                && p[0].abs() < 0.5 * h
-                && sign * p[1] > 0.0
-                && (name != "outer_thrust" || p[2] < s.seat_z + s.tol)
+            on(n, &p) && p[0].abs() < 0.5 * h && sign * p[1] > 0.0
         })
         .collect();
     cand.sort_by(|&a, &b| mesh.nodes[a][2].total_cmp(&mesh.nodes[b][2]));
@@ -525,14 +687,14 @@ fn add_set(
     mesh: &mut Mesh,
     part: &str,
     name: &str,
-    pred: &dyn Fn(&[f64; 3]) -> bool,
+    pred: &dyn Fn(usize, &[f64; 3]) -> bool,
     detail: String,
 ) -> FoundSet {
     if let Some(v) = mesh.node_sets.get(name) {
         return found(part, name, "deck", v.len(), String::new());
     }
     let nodes: Vec<usize> = (0..mesh.nodes.len())
-        .filter(|&n| pred(&mesh.nodes[n]))
+        .filter(|&n| pred(n, &mesh.nodes[n]))
         .collect();
     let count = nodes.len();
     mesh.node_sets.insert(name.into(), nodes);
@@ -545,13 +707,13 @@ fn add_point(
     part: &str,
     name: &str,
     target: [f64; 3],
-    pred: &dyn Fn(&[f64; 3]) -> bool,
+    pred: &dyn Fn(usize, &[f64; 3]) -> bool,
 ) -> FoundSet {
     if let Some(v) = mesh.node_sets.get(name) {
         return found(part, name, "deck", v.len(), String::new());
     }
     let best = (0..mesh.nodes.len())
-        .filter(|&n| pred(&mesh.nodes[n]))
+        .filter(|&n| pred(n, &mesh.nodes[n]))
         .map(|n| (dist(&mesh.nodes[n], &target), n))
         .min_by(|a, b| a.0.total_cmp(&b.0));
     match best {
@@ -635,7 +797,7 @@ pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<([f64; 2], f64)>
         let on: Vec<f64> = nodes[..kind.num_corners()]
             .iter()
             .map(|&n| cm.nodes[n])
-            .filter(|p| (radius_about(p, xc) - s.outer_radius).abs() < tol)
+            .filter(|p| s.holds(radius_about(p, xc), tol))
             .map(|p| p[2])
             .collect();
         if on.len() >= 3 {
@@ -692,10 +854,7 @@ pub fn extra_bores(cm: &Mesh, axis_x: &[f64], s: &LinerShape) -> Vec<f64> {
                 .filter(along)
                 .map(|p| radius_about(p, xc))
                 .fold((true, false), |(hole, wall), r| {
-                    (
-                        hole && r >= s.outer_radius - tol,
-                        wall || (r - s.outer_radius).abs() < tol,
-                    )
+                    (hole && r >= s.outer_radius - tol, wall || s.holds(r, tol))
                 });
             hole && wall
         })
@@ -727,7 +886,7 @@ pub fn crankcase_sets(
         // floor's plane keeps the mesh tolerance: a node off it is found and then refused by
         // that check, naming it, rather than left out of the seat without a word.
         let rim = rf + tol.min(1e-4 * rf);
-        let seat = move |p: &[f64; 3]| (p[2] - zs).abs() < tol && radius_about(p, xc) <= rim;
+        let seat = move |_, p: &[f64; 3]| (p[2] - zs).abs() < tol && radius_about(p, xc) <= rim;
         out.push(add_set(
             cm,
             "crankcase",
@@ -750,8 +909,8 @@ pub fn crankcase_sets(
                     crate::text::num(g1 * 1e3)
                 );
             }
-            let guide = move |p: &[f64; 3]| {
-                (radius_about(p, xc) - ro).abs() < tol && p[2] > g0 - tol && p[2] < g1 + tol
+            let guide = move |_, p: &[f64; 3]| {
+                s.holds(radius_about(p, xc), tol) && p[2] > g0 - tol && p[2] < g1 + tol
             };
             out.push(add_set(
                 cm,
@@ -763,7 +922,7 @@ pub fn crankcase_sets(
         }
         for (j, &z) in t.analysis_z.iter().enumerate() {
             let name = format!("point_{k}_{}", j + 1);
-            let beyond = move |p: &[f64; 3]| p[1] > ro + tol;
+            let beyond = move |_, p: &[f64; 3]| p[1] > ro + tol;
             out.push(add_point(cm, "crankcase", &name, [xc, ro, z], &beyond));
         }
     }
@@ -772,7 +931,7 @@ pub fn crankcase_sets(
         cm,
         "crankcase",
         "deck_top",
-        &|p| (p[2] - zs).abs() < tol,
+        &|_, p| (p[2] - zs).abs() < tol,
         format!("z = {zs:.6} m"),
     ));
     Ok(out)

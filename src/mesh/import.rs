@@ -347,8 +347,8 @@ fn size_mismatches(
     let sizes = [
         (
             "liner.pilot_diameter_mm (default liner.outer_diameter_mm)",
-            "outer diameter",
-            2.0 * deck.outer_radius,
+            "pilot diameter",
+            2.0 * deck.pilot_radius,
             2.0 * scene.pilot_radius,
         ),
         (
