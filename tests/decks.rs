@@ -972,6 +972,48 @@ fn regression_an_empty_bore_beyond_the_scenes_cylinders_is_warned_of() {
         .contains("beyond the scene's"));
 }
 
+/// Regression (session 79's deck sweep): a crankcase deck whose deck plate is 60 mm thick
+/// (the scene's `crankcase.deck_thickness_mm` 20 mm) put analysis point 1, 40 mm below the
+/// liner top, inside the plate, exit 0: its response was reported as a coolant-side one. The
+/// coolant zone is now taken from the deck (the plate's bore against the guide band) and
+/// such a point refused, naming the point, the depth keys and the zone.
+#[test]
+fn regression_an_analysis_point_inside_a_crankcase_decks_plate_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = decks_scene(dir.path());
+    let deck = dir.path().join("thick.inp");
+    export_mm(
+        "crankcase",
+        &[
+            "crankcase.deck_thickness_mm=60",
+            "liner.analysis_first_depth_mm=80",
+        ],
+        &deck,
+    );
+    let (code, _, err) = read_and_checked(&scene, &["crankcase.mesh_file=\"thick.inp\""]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("thick.inp")
+            && err.contains(
+                "analysis point 1 (40 mm below the liner top: liner.analysis_first_depth_mm"
+            )
+            && err.contains("inside the crankcase's deck plate")
+            && err.contains("72..230 mm below the liner top"),
+        "{err}"
+    );
+    // the same deck with the points in its coolant zone passes this check (and stops at the
+    // memory limit)
+    let err = read_and_checked(
+        &scene,
+        &[
+            "crankcase.mesh_file=\"thick.inp\"",
+            "liner.analysis_first_depth_mm=80",
+        ],
+    )
+    .2;
+    assert!(err.contains("limits.max_memory_gb"), "{err}");
+}
+
 /// `export-mesh SMALL --part PART --unit mm --no-sets` with `sets` to `out`, which must succeed.
 fn export_mm(part: &str, sets: &[&str], out: &Path) {
     let mut args = vec![

@@ -785,12 +785,28 @@ pub fn seat_crankcase(cm: &mut Mesh, axis_x: &[f64], s: &LinerShape) -> Result<f
     Ok(shift)
 }
 
-/// The guide band [z0, z1] of the bore at `xc`: the lowest z-band of crankcase element faces on
-/// the liner's outer radius between the liner's bottom and its seat (module docs), the faces
-/// cut at the liner's bottom z = 0.
-/// Also returns how far the bore's faces reach below the liner's bottom \[m\] (<= 0: none).
+/// The guide band [z0, z1] of the bore at `xc`: the lowest of its [`bore_bands`] below the
+/// seat (module docs). Also returns how far the bore's faces reach below the liner's bottom
+/// \[m\] (<= 0: none).
 pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<([f64; 2], f64)> {
     let tol = 0.02 * mesh_size(cm);
+    let (bands, below) = bore_bands(cm, xc, s, tol);
+    let below_seat: Vec<[f64; 2]> = bands
+        .iter()
+        .copied()
+        .filter(|b| b[1] < s.seat_z - tol)
+        .collect();
+    below_seat
+        .first()
+        .or(bands.first())
+        .map(|&band| (band, below))
+}
+
+/// The z-bands [z0, z1], bottom to top, where the crankcase's bore at `xc` holds the liner:
+/// element faces with at least three corners in r_o <= r <= r_p ([`LinerShape::holds`])
+/// between the liner's bottom and its seat, merged where they meet, cut at the liner's bottom
+/// z = 0. Also returns how far those faces reach below the liner's bottom \[m\] (<= 0: none).
+fn bore_bands(cm: &Mesh, xc: f64, s: &LinerShape, tol: f64) -> (Vec<[f64; 2]>, f64) {
     let mut spans: Vec<[f64; 2]> = Vec::new();
     let mut below = f64::NEG_INFINITY;
     for (kind, nodes) in cm.elements() {
@@ -821,15 +837,53 @@ pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<([f64; 2], f64)>
             _ => bands.push(sp),
         }
     }
-    let below_seat: Vec<[f64; 2]> = bands
+    (bands, below)
+}
+
+/// Checks that cylinder `k`'s analysis heights (`analysis_z`, liner frame) lie in its coolant
+/// zone: above its guide set's top and below the underside of the deck plate's bore (the
+/// lowest z of the [`bore_bands`] band that meets the seat, when the bore at `xc` has one).
+/// The scene's checks use its own `crankcase.deck_thickness_mm` and guide keys, which a
+/// crankcase deck does not follow: a deck plate 40 mm thicker put point 1 inside the plate, a
+/// wall no coolant wets (its response reported as if it were, exit 0).
+fn check_coolant_zone(
+    cm: &Mesh,
+    (k, xc): (usize, f64),
+    s: &LinerShape,
+    analysis_z: &[f64],
+    tol: f64,
+) -> Result<(), FindError> {
+    let guide = cm.node_set(&format!("guide_{k}")).unwrap_or(&[]);
+    let guide_top = guide
         .iter()
-        .copied()
-        .filter(|b| b[1] < s.seat_z - tol)
-        .collect();
-    below_seat
-        .first()
-        .or(bands.first())
-        .map(|&band| (band, below))
+        .map(|&n| cm.nodes[n][2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let (bands, _) = bore_bands(cm, xc, s, tol);
+    let deck = bands
+        .last()
+        .filter(|b| b[1] >= s.seat_z - tol && b[0] > guide_top)
+        .map_or(f64::INFINITY, |b| b[0]);
+    let mm = |z: f64| crate::text::num((s.length - z) * 1e3);
+    for (j, &z) in analysis_z.iter().enumerate() {
+        let place = if z > deck - tol {
+            format!("inside the crankcase's deck plate, which holds the liner from {} mm below its top up", mm(deck))
+        } else if z < guide_top + tol {
+            format!("in the crankcase's guide band, which holds the liner from {} mm below its top down", mm(guide_top))
+        } else {
+            continue;
+        };
+        return Err(fail(
+            "crankcase",
+            format!(
+                "cylinder {k}: analysis point {} ({} mm below the liner top: liner.analysis_first_depth_mm, liner.analysis_spacing_mm) lies {place}: the points must lie in the coolant zone, {}..{} mm below the liner top for this deck",
+                j + 1,
+                mm(z),
+                if deck.is_finite() { mm(deck) } else { mm(s.seat_z) },
+                mm(guide_top)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Bores of a seated crankcase beyond the scene's cylinders (`axis_x`, at least two, their
@@ -920,6 +974,7 @@ pub fn crankcase_sets(
                 format!("r = {ro:.6} m, z {g0:.6}..{g1:.6} m"),
             ));
         }
+        check_coolant_zone(cm, (k, xc), s, t.analysis_z, tol)?;
         for (j, &z) in t.analysis_z.iter().enumerate() {
             let name = format!("point_{k}_{}", j + 1);
             let beyond = move |_, p: &[f64; 3]| p[1] > ro + tol;
