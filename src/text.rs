@@ -101,3 +101,31 @@ mod tests {
         assert_eq!(num(1.5e-7), "1.5e-7");
     }
 }
+
+/// Warnings said through [`warn`] in this process, in order: kept for the outputs that list
+/// them (a ROM keeps those of its build in `RomInfo::warnings`, which `simulate --json` lists
+/// even when the ROM comes from the cache).
+static SAID: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+
+/// Says a warning about the model: `log::warn!` (standard error) and kept for [`said_since`].
+pub fn warn(msg: String) {
+    log::warn!("{msg}");
+    SAID.lock().unwrap_or_else(|p| p.into_inner()).push(msg);
+}
+
+/// How many warnings [`warn`] has said so far: a mark for [`said_since`].
+pub fn said_count() -> usize {
+    SAID.lock().unwrap_or_else(|p| p.into_inner()).len()
+}
+
+/// The distinct warnings said since `mark` ([`said_count`]), in order.
+pub fn said_since(mark: usize) -> Vec<String> {
+    let said = SAID.lock().unwrap_or_else(|p| p.into_inner());
+    let mut out: Vec<String> = Vec::new();
+    for w in said.iter().skip(mark) {
+        if !out.contains(w) {
+            out.push(w.clone());
+        }
+    }
+    out
+}

@@ -1014,6 +1014,39 @@ fn regression_an_analysis_point_inside_a_crankcase_decks_plate_is_refused() {
     assert!(err.contains("limits.max_memory_gb"), "{err}");
 }
 
+/// Regression (session 79's note): a deck's warnings were said on standard error while the
+/// ROM was built, and nowhere after: a later run on the cached ROM (`rom`, `simulate --json`,
+/// whose `warnings` array was empty) did not tell them. The ROM now keeps its build's
+/// warnings: `rom --json` lists them, and `rom` from the cache tells them again.
+#[test]
+fn regression_a_cached_roms_build_warnings_are_told_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = decks_scene(dir.path());
+    let sp = scene.to_str().unwrap();
+    let unused = "flange height is 12 mm, the scene's liner.flange_height_mm 15 mm";
+    let args = ["rom", sp, "--set", "liner.flange_height_mm=15"];
+    let (code, _, err) = linercav(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains(unused), "{err}");
+    let (code, out, _) = linercav(&args);
+    assert_eq!(code, 0);
+    assert!(
+        out.contains("hit cache") && out.contains("warning of its build: "),
+        "{out}"
+    );
+    assert!(out.contains(unused), "{out}");
+    let mut json_args = args.to_vec();
+    json_args.push("--json");
+    let v = json(&linercav_output(&json_args));
+    let warnings = v["warnings"].as_array().unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains(unused)),
+        "{warnings:?}"
+    );
+}
+
 /// `export-mesh SMALL --part PART --unit mm --no-sets` with `sets` to `out`, which must succeed.
 fn export_mm(part: &str, sets: &[&str], out: &Path) {
     let mut args = vec![

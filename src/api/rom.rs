@@ -70,6 +70,8 @@ pub struct RomReport {
     /// [`crate::scene::budget::Split::substructured`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub substructured: Option<crate::scene::budget::Split>,
+    /// The warnings said while the ROM was built (kept with a cached ROM).
+    pub warnings: Vec<String>,
 }
 
 impl RomReport {
@@ -103,6 +105,7 @@ impl RomReport {
                 .collect(),
             interfaces: i.interfaces.clone(),
             substructured: None,
+            warnings: i.warnings.clone(),
         }
     }
 
@@ -176,6 +179,12 @@ impl RomReport {
         }
         if let Some(found) = &self.interfaces {
             s.push_str(&interfaces_text(found));
+        }
+        // a build's warnings went to standard error then; a cached ROM's are told here
+        if self.cache == "hit" {
+            for w in &self.warnings {
+                let _ = writeln!(s, "  warning of its build: {w}");
+            }
         }
         s
     }

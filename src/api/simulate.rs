@@ -132,6 +132,15 @@ pub fn run(req: &SimulateRequest, started: Instant) -> Result<SimulateReport> {
     report
         .warnings
         .extend(film_warning(res.stats.film_mismatch));
+    // the ROM build's warnings (decks against the scene): said again for a cached ROM
+    for w in &loaded.rom.info.warnings {
+        if loaded.cache == "hit" {
+            log::warn!("{w} (said when the cached ROM was built)");
+        }
+        if !report.warnings.contains(w) {
+            report.warnings.push(w.clone());
+        }
+    }
     let maps = if req.maps {
         super::maps::maps_of(&scene, &res)?
     } else {

@@ -1176,7 +1176,7 @@ impl Reader {
     fn finish(mut self) -> Result<Mesh, DeckError> {
         self.check_closed()?;
         if let Some(loc) = self.boundary {
-            log::warn!("{}", self.err(loc, "*BOUNDARY and the deck's other boundary conditions are not applied: linercav holds only the node sets named by --fix or a part's `fix` key".into()));
+            crate::text::warn(format!("{}", self.err(loc, "*BOUNDARY and the deck's other boundary conditions are not applied: linercav holds only the node sets named by --fix or a part's `fix` key".into())));
         }
         let mut c = Collected::new(&self.files[0]);
         c.files = self.files.clone();

@@ -628,12 +628,12 @@ pub fn check_liner_deck_sets(
         }
         let depth = s.length - p[2];
         if (depth - d).abs() > h {
-            log::warn!(
+            crate::text::warn(format!(
                 "liner deck: the set '{name}' lies {} mm below the liner top, the scene's liner.analysis_first_depth_mm and liner.analysis_spacing_mm put point {} at {} mm: reported at the deck's node",
                 crate::text::num(depth * 1e3),
                 k + 1,
                 crate::text::num(d * 1e3)
-            );
+            ));
         }
     }
     Ok(())
@@ -956,12 +956,12 @@ pub fn crankcase_sets(
                 fail("crankcase", format!("cylinder {k}: no bore surface at the liner's outer radius {ro:.6} m below the seat (the liner's guide band) around x = {xc:.6} m, y = 0: check that the deck is in the engine frame (a shift or a tilt of the bore axes), or name the set {name}"))
             })?;
             if below > tol {
-                log::warn!(
+                crate::text::warn(format!(
                     "crankcase: cylinder {k}'s guide bore reaches {} mm below the liner's bottom once the crankcase is seated on the liner's flange: coupled over z {}..{} mm only; check that the two decks' flange heights and liner lengths agree",
                     crate::text::num(below * 1e3),
                     crate::text::num(g0 * 1e3),
                     crate::text::num(g1 * 1e3)
-                );
+                ));
             }
             let guide = move |_, p: &[f64; 3]| {
                 s.holds(radius_about(p, xc), tol) && p[2] > g0 - tol && p[2] < g1 + tol

@@ -258,7 +258,7 @@ pub fn complete_engine(
             })?,
         );
         for x in find::extra_bores(crankcase, frame.axis_x, &shape) {
-            log::warn!(
+            crate::text::warn(format!(
                 "{}: the crankcase has a bore at x = {} mm beyond the scene's {} cylinders (bores at x = {} mm): it stays empty, which changes the crankcase's stiffness; check engine.cylinders and the deck",
                 p.display(),
                 crate::text::num(x * 1e3),
@@ -269,7 +269,7 @@ pub fn complete_engine(
                     .map(|x| crate::text::num(x * 1e3))
                     .collect::<Vec<_>>()
                     .join(", ")
-            );
+            ));
         }
     }
     if let Some(p) = liner_file {
@@ -329,12 +329,12 @@ fn check_generated_fit(
 /// changes the liner changed nothing but the cache key).
 fn warn_unused_size(path: &Path, deck: &LinerShape, scene: &LinerShape) {
     for (key, what, d, s) in size_mismatches(deck, scene) {
-        log::warn!(
+        crate::text::warn(format!(
             "{}: the liner mesh's {what} is {} mm, the scene's {key} {} mm: the scene's value is not used (both parts come from decks)",
             path.display(),
             crate::text::num(d * 1e3),
             crate::text::num(s * 1e3)
-        );
+        ));
     }
 }
 

@@ -135,7 +135,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Mesh, DeckError> {
         .iter()
         .find(|k| constraints.contains(&k.name.as_str()))
     {
-        log::warn!("{}", c.err_at(card.loc, not_applied(&card.name)));
+        crate::text::warn(format!("{}", c.err_at(card.loc, not_applied(&card.name))));
     }
     c.into_mesh()
 }
@@ -987,7 +987,7 @@ fn given_shear_modulus(
     }
     let isotropic = young / (2.0 * (1.0 + poisson));
     if (g - isotropic).abs() > 0.01 * isotropic {
-        log::warn!(
+        crate::text::warn(format!(
             "{}",
             c.err_at(
                 card.loc,
@@ -997,7 +997,7 @@ fn given_shear_modulus(
                     crate::text::num(isotropic)
                 )
             )
-        );
+        ));
     }
     Ok(())
 }

@@ -213,7 +213,7 @@ fn part_mesh(
     let deck_has = !mesh.materials.is_empty();
     let (m, src, warning) = import::resolve_material(&mut mesh, given, p, &key)?;
     if let Some(w) = warning {
-        log::warn!("{w}");
+        crate::text::warn(w);
     }
     let note = match src {
         import::MaterialSource::Given if deck_has => {
@@ -564,11 +564,13 @@ pub fn build_rom(
 ) -> Result<(RomBuild, Mesh, Mesh)> {
     // before any faer product of the build (the interface fields' checks included)
     crate::linalg::thread_count_invariant();
+    let said = crate::text::said_count();
     let em = load_meshes(scene)?;
     let mut inputs = rom_inputs(scene, &em, keep_bases);
     inputs.part_cache = part_cache.map(Path::to_path_buf);
     let mut b = build(&inputs, progress)?;
     b.rom.info.interfaces = em.found.clone();
+    b.rom.info.warnings = crate::text::said_since(said);
     Ok((b, em.liner, em.crankcase))
 }
 

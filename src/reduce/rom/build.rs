@@ -483,6 +483,7 @@ pub fn build(inp: &RomInputs<'_>, progress: &dyn Fn(&str)) -> Result<RomBuild, R
         estimated_error,
         left_out: left_out(inp, n_g, &basis),
         interfaces: None,
+        warnings: Vec::new(),
     };
     let rom = EngineRom {
         frequencies_hz: sys.lambdas[..kept]

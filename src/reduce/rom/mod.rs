@@ -16,5 +16,6 @@ pub use model::*;
 /// Version of the ROM layout; part of the cache key (5: matrices stored as ndarray arrays;
 /// 9: residual vectors and residual flexibility from the dropped modes' exact flexibility;
 /// 10: a crankcase deck's guide bore reaching below the liner's bottom no longer replaced by
-/// its deck bore, so an engine ROM built from such decks is not read again).
-pub const ROM_FORMAT: u32 = 10;
+/// its deck bore, so an engine ROM built from such decks is not read again; 11: the build's
+/// warnings kept in `RomInfo::warnings`).
+pub const ROM_FORMAT: u32 = 11;

@@ -82,6 +82,9 @@ pub struct RomInfo {
     pub left_out: Vec<String>,
     /// Interfaces, points and materials found on imported meshes (none for generated ones).
     pub interfaces: Option<crate::mesh::find::FoundInterfaces>,
+    /// The warnings said while the meshes were read and the ROM built (decks against the
+    /// scene, materials, constraints not applied), kept with a cached ROM.
+    pub warnings: Vec<String>,
 }
 
 /// The cached engine reduced-order model.
