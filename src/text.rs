@@ -81,27 +81,6 @@ pub fn clipped(s: &str, max: usize) -> String {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::num;
-
-    #[test]
-    fn few_significant_digits() {
-        assert_eq!(num(1e308), "1e308");
-        assert_eq!(num(1e-308), "1e-308");
-        assert_eq!(num(2.5), "2.5");
-        assert_eq!(num(0.125), "0.125");
-        assert_eq!(num(1234.5678), "1235");
-        assert_eq!(num(1e9), "1e9");
-        assert_eq!(num(16416000.0), "1.642e7");
-        assert_eq!(num(-3.0), "-3");
-        assert_eq!(num(9.223372036854776e18), "9.223e18");
-        assert_eq!(num(1.0 / 3.0), "0.3333");
-        assert_eq!(num(f64::NAN), "NaN");
-        assert_eq!(num(1.5e-7), "1.5e-7");
-    }
-}
-
 /// Warnings said through [`warn`] in this process, in order: kept for the outputs that list
 /// them (a ROM keeps those of its build in `RomInfo::warnings`, which `simulate --json` lists
 /// even when the ROM comes from the cache).
@@ -128,4 +107,25 @@ pub fn said_since(mark: usize) -> Vec<String> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    #[test]
+    fn few_significant_digits() {
+        assert_eq!(num(1e308), "1e308");
+        assert_eq!(num(1e-308), "1e-308");
+        assert_eq!(num(2.5), "2.5");
+        assert_eq!(num(0.125), "0.125");
+        assert_eq!(num(1234.5678), "1235");
+        assert_eq!(num(1e9), "1e9");
+        assert_eq!(num(16416000.0), "1.642e7");
+        assert_eq!(num(-3.0), "-3");
+        assert_eq!(num(9.223372036854776e18), "9.223e18");
+        assert_eq!(num(1.0 / 3.0), "0.3333");
+        assert_eq!(num(f64::NAN), "NaN");
+        assert_eq!(num(1.5e-7), "1.5e-7");
+    }
 }
