@@ -924,8 +924,9 @@ fn regression_scene_liner_sizes_unused_under_decks_are_warned_of() {
     let run = |sets: &[&str]| read_and_checked(&scene, sets).2;
     let err = run(&["liner.outer_diameter_mm=140", "liner.flange_height_mm=15"]);
     assert!(
-        err.contains("pilot diameter is 135 mm, the scene's liner.pilot_diameter_mm")
-            && err.contains("flange height is 12 mm, the scene's liner.flange_height_mm 15 mm")
+        err.contains(
+            "wet wall's outer diameter is 135 mm, the scene's liner.outer_diameter_mm 140 mm"
+        ) && err.contains("flange height is 12 mm, the scene's liner.flange_height_mm 15 mm")
             && err.contains("the scene's value is not used"),
         "{err}"
     );
@@ -1045,6 +1046,78 @@ fn regression_a_cached_roms_build_warnings_are_told_again() {
             .any(|w| w.as_str().unwrap().contains(unused)),
         "{warnings:?}"
     );
+}
+
+/// Regression (a sweep of stepped decks, session 80): a liner whose lower guide (139 mm) is
+/// narrower than its deck pilot (140 mm), as real wet liners are made, in a crankcase deck
+/// bored to match. Its upper pilot, wider than everything below it, was taken for the flange:
+/// "flange height 32 mm", the crankcase moved 20 mm down, then "'flange_seat': cannot carry
+/// the interface field" (exit 2). The flange now starts at the highest face facing down.
+#[test]
+fn regression_a_lower_guide_narrower_than_the_deck_pilot_is_measured() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = decks_scene(dir.path());
+    let pilot = "liner.pilot_diameter_mm=140";
+    let (liner, crank) = (dir.path().join("liner.inp"), dir.path().join("c.inp"));
+    export_mm("liner", &[pilot], &liner);
+    export_mm("crankcase", &[pilot], &crank);
+    // the guide band (z <= 30 mm) to a 139 mm pilot on both parts
+    let narrow = |p: [f64; 3], xc: f64| {
+        let r = (p[0] - xc).hypot(p[1]);
+        if p[2] < 30.01 && p[2] > -0.01 && (r - 70.0).abs() < 0.01 {
+            let k = 69.5 / 70.0;
+            [xc + (p[0] - xc) * k, p[1] * k, p[2]]
+        } else {
+            p
+        }
+    };
+    edit_inp_nodes(&liner, &|p| narrow(p, 0.0));
+    edit_inp_nodes(&crank, &|p| {
+        narrow(p, if p[0] < 0.0 { -76.0 } else { 76.0 })
+    });
+    let (code, out, err) = linercav(&[
+        "rom",
+        scene.to_str().unwrap(),
+        "--no-cache",
+        "--json",
+        "--set",
+        "crankcase.mesh_file=\"c.inp\"",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("guide bore reaches"), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let f = &v["interfaces"];
+    let l = &f["liner"];
+    let mm = |k: &str| l[k].as_f64().unwrap() * 1e3;
+    assert!((mm("seat_z") - 248.0).abs() < 1e-6, "{l}");
+    assert!((mm("pilot_radius") - 70.0).abs() < 1e-6, "{l}");
+    assert!((mm("outer_radius") - 67.5).abs() < 1e-6, "{l}");
+    assert!(f["crankcase_shift_z"].as_f64().unwrap().abs() < 1e-9, "{f}");
+    assert_eq!(
+        f["guide_band"][1].as_f64().map(|z| (z * 1e3).round()),
+        Some(30.0)
+    );
+}
+
+/// Moves each node of the Abaqus deck `path` (its `*NODE` lines: id, x, y, z) by `f`.
+fn edit_inp_nodes(path: &Path, f: &dyn Fn([f64; 3]) -> [f64; 3]) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut out = String::new();
+    let mut nodes = false;
+    for line in text.lines() {
+        if line.starts_with('*') {
+            nodes = line.to_uppercase().starts_with("*NODE");
+        } else if nodes && !line.trim().is_empty() {
+            let v: Vec<&str> = line.split(',').map(str::trim).collect();
+            let p = [1, 2, 3].map(|i| v[i].parse::<f64>().unwrap());
+            let q = f(p);
+            out += &format!("{}, {:.15e}, {:.15e}, {:.15e}\n", v[0], q[0], q[1], q[2]);
+            continue;
+        }
+        out += line;
+        out += "\n";
+    }
+    std::fs::write(path, out).unwrap();
 }
 
 /// `export-mesh SMALL --part PART --unit mm --no-sets` with `sets` to `out`, which must succeed.

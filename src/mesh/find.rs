@@ -14,9 +14,9 @@
 //! with the larger radius (the flange). The mesh is moved rigidly into the liner's frame:
 //! p' = R (p - c) - z_min e_z, with R the smallest rotation taking the axis to +z.
 //! Radii from the outer surface (boundary faces facing away from the axis, [`outer_surface`])
-//! as a profile of heights, each its largest radius: the flange is the top run of heights each
-//! wider than every height below it; the pilot r_p is the largest radius below the flange (the
-//! guide band's and deck bore's on a stepped liner); the wet wall r_o is the radius over the
+//! as a profile of heights, each its largest radius: the flange starts at the highest face
+//! facing down ([`flange_underside`]); the pilot r_p is the largest radius below the flange
+//! (the guide band's and deck bore's on a stepped liner, which may differ); the wet wall r_o is the radius over the
 //! greatest height below the flange (r_p = r_o on a plain tube); bore r_i = min r, flange
 //! r_f = max r; the flange underside z_s = min z of the nodes with r > r_p + tol.
 //!
@@ -299,9 +299,11 @@ fn measure_liner(mesh: &Mesh, tol: f64) -> Result<LinerShape, FindError> {
             "no top flange found (no node outside the wall's outer radius): name the set 'flange_seat' in the deck".into(),
         )
     };
-    let surface = outer_surface(mesh, 0.5 * (inner + middle));
+    let mid = 0.5 * (inner + middle);
+    let surface = outer_surface(mesh, mid);
     let levels = surface_levels(mesh, &surface, tol);
-    let (wall, pilot) = below_flange(&levels, tol).ok_or_else(no_flange)?;
+    let underside = flange_underside(mesh, mid);
+    let (wall, pilot) = below_flange(&levels, underside, tol).ok_or_else(no_flange)?;
     let seat_z = mesh
         .nodes
         .iter()
@@ -328,34 +330,67 @@ fn measure_liner(mesh: &Mesh, tol: f64) -> Result<LinerShape, FindError> {
 /// mid-edge nodes of quadratic faces included. A stepped liner's pilots, its tapers and its
 /// flange rim are on it, its flange and shoulder faces (normal along z) are not.
 fn outer_surface(mesh: &Mesh, mid: f64) -> Vec<bool> {
+    let mut on = vec![false; mesh.nodes.len()];
+    for_boundary_faces(mesh, &mut |kind, el, face, c| {
+        let [n, m] = normal_and_centre(c);
+        let (nn, rm) = (norm(n), m[0].hypot(m[1]));
+        let nr = (n[0] * m[0] + n[1] * m[1]) / rm.max(f64::MIN_POSITIVE);
+        if !(rm > mid && nr.abs() >= 0.5 * nn && nn > 0.0) {
+            return;
+        }
+        for &a in face {
+            on[el[a]] = true;
+        }
+        for (k, &(a, b)) in kind.mid_edges().iter().enumerate() {
+            if face.contains(&a) && face.contains(&b) {
+                on[el[kind.num_corners() + k]] = true;
+            }
+        }
+    });
+    on
+}
+
+/// The height of a liner's flange underside (own frame): the highest boundary face facing
+/// down (outward normal n_z <= -0.9 |n|, within 26 deg of -z) whose centre lies beyond the
+/// radius `mid`. A pilot's shoulder, an O-ring groove's wall and the bottom face are lower; a
+/// fillet or flare under the flange faces outward, not down. None: no such face.
+fn flange_underside(mesh: &Mesh, mid: f64) -> Option<f64> {
+    let mut top = f64::NEG_INFINITY;
+    for_boundary_faces(mesh, &mut |_, _, _, c| {
+        let [n, m] = normal_and_centre(c);
+        if m[0].hypot(m[1]) > mid && n[2] <= -0.9 * norm(n) && norm(n) > 0.0 {
+            top = top.max(m[2]);
+        }
+    });
+    top.is_finite().then_some(top)
+}
+
+/// A visitor of boundary faces: (element kind, element nodes, face corners in element
+/// numbering, the corners' coordinates).
+type FaceVisitor<'v> =
+    dyn FnMut(crate::scene::spec::ElementKind, &[usize], &[usize], &[[f64; 3]]) + 'v;
+
+/// Calls `f` for every boundary face (a face of one element only) of `mesh`.
+fn for_boundary_faces(mesh: &Mesh, f: &mut FaceVisitor<'_>) {
+    let key = |el: &[usize], face: &[usize]| {
+        let mut k: Vec<usize> = face.iter().map(|&a| el[a]).collect();
+        k.sort_unstable();
+        k
+    };
     let mut count: std::collections::HashMap<Vec<usize>, u32> = std::collections::HashMap::new();
     for (kind, el) in mesh.elements() {
         for &face in kind.faces() {
-            let mut key: Vec<usize> = face.iter().map(|&a| el[a]).collect();
-            key.sort_unstable();
-            *count.entry(key).or_default() += 1;
+            *count.entry(key(el, face)).or_default() += 1;
         }
     }
-    let mut on = vec![false; mesh.nodes.len()];
     for (kind, el) in mesh.elements() {
         for &face in kind.faces() {
-            let c: Vec<[f64; 3]> = face.iter().map(|&a| mesh.nodes[el[a]]).collect();
-            let mut key: Vec<usize> = face.iter().map(|&a| el[a]).collect();
-            key.sort_unstable();
-            if count[&key] != 1 || !faces_out(&c, mid) {
-                continue;
-            }
-            for &a in face {
-                on[el[a]] = true;
-            }
-            for (k, &(a, b)) in kind.mid_edges().iter().enumerate() {
-                if face.contains(&a) && face.contains(&b) {
-                    on[el[kind.num_corners() + k]] = true;
-                }
+            if count[&key(el, face)] == 1 {
+                let c: Vec<[f64; 3]> = face.iter().map(|&a| mesh.nodes[el[a]]).collect();
+                f(kind, el, face, &c);
             }
         }
     }
-    on
 }
 
 /// The liner's outer wall below its flange (`s`, own frame): the [`outer_surface`] nodes
@@ -369,15 +404,17 @@ fn wall_surface(mesh: &Mesh, s: &LinerShape) -> Vec<bool> {
     on
 }
 
-/// Whether a face (its corners) faces away from the z axis: its normal n (the cross product
-/// of its diagonals, or of two edges of a triangle) has |n . e_r| >= |n| / 2 at its centre,
-/// and the centre lies beyond the radius `mid`.
-fn faces_out(c: &[[f64; 3]], mid: f64) -> bool {
+/// A face's outward normal n (the cross product of its diagonals, or of two edges of a
+/// triangle: corners in the right-hand order of [`ElementKind::faces`], |n| ~ its area) and
+/// its centre (the corners' mean); zeros for another corner count.
+///
+/// [`ElementKind::faces`]: crate::scene::spec::ElementKind::faces
+fn normal_and_centre(c: &[[f64; 3]]) -> [[f64; 3]; 2] {
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let (u, v) = match c {
         [a, b, d] => (sub(*b, *a), sub(*d, *a)),
         [a, b, d, e] => (sub(*d, *a), sub(*e, *b)),
-        _ => return false,
+        _ => return [[0.0; 3]; 2],
     };
     let n = [
         u[1] * v[2] - u[2] * v[1],
@@ -385,11 +422,14 @@ fn faces_out(c: &[[f64; 3]], mid: f64) -> bool {
         u[0] * v[1] - u[1] * v[0],
     ];
     let k = c.len() as f64;
-    let m = [0, 1].map(|i| c.iter().map(|p| p[i]).sum::<f64>() / k);
-    let rm = m[0].hypot(m[1]);
-    let nr = (n[0] * m[0] + n[1] * m[1]) / rm.max(f64::MIN_POSITIVE);
-    let nn = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-    rm > mid && nr.abs() >= 0.5 * nn && nn > 0.0
+    [
+        n,
+        [0, 1, 2].map(|i| c.iter().map(|p| p[i]).sum::<f64>() / k),
+    ]
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
 /// The heights of the liner's outer surface (`surface`), bottom to top: [z, r], the nodes
@@ -414,11 +454,13 @@ fn surface_levels(mesh: &Mesh, surface: &[bool], tol: f64) -> Vec<[f64; 2]> {
 }
 
 /// The wet wall's radius r_o and the largest radius r_p below the flange (the pilot of a
-/// stepped liner, r_o on a plain tube), from the outer surface's `levels`. The flange is the
-/// top run of levels each wider, by more than `tol`, than every level below it. The wet wall
+/// stepped liner, r_o on a plain tube), from the outer surface's `levels`. The flange starts
+/// at its `underside` ([`flange_underside`]) when found, else it is the top run of levels each
+/// wider, by more than `tol`, than every level below it (a stepped liner whose upper pilot is
+/// wider than its lower one needs the underside: its upper pilot is such a run). The wet wall
 /// is the radius (within `tol`) over the greatest height below the flange: each level
 /// counts half of the gaps to its neighbours. None: no flange.
-fn below_flange(levels: &[[f64; 2]], tol: f64) -> Option<(f64, f64)> {
+fn below_flange(levels: &[[f64; 2]], underside: Option<f64>, tol: f64) -> Option<(f64, f64)> {
     let mut above = vec![f64::INFINITY; levels.len() + 1];
     for i in (0..levels.len()).rev() {
         above[i] = above[i + 1].min(levels[i][1]);
@@ -428,7 +470,10 @@ fn below_flange(levels: &[[f64; 2]], tol: f64) -> Option<(f64, f64)> {
     for i in 0..levels.len() {
         widest[i + 1] = widest[i].max(levels[i][1]);
     }
-    let seat = (1..levels.len()).find(|&i| above[i] > widest[i] + tol)?;
+    let seat = match underside {
+        Some(z) => (1..levels.len()).find(|&i| levels[i][0] > z - tol)?,
+        None => (1..levels.len()).find(|&i| above[i] > widest[i] + tol)?,
+    };
     let pilot = widest[seat];
     let mut heights: Vec<[f64; 2]> = (0..seat)
         .map(|i| {
@@ -496,8 +541,9 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
             "lower_guide".into(),
             Box::new(move |n, p| on_outer(n) && p[2] > g0 - tol && p[2] < g1 + tol),
             format!(
-                "r = {ro:.6} m, z {g0:.6}..{g1:.6} m, area {:.4e} m^2",
-                2.0 * pi * ro * (g1 - g0)
+                "r = {:.6} m, z {g0:.6}..{g1:.6} m, area {:.4e} m^2",
+                s.pilot_radius,
+                2.0 * pi * s.pilot_radius * (g1 - g0)
             ),
         ),
         (
@@ -532,7 +578,9 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
     for (k, &d) in t.depths.iter().enumerate() {
         let target = [0.0, ro, s.length - d];
         let name = format!("point_{}", k + 1);
-        out.push(add_point(mesh, "liner", &name, target, &|n, _| on_outer(n)));
+        // on the wet wall: a pilot's corner nearer the depth is not wetted
+        let wet = |n: usize, p: &[f64; 3]| on_outer(n) && (r(p) - ro).abs() < tol;
+        out.push(add_point(mesh, "liner", &name, target, &wet));
     }
     let h = s.tol / 0.02;
     let on_bore = |_: usize, p: &[f64; 3]| (r(p) - s.inner_radius).abs() < tol;
@@ -971,13 +1019,14 @@ pub fn crankcase_sets(
                 "crankcase",
                 &name,
                 &guide,
-                format!("r = {ro:.6} m, z {g0:.6}..{g1:.6} m"),
+                format!("r {ro:.6}..{:.6} m, z {g0:.6}..{g1:.6} m", s.pilot_radius),
             ));
         }
         check_coolant_zone(cm, (k, xc), s, t.analysis_z, tol)?;
         for (j, &z) in t.analysis_z.iter().enumerate() {
             let name = format!("point_{k}_{}", j + 1);
-            let beyond = move |_, p: &[f64; 3]| p[1] > ro + tol;
+            // across the coolant: beyond the pilot, whose bores' corners are nearer
+            let beyond = move |_, p: &[f64; 3]| p[1] > s.pilot_radius + tol;
             out.push(add_point(cm, "crankcase", &name, [xc, ro, z], &beyond));
         }
     }

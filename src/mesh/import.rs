@@ -323,12 +323,28 @@ fn check_generated_fit(
     }
 }
 
-/// A liner deck under a crankcase deck: the scene's pilot diameter, flange diameter and flange
-/// height are not used (the decks hold the parts); each that differs from the deck's by more
-/// than [`FIT_TOLERANCE`] is warned of, naming the key (a scene edited in the belief that it
-/// changes the liner changed nothing but the cache key).
+/// A liner deck under a crankcase deck: the scene's outer (wet wall) diameter, pilot diameter,
+/// flange diameter and flange height are not used (the decks hold the parts); each that
+/// differs from the deck's by more than [`FIT_TOLERANCE`] is warned of, naming the key (a
+/// scene edited in the belief that it changes the liner changed nothing but the cache key).
+/// The pilot only where the scene gives one: a scene without (its pilot the outer diameter)
+/// says nothing of a stepped deck's pilots.
 fn warn_unused_size(path: &Path, deck: &LinerShape, scene: &LinerShape) {
-    for (key, what, d, s) in size_mismatches(deck, scene) {
+    let plain = scene.pilot_radius == scene.outer_radius;
+    let wall = (
+        "liner.outer_diameter_mm",
+        "wet wall's outer diameter",
+        2.0 * deck.outer_radius,
+        2.0 * scene.outer_radius,
+    );
+    let sizes = size_mismatches(deck, scene)
+        .into_iter()
+        .filter(|m| !(plain && m.1 == "pilot diameter"));
+    for (key, what, d, s) in [wall]
+        .into_iter()
+        .filter(|&(_, _, d, s)| (d - s).abs() > FIT_TOLERANCE * s)
+        .chain(sizes)
+    {
         crate::text::warn(format!(
             "{}: the liner mesh's {what} is {} mm, the scene's {key} {} mm: the scene's value is not used (both parts come from decks)",
             path.display(),

@@ -589,6 +589,10 @@ pub fn rom_inputs<'a>(scene: &Scene, em: &'a EngineMeshes, keep_bases: bool) -> 
         crankcase_material: em.crankcase_material,
         crankcase_fix: cc.fix.clone(),
         bore_radius: em.shape.pilot_radius,
+        fit_radius: match cc.source {
+            CrankcaseSource::File(_) => em.shape.outer_radius,
+            CrankcaseSource::Parametric { .. } => em.shape.pilot_radius,
+        },
         flange_radius: em.shape.flange_radius,
         seat_z: em.shape.seat_z,
         guide_height: em.guide[1] - em.guide[0],

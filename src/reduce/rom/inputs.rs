@@ -22,6 +22,11 @@ pub struct RomInputs<'a> {
     /// Radii and heights that define the interfaces \[m\]: the bore (the liner's pilot
     /// radius), the flange, the seat height and the guide band.
     pub bore_radius: f64,
+    /// No crankcase node may lie inside this radius of a bore axis along the liner
+    /// ([`check_fit`]): the bore radius for a generated crankcase; a crankcase deck's bores
+    /// follow a stepped liner's own pilots (a lower guide narrower than the deck's pilot),
+    /// so only its wet wall r_o is certain.
+    pub fit_radius: f64,
     pub flange_radius: f64,
     pub seat_z: f64,
     pub guide_height: f64,
@@ -154,7 +159,7 @@ pub(super) fn check_fit(inp: &RomInputs<'_>) -> Result<(), RomError> {
     for (c, &xc) in inp.axis_x.iter().enumerate() {
         if let Some(n) = inp.crankcase.nodes.iter().position(|p| {
             let r = ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
-            r < inp.bore_radius - tol && p[2] > tol && p[2] < inp.seat_z - tol
+            r < inp.fit_radius - tol && p[2] > tol && p[2] < inp.seat_z - tol
         }) {
             return Err(RomError::Set {
                 part: "crankcase".into(),
