@@ -294,23 +294,40 @@ pub fn complete_engine(
         })?;
         sets.append(&mut found.sets);
         found.sets = sets;
-        if let Some(band) = find::trim_lower_guide(liner, &mut found.sets) {
-            let tol = 0.02 * find::mesh_size(crankcase);
-            if band[0] > guide[0] + tol || band[1] < guide[1] - tol {
-                crate::text::warn(format!(
-                    "{}: the crankcase's guide bore (z {}..{} mm) is longer than the liner's pilot in it (z {}..{} mm): coupled over the pilot only; check the guide heights of the decks (or liner.guide_height_mm)",
-                    p.display(),
-                    crate::text::num(guide[0] * 1e3),
-                    crate::text::num(guide[1] * 1e3),
-                    crate::text::num(band[0] * 1e3),
-                    crate::text::num(band[1] * 1e3)
-                ));
-                find::narrow_guides(crankcase, frame.axis_x.len(), band, &mut found.sets);
-                found.guide_band = Some(band);
-            }
-        }
+        narrow_guide(p, liner, crankcase, frame.axis_x.len(), &mut found);
     }
     Ok(found)
+}
+
+/// Narrows the guide band (`found.guide_band`) of a liner deck at `p` to where the liner's
+/// pilot meets the bore ([`find::trim_lower_guide`]), on both parts, with a warning when the
+/// crankcase's guide bore is longer than that.
+fn narrow_guide(
+    p: &Path,
+    liner: &mut Mesh,
+    crankcase: &mut Mesh,
+    cylinders: usize,
+    found: &mut FoundInterfaces,
+) {
+    let (Some(guide), Some(band)) = (
+        found.guide_band,
+        find::trim_lower_guide(liner, &mut found.sets),
+    ) else {
+        return;
+    };
+    let tol = 0.02 * find::mesh_size(crankcase);
+    if band[0] > guide[0] + tol || band[1] < guide[1] - tol {
+        crate::text::warn(format!(
+            "{}: the crankcase's guide bore (z {}..{} mm) is longer than the liner's pilot in it (z {}..{} mm): coupled over the pilot only; check the guide heights of the decks (or liner.guide_height_mm)",
+            p.display(),
+            crate::text::num(guide[0] * 1e3),
+            crate::text::num(guide[1] * 1e3),
+            crate::text::num(band[0] * 1e3),
+            crate::text::num(band[1] * 1e3)
+        ));
+        find::narrow_guides(crankcase, cylinders, band, &mut found.sets);
+        found.guide_band = Some(band);
+    }
 }
 
 /// A liner deck under a generated crankcase: the crankcase is built to the scene's liner
