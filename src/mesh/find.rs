@@ -13,9 +13,9 @@
 //! circle (Kasa fit: x^2 + y^2 = 2 a x + 2 b y + c) through the bore's nodes; its top the end
 //! with the larger radius (the flange). The mesh is moved rigidly into the liner's frame:
 //! p' = R (p - c) - z_min e_z, with R the smallest rotation taking the axis to +z.
-//! Radii from the outer surface (boundary faces facing away from the axis, [`outer_surface`])
+//! Radii from the outer surface (boundary faces facing away from the axis, `outer_surface`)
 //! as a profile of heights, each its largest radius: the flange starts at the highest face
-//! facing down ([`flange_underside`]); the pilot r_p is the largest radius below the flange
+//! facing down (`flange_underside`); the pilot r_p is the largest radius below the flange
 //! (the guide band's and deck bore's on a stepped liner, which may differ); the wet wall r_o is the radius over the
 //! greatest height below the flange (r_p = r_o on a plain tube); bore r_i = min r, flange
 //! r_f = max r; the flange underside z_s = min z of the nodes with r > r_p + tol.
@@ -881,7 +881,7 @@ pub fn seat_crankcase(cm: &mut Mesh, axis_x: &[f64], s: &LinerShape) -> Result<f
     Ok(shift)
 }
 
-/// The guide band [z0, z1] of the bore at `xc`: the lowest of its [`bore_bands`] below the
+/// The guide band [z0, z1] of the bore at `xc`: the lowest of its `bore_bands` below the
 /// seat (module docs). Also returns how far the bore's faces reach below the liner's bottom
 /// \[m\] (<= 0: none).
 pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<([f64; 2], f64)> {

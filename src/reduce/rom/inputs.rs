@@ -23,7 +23,7 @@ pub struct RomInputs<'a> {
     /// radius), the flange, the seat height and the guide band.
     pub bore_radius: f64,
     /// No crankcase node may lie inside this radius of a bore axis along the liner
-    /// ([`check_fit`]): the bore radius for a generated crankcase; a crankcase deck's bores
+    /// (`check_fit`): the bore radius for a generated crankcase; a crankcase deck's bores
     /// follow a stepped liner's own pilots (a lower guide narrower than the deck's pilot),
     /// so only its wet wall r_o is certain.
     pub fit_radius: f64,
