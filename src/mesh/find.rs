@@ -1049,7 +1049,13 @@ pub fn crankcase_sets(
             out.push(found("crankcase", &name, "deck", v.len(), String::new()));
         } else {
             let ([g0, g1], below) = guide_band(cm, xc, s).ok_or_else(|| {
-                fail("crankcase", format!("cylinder {k}: no bore surface at the liner's outer radius {ro:.6} m below the seat (the liner's guide band) around x = {xc:.6} m, y = 0: check that the deck is in the engine frame (a shift or a tilt of the bore axes), or name the set {name}"))
+                let nearest = cm
+                    .nodes
+                    .iter()
+                    .filter(|p| p[2] > tol && p[2] < zs - tol)
+                    .map(|p| radius_about(p, xc))
+                    .fold(f64::INFINITY, f64::min);
+                fail("crankcase", format!("cylinder {k}: no bore surface holding the liner (r {} to {} mm, its wet wall to its pilot) below the seat (the liner's guide band) around x = {} mm, y = 0; the crankcase's nearest node there is at r = {} mm: a bore with a radial clearance is not coupled (give it the liner's pilot diameter), or the deck is not in the engine frame (a shift or a tilt of the bore axes); or name the set {name}", crate::text::num(ro * 1e3), crate::text::num(s.pilot_radius * 1e3), crate::text::num(xc * 1e3), crate::text::num(nearest * 1e3)))
             })?;
             if below > tol {
                 crate::text::warn(format!(
