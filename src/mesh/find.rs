@@ -16,9 +16,10 @@
 //! Radii from the outer surface (boundary faces facing away from the axis, `outer_surface`)
 //! as a profile of heights, each its largest radius: the flange starts at the highest face
 //! facing down (`flange_underside`); the pilot r_p is the largest radius below the flange
-//! (the guide band's and deck bore's on a stepped liner, which may differ); the wet wall r_o is the radius over the
-//! greatest height below the flange (r_p = r_o on a plain tube); bore r_i = min r, flange
-//! r_f = max r; the flange underside z_s = min z of the nodes with r > r_p + tol.
+//! (the guide band's and deck bore's on a stepped liner, which may differ); the wet wall r_o
+//! is the radius over the greatest height below the flange (r_p = r_o on a plain tube); bore
+//! r_i = min r, flange r_f = max r; the flange underside z_s = min z of the nodes with
+//! r > r_p + tol.
 //!
 //! The crankcase ([`seat_crankcase`]): each bore's counterbore floor is the highest crankcase
 //! node in the annulus r_o - tol <= r <= r_f - tol around the bore axis; the crankcase is moved
