@@ -7,11 +7,14 @@
 //! - the engine frame: x along the crankshaft, cylinder c's bore axis at
 //!   x_c = (c - (N + 1) / 2) p, y = 0, z up along the bores, thrust side +y.
 //!
-//! The liner ([`place_liner`]): its axis is the principal axis of inertia of its nodes whose
-//! moment stands apart from the other two (an axisymmetric body has two equal transverse
-//! moments), snapped to a coordinate axis when within 1e-9 of one; its centre the least-squares
-//! circle (Kasa fit: x^2 + y^2 = 2 a x + 2 b y + c) through the bore's nodes; its top the end
-//! with the larger radius (the flange). The mesh is moved rigidly into the liner's frame:
+//! The liner ([`place_liner`]): its axis is first the principal axis of inertia of its nodes
+//! whose moment stands apart from the other two (an axisymmetric body has two equal
+//! transverse moments), then the bore's own axis: the line of centres of a cylinder fitted to
+//! the bore's nodes (Kasa's linear fit with a sloping centre line, iterated), since an
+//! unstructured or locally refined deck's node cloud is lopsided; an axis within 1e-12 of a
+//! coordinate axis is taken as it. Its centre is the least-squares circle (Kasa fit: x^2 + y^2
+//! = 2 a x + 2 b y + c) through the bore's nodes; its top the end with the larger radius (the
+//! flange). The mesh is moved rigidly into the liner's frame:
 //! p' = R (p - c) - z_min e_z, with R the smallest rotation taking the axis to +z.
 //! Radii from the outer surface (boundary faces facing away from the axis, `outer_surface`)
 //! as a profile of heights, each its largest radius: the flange starts at the highest face
@@ -231,25 +234,14 @@ fn circle_fit(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
     (r2 > 0.0).then(|| ([s[0], s[1]], r2.sqrt()))
 }
 
-/// Moves a liner mesh into its own frame and measures it (module docs). Returns the shape,
-/// the axis found and the centre of the bottom.
-pub fn place_liner(mesh: &mut Mesh) -> Result<(LinerShape, [f64; 3], [f64; 3]), FindError> {
-    let h = mesh_size(mesh);
-    if mesh.nodes.len() < 8 || h <= 0.0 {
-        return Err(fail("liner", "too few nodes to find its axis".into()));
-    }
-    let tol = 0.02 * h;
-    let axis = toward_flange(&mesh.nodes, principal_axis(&mesh.nodes), tol);
-    let rot = rotation_to_z(axis);
-    let mut pts: Vec<[f64; 3]> = mesh.nodes.iter().map(|&p| apply(&rot, p)).collect();
-    // centre: the bore's circle, refined once from the nodes' mean
-    let mean = |pts: &[[f64; 3]]| {
-        let n = pts.len() as f64;
-        [0, 1].map(|a| pts.iter().map(|p| p[a]).sum::<f64>() / n)
-    };
-    let mut c = mean(&pts);
+/// The bore's centre (x, y) in the frame of `pts` (turned so that the axis is about z):
+/// Kasa's circle through the nodes within h / 4 of the smallest radius, refined once from the
+/// nodes' mean.
+fn bore_centre(pts: &[[f64; 3]], h: f64) -> [f64; 2] {
+    let n = pts.len() as f64;
+    let mut c = [0, 1].map(|a| pts.iter().map(|p| p[a]).sum::<f64>() / n);
     for _ in 0..2 {
-        let r = |p: &[f64; 3]| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sqrt();
+        let r = |p: &[f64; 3]| (p[0] - c[0]).hypot(p[1] - c[1]);
         let rmin = pts.iter().map(r).fold(f64::INFINITY, f64::min);
         let bore: Vec<[f64; 2]> = pts
             .iter()
@@ -260,6 +252,118 @@ pub fn place_liner(mesh: &mut Mesh) -> Result<(LinerShape, [f64; 3], [f64; 3]), 
             c = cc;
         }
     }
+    c
+}
+
+/// The bore's nodes of `pts` (turned so that the axis is about z, centre `c`): those within
+/// h / 4 of the smallest radius among the nodes of their slab (height 2h) and the two slabs
+/// either side. Slabs keep a tilted axis from hiding one end of the bore; the neighbours keep
+/// a slab that holds no bore node (a node layer pushed across a slab's edge) from offering
+/// its outer wall.
+fn bore_nodes(pts: &[[f64; 3]], c: [f64; 2], h: f64) -> Vec<[f64; 3]> {
+    let zmin = pts.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+    let slab = |p: &[f64; 3]| ((p[2] - zmin) / (2.0 * h)) as usize;
+    let r = |p: &[f64; 3]| (p[0] - c[0]).hypot(p[1] - c[1]);
+    let slabs = pts.iter().map(slab).max().unwrap_or(0) + 1;
+    let mut own = vec![f64::INFINITY; slabs];
+    for p in pts {
+        let k = slab(p);
+        own[k] = own[k].min(r(p));
+    }
+    let near: Vec<f64> = (0..slabs)
+        .map(|k| {
+            own[k.saturating_sub(2)..(k + 3).min(slabs)]
+                .iter()
+                .fold(f64::INFINITY, |a, &b| a.min(b))
+        })
+        .collect();
+    pts.iter()
+        .filter(|p| r(p) < near[slab(p)] + 0.25 * h)
+        .copied()
+        .collect()
+}
+
+/// The tilt (t_x, t_y) of the bore's axis in the frame of its nodes `bore`: the line of
+/// centres (a + t_x z, b + t_y z) of Kasa's circle extended to a sloping centre line, linear
+/// least squares of
+/// x^2 + y^2 = 2a x + 2b y + 2 t_x x z + 2 t_y y z + e + f z + g z^2
+/// (exact for circular sections; a right cylinder tilted by theta has elliptic ones, axes r
+/// and r / cos theta, an error of order theta^2 that iterating removes). Coordinates are
+/// taken about the nodes' mean and scaled by their spread for the normal equations.
+fn bore_tilt(bore: &[[f64; 3]]) -> Option<[f64; 2]> {
+    let n = bore.len() as f64;
+    let m = [0, 1, 2].map(|a| bore.iter().map(|p| p[a]).sum::<f64>() / n);
+    let s = bore
+        .iter()
+        .flat_map(|p| (0..3).map(move |a| (p[a] - m[a]).abs()))
+        .fold(0.0, f64::max);
+    if s.is_nan() || s <= 0.0 {
+        return None;
+    }
+    let mut a = nalgebra::SMatrix::<f64, 7, 7>::zeros();
+    let mut b = nalgebra::SVector::<f64, 7>::zeros();
+    for p in bore {
+        let [x, y, z] = [0, 1, 2].map(|k| (p[k] - m[k]) / s);
+        let row = nalgebra::SVector::<f64, 7>::from([x, y, x * z, y * z, 1.0, z, z * z]);
+        a += row * row.transpose();
+        b += row * (x * x + y * y);
+    }
+    let sol = a.cholesky()?.solve(&b);
+    // 2 t_x = coefficient of x z; z scaled like x, so the slope is scale-free
+    let t = [0.5 * sol[2], 0.5 * sol[3]];
+    t.iter().all(|v| v.is_finite()).then_some(t)
+}
+
+/// The liner's axis pointing to the flange: the principal axis of its nodes (turned toward
+/// the flange), then the bore's own axis ([`bore_tilt`], iterated until it moves less than
+/// 1e-14 rad): an unstructured or locally refined deck's node cloud is not symmetric, and
+/// its principal axis may tilt by 1e-4 rad or more. An axis within 1e-12 of a coordinate
+/// axis is taken as that axis.
+fn liner_axis(nodes: &[[f64; 3]], h: f64, tol: f64) -> [f64; 3] {
+    let mut axis = toward_flange(nodes, principal_axis(nodes), tol);
+    for _ in 0..6 {
+        let rot = rotation_to_z(axis);
+        let pts: Vec<[f64; 3]> = nodes.iter().map(|&p| apply(&rot, p)).collect();
+        let c = bore_centre(&pts, h);
+        let Some(t) = bore_tilt(&bore_nodes(&pts, c, h)) else {
+            break;
+        };
+        let k = 1.0 / (1.0 + t[0] * t[0] + t[1] * t[1]).sqrt();
+        let d = [t[0] * k, t[1] * k, k];
+        // R^T d: back to the deck's frame
+        let next = [0, 1, 2].map(|i| (0..3).map(|j| rot[j][i] * d[j]).sum::<f64>());
+        let moved = (0..3).map(|i| (next[i] - axis[i]).powi(2)).sum::<f64>();
+        axis = next;
+        if moved.sqrt() < 1e-14 {
+            break;
+        }
+    }
+    for a in 0..3 {
+        let off = (0..3)
+            .filter(|&b| b != a)
+            .map(|b| axis[b].abs())
+            .fold(0.0, f64::max);
+        if off < 1e-12 {
+            let sign = axis[a].signum();
+            axis = [0.0; 3];
+            axis[a] = sign;
+        }
+    }
+    axis
+}
+
+/// Moves a liner mesh into its own frame and measures it (module docs). Returns the shape,
+/// the axis found and the centre of the bottom.
+pub fn place_liner(mesh: &mut Mesh) -> Result<(LinerShape, [f64; 3], [f64; 3]), FindError> {
+    let h = mesh_size(mesh);
+    if mesh.nodes.len() < 8 || h <= 0.0 {
+        return Err(fail("liner", "too few nodes to find its axis".into()));
+    }
+    let tol = 0.02 * h;
+    let axis = liner_axis(&mesh.nodes, h, tol);
+    let rot = rotation_to_z(axis);
+    let mut pts: Vec<[f64; 3]> = mesh.nodes.iter().map(|&p| apply(&rot, p)).collect();
+    let c = bore_centre(&pts, h);
     let zmin = pts.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
     for p in &mut pts {
         *p = [p[0] - c[0], p[1] - c[1], p[2] - zmin];

@@ -333,7 +333,7 @@ fn narrow_guide(
 /// A liner deck under a generated crankcase: the crankcase is built to the scene's liner
 /// (`scene`: its pilot radius, flange and flange underside; the length is
 /// [`check_length`]'s), so the deck's (`deck`)
-/// must be the same within [`FIT_TOLERANCE`] of each value. A wall 5.5 mm thicker in the
+/// must be the same ([`size_mismatches`]). A wall 5.5 mm thicker in the
 /// scene than in the deck built the crankcase's bore around a liner that was not there and
 /// moved the first system mode by 3 % without a word.
 fn check_generated_fit(
@@ -357,7 +357,8 @@ fn check_generated_fit(
 
 /// A liner deck under a crankcase deck: the scene's outer (wet wall) diameter, pilot diameter,
 /// flange diameter and flange height are not used (the decks hold the parts); each that
-/// differs from the deck's by more than [`FIT_TOLERANCE`] is warned of, naming the key (a
+/// differs from the deck's ([`FIT_TOLERANCE`], the pilot as in [`size_mismatches`]) is
+/// warned of, naming the key (a
 /// scene edited in the belief that it changes the liner changed nothing but the cache key).
 /// The pilot only where the scene gives one: a scene without (its pilot the outer diameter)
 /// says nothing of a stepped deck's pilots.
@@ -386,35 +387,43 @@ fn warn_unused_size(path: &Path, deck: &LinerShape, scene: &LinerShape) {
     }
 }
 
-/// The liner sizes in which a deck (`deck`) and the scene (`scene`) differ by more than
-/// [`FIT_TOLERANCE`]: (scene key, what, deck's value, scene's value) \[m\].
+/// The liner sizes in which a deck (`deck`) and the scene (`scene`) differ: the pilot
+/// diameter by more than twice the liner's surface tolerance (the pilot is a fit: a deck
+/// crankcase's bore is coupled only within that tolerance of it, [`LinerShape::holds`], and a
+/// generated one is built to the scene's, so a 141 mm scene pilot round a 140 mm deck tied
+/// the liner across a 0.5 mm gap), the flange by more than [`FIT_TOLERANCE`]: (scene key,
+/// what, deck's value, scene's value) \[m\].
 fn size_mismatches(
     deck: &LinerShape,
     scene: &LinerShape,
 ) -> Vec<(&'static str, &'static str, f64, f64)> {
+    let pilot = (2.0 * scene.pilot_radius, 2.0 * deck.tol);
+    let flange = 2.0 * scene.flange_radius;
+    let height = scene.length - scene.seat_z;
     let sizes = [
         (
             "liner.pilot_diameter_mm (default liner.outer_diameter_mm)",
             "pilot diameter",
             2.0 * deck.pilot_radius,
-            2.0 * scene.pilot_radius,
+            pilot,
         ),
         (
             "liner.flange_outer_diameter_mm",
             "flange diameter",
             2.0 * deck.flange_radius,
-            2.0 * scene.flange_radius,
+            (flange, FIT_TOLERANCE * flange),
         ),
         (
             "liner.flange_height_mm",
             "flange height",
             deck.length - deck.seat_z,
-            scene.length - scene.seat_z,
+            (height, FIT_TOLERANCE * height),
         ),
     ];
     sizes
         .into_iter()
-        .filter(|&(_, _, d, s)| (d - s).abs() > FIT_TOLERANCE * s)
+        .filter(|&(_, _, d, (s, allowed))| (d - s).abs() > allowed)
+        .map(|(key, what, d, (s, _))| (key, what, d, s))
         .collect()
 }
 

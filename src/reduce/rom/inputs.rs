@@ -71,6 +71,9 @@ pub enum RomError {
         set: String,
         msg: String,
     },
+    /// The crankcase does not leave room for a liner (1-based cylinder).
+    #[error("the crankcase around cylinder {cylinder}'s liner: {msg}")]
+    Fit { cylinder: usize, msg: String },
     #[error("engine assembly: {0}")]
     System(#[from] engine::SystemError),
     /// The component cache could not be read or written (the reduction itself succeeded or
@@ -94,7 +97,7 @@ impl RomError {
         use crate::fem::model::ModelError;
         use crate::reduce::craig_bampton::ReduceError;
         match self {
-            RomError::Set { .. } | RomError::PartCache(_) => 2,
+            RomError::Set { .. } | RomError::Fit { .. } | RomError::PartCache(_) => 2,
             RomError::Reduce(ReduceError::Interface { .. }) => 2,
             RomError::Reduce(
                 ReduceError::TooManyModes { .. } | ReduceError::Substructure { .. },
@@ -157,19 +160,26 @@ pub(super) fn block(
 pub(super) fn check_fit(inp: &RomInputs<'_>) -> Result<(), RomError> {
     let tol = 1e-4 * inp.pitch;
     for (c, &xc) in inp.axis_x.iter().enumerate() {
-        if let Some(n) = inp.crankcase.nodes.iter().position(|p| {
-            let r = ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
-            r < inp.fit_radius - tol && p[2] > tol && p[2] < inp.seat_z - tol
-        }) {
-            return Err(RomError::Set {
-                part: "crankcase".into(),
-                set: format!("bore {}", c + 1),
+        let radius = |p: &[f64; 3]| (p[0] - xc).hypot(p[1]);
+        if let Some(n) =
+            inp.crankcase.nodes.iter().position(|p| {
+                radius(p) < inp.fit_radius - tol && p[2] > tol && p[2] < inp.seat_z - tol
+            })
+        {
+            let p = inp.crankcase.nodes[n];
+            let mm = |v: f64| crate::text::num(v * 1e3);
+            return Err(RomError::Fit {
+                cylinder: c + 1,
                 msg: format!(
-                    "crankcase node {} at {:?} lies inside the liner of cylinder {}: the parts overlap (a bore smaller than the liner's outer diameter, or a crankcase deck off the engine frame: bore axes at x = {} m, y = 0, z up, even a fraction of a degree)",
+                    "crankcase node {} at ({}, {}, {}) mm is {} mm from the bore axis (x = {} mm, y = 0), inside the liner (radius {} mm) below its flange: the parts overlap (a crankcase bore narrower than the liner, or a crankcase deck off the engine frame: bore axes at x = {} mm, y = 0, z up; a tilt of even a fraction of a degree)",
                     n + 1,
-                    inp.crankcase.nodes[n],
-                    c + 1,
-                    crate::text::joined(&inp.axis_x, ", ")
+                    mm(p[0]),
+                    mm(p[1]),
+                    mm(p[2]),
+                    mm(radius(&p)),
+                    mm(xc),
+                    mm(inp.fit_radius),
+                    inp.axis_x.iter().map(|&x| mm(x)).collect::<Vec<_>>().join(", ")
                 ),
             });
         }
