@@ -232,6 +232,20 @@ fn decks_scene(dir: &Path) -> std::path::PathBuf {
     sp
 }
 
+/// Asserts that two `rom --json` outputs (the parametric engine's and its decks') give at
+/// least 10 system frequencies, the same within 1e-6 each (the bound's reason: the
+/// verification of the small engine as mm decks).
+fn same_system_frequencies(param: &serde_json::Value, decks: &serde_json::Value) {
+    let (a, b) = (frequencies(param), frequencies(decks));
+    assert!(a.len() >= 10 && a.len() == b.len(), "{a:?} {b:?}");
+    for (k, (fa, fb)) in a.iter().zip(&b).enumerate() {
+        assert!(
+            (fa - fb).abs() <= 1e-6 * fa,
+            "mode {k}: {fa} Hz parametric, {fb} Hz decks"
+        );
+    }
+}
+
 fn frequencies(v: &serde_json::Value) -> Vec<f64> {
     v["first_frequencies_hz"]
         .as_array()
@@ -257,15 +271,7 @@ fn verification_small_engine_as_mm_decks_gives_the_parametric_frequencies() {
     let sp = sp.display().to_string();
     let param = json(&linercav_output(&["rom", SMALL, "--json", "--no-cache"]));
     let decks = json(&linercav_output(&["rom", &sp, "--json", "--no-cache"]));
-    let (a, b) = (frequencies(&param), frequencies(&decks));
-    assert_eq!(a.len(), b.len());
-    assert!(a.len() >= 10);
-    for (k, (fa, fb)) in a.iter().zip(&b).enumerate() {
-        assert!(
-            (fa - fb).abs() <= 1e-6 * fa,
-            "mode {k}: {fa} Hz parametric, {fb} Hz decks"
-        );
-    }
+    same_system_frequencies(&param, &decks);
     let found = &decks["interfaces"];
     let sets = found["sets"].as_array().unwrap();
     let source = |part: &str, name: &str| {
@@ -317,14 +323,7 @@ fn verification_a_stepped_liner_as_mm_decks_gives_the_parametric_frequencies() {
         "--set",
         pilot,
     ]));
-    let (a, b) = (frequencies(&param), frequencies(&decks));
-    assert_eq!(a.len(), b.len());
-    for (k, (fa, fb)) in a.iter().zip(&b).enumerate() {
-        assert!(
-            (fa - fb).abs() <= 1e-6 * fa,
-            "mode {k}: {fa} Hz parametric, {fb} Hz decks"
-        );
-    }
+    same_system_frequencies(&param, &decks);
     let liner = &decks["interfaces"]["liner"];
     assert!((liner["pilot_radius"].as_f64().unwrap() - 0.070).abs() < 1e-9);
     assert!((liner["outer_radius"].as_f64().unwrap() - 0.0675).abs() < 1e-9);
@@ -362,14 +361,7 @@ fn regression_close_counterbores_of_a_deck_are_seated() {
         "--set",
         pitch,
     ]));
-    let (a, b) = (frequencies(&param), frequencies(&decks));
-    assert!(a.len() >= 10 && a.len() == b.len(), "{a:?} {b:?}");
-    for (k, (fa, fb)) in a.iter().zip(&b).enumerate() {
-        assert!(
-            (fa - fb).abs() <= 1e-6 * fa,
-            "mode {k}: {fa} Hz parametric, {fb} Hz decks"
-        );
-    }
+    same_system_frequencies(&param, &decks);
 }
 
 /// Regression: a crankcase deck with a stray element (a second piece, joined to nothing)

@@ -477,24 +477,26 @@ type FaceVisitor<'v> =
 
 /// Calls `f` for every boundary face (a face of one element only) of `mesh`.
 fn for_boundary_faces(mesh: &Mesh, f: &mut FaceVisitor<'_>) {
-    let key = |el: &[usize], face: &[usize]| {
-        let mut k: Vec<usize> = face.iter().map(|&a| el[a]).collect();
-        k.sort_unstable();
-        k
-    };
-    let mut count: std::collections::HashMap<Vec<usize>, u32> = std::collections::HashMap::new();
+    use std::collections::hash_map::Entry;
+    // each face once, in the elements' order, with the number of elements that hold it
+    let mut index: std::collections::HashMap<Vec<usize>, usize> = Default::default();
+    let mut faces = Vec::new();
     for (kind, el) in mesh.elements() {
         for &face in kind.faces() {
-            *count.entry(key(el, face)).or_default() += 1;
-        }
-    }
-    for (kind, el) in mesh.elements() {
-        for &face in kind.faces() {
-            if count[&key(el, face)] == 1 {
-                let c: Vec<[f64; 3]> = face.iter().map(|&a| mesh.nodes[el[a]]).collect();
-                f(kind, el, face, &c);
+            let mut key: Vec<usize> = face.iter().map(|&a| el[a]).collect();
+            key.sort_unstable();
+            match index.entry(key) {
+                Entry::Occupied(e) => faces[*e.get()] = None,
+                Entry::Vacant(e) => {
+                    e.insert(faces.len());
+                    faces.push(Some((kind, el, face)));
+                }
             }
         }
+    }
+    for (kind, el, face) in faces.into_iter().flatten() {
+        let c: Vec<[f64; 3]> = face.iter().map(|&a| mesh.nodes[el[a]]).collect();
+        f(kind, el, face, &c);
     }
 }
 
@@ -793,12 +795,12 @@ pub fn check_liner_deck_sets(
 }
 
 /// Narrows a found `lower_guide` (`found`: where each set came from) to the nodes where the
-/// liner's outer surface meets the guide bore: within `s.tol` of the set's largest radius (an
+/// liner's outer surface meets the guide bore: within `tol` (the liner's) of the set's largest radius (an
 /// O-ring groove's floor and a wet wall the band reaches are left out: a crankcase guide bore
 /// 20 mm longer than a stepped liner's pilot glued the wet wall across a 2.5 mm gap, +1.9 %
 /// on a frequency, exit 0). Returns the z-range of the nodes kept, None when the deck names
 /// the set or it is empty.
-pub fn trim_lower_guide(mesh: &mut Mesh, found: &mut [FoundSet]) -> Option<[f64; 2]> {
+pub fn trim_lower_guide(mesh: &mut Mesh, found: &mut [FoundSet], tol: f64) -> Option<[f64; 2]> {
     let f = found
         .iter_mut()
         .find(|f| f.name == "lower_guide" && f.source == "geometry")?;
@@ -806,7 +808,6 @@ pub fn trim_lower_guide(mesh: &mut Mesh, found: &mut [FoundSet]) -> Option<[f64;
     let r = |n: usize| nodes[n][0].hypot(nodes[n][1]);
     let set = mesh.node_sets.get("lower_guide")?;
     let top = set.iter().map(|&n| r(n)).fold(f64::NEG_INFINITY, f64::max);
-    let tol = 0.02 * mesh_size(mesh);
     let kept: Vec<usize> = set.iter().copied().filter(|&n| r(n) > top - tol).collect();
     let z = kept.iter().map(|&n| mesh.nodes[n][2]);
     let band = [

@@ -309,9 +309,12 @@ fn narrow_guide(
     cylinders: usize,
     found: &mut FoundInterfaces,
 ) {
+    let Some(liner_tol) = found.liner.map(|s| s.tol) else {
+        return;
+    };
     let (Some(guide), Some(band)) = (
         found.guide_band,
-        find::trim_lower_guide(liner, &mut found.sets),
+        find::trim_lower_guide(liner, &mut found.sets, liner_tol),
     ) else {
         return;
     };
