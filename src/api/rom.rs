@@ -224,6 +224,14 @@ pub fn interfaces_text(f: &crate::mesh::find::FoundInterfaces) -> String {
             f.crankcase_shift_z * 1e3
         );
     }
+    if f.crankcase_shift_xy != [0.0; 2] {
+        let _ = writeln!(
+            s,
+            "    crankcase moved by ({:.4}, {:.4}) mm across to centre its bores on the liners' axes",
+            f.crankcase_shift_xy[0] * 1e3,
+            f.crankcase_shift_xy[1] * 1e3
+        );
+    }
     for set in &f.sets {
         let _ = writeln!(
             s,

@@ -243,6 +243,7 @@ pub fn complete_engine(
                     path: p.to_path_buf(),
                     source,
                 })?;
+            found.crankcase_shift_xy = find::centre_crankcase(crankcase, frame.axis_x, &shape);
         }
         let analysis_z: Vec<f64> = frame.depths.iter().map(|d| shape.length - d).collect();
         let targets = find::CrankcaseTargets {

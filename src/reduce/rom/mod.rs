@@ -17,5 +17,6 @@ pub use model::*;
 /// 9: residual vectors and residual flexibility from the dropped modes' exact flexibility;
 /// 10: a crankcase deck's guide bore reaching below the liner's bottom no longer replaced by
 /// its deck bore, so an engine ROM built from such decks is not read again; 11: the build's
-/// warnings kept in `RomInfo::warnings`).
-pub const ROM_FORMAT: u32 = 11;
+/// warnings kept in `RomInfo::warnings`; 12: a crankcase deck off the frame by less than its
+/// mesh tolerance centred on the liners (`FoundInterfaces::crankcase_shift_xy`)).
+pub const ROM_FORMAT: u32 = 12;
