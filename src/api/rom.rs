@@ -217,6 +217,13 @@ pub fn interfaces_text(f: &crate::mesh::find::FoundInterfaces) -> String {
             g1 * 1e3
         );
     }
+    if f.liner_turn != 0.0 {
+        let _ = writeln!(
+            s,
+            "    liner turned by {:.4} deg about its axis: a column of its bore's nodes on the thrust line",
+            f.liner_turn.to_degrees()
+        );
+    }
     if f.crankcase_shift_z != 0.0 {
         let _ = writeln!(
             s,

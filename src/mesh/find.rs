@@ -96,6 +96,10 @@ pub struct FoundInterfaces {
     /// Rigid motion applied to the liner mesh: the axis found (deck frame) and the centre.
     pub liner_axis: Option<[f64; 3]>,
     pub liner_centre: Option<[f64; 3]>,
+    /// Turn applied to the liner about its axis to bring a column of bore nodes onto the
+    /// thrust line \[rad\].
+    #[serde(default)]
+    pub liner_turn: f64,
     /// z shift applied to the crankcase to seat cylinder 1's liner \[m\].
     pub crankcase_shift_z: f64,
     /// (x, y) shift applied to the crankcase to centre its bores on the liners' axes \[m\].
@@ -422,6 +426,47 @@ pub fn place_liner(mesh: &mut Mesh) -> Result<(LinerShape, [f64; 3], [f64; 3]), 
     mesh.nodes = pts;
     let shape = measure_liner(mesh, tol)?;
     Ok((shape, axis, centre_deck))
+}
+
+/// Turns a placed liner (own frame, shape `s`) about its axis so that a column of its bore's
+/// nodes lies on the thrust line (x = 0, y > 0), when none does and the column nearest to the
+/// line holds at least three nodes: a structured deck turned about its axis then has its
+/// thrust and anti-thrust lines as the generator's (without, they were empty, or widened to
+/// nodes 5 mm off the line). The liner is axisymmetric: the turn moves no surface. An
+/// unstructured deck (no column of three) is left as it is. Returns the turn \[rad\]: a
+/// column at angle phi from +y toward +x is turned by +phi, (x, y) -> (x cos phi - y sin phi,
+/// x sin phi + y cos phi).
+pub fn turn_liner_to_thrust_line(mesh: &mut Mesh, s: &LinerShape) -> f64 {
+    let tol = s.tol;
+    let bore: Vec<[f64; 2]> = mesh
+        .nodes
+        .iter()
+        .filter(|p| (p[0].hypot(p[1]) - s.inner_radius).abs() < tol && p[1] > 0.0)
+        .map(|p| [p[0], p[1]])
+        .collect();
+    if bore.iter().filter(|p| p[0].abs() < tol).count() >= 3 {
+        return 0.0;
+    }
+    let angle = |p: &[f64; 2]| p[0].atan2(p[1]);
+    let Some(phi) = bore
+        .iter()
+        .map(angle)
+        .min_by(|a, b| a.abs().total_cmp(&b.abs()))
+    else {
+        return 0.0;
+    };
+    let column = bore
+        .iter()
+        .filter(|p| (angle(p) - phi).abs() * s.inner_radius < tol)
+        .count();
+    if column < 3 {
+        return 0.0;
+    }
+    let (sn, cs) = phi.sin_cos();
+    for p in &mut mesh.nodes {
+        *p = [p[0] * cs - p[1] * sn, p[0] * sn + p[1] * cs, p[2]];
+    }
+    phi
 }
 
 /// Radii and heights of a liner in its own frame (module docs).
@@ -888,8 +933,11 @@ pub fn narrow_guides(cm: &mut Mesh, cylinders: usize, band: [f64; 2], found: &mu
 }
 
 /// A line set found with fewer than three nodes (an unstructured mesh has no nodes exactly on
-/// the thrust line) is widened: the surface nodes within h/2 of the line, at each height the
-/// one nearest to it.
+/// the thrust line) is widened: the surface nodes within w = h/2 of the line, at each height
+/// the one nearest to it; w doubled up to 2h while fewer than three heights are found (a
+/// coarse deck turned about its axis: bore nodes 5.6 mm apart around, none within 2.5 mm of
+/// the line; the set was empty, exit 2 without a cause). The detail gives the largest
+/// distance of a chosen node from the line.
 fn widen_line(
     mesh: &mut Mesh,
     out: &mut [FoundSet],
@@ -907,10 +955,35 @@ fn widen_line(
     if f.nodes >= 3 {
         return;
     }
+    let mut line: Vec<usize> = Vec::new();
+    for w in [0.5 * h, h, 2.0 * h] {
+        line = nearest_on_line(mesh, on, sign, w, h);
+        if line.len() >= 3 {
+            break;
+        }
+    }
+    let off = line
+        .iter()
+        .map(|&n| mesh.nodes[n][0].abs())
+        .fold(0.0, f64::max);
+    f.nodes = line.len();
+    f.detail += &format!(" (widened: nodes up to {off:.6} m off the line)");
+    mesh.node_sets.insert(name.into(), line);
+}
+
+/// The nodes `on` the surface within `w` of the line x = 0, sign y > 0, at each height (levels
+/// 0.25 h apart) the one nearest to it, bottom to top.
+fn nearest_on_line(
+    mesh: &Mesh,
+    on: &dyn Fn(usize, &[f64; 3]) -> bool,
+    sign: f64,
+    w: f64,
+    h: f64,
+) -> Vec<usize> {
     let mut cand: Vec<usize> = (0..mesh.nodes.len())
         .filter(|&n| {
             let p = mesh.nodes[n];
-            on(n, &p) && p[0].abs() < 0.5 * h && sign * p[1] > 0.0
+            on(n, &p) && p[0].abs() < w && sign * p[1] > 0.0
         })
         .collect();
     cand.sort_by(|&a, &b| mesh.nodes[a][2].total_cmp(&mesh.nodes[b][2]));
@@ -925,9 +998,7 @@ fn widen_line(
             _ => line.push(n),
         }
     }
-    f.nodes = line.len();
-    f.detail += &format!(" (widened to within {:.6} m of the line)", 0.5 * h);
-    mesh.node_sets.insert(name.into(), line);
+    line
 }
 
 /// Adds node set `name` of the nodes satisfying `pred` unless the mesh names it.

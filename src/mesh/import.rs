@@ -229,6 +229,7 @@ pub fn complete_engine(
             }
             found.liner_axis = Some(axis);
             found.liner_centre = Some(centre);
+            found.liner_turn = find::turn_liner_to_thrust_line(liner, &s);
             s
         }
         None => generated_shape,
