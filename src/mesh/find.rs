@@ -490,9 +490,15 @@ fn measure_liner(mesh: &Mesh, tol: f64) -> Result<LinerShape, FindError> {
         ));
     }
     let no_flange = || {
+        let mm = |v: f64| crate::text::num(v * 1e3);
         fail(
             "liner",
-            "no top flange found (no node outside the wall's outer radius): name the set 'flange_seat' in the deck".into(),
+            format!(
+                "no top flange found: no outer surface stands out of the wall (bore radius {} mm, largest radius {} mm, surfaces taken to {} mm, 0.02 of the median element edge): a deck that is not a flanged tube, or whose surfaces scatter more than that; name the set 'flange_seat' in the deck",
+                mm(inner),
+                mm(flange),
+                mm(tol)
+            ),
         )
     };
     let mid = 0.5 * (inner + middle);
