@@ -1197,10 +1197,8 @@ fn verification_a_lopsided_turned_liner_is_placed_on_its_bores_axis() {
         &nalgebra::Unit::new_normalize(nalgebra::Vector3::new(1.0, 2.0, 0.0)),
         0.2,
     );
-    for p in &mut lm.nodes {
-        let q = turn * nalgebra::Vector3::from(*p) + nalgebra::Vector3::new(0.1, -0.2, 0.3);
-        *p = [q[0], q[1], q[2]];
-    }
+    let shift = nalgebra::Vector3::new(0.1, -0.2, 0.3);
+    move_rigidly(&mut lm, &turn, shift);
     let want = turn * nalgebra::Vector3::z();
     let off = principal_axis_largest(&lm.nodes).angle(&want);
     let off = off.min(std::f64::consts::PI - off);
@@ -1208,10 +1206,31 @@ fn verification_a_lopsided_turned_liner_is_placed_on_its_bores_axis() {
         off > 1e-4,
         "the lopsided cloud's principal axis is only {off} rad off"
     );
-    let (found, axis, centre) = linercav::mesh::find::place_liner(&mut lm).unwrap();
+    assert_placed_back(&mut lm, &turn, shift, &shape);
+}
+
+/// p -> turn p + shift for every node of `lm`.
+fn move_rigidly(lm: &mut Mesh, turn: &nalgebra::Rotation3<f64>, shift: nalgebra::Vector3<f64>) {
+    for p in &mut lm.nodes {
+        let q = turn * nalgebra::Vector3::from(*p) + shift;
+        *p = [q[0], q[1], q[2]];
+    }
+}
+
+/// Asserts that `place_liner` finds the axis `turn e_z` within 1e-9 rad, the bottom centre
+/// `shift` and the generated `shape`'s bore, wet wall and length within 1e-9 m (exact
+/// geometry: roundoff).
+fn assert_placed_back(
+    lm: &mut Mesh,
+    turn: &nalgebra::Rotation3<f64>,
+    shift: nalgebra::Vector3<f64>,
+    shape: &LinerShape,
+) {
+    let (found, axis, centre) = linercav::mesh::find::place_liner(lm).unwrap();
+    let want = turn * nalgebra::Vector3::z();
     let got = nalgebra::Vector3::from(axis);
     assert!(got.angle(&want) < 1e-9, "axis {got:?}, want {want:?}");
-    let c = nalgebra::Vector3::from(centre) - nalgebra::Vector3::new(0.1, -0.2, 0.3);
+    let c = nalgebra::Vector3::from(centre) - shift;
     assert!(c.norm() < 1e-9, "bottom centre off by {c:?}");
     for (a, b, what) in [
         (found.inner_radius, shape.inner_radius, "bore"),
@@ -1259,23 +1278,8 @@ fn verification_a_liner_with_a_one_sided_bore_recess_is_placed_on_its_bores_axis
         0.3,
     );
     let shift = nalgebra::Vector3::new(-0.4, 0.2, 0.1);
-    for p in &mut lm.nodes {
-        let q = turn * nalgebra::Vector3::from(*p) + shift;
-        *p = [q[0], q[1], q[2]];
-    }
-    let (found, axis, centre) = linercav::mesh::find::place_liner(&mut lm).unwrap();
-    let want = turn * nalgebra::Vector3::z();
-    let got = nalgebra::Vector3::from(axis);
-    assert!(got.angle(&want) < 1e-9, "axis {got:?}, want {want:?}");
-    let c = nalgebra::Vector3::from(centre) - shift;
-    assert!(c.norm() < 1e-9, "bottom centre off by {c:?}");
-    for (a, b, what) in [
-        (found.inner_radius, shape.inner_radius, "bore"),
-        (found.outer_radius, shape.outer_radius, "wet wall"),
-        (found.length, shape.length, "length"),
-    ] {
-        assert!((a - b).abs() < 1e-9, "{what}: found {a} m, generated {b} m");
-    }
+    move_rigidly(&mut lm, &turn, shift);
+    assert_placed_back(&mut lm, &turn, shift, &shape);
 }
 
 /// Verification: the small engine's liner deck turned 5 deg about its own axis (a structured

@@ -243,12 +243,13 @@ fn circle_fit(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
 }
 
 /// The bore's centre (x, y) in the frame of `pts` (turned so that the axis is about z):
-/// Kasa's circle through the nodes within h / 4 of the smallest radius, refined twice from
-/// the nodes' mean, then fitted again without the nodes off it by more than `tol`.
+/// Kasa's circle through the nodes within h / 4 of the smallest radius, refined three times
+/// from the nodes' mean, then fitted again without the nodes off it by more than `tol`.
 fn bore_centre(pts: &[[f64; 3]], h: f64, tol: f64) -> [f64; 2] {
     let n = pts.len() as f64;
     let mut c = [0, 1].map(|a| pts.iter().map(|p| p[a]).sum::<f64>() / n);
-    for _ in 0..2 {
+    let mut last = None;
+    for _ in 0..3 {
         let r = |p: &[f64; 3]| (p[0] - c[0]).hypot(p[1] - c[1]);
         let rmin = pts.iter().map(r).fold(f64::INFINITY, f64::min);
         let bore: Vec<[f64; 2]> = pts
@@ -256,31 +257,25 @@ fn bore_centre(pts: &[[f64; 3]], h: f64, tol: f64) -> [f64; 2] {
             .filter(|p| r(p) < rmin + 0.25 * h)
             .map(|p| [p[0], p[1]])
             .collect();
-        if let Some((cc, _)) = circle_fit(&bore) {
+        if let Some((cc, radius)) = circle_fit(&bore) {
             c = cc;
+            last = Some((bore, radius));
         }
     }
     // once more without the nodes off the circle by more than tol (a recess on one side),
     // when at least half stay
-    let r = |p: &[f64; 3]| (p[0] - c[0]).hypot(p[1] - c[1]);
-    let rmin = pts.iter().map(r).fold(f64::INFINITY, f64::min);
-    let bore: Vec<[f64; 2]> = pts
+    let Some((bore, radius)) = last else {
+        return c;
+    };
+    let on: Vec<[f64; 2]> = bore
         .iter()
-        .filter(|p| r(p) < rmin + 0.25 * h)
-        .map(|p| [p[0], p[1]])
+        .filter(|p| ((p[0] - c[0]).hypot(p[1] - c[1]) - radius).abs() <= tol)
+        .copied()
         .collect();
-    if let Some((cc, radius)) = circle_fit(&bore) {
-        let on: Vec<[f64; 2]> = bore
-            .iter()
-            .filter(|p| ((p[0] - cc[0]).hypot(p[1] - cc[1]) - radius).abs() <= tol)
-            .copied()
-            .collect();
-        c = match circle_fit(&on) {
-            Some((trimmed, _)) if on.len() < bore.len() && 2 * on.len() >= bore.len() => trimmed,
-            _ => cc,
-        };
+    match circle_fit(&on) {
+        Some((trimmed, _)) if on.len() < bore.len() && 2 * on.len() >= bore.len() => trimmed,
+        _ => c,
     }
-    c
 }
 
 /// The bore's nodes of `pts` (turned so that the axis is about z, centre `c`): those within
