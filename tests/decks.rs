@@ -1419,3 +1419,93 @@ fn export_crankcase_mm_with_sets(out: &Path) {
     let (code, _, err) = linercav(&args);
     assert_eq!(code, 0, "{err}");
 }
+
+/// The small engine's crankcase deck (mm, no sets) given a counterbore `depth_mm` deep and as
+/// wide as the liner's flange: the deck plate (z 228..248 mm) inside the flange radius
+/// (74 mm) thinned from its top, z' = z - depth (z - 228) / 20, so the plate's top inside
+/// the flange becomes a floor `depth_mm` below the deck top and the nodes at r = 74 mm the
+/// counterbore's wall. `narrow = Some((c, r))` moves cylinder c's wall's top nodes in to
+/// r mm (a counterbore narrower than the flange there). Written to `out`.
+fn counterbored_crankcase(out: &Path, depth_mm: f64, narrow: Option<(usize, f64)>) {
+    export_mm("crankcase", &[], out);
+    edit_inp_nodes(out, &|p| {
+        let (c, xc) = if p[0] < 0.0 { (1, -76.0) } else { (2, 76.0) };
+        let (dx, r) = (p[0] - xc, (p[0] - xc).hypot(p[1]));
+        if r < 74.0 - 0.01 && p[2] > 228.0 + 0.01 {
+            return [p[0], p[1], p[2] - depth_mm * (p[2] - 228.0) / 20.0];
+        }
+        match narrow {
+            Some((k, to)) if k == c && (r - 74.0).abs() < 0.01 && p[2] > 248.0 - 0.01 => {
+                [xc + dx * to / r, p[1] * to / r, p[2]]
+            }
+            _ => p,
+        }
+    });
+}
+
+/// Regression (session 82's note): a crankcase deck whose counterbore (74 mm radius, 6 mm
+/// deep) is narrower than the liner deck's flange (widened to 75.5 mm) seated the liner on
+/// the deck top around the counterbore, a counterbore depth too high, exit 0. It is refused
+/// naming the cylinder, the radii and the floor's depth. The same crankcase under the
+/// unchanged liner (a counterbore exactly as wide as the flange) seats it on the floor: the
+/// crankcase is lifted by the depth (6 mm to roundoff: the deck's coordinates carry 16 digits).
+#[test]
+fn regression_a_counterbore_narrower_than_the_flange_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = decks_scene(dir.path());
+    counterbored_crankcase(&dir.path().join("cb.inp"), 6.0, None);
+    let with_cb = ["--set", "crankcase.mesh_file=\"cb.inp\""];
+    let run = |extra: &[&str]| {
+        let mut args = vec!["rom", scene.to_str().unwrap(), "--no-cache", "--json"];
+        args.extend(extra);
+        linercav(&args)
+    };
+    let (code, out, err) = run(&with_cb);
+    assert_eq!(code, 0, "{err}");
+    let fit = json(&out);
+    let lifted = fit["interfaces"]["crankcase_shift_z"].as_f64().unwrap();
+    let plain = json(&run(&[]).1)["interfaces"]["crankcase_shift_z"]
+        .as_f64()
+        .unwrap();
+    assert!((lifted - plain - 6e-3).abs() < 1e-9, "{lifted} {plain}");
+    // the liner's flange widened from 74 to 75.5 mm (its ring scaled from the bore, 67.5 mm)
+    edit_inp_nodes(&dir.path().join("liner.inp"), &|p| {
+        let r = p[0].hypot(p[1]);
+        if p[2] < 248.0 - 0.01 || r < 67.5 + 0.01 {
+            return p;
+        }
+        let k = (67.5 + (r - 67.5) * 8.0 / 6.5) / r;
+        [p[0] * k, p[1] * k, p[2]]
+    });
+    let (code, _, err) = run(&with_cb);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("cylinder 1: the liner's flange (radius 75.5 mm) would rest only on its rim, at r 74..75.5 mm")
+            && err.contains("the crankcase's counterbore is narrower than the flange; the counterbore's floor is 6 mm lower"),
+        "{err}"
+    );
+}
+
+/// Regression (session 82's note): cylinder 2's counterbore narrowed at its top to 72 mm
+/// against the flange's 74 mm (cylinder 1's as wide as the flange, so the crankcase is seated
+/// on the floors) put crankcase nodes inside the flange, which no check looked at (only the
+/// liner's wall below the flange), exit 0. It is refused naming the node and the cause.
+#[test]
+fn regression_a_crankcase_node_inside_the_flange_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = decks_scene(dir.path());
+    counterbored_crankcase(&dir.path().join("cb.inp"), 6.0, Some((2, 72.0)));
+    let (code, _, err) = linercav(&[
+        "rom",
+        scene.to_str().unwrap(),
+        "--no-cache",
+        "--set",
+        "crankcase.mesh_file=\"cb.inp\"",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("the crankcase around cylinder 2's liner: crankcase node")
+            && err.contains("mm is 72 mm from the bore axis (x = 76 mm, y = 0), inside the liner's flange (radius 74 mm): the parts overlap (a counterbore narrower than the liner's flange, or a crankcase deck off the engine frame"),
+        "{err}"
+    );
+}

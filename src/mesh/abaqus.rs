@@ -757,6 +757,16 @@ impl Reader {
             }
             (_, i) => i.map(str::to_string),
         };
+        if instance.is_none() {
+            // a set with no data lines is defined, empty (a *SOLID SECTION may name it)
+            let s = self.scope();
+            let sets = if nodes {
+                &mut s.node_sets
+            } else {
+                &mut s.element_sets
+            };
+            sets.entry(name.to_string()).or_insert((Vec::new(), loc));
+        }
         self.block = Block::Set {
             nodes,
             name: name.to_string(),
@@ -1883,6 +1893,14 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.line == 9 && e.msg.contains("three"), "{e}");
+        // an *ELSET with no data lines is defined, empty: its section assigns nothing (it was
+        // refused as "not defined"); element 2 moved to set one takes its material
+        let empty = deck.replace(
+            "*ELSET, ELSET=two\n2\n",
+            "*ELSET, ELSET=two\n*ELSET, ELSET=one\n2\n",
+        );
+        let m = parse(Path::new("t.inp"), &empty).unwrap();
+        assert_eq!(m.element_material, vec![0, 0]);
     }
 
     #[test]

@@ -780,6 +780,7 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
         // on the wet wall: a pilot's corner nearer the depth is not wetted
         let wet = |n: usize, p: &[f64; 3]| on_outer(n) && (r(p) - ro).abs() < tol;
         out.push(add_point(mesh, "liner", &name, target, &wet));
+        warn_point_off(mesh, &out[out.len() - 1], (k, d), s);
     }
     let h = s.tol / 0.02;
     let on_bore = |_: usize, p: &[f64; 3]| (r(p) - s.inner_radius).abs() < tol;
@@ -801,6 +802,32 @@ pub fn liner_sets(mesh: &mut Mesh, s: &LinerShape, t: &LinerTargets<'_>) -> Vec<
         }
     }
     out
+}
+
+/// Warns of an analysis point found (`f`, the set `point_<k+1>`) more than one element (the
+/// median edge h) from its depth `d` below the liner top: a deck coarse along the axis
+/// (a crowded one put them 7.3 mm off without a word) reports the response at the node found,
+/// not at the scene's depth (the rule [`check_liner_deck_sets`] applies to a deck's own
+/// points).
+fn warn_point_off(mesh: &Mesh, f: &FoundSet, (k, d): (usize, f64), s: &LinerShape) {
+    let Some(&[n]) = mesh.node_sets.get(&f.name).map(|v| &v[..]) else {
+        return;
+    };
+    if f.source != "geometry" {
+        return;
+    }
+    let depth = s.length - mesh.nodes[n][2];
+    let h = s.tol / 0.02;
+    if (depth - d).abs() > h {
+        crate::text::warn(format!(
+            "liner: analysis point {} found {} mm below the liner top, its nearest node on the wet wall's thrust side, against the {} mm the scene's liner.analysis_first_depth_mm and liner.analysis_spacing_mm give (more than the deck's median element edge, {} mm): reported at that node; refine the deck along the axis there or name the set {}",
+            k + 1,
+            crate::text::num(depth * 1e3),
+            crate::text::num(d * 1e3),
+            crate::text::num(h * 1e3),
+            f.name
+        ));
+    }
 }
 
 /// Checks the liner deck's own line and point sets (`found`: where each set came from) in the
@@ -1301,13 +1328,17 @@ pub fn crankcase_sets(
         // that check, naming it, rather than left out of the seat without a word.
         let rim = rf + tol.min(1e-4 * rf);
         let seat = move |_, p: &[f64; 3]| (p[2] - zs).abs() < tol && radius_about(p, xc) <= rim;
-        out.push(add_set(
+        let found_seat = add_set(
             cm,
             "crankcase",
             &format!("seat_{k}"),
             &seat,
             format!("z = {zs:.6} m, r <= {rf:.6} m"),
-        ));
+        );
+        if found_seat.source == "geometry" {
+            check_seat_ring(cm, (k, xc), s, tol)?;
+        }
+        out.push(found_seat);
         let name = format!("guide_{k}");
         if let Some(v) = cm.node_sets.get(&name) {
             out.push(found("crankcase", &name, "deck", v.len(), String::new()));
@@ -1357,6 +1388,56 @@ pub fn crankcase_sets(
         format!("z = {zs:.6} m"),
     ));
     Ok(out)
+}
+
+/// Refuses a seat found under only the rim of cylinder `k`'s flange: its nodes' smallest
+/// radius r_in about the bore axis beyond the middle of the flange's bearing ring,
+/// r_in > (r_p + r_f) / 2. That is a counterbore narrower than the flange: the highest
+/// crankcase node under the flange is then the deck top around the counterbore, so the liner
+/// was seated on the deck top a counterbore depth too high (exit 0 before). A chamfer at the
+/// bore's mouth takes far less than half the ring. The message gives the floor below (the
+/// highest node inside r_in, below the seat), when there is one.
+fn check_seat_ring(
+    cm: &Mesh,
+    (k, xc): (usize, f64),
+    s: &LinerShape,
+    tol: f64,
+) -> Result<(), FindError> {
+    let Some(seat) = cm.node_sets.get(&format!("seat_{k}")) else {
+        return Ok(());
+    };
+    let r_in = seat
+        .iter()
+        .map(|&n| radius_about(&cm.nodes[n], xc))
+        .fold(f64::INFINITY, f64::min);
+    if !(r_in.is_finite() && r_in > 0.5 * (s.pilot_radius + s.flange_radius)) {
+        return Ok(());
+    }
+    let floor = cm
+        .nodes
+        .iter()
+        .filter(|p| p[2] < s.seat_z - tol && radius_about(p, xc) < r_in - tol)
+        .filter(|p| radius_about(p, xc) > s.outer_radius - tol)
+        .map(|p| p[2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let mm = |v: f64| crate::text::num(v * 1e3);
+    let below = if floor.is_finite() {
+        format!(
+            "; the counterbore's floor is {} mm lower",
+            mm(s.seat_z - floor)
+        )
+    } else {
+        String::new()
+    };
+    Err(fail(
+        "crankcase",
+        format!(
+            "cylinder {k}: the liner's flange (radius {} mm) would rest only on its rim, at r {}..{} mm (the deck top around the counterbore): the crankcase's counterbore is narrower than the flange{below}; check the two decks' flange and counterbore diameters, or name the set seat_{k}",
+            mm(s.flange_radius),
+            mm(r_in),
+            mm(s.flange_radius)
+        ),
+    ))
 }
 
 /// A scene's box set: the nodes inside [x0, x1] x [y0, y1] x [z0, z1] \[m\].

@@ -593,6 +593,7 @@ pub fn rom_inputs<'a>(scene: &Scene, em: &'a EngineMeshes, keep_bases: bool) -> 
             CrankcaseSource::File(_) => em.shape.outer_radius,
             CrankcaseSource::Parametric { .. } => em.shape.pilot_radius,
         },
+        crankcase_deck: matches!(cc.source, CrankcaseSource::File(_)),
         flange_radius: em.shape.flange_radius,
         seat_z: em.shape.seat_z,
         guide_height: em.guide[1] - em.guide[0],

@@ -163,8 +163,10 @@ pub struct RawCrankcase {
     #[serde(default)]
     pub mesh_unit: Option<String>,
     /// Node sets of the crankcase defined by geometry: `[crankcase.sets.NAME] box_mm = [x0,
-    /// y0, z0, x1, y1, z1]` selects the nodes inside the box (the crankcase mesh's frame, the
-    /// engine frame, in mm whatever the mesh's unit), e.g. the fixed set named in `fix`.
+    /// y0, z0, x1, y1, z1]` selects the nodes inside the box, e.g. the fixed set named in
+    /// `fix`: in the crankcase mesh's own coordinates as read (a deck's, before linercav
+    /// seats it on the liners; the engine frame for a generated crankcase), in mm whatever
+    /// the mesh's unit.
     #[serde(default)]
     pub sets: BTreeMap<String, RawBoxSet>,
     /// Deck plate thickness below the liner flange seat \[mm\]. This and the other crankcase
@@ -191,9 +193,11 @@ pub struct RawCrankcase {
     /// `pan_rail`.
     #[serde(default)]
     pub fix: Vec<String>,
-    /// Optional mesh file (Gmsh MSH 4.1 `.msh`, Nastran `.bdf`/`.nas`, Abaqus `.inp`; path relative to the scene file) replacing the parametric
-    /// one; it must provide `seat_<c>`, `guide_<c>` and `point_<c>_<k>` node sets in the
-    /// engine frame (see the README).
+    /// Optional mesh file (Gmsh MSH 4.1 `.msh`, Nastran `.bdf`/`.nas`, Abaqus `.inp`; path
+    /// relative to the scene file) replacing the parametric one. Its bores' axes at the
+    /// engine frame's (x_c = (c - (N + 1) / 2) pitch, y = 0, z up) to its mesh tolerance;
+    /// linercav seats it on the liners' flanges (a z move) and finds the `seat_<c>`,
+    /// `guide_<c>`, `point_<c>_<k>` and `deck_top` sets it does not name (see the README).
     #[serde(default)]
     pub mesh_file: Option<String>,
     pub mesh: RawCrankcaseMesh,
@@ -413,8 +417,10 @@ pub struct RawLiner {
     pub analysis_spacing_mm: f64,
     /// Number of analysis points (paper: 4).
     pub analysis_points: usize,
-    /// Optional mesh file of the liner (Gmsh MSH 4.1 `.msh`, Nastran `.bdf`/`.nas`, Abaqus `.inp`; path relative to the scene file); replaces the
-    /// parametric mesh. It must provide the node sets the later stages use.
+    /// Optional mesh file of the liner (Gmsh MSH 4.1 `.msh`, Nastran `.bdf`/`.nas`, Abaqus
+    /// `.inp`; path relative to the scene file); replaces the parametric mesh. It may lie
+    /// anywhere in any orientation: linercav places it on its bore's axis in the liner's own
+    /// frame and finds the sets it does not name (see the README).
     #[serde(default)]
     pub mesh_file: Option<String>,
     /// Node sets held fixed in a stand-alone modal analysis (`modes --part liner`); empty for

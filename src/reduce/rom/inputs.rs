@@ -27,6 +27,9 @@ pub struct RomInputs<'a> {
     /// follow a stepped liner's own pilots (a lower guide narrower than the deck's pilot),
     /// so only its wet wall r_o is certain.
     pub fit_radius: f64,
+    /// The crankcase is a deck (not generated): the overlap refusals name its placement as a
+    /// cause.
+    pub crankcase_deck: bool,
     pub flange_radius: f64,
     pub seat_z: f64,
     pub guide_height: f64,
@@ -155,38 +158,78 @@ pub(super) fn block(
     })
 }
 
+/// Refuses a crankcase node inside cylinder `c`'s liner (0-based): within r_fit - tol of the
+/// bore axis between the liner's bottom and its flange's underside, or within r_f - tol
+/// between the underside and the liner's top (a counterbore narrower than the flange; before,
+/// only the first was checked and such a deck ran with the parts overlapping, exit 0).
+fn overlap(inp: &RomInputs<'_>, c: usize, tol: f64) -> Result<(), RomError> {
+    let xc = inp.axis_x[c];
+    let radius = |p: &[f64; 3]| (p[0] - xc).hypot(p[1]);
+    let top = inp
+        .liner
+        .nodes
+        .iter()
+        .map(|p| p[2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let inside = |p: &[f64; 3]| {
+        let (r, z) = (radius(p), p[2]);
+        (r < inp.fit_radius - tol && z > tol && z < inp.seat_z - tol)
+            || (r < inp.flange_radius - tol && z > inp.seat_z + tol && z < top - tol)
+    };
+    let Some(n) = inp.crankcase.nodes.iter().position(inside) else {
+        return Ok(());
+    };
+    let p = inp.crankcase.nodes[n];
+    let mm = |v: f64| crate::text::num(v * 1e3);
+    let (place, cause) = if p[2] < inp.seat_z {
+        (
+            format!(
+                "inside the liner (radius {} mm) below its flange",
+                mm(inp.fit_radius)
+            ),
+            "a crankcase bore narrower than the liner",
+        )
+    } else {
+        (
+            format!(
+                "inside the liner's flange (radius {} mm)",
+                mm(inp.flange_radius)
+            ),
+            "a counterbore narrower than the liner's flange",
+        )
+    };
+    let frame = if inp.crankcase_deck {
+        format!(
+            ", or a crankcase deck off the engine frame: bore axes at x = {} mm, y = 0, z up; a tilt of even a fraction of a degree",
+            inp.axis_x.iter().map(|&x| mm(x)).collect::<Vec<_>>().join(", ")
+        )
+    } else {
+        String::new()
+    };
+    Err(RomError::Fit {
+        cylinder: c + 1,
+        msg: format!(
+            "crankcase node {} at ({}, {}, {}) mm is {} mm from the bore axis (x = {} mm, y = 0), {place}: the parts overlap ({cause}{frame})",
+            n + 1,
+            mm(p[0]),
+            mm(p[1]),
+            mm(p[2]),
+            mm(radius(&p)),
+            mm(xc),
+        ),
+    })
+}
+
 /// Checks that the crankcase leaves room for each liner and seats it where the liner's
 /// flange is (part and set named in the error).
 pub(super) fn check_fit(inp: &RomInputs<'_>) -> Result<(), RomError> {
     let tol = 1e-4 * inp.pitch;
     for (c, &xc) in inp.axis_x.iter().enumerate() {
-        let radius = |p: &[f64; 3]| (p[0] - xc).hypot(p[1]);
-        if let Some(n) =
-            inp.crankcase.nodes.iter().position(|p| {
-                radius(p) < inp.fit_radius - tol && p[2] > tol && p[2] < inp.seat_z - tol
-            })
-        {
-            let p = inp.crankcase.nodes[n];
-            let mm = |v: f64| crate::text::num(v * 1e3);
-            return Err(RomError::Fit {
-                cylinder: c + 1,
-                msg: format!(
-                    "crankcase node {} at ({}, {}, {}) mm is {} mm from the bore axis (x = {} mm, y = 0), inside the liner (radius {} mm) below its flange: the parts overlap (a crankcase bore narrower than the liner, or a crankcase deck off the engine frame: bore axes at x = {} mm, y = 0, z up; a tilt of even a fraction of a degree)",
-                    n + 1,
-                    mm(p[0]),
-                    mm(p[1]),
-                    mm(p[2]),
-                    mm(radius(&p)),
-                    mm(xc),
-                    mm(inp.fit_radius),
-                    inp.axis_x.iter().map(|&x| mm(x)).collect::<Vec<_>>().join(", ")
-                ),
-            });
-        }
+        overlap(inp, c, tol)?;
         let seat = set(inp.crankcase, "crankcase", &format!("seat_{}", c + 1))?;
         for &n in seat {
             let p = inp.crankcase.nodes[n];
-            let r = ((p[0] - xc).powi(2) + p[1].powi(2)).sqrt();
+            let r = (p[0] - xc).hypot(p[1]);
             if (p[2] - inp.seat_z).abs() > tol || r > inp.flange_radius + tol {
                 return Err(RomError::Set {
                     part: "crankcase".into(),
