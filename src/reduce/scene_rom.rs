@@ -232,7 +232,28 @@ fn part_mesh(
     Ok((mesh, m, note))
 }
 
-/// The engine's meshes checked and compacted ([`check_and_compact`]), each liner
+/// Checks a part's mesh and compacts away the nodes no element uses ([`check_and_compact`],
+/// warning of them for a mesh file), before any set is found on it: a deck's stray nodes (a
+/// counterbore's elements taken out, construction points) were taken for its surfaces (the
+/// counterbore's floor found at the height of nodes no element held; exit 2 with a
+/// conditioning message).
+fn checked(mesh: &mut Mesh, file: Option<&Path>) -> Result<()> {
+    let report = check_and_compact(mesh).map_err(|source| SceneRomError::Mesh {
+        file: file.map(|p| p.display().to_string()),
+        source,
+    })?;
+    // (a file in pieces is refused next, `one_piece`; a generated mesh has no stray nodes)
+    if let (Some(p), true) = (file, report.removed_nodes > 0) {
+        crate::text::warn(format!(
+            "{}: {} node(s) belong to no solid element and were left out",
+            p.display(),
+            report.removed_nodes
+        ));
+    }
+    Ok(())
+}
+
+/// The engine's meshes (checked and compacted, [`checked`]): each liner
 /// surface-mass set a boundary surface, the engine model a mesh file makes within the
 /// limits (a file is sized only once read), and every fixed crankcase set present.
 fn check_engine_meshes(
@@ -241,10 +262,6 @@ fn check_engine_meshes(
     (lm, cm): (&mut Mesh, &mut Mesh),
     (lfile, cfile): (Option<&Path>, Option<&Path>),
 ) -> Result<()> {
-    check_and_compact(lm).map_err(|source| SceneRomError::Mesh {
-        file: lfile.map(|p| p.display().to_string()),
-        source,
-    })?;
     for sm in liner_surface_mass(scene) {
         if let Err(e) = crate::fem::surface::boundary_faces(lm, &sm.set) {
             return Err(SceneRomError::WetSurface {
@@ -255,10 +272,6 @@ fn check_engine_meshes(
             });
         }
     }
-    check_and_compact(cm).map_err(|source| SceneRomError::Mesh {
-        file: cfile.map(|p| p.display().to_string()),
-        source,
-    })?;
     // a mesh from a file is sized only once read: the engine model it makes is checked now
     if lfile.is_some() || cfile.is_some() {
         let cylinders = axis_x(scene).len();
@@ -374,6 +387,8 @@ fn load_meshes_for(scene: &Scene, split: budget::Split) -> Result<EngineMeshes> 
         cc.material,
         &scene.path,
     )?;
+    checked(&mut lm, lfile)?;
+    checked(&mut cm, cfile)?;
     one_piece(&lm, lfile, "liner")?;
     one_piece(&cm, cfile, "crankcase")?;
     let mut boxes = Vec::new();
