@@ -148,7 +148,8 @@ pub(super) fn block(
             part: part.into(),
             set: name.into(),
             msg: format!(
-                "cannot carry the interface field (conditioning {cond:.1e}): too few nodes, or all on one radius/height; refine the mesh there or lower rom.interface_harmonics"
+                "cannot carry the interface field (conditioning {cond:.1e}): {}; too few nodes, or all on one radius/height; refine the mesh there or lower rom.interface_harmonics",
+                spread(&coords, cx)
             ),
         });
     }
@@ -218,6 +219,30 @@ fn overlap(inp: &RomInputs<'_>, c: usize, tol: f64) -> Result<(), RomError> {
             mm(xc),
         ),
     })
+}
+
+/// Where an interface set's nodes `coords` lie about the bore axis at x = `cx`: their count
+/// and the ranges of radius and height, in mm (what a conditioning refusal needs to be acted on).
+fn spread(coords: &[[f64; 3]], cx: f64) -> String {
+    let range = |v: Vec<f64>| {
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mm = |x: f64| crate::text::num(x * 1e3);
+        if hi - lo < 1e-9 {
+            mm(lo)
+        } else {
+            format!("{}..{}", mm(lo), mm(hi))
+        }
+    };
+    if coords.is_empty() {
+        return "no nodes".into();
+    }
+    format!(
+        "its {} node(s) at r = {} mm about the bore axis, z = {} mm",
+        coords.len(),
+        range(coords.iter().map(|p| (p[0] - cx).hypot(p[1])).collect()),
+        range(coords.iter().map(|p| p[2]).collect())
+    )
 }
 
 /// Checks that the crankcase leaves room for each liner and seats it where the liner's
@@ -573,4 +598,30 @@ pub(super) fn crankcase_split(inp: &RomInputs<'_>) -> Option<crate::reduce::subs
         component_cutoff_factor: inp.component_cutoff_factor,
         enrichment: inp.cut_enrichment,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::spread;
+
+    #[test]
+    fn a_refused_sets_nodes_are_described_about_the_axis() {
+        // a flange rim: four nodes on one radius and height about x = 0.076 m
+        let rim: Vec<[f64; 3]> = (0..4)
+            .map(|k| {
+                let t = k as f64 * std::f64::consts::FRAC_PI_2;
+                [0.076 + 0.074 * t.cos(), 0.074 * t.sin(), 0.248]
+            })
+            .collect();
+        assert_eq!(
+            spread(&rim, 0.076),
+            "its 4 node(s) at r = 74 mm about the bore axis, z = 248 mm"
+        );
+        let band = [[0.0675, 0.0, 0.01], [0.0, 0.07, 0.04]];
+        assert_eq!(
+            spread(&band, 0.0),
+            "its 2 node(s) at r = 67.5..70 mm about the bore axis, z = 10..40 mm"
+        );
+        assert_eq!(spread(&[], 0.0), "no nodes");
+    }
 }
