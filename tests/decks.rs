@@ -1593,3 +1593,59 @@ fn regression_an_analysis_point_found_off_its_depth_is_warned_of() {
         "{err}"
     );
 }
+
+/// Regression (a review with Gmsh's decks, session 83): the small engine's liner drawn and
+/// meshed in Gmsh (`tests/fixtures/liner_gmsh_tet10.msh`, tet10 of 15 mm) has a few nodes
+/// within the surface tolerance of the thrust line's plane by chance, at the liner's ends:
+/// its anti-thrust and outer lines were 4 nodes each, and a finer Gmsh deck's bore line 3
+/// nodes at z = 0, 255 and 260 mm. The pistons' slices were spread between the ends and the
+/// peaks came out 50-60 % low against the parametric engine's, exit 0. Each line now covers
+/// its surface: no gap along it wider than 4 median element edges h (`find::LINE_GAP`), from
+/// the liner's bottom to its top (the outer line to the flange).
+#[test]
+fn regression_a_gmsh_liner_decks_thrust_lines_cover_the_liner() {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = std::fs::canonicalize("tests/fixtures/liner_gmsh_tet10.msh").unwrap();
+    let scene = std::fs::read_to_string(SMALL)
+        .unwrap()
+        .replace(
+            "[liner]\n",
+            &format!("[liner]\nmesh_file = {:?}\nmesh_unit = \"mm\"\n", deck.display()),
+        )
+        .replace(
+            "cache_dir = \".linercav-cache\"",
+            &format!("cache_dir = {:?}", dir.path().join("cache").display()),
+        );
+    let path = dir.path().join("engine.toml");
+    std::fs::write(&path, scene).unwrap();
+    let out = json(&linercav_output(&[
+        "rom",
+        path.to_str().unwrap(),
+        "--json",
+        "--no-cache",
+    ]));
+    let found = &out["interfaces"];
+    let h = found["liner"]["tol"].as_f64().unwrap() / 0.02;
+    let (length, seat) = (0.26, 0.248);
+    for name in ["bore_thrust", "bore_antithrust", "outer_thrust"] {
+        let set = found["sets"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["name"] == name)
+            .unwrap();
+        let detail = set["detail"].as_str().unwrap();
+        let gap: f64 = detail
+            .split("gaps up to ")
+            .nth(1)
+            .and_then(|t| t.split(' ').next())
+            .unwrap_or_else(|| panic!("{name}: {detail}"))
+            .parse()
+            .unwrap();
+        assert!(gap <= 4.0 * h, "{name}: {detail}, h = {h}");
+        // and it spans the surface: at least one node per 4 h over the length
+        let span = if name == "outer_thrust" { seat } else { length };
+        let nodes = set["nodes"].as_u64().unwrap() as f64;
+        assert!(nodes >= span / (4.0 * h), "{name}: {nodes} nodes, h = {h}");
+    }
+}
