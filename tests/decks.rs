@@ -1610,7 +1610,10 @@ fn regression_a_gmsh_liner_decks_thrust_lines_cover_the_liner() {
         .unwrap()
         .replace(
             "[liner]\n",
-            &format!("[liner]\nmesh_file = {:?}\nmesh_unit = \"mm\"\n", deck.display()),
+            &format!(
+                "[liner]\nmesh_file = {:?}\nmesh_unit = \"mm\"\n",
+                deck.display()
+            ),
         )
         .replace(
             "cache_dir = \".linercav-cache\"",
@@ -1648,4 +1651,46 @@ fn regression_a_gmsh_liner_decks_thrust_lines_cover_the_liner() {
         let nodes = set["nodes"].as_u64().unwrap() as f64;
         assert!(nodes >= span / (4.0 * h), "{name}: {nodes} nodes, h = {h}");
     }
+}
+
+/// Regression (a review with Gmsh's decks, session 83): a liner deck with no node row at the
+/// guide band's top (a hex20 deck made in Gmsh: its row below 30 mm at 29.76 mm) was taken
+/// for a pilot ending at that row: the crankcase's guide was narrowed to its rows below it (0
+/// and 15 mm) and refused for conditioning, with a warning that the guide bore is longer than
+/// the pilot, exit 2. Here the small engine's liner deck with its rows up to 53 mm moved down
+/// (30 -> 29.76 mm, linearly between 0 and 53 mm: the elements keep straight edges). The
+/// pilot is now measured by the faces on its radius, which run on past the row: the guide is
+/// coupled over its whole band, 0..30 mm, without a warning.
+#[test]
+fn regression_a_liner_deck_without_a_row_at_the_guides_top_is_coupled_over_the_guide() {
+    let dir = tempfile::tempdir().unwrap();
+    let deck = dir.path().join("liner.inp");
+    export_mm("liner", &[], &deck);
+    edit_inp_nodes(&deck, &|p| {
+        let z = match p[2] {
+            z if z <= 30.0 => z * 29.76 / 30.0,
+            z if z <= 53.0 => 29.76 + (z - 30.0) * (53.0 - 29.76) / 23.0,
+            z => z,
+        };
+        [p[0], p[1], z]
+    });
+    let scene = std::fs::read_to_string(SMALL)
+        .unwrap()
+        .replace(
+            "[liner]\n",
+            "[liner]\nmesh_file = \"liner.inp\"\nmesh_unit = \"mm\"\n",
+        )
+        .replace(
+            "cache_dir = \".linercav-cache\"",
+            &format!("cache_dir = {:?}", dir.path().join("cache").display()),
+        );
+    let path = dir.path().join("engine.toml");
+    std::fs::write(&path, scene).unwrap();
+    let (code, out, err) = linercav(&["rom", path.to_str().unwrap(), "--json", "--no-cache"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("is longer than the liner's pilot"), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let band = &v["interfaces"]["guide_band"];
+    let (z0, z1) = (band[0].as_f64().unwrap(), band[1].as_f64().unwrap());
+    assert!(z0.abs() < 1e-9 && (z1 - 0.030).abs() < 1e-9, "{band}");
 }

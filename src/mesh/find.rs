@@ -917,8 +917,10 @@ pub fn check_liner_deck_sets(
 /// liner's outer surface meets the guide bore: within `tol` (the liner's) of the set's largest radius (an
 /// O-ring groove's floor and a wet wall the band reaches are left out: a crankcase guide bore
 /// 20 mm longer than a stepped liner's pilot glued the wet wall across a 2.5 mm gap, +1.9 %
-/// on a frequency, exit 0). Returns the z-range of the nodes kept, None when the deck names
-/// the set or it is empty.
+/// on a frequency, exit 0). Returns the z-range of the pilot there: the nodes kept, widened by
+/// the element faces on the pilot's radius that reach them ([`radius_spans`]: a pilot runs on
+/// between node rows; a deck whose rows missed the guide's top by 0.24 mm was narrowed to its
+/// row below and refused for conditioning); None when the deck names the set or it is empty.
 pub fn trim_lower_guide(mesh: &mut Mesh, found: &mut [FoundSet], tol: f64) -> Option<[f64; 2]> {
     let f = found
         .iter_mut()
@@ -929,13 +931,47 @@ pub fn trim_lower_guide(mesh: &mut Mesh, found: &mut [FoundSet], tol: f64) -> Op
     let top = set.iter().map(|&n| r(n)).fold(f64::NEG_INFINITY, f64::max);
     let kept: Vec<usize> = set.iter().copied().filter(|&n| r(n) > top - tol).collect();
     let z = kept.iter().map(|&n| mesh.nodes[n][2]);
-    let band = [
+    let mut band = [
         z.clone().fold(f64::INFINITY, f64::min),
         z.fold(f64::NEG_INFINITY, f64::max),
     ];
+    for sp in radius_spans(mesh, top, tol) {
+        if sp[1] > band[0] - tol && sp[0] < band[1] + tol {
+            band = [band[0].min(sp[0]), band[1].max(sp[1])];
+        }
+    }
     f.nodes = kept.len();
     mesh.node_sets.insert("lower_guide".into(), kept);
     band[0].is_finite().then_some(band)
+}
+
+/// The z-spans, bottom to top and merged where they meet, of the liner's element faces on the
+/// radius `radius` (elements with three corners or more within `tol` of it, as
+/// [`bore_bands`] takes the crankcase's).
+fn radius_spans(mesh: &Mesh, radius: f64, tol: f64) -> Vec<[f64; 2]> {
+    let mut spans: Vec<[f64; 2]> = Vec::new();
+    for (kind, nodes) in mesh.elements() {
+        let z: Vec<f64> = nodes[..kind.num_corners()]
+            .iter()
+            .map(|&n| mesh.nodes[n])
+            .filter(|p| (p[0].hypot(p[1]) - radius).abs() < tol)
+            .map(|p| p[2])
+            .collect();
+        if z.len() >= 3 {
+            let lo = z.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            spans.push([lo, hi]);
+        }
+    }
+    spans.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    let mut merged: Vec<[f64; 2]> = Vec::new();
+    for sp in spans {
+        match merged.last_mut() {
+            Some(m) if sp[0] <= m[1] + tol => m[1] = m[1].max(sp[1]),
+            _ => merged.push(sp),
+        }
+    }
+    merged
 }
 
 /// Keeps of each crankcase set `guide_1` .. `guide_<cylinders>` the nodes within `band`
@@ -1013,9 +1049,7 @@ fn widen_line(
         .map(|&n| mesh.nodes[n][0].abs())
         .fold(0.0, f64::max);
     f.nodes = line.len();
-    f.detail += &format!(
-        " (widened: nodes up to {off:.6} m off the line, gaps up to {gap:.6} m)"
-    );
+    f.detail += &format!(" (widened: nodes up to {off:.6} m off the line, gaps up to {gap:.6} m)");
     if line.len() >= 3 && gap > LINE_GAP * h {
         crate::text::warn(format!(
             "liner: the line '{name}' has no node within {} mm of the thrust line's plane for {} mm of its length (nodes up to {} mm off it taken): the slices' forces there are spread over that gap; refine the deck there or name the set",

@@ -321,6 +321,8 @@ fn narrow_guide(
         return;
     };
     let tol = 0.02 * find::mesh_size(crankcase);
+    // the pilot beyond the crankcase's guide bore is not in it
+    let band = [band[0].max(guide[0]), band[1].min(guide[1])];
     if band[0] > guide[0] + tol || band[1] < guide[1] - tol {
         crate::text::warn(format!(
             "{}: the crankcase's guide bore (z {}..{} mm) is longer than the liner's pilot in it (z {}..{} mm): coupled over the pilot only; check the guide heights of the decks (or liner.guide_height_mm)",
