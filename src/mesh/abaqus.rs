@@ -722,7 +722,7 @@ impl Reader {
                     return fail(self, "without TYPE=".into());
                 };
                 let Some(kind) = solid_kind(t) else {
-                    return fail(self, format!("element type {t} is not supported (expected C3D4, C3D10, C3D8 or C3D20, with formulation letters R, I, H, M)"));
+                    return fail(self, format!("element type {t} is not supported (expected C3D4, C3D10, C3D8 or C3D20, with formulation letters R, I, H, M; a mesher's surface and edge elements: write the volume elements only, in Gmsh a physical volume group with Mesh.SaveAll = 0)"));
                 };
                 Block::Element {
                     kind,

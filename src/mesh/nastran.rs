@@ -745,7 +745,7 @@ fn hint(name: &str) -> &'static str {
     ]) {
         "properties other than PSOLID are not read: linercav reads solid elements only"
     } else if starts(&["C"]) {
-        "linercav reads the solid elements CTETRA (4 or 10 nodes) and CHEXA (8 or 20 nodes) only: mesh the part with them or remove the card"
+        "linercav reads the solid elements CTETRA (4 or 10 nodes) and CHEXA (8 or 20 nodes) only: mesh the part with them or remove the card (a mesher's surface and edge elements: write the volume elements only, in Gmsh a physical volume group with Mesh.SaveAll = 0)"
     } else {
         "linercav does not know it: remove it if it does not belong to the solid model"
     }
