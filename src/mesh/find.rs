@@ -918,7 +918,7 @@ pub fn check_liner_deck_sets(
 /// O-ring groove's floor and a wet wall the band reaches are left out: a crankcase guide bore
 /// 20 mm longer than a stepped liner's pilot glued the wet wall across a 2.5 mm gap, +1.9 %
 /// on a frequency, exit 0). Returns the z-range of the pilot there: the nodes kept, widened by
-/// the element faces on the pilot's radius that reach them ([`radius_spans`]: a pilot runs on
+/// the element faces on the pilot's radius that reach them (`radius_spans`: a pilot runs on
 /// between node rows; a deck whose rows missed the guide's top by 0.24 mm was narrowed to its
 /// row below and refused for conditioning); None when the deck names the set or it is empty.
 pub fn trim_lower_guide(mesh: &mut Mesh, found: &mut [FoundSet], tol: f64) -> Option<[f64; 2]> {
