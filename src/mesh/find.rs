@@ -1006,7 +1006,9 @@ pub fn narrow_guides(cm: &mut Mesh, cylinders: usize, band: [f64; 2], found: &mu
 /// taken. A Gmsh tet10 liner's bore line had three nodes on the line by chance, at z = 0, 255
 /// and 260 mm: the pistons' slices were spread between the ends and the peaks came out 50-60 %
 /// low, exit 0. The detail gives the largest distance of a chosen node from the line and the
-/// largest gap; a gap still wider than [`LINE_GAP`] h is warned of.
+/// largest gap; a widened line with a gap still wider than [`LINE_GAP`] h is warned of. A line
+/// as found that no widening improves (a structured deck coarse along the axis, whose line
+/// has a node at each of its rows) is kept without a word.
 fn widen_line(
     mesh: &mut Mesh,
     out: &mut [FoundSet],
