@@ -41,8 +41,9 @@ fn added_mass_along(dry: &FeModel, wet: &FeModel, dir: usize) -> f64 {
     u.iter().zip(&y).map(|(a, b)| a * b).sum()
 }
 
-/// The default liner's wet zone (outer surface from the guide band's top to the flange
-/// underside) is a cylinder of radius R_o and height L_w: a rigid translation across the axis
+/// The default liner's wet zone (outer surface from the guide band's top to the deck plate's
+/// underside, down to the mesh's last element level below it: the layer acts on whole faces)
+/// is a cylinder of radius R_o and height L_w: a rigid translation across the axis
 /// carries mu int(n_x^2) dA = mu pi R_o L_w, one along the axis nothing (the layer slides).
 /// The 20-node faces put every node on the circle; the quadratic arc between them deviates
 /// from the circle by O((pi/48)^4) ~ 2e-5 relative at 48 elements around, so 1e-4.
@@ -53,11 +54,18 @@ fn verification_rigid_motion_of_the_default_liner_sees_mu_pi_r_l() {
         panic!("default liner is parametric")
     };
     let mesh = generate(geometry, meshing);
+    let g = geometry;
+    let deck = g.deck_underside.expect("the default crankcase has a deck plate");
+    // the highest element level (corner height) at or below the deck's underside
+    let top = (mesh.elements())
+        .flat_map(|(kind, nodes)| nodes[..kind.num_corners()].to_vec())
+        .map(|n| mesh.nodes[n][2])
+        .filter(|&z| z < deck + 1e-9)
+        .fold(f64::NEG_INFINITY, f64::max);
     let mu = 4.5;
     let dry = FeModel::build(mesh.clone(), &IRON, &[]).unwrap();
     let wet_model = FeModel::build_with(mesh, &IRON, &[], &wet(mu)).unwrap();
-    let g = geometry;
-    let wet_length = (g.length - g.flange_height) - (g.guide_bottom + g.guide_height);
+    let wet_length = top - (g.guide_bottom + g.guide_height);
     let expected = mu * PI * g.outer_diameter / 2.0 * wet_length;
     for dir in [0, 1] {
         let got = added_mass_along(&dry, &wet_model, dir);

@@ -118,6 +118,34 @@ fn found_sets_equal_the_generators(sets: &[&str]) {
     }
 }
 
+/// Verification (session 84): the liner's wet surface is the coolant jacket's, from the guide
+/// band's top to the deck plate's underside (228 mm on the default engine: seat 248 mm, deck
+/// 20 mm); it reached the flange, so the coolant layer's mass and the maps covered the 20 mm
+/// the deck bore holds. Node heights are exact lattice values, so the bounds are to roundoff.
+#[test]
+fn verification_the_wet_surface_ends_at_the_deck_underside() {
+    let (lm, _, shape, ..) = default_meshes(&[]);
+    let scene = load_scene(Path::new("models/engine.toml"), &[]).unwrap();
+    let g = &scene.liner_geometry;
+    let cc = scene.crankcase.as_ref().unwrap();
+    let CrankcaseSource::Parametric { geometry: c, .. } = &cc.source else {
+        panic!("the crankcase is parametric")
+    };
+    let (guide_top, deck) = (g.guide_bottom + g.guide_height, c.seat_z - c.deck_thickness);
+    assert!((deck - (shape.seat_z - 0.020)).abs() < 1e-9, "{deck}");
+    let z: Vec<f64> = lm.node_sets["coolant_wetted"]
+        .iter()
+        .map(|&n| lm.nodes[n][2])
+        .collect();
+    let lo = z.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    assert!((lo - guide_top).abs() < 1e-9, "{lo} {guide_top}");
+    // the highest node level at or below the deck: the next one above lies above it
+    let above = lm.nodes.iter().map(|p| p[2]).filter(|&z| z > hi + 1e-9);
+    let next = above.fold(f64::INFINITY, f64::min);
+    assert!(hi <= deck + 1e-9 && next > deck + 1e-9, "{hi} {next} {deck}");
+}
+
 /// Asserts that `mesh`'s set `name` holds exactly `want`, naming a few nodes that differ.
 fn same_set(mesh: &Mesh, name: &str, want: &[usize], part: &str) {
     use std::collections::BTreeSet;
@@ -230,6 +258,27 @@ fn decks_scene(dir: &Path) -> std::path::PathBuf {
     let sp = dir.join("engine.toml");
     std::fs::write(&sp, small_engine_as_decks(dir)).unwrap();
     sp
+}
+
+/// Writes `dir/engine.toml`: the small engine with its liner from the mm deck `deck` and its
+/// cache in `dir`; returns its path.
+fn liner_deck_scene(dir: &Path, deck: &Path) -> std::path::PathBuf {
+    let scene = std::fs::read_to_string(SMALL)
+        .unwrap()
+        .replace(
+            "[liner]\n",
+            &format!(
+                "[liner]\nmesh_file = {:?}\nmesh_unit = \"mm\"\n",
+                deck.display()
+            ),
+        )
+        .replace(
+            "cache_dir = \".linercav-cache\"",
+            &format!("cache_dir = {:?}", dir.join("cache").display()),
+        );
+    let path = dir.join("engine.toml");
+    std::fs::write(&path, scene).unwrap();
+    path
 }
 
 /// Asserts that two `rom --json` outputs (the parametric engine's and its decks') give at
@@ -1606,21 +1655,7 @@ fn regression_an_analysis_point_found_off_its_depth_is_warned_of() {
 fn regression_a_gmsh_liner_decks_thrust_lines_cover_the_liner() {
     let dir = tempfile::tempdir().unwrap();
     let deck = std::fs::canonicalize("tests/fixtures/liner_gmsh_tet10.msh").unwrap();
-    let scene = std::fs::read_to_string(SMALL)
-        .unwrap()
-        .replace(
-            "[liner]\n",
-            &format!(
-                "[liner]\nmesh_file = {:?}\nmesh_unit = \"mm\"\n",
-                deck.display()
-            ),
-        )
-        .replace(
-            "cache_dir = \".linercav-cache\"",
-            &format!("cache_dir = {:?}", dir.path().join("cache").display()),
-        );
-    let path = dir.path().join("engine.toml");
-    std::fs::write(&path, scene).unwrap();
+    let path = liner_deck_scene(dir.path(), &deck);
     let out = json(&linercav_output(&[
         "rom",
         path.to_str().unwrap(),
@@ -1674,18 +1709,7 @@ fn regression_a_liner_deck_without_a_row_at_the_guides_top_is_coupled_over_the_g
         };
         [p[0], p[1], z]
     });
-    let scene = std::fs::read_to_string(SMALL)
-        .unwrap()
-        .replace(
-            "[liner]\n",
-            "[liner]\nmesh_file = \"liner.inp\"\nmesh_unit = \"mm\"\n",
-        )
-        .replace(
-            "cache_dir = \".linercav-cache\"",
-            &format!("cache_dir = {:?}", dir.path().join("cache").display()),
-        );
-    let path = dir.path().join("engine.toml");
-    std::fs::write(&path, scene).unwrap();
+    let path = liner_deck_scene(dir.path(), &deck);
     let (code, out, err) = linercav(&["rom", path.to_str().unwrap(), "--json", "--no-cache"]);
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("is longer than the liner's pilot"), "{err}");

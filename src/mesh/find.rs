@@ -946,23 +946,33 @@ pub fn trim_lower_guide(mesh: &mut Mesh, found: &mut [FoundSet], tol: f64) -> Op
 }
 
 /// The z-spans, bottom to top and merged where they meet, of the liner's element faces on the
-/// radius `radius` (elements with three corners or more within `tol` of it, as
-/// [`bore_bands`] takes the crankcase's).
+/// radius `radius` (within `tol`; faces as [`bore_bands`] takes the crankcase's).
 fn radius_spans(mesh: &Mesh, radius: f64, tol: f64) -> Vec<[f64; 2]> {
-    let mut spans: Vec<[f64; 2]> = Vec::new();
-    for (kind, nodes) in mesh.elements() {
+    let on = |p: &[f64; 3]| (p[0].hypot(p[1]) - radius).abs() < tol;
+    merge_spans(face_spans(mesh, on).collect(), tol)
+}
+
+/// The z-extent [lo, hi] of every element face with three corners or more where `on` holds.
+fn face_spans<'a>(
+    mesh: &'a Mesh,
+    on: impl Fn(&[f64; 3]) -> bool + 'a,
+) -> impl Iterator<Item = [f64; 2]> + 'a {
+    mesh.elements().filter_map(move |(kind, nodes)| {
         let z: Vec<f64> = nodes[..kind.num_corners()]
             .iter()
-            .map(|&n| mesh.nodes[n])
-            .filter(|p| (p[0].hypot(p[1]) - radius).abs() < tol)
+            .map(|&n| &mesh.nodes[n])
+            .filter(|p| on(p))
             .map(|p| p[2])
             .collect();
-        if z.len() >= 3 {
+        (z.len() >= 3).then(|| {
             let lo = z.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            spans.push([lo, hi]);
-        }
-    }
+            [lo, z.iter().copied().fold(f64::NEG_INFINITY, f64::max)]
+        })
+    })
+}
+
+/// `spans` sorted by their bottoms, those that meet (within `tol`) merged.
+fn merge_spans(mut spans: Vec<[f64; 2]>, tol: f64) -> Vec<[f64; 2]> {
     spans.sort_by(|a, b| a[0].total_cmp(&b[0]));
     let mut merged: Vec<[f64; 2]> = Vec::new();
     for sp in spans {
@@ -1285,37 +1295,67 @@ pub fn guide_band(cm: &Mesh, xc: f64, s: &LinerShape) -> Option<([f64; 2], f64)>
 /// between the liner's bottom and its seat, merged where they meet, cut at the liner's bottom
 /// z = 0. Also returns how far those faces reach below the liner's bottom \[m\] (<= 0: none).
 fn bore_bands(cm: &Mesh, xc: f64, s: &LinerShape, tol: f64) -> (Vec<[f64; 2]>, f64) {
-    let mut spans: Vec<[f64; 2]> = Vec::new();
     let mut below = f64::NEG_INFINITY;
-    for (kind, nodes) in cm.elements() {
-        let on: Vec<f64> = nodes[..kind.num_corners()]
-            .iter()
-            .map(|&n| cm.nodes[n])
-            .filter(|p| s.holds(radius_about(p, xc), tol))
-            .map(|p| p[2])
-            .collect();
-        if on.len() >= 3 {
-            let lo = on.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = on.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            // faces along the liner, between its bottom and its seat; a face reaching below
-            // the liner's bottom (a crankcase seated lower, its guide bore longer than the
-            // liner) counts from the bottom up: dropped, the band above it was taken for the
-            // guide and the liner hung from its deck bore (the small engine's slap +30-39 %)
-            if hi > tol && hi > lo + tol && hi < s.seat_z + tol {
-                below = below.max(-lo);
-                spans.push([lo.max(0.0), hi]);
-            }
-        }
+    let on = |p: &[f64; 3]| s.holds(radius_about(p, xc), tol);
+    let spans = face_spans(cm, on)
+        // faces along the liner, between its bottom and its seat; a face reaching below
+        // the liner's bottom (a crankcase seated lower, its guide bore longer than the
+        // liner) counts from the bottom up: dropped, the band above it was taken for the
+        // guide and the liner hung from its deck bore (the small engine's slap +30-39 %)
+        .filter(|&[lo, hi]| hi > tol && hi > lo + tol && hi < s.seat_z + tol)
+        .map(|[lo, hi]| {
+            below = below.max(-lo);
+            [lo.max(0.0), hi]
+        })
+        .collect();
+    (merge_spans(spans, tol), below)
+}
+
+/// The top z of the crankcase's set `guide_<k>` (-inf without one).
+fn guide_top(cm: &Mesh, k: usize) -> f64 {
+    let guide = cm.node_set(&format!("guide_{k}")).unwrap_or(&[]);
+    guide
+        .iter()
+        .map(|&n| cm.nodes[n][2])
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The underside of the deck plate's bore at cylinder `k`'s axis x = `xc` (liner frame): the
+/// lowest z of the [`bore_bands`] band that meets the seat, when it lies above the guide set's
+/// top. From there up the deck holds the liner and no coolant wets it. None: the bore has no
+/// such band (the liner is held only at its flange and guide).
+pub fn deck_underside(cm: &Mesh, (k, xc): (usize, f64), s: &LinerShape, tol: f64) -> Option<f64> {
+    let (bands, _) = bore_bands(cm, xc, s, tol);
+    let top = guide_top(cm, k);
+    bands
+        .last()
+        .filter(|b| b[1] >= s.seat_z - tol && b[0] > top)
+        .map(|b| b[0])
+}
+
+/// Keeps of the liner's wet surface (`coolant_wetted`) the nodes at most `deck` high (within
+/// the liner's tolerance), updating its count and detail in `found` when it was found or
+/// generated there (a set named in the liner's deck is the user's: kept as named).
+pub fn trim_wet_zone(liner: &mut Mesh, s: &LinerShape, deck: f64, found: &mut [FoundSet]) {
+    let name = super::liner::COOLANT_WETTED;
+    let entry = found.iter_mut().find(|f| f.name == name && f.part == "liner");
+    if entry.as_ref().is_some_and(|f| f.source == "deck") {
+        return;
     }
-    spans.sort_by(|a, b| a[0].total_cmp(&b[0]));
-    let mut bands: Vec<[f64; 2]> = Vec::new();
-    for sp in spans {
-        match bands.last_mut() {
-            Some(b) if sp[0] <= b[1] + tol => b[1] = b[1].max(sp[1]),
-            _ => bands.push(sp),
-        }
+    let nodes = &liner.nodes;
+    let Some(set) = liner.node_sets.get_mut(name) else {
+        return;
+    };
+    set.retain(|&n| nodes[n][2] < deck + s.tol);
+    let z = set.iter().map(|&n| nodes[n][2]);
+    let lo = z.clone().fold(f64::INFINITY, f64::min);
+    let hi = z.fold(f64::NEG_INFINITY, f64::max);
+    if let Some(f) = entry {
+        f.nodes = set.len();
+        f.detail = format!(
+            "the outer wall, z {lo:.6}..{hi:.6} m: from the guide band's top to the deck plate's underside at z {deck:.6} m (the deck bore holds the liner above it)"
+        );
     }
-    (bands, below)
 }
 
 /// Checks that cylinder `k`'s analysis heights (`analysis_z`, liner frame) lie in its coolant
@@ -1331,16 +1371,8 @@ fn check_coolant_zone(
     analysis_z: &[f64],
     tol: f64,
 ) -> Result<(), FindError> {
-    let guide = cm.node_set(&format!("guide_{k}")).unwrap_or(&[]);
-    let guide_top = guide
-        .iter()
-        .map(|&n| cm.nodes[n][2])
-        .fold(f64::NEG_INFINITY, f64::max);
-    let (bands, _) = bore_bands(cm, xc, s, tol);
-    let deck = bands
-        .last()
-        .filter(|b| b[1] >= s.seat_z - tol && b[0] > guide_top)
-        .map_or(f64::INFINITY, |b| b[0]);
+    let guide_top = guide_top(cm, k);
+    let deck = deck_underside(cm, (k, xc), s, tol).unwrap_or(f64::INFINITY);
     let mm = |z: f64| crate::text::num((s.length - z) * 1e3);
     for (j, &z) in analysis_z.iter().enumerate() {
         let place = if z > deck - tol {

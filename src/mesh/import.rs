@@ -298,6 +298,14 @@ pub fn complete_engine(
         found.sets = sets;
         narrow_guide(p, liner, crankcase, frame.axis_x.len(), &mut found);
     }
+    // no coolant where the deck plate's bore holds the liner (the lowest deck over the bores)
+    let tol = 0.02 * find::mesh_size(crankcase);
+    let deck = (frame.axis_x.iter().enumerate())
+        .filter_map(|(c, &xc)| find::deck_underside(crankcase, (c + 1, xc), &shape, tol))
+        .fold(f64::INFINITY, f64::min);
+    if deck.is_finite() {
+        find::trim_wet_zone(liner, &shape, deck, &mut found.sets);
+    }
     Ok(found)
 }
 

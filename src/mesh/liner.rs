@@ -20,7 +20,8 @@
 //! - `bore_thrust`, `bore_antithrust`: bore lines at theta = 90 and 270 deg (piston contact),
 //! - `outer_thrust`: coolant-side line at theta = 90 deg,
 //! - `coolant_wetted`: the outer surface in the coolant zone, from the guide band's top up to
-//!   the flange underside (where a coolant layer's mass acts, `fem::surface`),
+//!   the deck's underside (the flange underside without a deck): where a coolant layer's
+//!   mass acts (`fem::surface`) and the maps are drawn,
 //! - `point_1` .. `point_n`: single coolant-side nodes on the thrust side, top to bottom.
 
 use super::lattice::{level_at, subdivide, Key, Lattice};
@@ -144,6 +145,22 @@ fn levels(geo: &LinerGeometry, meshing: &LinerMeshing) -> (Vec<f64>, Vec<f64>, O
     (r_levels, z_levels, deck)
 }
 
+/// The doubled lattice index (mid-side nodes odd) of the wet zone's top: the highest node
+/// level at or below the deck's underside (the liner enters the deck bore there; no coolant
+/// above it), or the flange underside without a deck (or with one outside the guide band's
+/// top .. the flange). The same nodes as the found set's rule, z <= the deck's underside.
+fn wet_top_index(geo: &LinerGeometry, z_levels: &[f64]) -> usize {
+    let z_flange = geo.length - geo.flange_height;
+    let guide_top = geo.guide_bottom + geo.guide_height;
+    let top = geo
+        .deck_underside
+        .filter(|&d| d > guide_top && d < z_flange)
+        .unwrap_or(z_flange);
+    (0..2 * z_levels.len() - 1)
+        .rposition(|k| level_at(z_levels, k) < top + 1e-9)
+        .unwrap_or(0)
+}
+
 /// Where the named sets lie in the lattice.
 struct SetLevels<'a> {
     z_levels: &'a [f64],
@@ -200,9 +217,10 @@ fn named_sets(
         "outer_thrust".into(),
         select(&|k| k[0] == iwall && k[1] == jthrust && k[2] <= kf),
     );
+    let kwet = wet_top_index(geo, l.z_levels);
     sets.insert(
         COOLANT_WETTED.into(),
-        select(&|k| k[0] == iwall && k[2] >= kguide1 && k[2] <= kf),
+        select(&|k| k[0] == iwall && k[2] >= kguide1 && k[2] <= kwet),
     );
     for (p, d) in geo.analysis_depths.iter().enumerate() {
         let kz = z_index(geo.length - d);

@@ -108,8 +108,9 @@ pub struct RawCavitation {
     /// high-risk and k_p replace the defaults; not allowed together with the three keys above.
     #[serde(default)]
     pub calibration_file: Option<String>,
-    /// Coolant carried by the liner's wet outer surface (flange underside down to the guide
-    /// band, node set `coolant_wetted`): "none" (default; the reference study's model) or
+    /// Coolant carried by the liner's wet outer surface (the guide band's top up to the deck's
+    /// underside, where the liner enters the deck bore, or to the flange without one; node
+    /// set `coolant_wetted`): "none" (default; the reference study's model) or
     /// "layer": the gap's coolant column moves with the wall's normal motion, a normal mass
     /// rho h per unit area (rho of the coolant above, h = `gap_mm`; the same column whose
     /// pressure difference rho a h the cavitation number uses). Part of the ROM: a scene with

@@ -163,15 +163,10 @@ pub(super) fn block(
 /// bore axis between the liner's bottom and its flange's underside, or within r_f - tol
 /// between the underside and the liner's top (a counterbore narrower than the flange; before,
 /// only the first was checked and such a deck ran with the parts overlapping, exit 0).
-fn overlap(inp: &RomInputs<'_>, c: usize, tol: f64) -> Result<(), RomError> {
+/// `top` is the liner's top z.
+fn overlap(inp: &RomInputs<'_>, c: usize, top: f64, tol: f64) -> Result<(), RomError> {
     let xc = inp.axis_x[c];
     let radius = |p: &[f64; 3]| (p[0] - xc).hypot(p[1]);
-    let top = inp
-        .liner
-        .nodes
-        .iter()
-        .map(|p| p[2])
-        .fold(f64::NEG_INFINITY, f64::max);
     let inside = |p: &[f64; 3]| {
         let (r, z) = (radius(p), p[2]);
         (r < inp.fit_radius - tol && z > tol && z < inp.seat_z - tol)
@@ -249,8 +244,14 @@ fn spread(coords: &[[f64; 3]], cx: f64) -> String {
 /// flange is (part and set named in the error).
 pub(super) fn check_fit(inp: &RomInputs<'_>) -> Result<(), RomError> {
     let tol = 1e-4 * inp.pitch;
+    let top = inp
+        .liner
+        .nodes
+        .iter()
+        .map(|p| p[2])
+        .fold(f64::NEG_INFINITY, f64::max);
     for (c, &xc) in inp.axis_x.iter().enumerate() {
-        overlap(inp, c, tol)?;
+        overlap(inp, c, top, tol)?;
         let seat = set(inp.crankcase, "crankcase", &format!("seat_{}", c + 1))?;
         for &n in seat {
             let p = inp.crankcase.nodes[n];

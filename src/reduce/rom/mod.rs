@@ -18,5 +18,7 @@ pub use model::*;
 /// 10: a crankcase deck's guide bore reaching below the liner's bottom no longer replaced by
 /// its deck bore, so an engine ROM built from such decks is not read again; 11: the build's
 /// warnings kept in `RomInfo::warnings`; 12: a crankcase deck off the frame by less than its
-/// mesh tolerance centred on the liners (`FoundInterfaces::crankcase_shift_xy`)).
-pub const ROM_FORMAT: u32 = 12;
+/// mesh tolerance centred on the liners (`FoundInterfaces::crankcase_shift_xy`); 13: the
+/// liner's wet surface ends at the deck plate's underside, which moves the coolant layer's
+/// mass and the maps' rows).
+pub const ROM_FORMAT: u32 = 13;
