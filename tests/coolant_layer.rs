@@ -55,7 +55,9 @@ fn verification_rigid_motion_of_the_default_liner_sees_mu_pi_r_l() {
     };
     let mesh = generate(geometry, meshing);
     let g = geometry;
-    let deck = g.deck_underside.expect("the default crankcase has a deck plate");
+    let deck = g
+        .deck_underside
+        .expect("the default crankcase has a deck plate");
     // the highest element level (corner height) at or below the deck's underside
     let top = (mesh.elements())
         .flat_map(|(kind, nodes)| nodes[..kind.num_corners()].to_vec())

@@ -143,7 +143,10 @@ fn verification_the_wet_surface_ends_at_the_deck_underside() {
     // the highest node level at or below the deck: the next one above lies above it
     let above = lm.nodes.iter().map(|p| p[2]).filter(|&z| z > hi + 1e-9);
     let next = above.fold(f64::INFINITY, f64::min);
-    assert!(hi <= deck + 1e-9 && next > deck + 1e-9, "{hi} {next} {deck}");
+    assert!(
+        hi <= deck + 1e-9 && next > deck + 1e-9,
+        "{hi} {next} {deck}"
+    );
 }
 
 /// Asserts that `mesh`'s set `name` holds exactly `want`, naming a few nodes that differ.

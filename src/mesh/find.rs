@@ -1338,7 +1338,9 @@ pub fn deck_underside(cm: &Mesh, (k, xc): (usize, f64), s: &LinerShape, tol: f64
 /// generated there (a set named in the liner's deck is the user's: kept as named).
 pub fn trim_wet_zone(liner: &mut Mesh, s: &LinerShape, deck: f64, found: &mut [FoundSet]) {
     let name = super::liner::COOLANT_WETTED;
-    let entry = found.iter_mut().find(|f| f.name == name && f.part == "liner");
+    let entry = found
+        .iter_mut()
+        .find(|f| f.name == name && f.part == "liner");
     if entry.as_ref().is_some_and(|f| f.source == "deck") {
         return;
     }

@@ -298,15 +298,23 @@ pub fn complete_engine(
         found.sets = sets;
         narrow_guide(p, liner, crankcase, frame.axis_x.len(), &mut found);
     }
-    // no coolant where the deck plate's bore holds the liner (the lowest deck over the bores)
+    dry_deck_bore(liner, crankcase, frame.axis_x, &mut found);
+    Ok(found)
+}
+
+/// Takes the deck plate's bore out of the liner's wet surface: no coolant where the deck holds
+/// the liner, from the lowest of the bores' deck undersides ([`find::deck_underside`]) up.
+fn dry_deck_bore(liner: &mut Mesh, crankcase: &Mesh, axis_x: &[f64], found: &mut FoundInterfaces) {
+    let Some(shape) = found.liner else {
+        return;
+    };
     let tol = 0.02 * find::mesh_size(crankcase);
-    let deck = (frame.axis_x.iter().enumerate())
+    let deck = (axis_x.iter().enumerate())
         .filter_map(|(c, &xc)| find::deck_underside(crankcase, (c + 1, xc), &shape, tol))
         .fold(f64::INFINITY, f64::min);
     if deck.is_finite() {
         find::trim_wet_zone(liner, &shape, deck, &mut found.sets);
     }
-    Ok(found)
 }
 
 /// Narrows the guide band (`found.guide_band`) of a liner deck at `p` to where the liner's
