@@ -463,10 +463,9 @@ fn validation_interior_point_most_active() {
 ///   liner wall's kinetic energy to a mode; f by at most 2.3 % here).
 /// - The peaks move by a few percent, as the study's 6 %: at the study's measuring point and
 ///   on average over the 24 points by less than twice 6 %, the engine's mean by less than 6 %.
-///   (Measured: band modes -0.0 to -0.3 %; cylinder 1 point 4 +4 %; mean |change| 5 % with
-///   single points up to 16 % where the dense 1.84-1.89 kHz family reshuffles; engine mean
-///   -0.2 %. The dry model's own realisation spread, damping 0.0199 against 0.02: mean
-///   |change| 2.6 %.) What fails: a layer as heavy as a closed annulus's thin-gap added mass
+///   (Measured 2026-12-02, the wet zone ending at the deck's underside: band modes -0.00 to
+///   -0.26 %; cylinder 1 point 4 +3.3 %; mean |change| 2.7 %; engine mean +2.6 %. The dry
+///   model's own realisation spread, damping 0.0199 against 0.02: mean |change| 2.6 %.) What fails: a layer as heavy as a closed annulus's thin-gap added mass
 ///   (rho R^2 / (n^2 h), 2.6 times the wall's for ovalling, n = 2) would pull the
 ///   liner-dominated band modes down by tens of percent.
 #[test]
@@ -489,6 +488,13 @@ fn validation_leaving_out_the_coolant_costs_a_few_percent() {
         .filter(|&f| f <= band)
         .collect();
     let wet_f = &wet_rom.frequencies_hz[..dry_f.len()];
+    let shift = dry_f.iter().zip(wet_f).map(|(d, w)| 100.0 * (w / d - 1.0));
+    println!(
+        "coolant layer: {} band modes, f change {:+.2} to {:+.2} %",
+        dry_f.len(),
+        shift.clone().fold(f64::INFINITY, f64::min),
+        shift.fold(f64::NEG_INFINITY, f64::max)
+    );
     for (k, (d, w)) in dry_f.iter().zip(wet_f).enumerate() {
         let drop = 1.0 - (w / d).powi(2);
         assert!(
