@@ -1321,7 +1321,7 @@ fn guide_top(cm: &Mesh, k: usize) -> f64 {
 }
 
 /// The underside of the deck plate's bore at cylinder `k`'s axis x = `xc` (liner frame): the
-/// lowest z of the [`bore_bands`] band that meets the seat, when it lies above the guide set's
+/// lowest z of the `bore_bands` band that meets the seat, when it lies above the guide set's
 /// top. From there up the deck holds the liner and no coolant wets it. None: the bore has no
 /// such band (the liner is held only at its flange and guide).
 pub fn deck_underside(cm: &Mesh, (k, xc): (usize, f64), s: &LinerShape, tol: f64) -> Option<f64> {
