@@ -367,17 +367,7 @@ fn verification_the_coolant_layer_on_mm_decks_gives_the_parametric_frequencies()
     };
     let param = layer(Path::new(SMALL));
     same_system_frequencies(&param, &layer(&decks_scene(dir.path())));
-    let (code, _, err) = linercav(&[
-        "export-mesh",
-        SMALL,
-        "--part",
-        "crankcase",
-        "--unit",
-        "mm",
-        "--out",
-        dir.path().join("cc.inp").to_str().unwrap(),
-    ]);
-    assert_eq!(code, 0, "{err}");
+    export_crankcase_mm_with_sets(&dir.path().join("cc.inp"));
     let scene = std::fs::read_to_string(SMALL)
         .unwrap()
         .replace(

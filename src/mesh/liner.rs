@@ -150,12 +150,7 @@ fn levels(geo: &LinerGeometry, meshing: &LinerMeshing) -> (Vec<f64>, Vec<f64>, O
 /// above it), or the flange underside without a deck (or with one outside the guide band's
 /// top .. the flange). The same nodes as the found set's rule, z <= the deck's underside.
 fn wet_top_index(geo: &LinerGeometry, z_levels: &[f64]) -> usize {
-    let z_flange = geo.length - geo.flange_height;
-    let guide_top = geo.guide_bottom + geo.guide_height;
-    let top = geo
-        .deck_underside
-        .filter(|&d| d > guide_top && d < z_flange)
-        .unwrap_or(z_flange);
+    let top = (geo.deck_in_wall()).unwrap_or(geo.length - geo.flange_height);
     (0..2 * z_levels.len() - 1)
         .rposition(|k| level_at(z_levels, k) < top + 1e-9)
         .unwrap_or(0)

@@ -130,11 +130,17 @@ impl LinerGeometry {
     /// The upper pilot's lower edge: the deck's underside when the pilots differ from the wet
     /// wall and it lies between the guide band and the flange (a plane of the generated mesh).
     pub fn deck_plane(&self) -> Option<f64> {
+        self.deck_in_wall()
+            .filter(|_| self.pilot_diameter != self.outer_diameter)
+    }
+
+    /// The deck's underside when it lies between the guide band's top and the flange: the
+    /// top of the coolant zone (where the liner enters the deck bore).
+    pub fn deck_in_wall(&self) -> Option<f64> {
         let guide_top = self.guide_bottom + self.guide_height;
         let z_flange = self.length - self.flange_height;
-        self.deck_underside.filter(|&z| {
-            self.pilot_diameter != self.outer_diameter && z > guide_top && z < z_flange
-        })
+        self.deck_underside
+            .filter(|&z| z > guide_top && z < z_flange)
     }
 
     /// The axial planes every generated liner mesh has, ascending and distinct: its ends, the
