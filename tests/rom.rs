@@ -5,7 +5,7 @@
 mod common;
 use common::linercav_output as linercav;
 use linercav::analysis::correlation::compare_rom_with_full;
-use linercav::reduce::craig_bampton::{reduce, CbSettings, InterfaceBlock, Part};
+use linercav::reduce::craig_bampton::{reduce, reduce_with, CbSettings, InterfaceBlock, Part};
 use linercav::reduce::scene_rom::{
     build_rom, full_modes, get_rom, key_description, load_meshes, rom_inputs, CacheOptions,
 };
@@ -304,16 +304,92 @@ fn verification_structured_projection_equals_the_brute_force_products() {
         ("K_r", &red.k, brute(&full.km.k)),
         ("M_r", &red.m, brute(&full.km.m)),
     ] {
-        let n = got.nrows();
         // a coordinate with (nearly) zero stiffness is measured against 1e-6 of the largest
-        let floor = 1e-6 * (0..n).map(|i| want[(i, i)]).fold(0.0f64, f64::max);
-        let d = |i: usize| want[(i, i)].max(floor);
-        let worst = (0..n)
-            .flat_map(|i| (0..n).map(move |j| (i, j)))
-            .map(|(i, j)| (got[(i, j)] - want[(i, j)]).abs() / (d(i) * d(j)).sqrt())
-            .fold(0.0f64, f64::max);
+        let worst = scaled_difference(got, &want);
+        let n = got.nrows();
         println!("{name}: largest scaled difference {worst:.1e} over {n} coordinates");
         assert!(worst < 1e-8, "{name}: {worst}");
+    }
+}
+
+/// Largest difference of two reduced matrices scaled by their diagonals, |a_ij - b_ij| /
+/// sqrt(d_i d_j), the diagonals floored at 1e-6 of the largest.
+fn scaled_difference(got: &faer::Mat<f64>, want: &faer::Mat<f64>) -> f64 {
+    let n = got.nrows();
+    let floor = 1e-6 * (0..n).map(|i| want[(i, i)]).fold(0.0f64, f64::max);
+    let d = |i: usize| want[(i, i)].max(floor);
+    (0..n)
+        .flat_map(|i| (0..n).map(move |j| (i, j)))
+        .map(|(i, j)| (got[(i, j)] - want[(i, j)]).abs() / (d(i) * d(j)).sqrt())
+        .fold(0.0f64, f64::max)
+}
+
+/// Verification of the second pass of enriched cuts (`reduce_with`): the fixed-interface modes
+/// of a reduction with one set of interface shapes, given to a reduction of the same part with
+/// other shapes (every second column of each block), give the reduction that solves for them.
+/// The interior model does not depend on the shapes, so both hold the same modes; tolerance
+/// 1e-10 of the scaled entries (the solved modes are the same to the last bits in a process,
+/// `REDUCING`; the margin covers a different Lanczos start only if that ever changes). Modes
+/// that do not fit the interior model (one row short) are not used: the result is the same.
+#[test]
+fn verification_reused_fixed_interface_modes_give_the_solved_reduction() {
+    let sc = scene(&[]);
+    let em = load_meshes(&sc).unwrap();
+    let inp = rom_inputs(&sc, &em, false);
+    let lm = &em.liner;
+    let blocks = linercav::reduce::rom::liner_blocks(&inp, lm, 0.0).unwrap();
+    let part = |interfaces| Part {
+        name: "liner",
+        mesh: lm,
+        material: &inp.liner_material,
+        surface: &[],
+        fix: &[],
+        interfaces,
+        loads: &[],
+        outputs: &[],
+    };
+    let first = CbSettings {
+        cutoff_hz: inp.cutoff_hz,
+        keep_basis: true,
+    };
+    let known = reduce(&part(&blocks), &first)
+        .unwrap()
+        .fixed_modes
+        .expect("kept with the basis");
+    assert!(!known.lambdas.is_empty());
+    let other: Vec<InterfaceBlock> = blocks
+        .iter()
+        .map(|b| InterfaceBlock {
+            set: b.set.clone(),
+            psi: faer::Mat::from_fn(b.psi.nrows(), b.psi.ncols().div_ceil(2), |i, j| {
+                b.psi[(i, 2 * j)]
+            }),
+        })
+        .collect();
+    let settings = CbSettings {
+        cutoff_hz: inp.cutoff_hz,
+        keep_basis: false,
+    };
+    let solved = reduce(&part(&other), &settings).unwrap();
+    let short = linercav::reduce::craig_bampton::FixedModes {
+        lambdas: known.lambdas.clone(),
+        vectors: known
+            .vectors
+            .subrows(1, known.vectors.nrows() - 1)
+            .to_owned(),
+    };
+    for (label, modes) in [("reused", known), ("one row short", short)] {
+        let r = reduce_with(&part(&other), &settings, Some(modes)).unwrap();
+        assert_eq!(r.size(), solved.size(), "{label}");
+        assert_eq!(
+            r.mode_frequencies_hz.len(),
+            solved.mode_frequencies_hz.len()
+        );
+        for (name, got, want) in [("K_r", &r.k, &solved.k), ("M_r", &r.m, &solved.m)] {
+            let worst = scaled_difference(got, want);
+            println!("{label}: {name} largest scaled difference {worst:.1e}");
+            assert!(worst < 1e-10, "{label}: {name}: {worst}");
+        }
     }
 }
 
@@ -1036,8 +1112,9 @@ fn assert_assembled_from_cache((code, out, err): (i32, String, String), sets: &[
 /// exactly one makes them (the first pass of both components) and stores them, the other
 /// waits on the entry's lock (or arrives after) and reads them; the plain `rom` after the
 /// tasks assembles everything from the cache with the frequencies of a build without the
-/// cache (same code on the same inputs; 1e-6 as the other cache contracts); a changed
-/// enrichment is a different ROM (its key changes).
+/// cache (same code on the same inputs; 1e-6 as the other cache contracts); both tasks'
+/// second pass reuses the first pass's fixed-interface modes, which are gone from the cache
+/// once their component is reduced; a changed enrichment is a different ROM (its key changes).
 #[test]
 fn contract_enriched_cuts_through_the_cache_and_tasks() {
     let dir = tempfile::tempdir().unwrap();
@@ -1056,6 +1133,8 @@ fn contract_enriched_cuts_through_the_cache_and_tasks() {
             .map(|t| {
                 let (code, _, err) = t.join().unwrap();
                 assert_eq!(code, 0, "{err}");
+                // the first pass's modes, left in the cache, serve both tasks' second pass
+                assert!(err.contains("fixed-interface modes reused"), "{err}");
                 err.contains("cut shapes enriched by")
             })
             .collect()
@@ -1073,6 +1152,13 @@ fn contract_enriched_cuts_through_the_cache_and_tasks() {
         .count();
     assert_eq!(enriched, 1, "one enriched entry for the one cut");
     assert_assembled_from_cache(run(&["--json"]), &sets);
+    // the first pass's modes are removed once their component is reduced
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("modes-"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
     let plain = key_description(&scene(&sets[..2])).unwrap();
     assert_ne!(plain, key_description(&scene(&sets)).unwrap());
 }

@@ -116,6 +116,9 @@ pub struct PartReduction {
     pub loads: Mat<f64>,
     /// Full basis in the part's free-DOF numbering (kept on request, for recovery).
     pub basis: Option<Mat<f64>>,
+    /// The fixed-interface modes on the interior DOFs (kept with the basis): a later
+    /// reduction of the same part with other interface shapes reuses them ([`reduce_with`]).
+    pub fixed_modes: Option<FixedModes>,
     pub dofs: DofMap,
     pub stats: CbStats,
 }
@@ -124,6 +127,17 @@ impl PartReduction {
     pub fn size(&self) -> usize {
         self.k.nrows()
     }
+}
+
+/// A part's fixed-interface modes: K_ii phi = lambda M_ii phi below the cut-off, on the
+/// interior DOFs (interior model's numbering), certified by the Sturm count when solved.
+/// They depend on the interior model only (the mesh, material, surface masses, fixed and
+/// interface node sets), not on the interface shapes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FixedModes {
+    pub lambdas: Vec<f64>,
+    /// Interior DOFs x modes, M_ii-orthonormal.
+    pub vectors: Mat<f64>,
 }
 
 /// Settings of one reduction.
@@ -165,6 +179,18 @@ static REDUCING: std::sync::Mutex<()> = std::sync::Mutex::new(());
 /// K_r = Phi^T K Phi, M_r = Phi^T M Phi with the basis's rows at the outputs and Phi^T f of
 /// the loads.
 pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, ReduceError> {
+    reduce_with(p, settings, None)
+}
+
+/// [`reduce`] with the fixed-interface modes `known` of an earlier reduction of the same
+/// interior model at the same cut-off (the same part with other interface shapes: the second
+/// pass of enriched cuts), used instead of the Sturm count and the eigen-solve; modes that do
+/// not fit the interior model are refused and solved for.
+pub fn reduce_with(
+    p: &Part<'_>,
+    settings: &CbSettings,
+    known: Option<FixedModes>,
+) -> Result<PartReduction, ReduceError> {
     // one reduction at a time per process (see [`REDUCING`])
     let _one = REDUCING.lock().unwrap_or_else(|e| e.into_inner());
     let part = p.name;
@@ -190,8 +216,27 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
         .analysis
         .llt(&inner.km.pattern, &inner.km.k)
         .map_err(|e| err_model(e.into()))?;
-    let (lambdas, modes_b) = fixed_interface_modes(p, &inner, &llt, settings.cutoff_hz, &tick)?;
-    tick("modes");
+    let known = known.filter(|m| {
+        let fits = m.vectors.nrows() == nb && m.vectors.ncols() == m.lambdas.len();
+        if !fits {
+            log::warn!("[{part}] the earlier fixed-interface modes do not fit the interior model ({} rows, {nb} interior DOFs): solving for them", m.vectors.nrows());
+        }
+        fits
+    });
+    let (lambdas, modes_b) = match known {
+        Some(m) => {
+            tick(&format!(
+                "factorised; {} fixed-interface modes reused",
+                m.lambdas.len()
+            ));
+            (m.lambdas, m.vectors)
+        }
+        None => {
+            let solved = fixed_interface_modes(p, &inner, &llt, settings.cutoff_hz, &tick)?;
+            tick("modes");
+            solved
+        }
+    };
     let b_to_a = interior_to_full(&full, &inner);
     let mass = full.km.pattern.compress(&full.km.m);
     let boundary = boundary_dofs(na, &b_to_a);
@@ -231,6 +276,10 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
     log_conditioning(part, &k, &m);
     let loads_r = phi.transpose() * &f_a;
     let out = output_rows(&full, p.outputs, &phi);
+    let fixed_modes = settings.keep_basis.then(|| FixedModes {
+        lambdas: lambdas.clone(),
+        vectors: modes_b.clone(),
+    });
     let freqs: Vec<f64> = lambdas
         .iter()
         .map(|l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI))
@@ -255,6 +304,7 @@ pub fn reduce(p: &Part<'_>, settings: &CbSettings) -> Result<PartReduction, Redu
         outputs: out,
         loads: loads_r,
         basis: settings.keep_basis.then_some(phi),
+        fixed_modes,
         dofs: full.dofs.clone(),
         stats,
     })

@@ -10,7 +10,7 @@
 //! with the same integrity checks (magic, version, length, checksum, stored key, consistency).
 
 use super::cache::{self, CacheReadError, Entry, Invalid, Lookup};
-use super::craig_bampton::{CbSettings, CbStats, Part, PartReduction};
+use super::craig_bampton::{CbSettings, CbStats, FixedModes, Part, PartReduction};
 use crate::fem::dofs::DofMap;
 use crate::files::WriteError;
 use crate::linalg::dense::{from_faer, Dense};
@@ -97,6 +97,7 @@ impl StoredPart {
             outputs: to_faer(&self.outputs),
             loads: to_faer(&self.loads),
             basis: None,
+            fixed_modes: None,
             dofs: DofMap {
                 dof: self.dof,
                 n_free: self.n_free,
@@ -136,7 +137,23 @@ impl KeyHasher {
 
 /// The cache key of one part's reduction (32 hex characters): see the module doc.
 pub fn key(p: &Part<'_>, settings: &CbSettings) -> String {
+    key_with(p, settings.cutoff_hz, true)
+}
+
+/// The cache key of a part's fixed-interface modes: the part's key without its interface
+/// shapes (the interior model holds every interface node, whatever the shapes), the modes'
+/// own format and the cut-off.
+pub fn modes_key(p: &Part<'_>, cutoff_hz: f64) -> String {
+    key_with(p, cutoff_hz, false)
+}
+
+/// The key of [`key`], with the interface shapes hashed or (`shapes` false: the
+/// fixed-interface modes' key, marked as such) only their node sets.
+fn key_with(p: &Part<'_>, cutoff_hz: f64, shapes: bool) -> String {
     let mut h = KeyHasher(blake3::Hasher::new());
+    if !shapes {
+        h.str("fixed-interface modes");
+    }
     h.usize(PART_FORMAT as usize);
     h.str(p.name);
     let mesh = p.mesh;
@@ -169,11 +186,13 @@ pub fn key(p: &Part<'_>, settings: &CbSettings) -> String {
     h.usize(p.interfaces.len());
     for b in p.interfaces {
         h.set(p, &b.set);
-        h.usize(b.psi.ncols());
-        let psi: Vec<f64> = (0..b.psi.ncols())
-            .flat_map(|j| (0..b.psi.nrows()).map(move |i| b.psi[(i, j)]))
-            .collect();
-        h.floats(&psi);
+        if shapes {
+            h.usize(b.psi.ncols());
+            let psi: Vec<f64> = (0..b.psi.ncols())
+                .flat_map(|j| (0..b.psi.nrows()).map(move |i| b.psi[(i, j)]))
+                .collect();
+            h.floats(&psi);
+        }
     }
     h.usize(p.loads.len());
     for l in p.loads {
@@ -188,7 +207,7 @@ pub fn key(p: &Part<'_>, settings: &CbSettings) -> String {
         h.usize(o.node);
         h.floats(&o.dir);
     }
-    h.f64(settings.cutoff_hz);
+    h.f64(cutoff_hz);
     h.0.finalize().to_hex()[..32].to_string()
 }
 
@@ -325,6 +344,101 @@ pub fn path_for(dir: &Path, part: &str, key: &str) -> PathBuf {
     dir.join(format!("part-{part}-{key}.bin"))
 }
 
+/// A part's fixed-interface modes as stored between the two passes of enriched cuts.
+#[derive(Serialize, Deserialize)]
+pub struct StoredModes {
+    lambdas: Vec<f64>,
+    vectors: Dense,
+}
+
+impl Entry for StoredModes {
+    const MAGIC: &'static [u8; 8] = b"LCAVMOD\0";
+    const FORMAT: u32 = PART_FORMAT;
+    /// One column per eigenvalue, finite, the eigenvalues ascending and not negative beyond
+    /// roundoff.
+    fn validate(&self) -> Result<(), Invalid> {
+        let sorted = self.lambdas.windows(2).all(|w| w[0] <= w[1]);
+        let finite = self
+            .lambdas
+            .iter()
+            .chain(self.vectors.iter())
+            .all(|v| v.is_finite());
+        if self.vectors.ncols() == self.lambdas.len() && sorted && finite {
+            Ok(())
+        } else {
+            Err(Invalid::Part)
+        }
+    }
+}
+
+/// Where the fixed-interface modes of the components' first pass wait for their second pass
+/// (enriched cuts, `substructure/enrich.rs`): files `modes-<part>-<key>.bin` in the component
+/// cache directory, each removed once that component's final reduction is stored (a component
+/// task of a job array finds the first pass's modes there), or in a temporary directory of
+/// the build when there is no cache (removed with the store).
+pub struct ModeStore {
+    dir: PathBuf,
+    _temp: Option<tempfile::TempDir>,
+}
+
+impl ModeStore {
+    /// The store in the cache directory `dir`, else in a new temporary directory.
+    pub fn new(dir: Option<&Path>) -> Result<Self, WriteError> {
+        if let Some(d) = dir {
+            return Ok(Self {
+                dir: d.to_path_buf(),
+                _temp: None,
+            });
+        }
+        let base = std::env::temp_dir();
+        let temp = tempfile::Builder::new()
+            .prefix("linercav-modes-")
+            .tempdir_in(&base)
+            .map_err(|source| WriteError { path: base, source })?;
+        Ok(Self {
+            dir: temp.path().to_path_buf(),
+            _temp: Some(temp),
+        })
+    }
+
+    fn path(&self, p: &Part<'_>, cutoff_hz: f64) -> (PathBuf, String) {
+        let key = modes_key(p, cutoff_hz);
+        (self.dir.join(format!("modes-{}-{key}.bin", p.name)), key)
+    }
+
+    /// Stores part `p`'s modes at `cutoff_hz`.
+    pub fn save(&self, p: &Part<'_>, cutoff_hz: f64, m: &FixedModes) -> Result<(), WriteError> {
+        let (path, key) = self.path(p, cutoff_hz);
+        let stored = StoredModes {
+            lambdas: m.lambdas.clone(),
+            vectors: from_faer(&m.vectors),
+        };
+        cache::store(&path, &key, &stored)
+    }
+
+    /// Part `p`'s modes at `cutoff_hz` when stored and valid (a corrupt file is reported and
+    /// ignored: the modes are solved for).
+    pub fn load(&self, p: &Part<'_>, cutoff_hz: f64) -> Result<Option<FixedModes>, CacheReadError> {
+        let (path, key) = self.path(p, cutoff_hz);
+        Ok(match cache::load::<StoredModes>(&path, &key)? {
+            Lookup::Hit(s) => Some(FixedModes {
+                lambdas: s.lambdas,
+                vectors: to_faer(&s.vectors),
+            }),
+            Lookup::Corrupt(reason) => {
+                log::warn!("{}: {reason}; solving for the modes again", path.display());
+                None
+            }
+            Lookup::Miss => None,
+        })
+    }
+
+    /// Removes part `p`'s stored modes (done with them).
+    pub fn remove(&self, p: &Part<'_>, cutoff_hz: f64) {
+        let _ = std::fs::remove_file(self.path(p, cutoff_hz).0);
+    }
+}
+
 /// Where a reduction came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Source {
@@ -341,13 +455,43 @@ pub fn reduce_cached(
     settings: &CbSettings,
     dir: Option<&Path>,
 ) -> Result<(PartReduction, Source), PartCacheError> {
+    reduce_cached_with(p, settings, dir, None)
+}
+
+/// [`reduce_cached`] of a component whose fixed-interface modes a first pass may have left in
+/// `modes`: on a cache miss they are read from there instead of solved for, and removed once
+/// the reduction is made (and stored).
+pub fn reduce_cached_with(
+    p: &Part<'_>,
+    settings: &CbSettings,
+    dir: Option<&Path>,
+    modes: Option<&ModeStore>,
+) -> Result<(PartReduction, Source), PartCacheError> {
+    let reduce = || -> Result<PartReduction, PartCacheError> {
+        let known = match modes {
+            Some(store) => store.load(p, settings.cutoff_hz)?,
+            None => None,
+        };
+        Ok(super::craig_bampton::reduce_with(p, settings, known)?)
+    };
+    // the first pass's modes are done with once the part's reduction is at hand
+    let forget = || {
+        if let Some(store) = modes {
+            store.remove(p, settings.cutoff_hz);
+        }
+    };
     let Some(dir) = dir.filter(|_| !settings.keep_basis) else {
-        return Ok((super::craig_bampton::reduce(p, settings)?, Source::Reduced));
+        let r = reduce()?;
+        forget();
+        return Ok((r, Source::Reduced));
     };
     let key = key(p, settings);
     let path = path_for(dir, p.name, &key);
     match cache::load::<StoredPart>(&path, &key)? {
-        Lookup::Hit(stored) => return Ok((stored.into_reduction(), Source::Cached)),
+        Lookup::Hit(stored) => {
+            forget();
+            return Ok((stored.into_reduction(), Source::Cached));
+        }
         Lookup::Corrupt(reason) => {
             log::warn!(
                 "{}: {reason}; reducing the {} again",
@@ -357,8 +501,9 @@ pub fn reduce_cached(
         }
         Lookup::Miss => {}
     }
-    let r = super::craig_bampton::reduce(p, settings)?;
+    let r = reduce()?;
     cache::store(&path, &key, &StoredPart::of(&r))?;
+    forget();
     Ok((r, Source::Reduced))
 }
 

@@ -20,7 +20,11 @@
 //! scaled by the size of v's own trace on the cut (a relative error), and the leading left
 //! singular vectors of the scaled corrections, `enrichment` of them (directions below 1e-6 of
 //! the largest dropped), are added to the cut's shapes. The components are then reduced again
-//! with the enriched shapes (the second pass is what the part's reduction uses).
+//! with the enriched shapes (the second pass is what the part's reduction uses). A
+//! component's fixed-interface modes do not depend on its cut shapes (every cut node is held
+//! in its interior model), so the first pass leaves them in a [`ModeStore`] and the second
+//! pass reads them instead of solving again: it factorises K_ii once for the constraint and
+//! attachment modes and skips the Sturm count and the Lanczos solves.
 //!
 //! Measured (benches/RESULTS.md, session 76): the default engine in 3 components with 200
 //! slab shapes per cut, system frequencies below half the cut-off against the one-piece
@@ -36,20 +40,22 @@ use super::{assemble, component, Interior, Prepared, Slab, Split};
 use crate::fem::dofs::FIXED;
 use crate::fem::model::FeModel;
 use crate::reduce::craig_bampton::{CbSettings, Part, PartReduction, ReduceError};
-use crate::reduce::part_cache::{cached_matrices, PartCacheError};
+use crate::reduce::part_cache::{cached_matrices, ModeStore, PartCacheError};
 use faer::Mat;
+use rayon::prelude::*;
 use std::path::Path;
 use std::time::Instant;
 
 /// Replaces each cut's shapes in `prep` by the enriched ones (module doc): from the cache
 /// `dir` when every cut's entry is there, else computed by a first pass over all components
-/// (and stored).
+/// (and stored), which leaves each component's fixed-interface modes in `modes` for the
+/// second pass.
 pub(super) fn enrich(
     p: &Part<'_>,
     prep: &mut Prepared,
     split: &Split,
-    settings: &CbSettings,
-    dir: Option<&Path>,
+    (settings, dir): (&CbSettings, Option<&Path>),
+    modes: &ModeStore,
 ) -> Result<(), PartCacheError> {
     let key = enriched_key(p, split, settings);
     let files: Vec<String> = (0..prep.cuts.len())
@@ -60,7 +66,7 @@ pub(super) fn enrich(
         if prep.cut_psi.iter().any(|m| m.ncols() == 0) {
             *prep = super::prepare(p, split, dir, &|_| true)?;
         }
-        Ok(enriched_shapes(p, prep, split, settings.cutoff_hz)?)
+        enriched_shapes(p, prep, split, settings.cutoff_hz, modes)
     })?;
     prep.cparts = super::component_parts(p, &prep.comps, &shapes)?;
     prep.cut_psi = shapes;
@@ -87,6 +93,7 @@ fn enriched_key(p: &Part<'_>, split: &Split, settings: &CbSettings) -> String {
         super::SLAB_LAYERS as f64,
         super::SUBSPACE_PASSES as f64,
         SINGULAR_CUT,
+        COMPRESS,
     ];
     nums.extend(&split.cuts_x);
     for v in nums {
@@ -110,19 +117,22 @@ fn enriched_shapes(
     prep: &Prepared,
     split: &Split,
     cutoff_hz: f64,
-) -> Result<Vec<Mat<f64>>, ReduceError> {
+    modes: &ModeStore,
+) -> Result<Vec<Mat<f64>>, PartCacheError> {
     let t0 = Instant::now();
     let slab_psi = &prep.cut_psi;
     let mut reductions = Vec::with_capacity(prep.comps.len());
     let mut passes = Vec::with_capacity(prep.comps.len());
     for c in 0..prep.comps.len() {
-        let (r, rows) = first_pass(p, prep, c, cutoff_hz * split.component_cutoff_factor)?;
+        let (r, rows) = first_pass(p, prep, c, cutoff_hz * split.component_cutoff_factor, modes)?;
         reductions.push(r);
         passes.push(rows);
     }
+    let t_first = t0.elapsed().as_secs_f64();
     let a = assemble(p, &prep.cparts, &reductions, slab_psi);
     let inner = Interior::of(p.name, &a, cutoff_hz)?;
     let (v, lambdas) = low_fields(&a, &inner);
+    let t_fields = t0.elapsed().as_secs_f64() - t_first;
     let mut out = Vec::with_capacity(prep.cuts.len());
     for (j, psi) in slab_psi.iter().enumerate() {
         let r = imbalance((j, psi.nrows()), &a, &passes, (&v, &lambdas));
@@ -134,7 +144,7 @@ fn enriched_shapes(
         out.push(added);
     }
     log::info!(
-        "[{}] cut shapes enriched by {} ({}) from {} fields in {:.2} s",
+        "[{}] cut shapes enriched by {} ({}) from {} fields in {:.2} s (first pass {t_first:.2} s, assembly and fields {t_fields:.2} s, the cuts' slab solves {:.2} s)",
         p.name,
         split.enrichment,
         crate::text::joined(
@@ -145,7 +155,8 @@ fn enriched_shapes(
             ", "
         ),
         v.ncols(),
-        t0.elapsed().as_secs_f64()
+        t0.elapsed().as_secs_f64(),
+        t0.elapsed().as_secs_f64() - t_first - t_fields
     );
     Ok(out)
 }
@@ -174,19 +185,21 @@ fn imbalance(
 }
 
 /// Component `c`'s reduction with its basis kept, the basis's cut rows of K Phi and M Phi
-/// taken, the basis dropped.
+/// taken, the basis dropped, its fixed-interface modes stored in `modes` for the second pass.
 fn first_pass(
     p: &Part<'_>,
     prep: &Prepared,
     c: usize,
     cutoff_hz: f64,
-) -> Result<(PartReduction, CutRows), ReduceError> {
+    modes: &ModeStore,
+) -> Result<(PartReduction, CutRows), PartCacheError> {
     let sub = component(p, prep, c);
     let settings = CbSettings {
         cutoff_hz,
         keep_basis: true,
     };
     let mut reduction = crate::reduce::craig_bampton::reduce(&sub, &settings)?;
+    let t0 = Instant::now();
     let phi = reduction.basis.take().expect("the basis was asked for");
     let model = FeModel::build_with(sub.mesh.clone(), p.material, sub.fix, p.surface).map_err(
         |source| ReduceError::Model {
@@ -208,6 +221,15 @@ fn first_pass(
             )
         })
         .collect();
+    drop(phi);
+    let fixed = reduction.fixed_modes.take().expect("kept with the basis");
+    modes.save(&sub, cutoff_hz, &fixed)?;
+    log::info!(
+        "[{}] cut rows taken and {} modes stored in {:.2} s",
+        sub.name,
+        fixed.lambdas.len(),
+        t0.elapsed().as_secs_f64()
+    );
     Ok((reduction, cut_rows))
 }
 
@@ -233,19 +255,57 @@ fn rows_times(
     x: &Mat<f64>,
 ) -> Mat<f64> {
     let mut out = Mat::<f64>::zeros(dofs.len(), x.ncols());
-    for (r, &d) in dofs.iter().enumerate() {
-        if d == FIXED {
-            continue;
-        }
-        for q in pattern.col_ptr[d]..pattern.col_ptr[d + 1] {
-            let (row, a) = (pattern.row_idx[q], values[q]);
-            for k in 0..x.ncols() {
-                out[(r, k)] += a * x[(row, k)];
+    // column blocks on both cores, each column of x read where it is contiguous
+    out.par_col_chunks_mut(16)
+        .enumerate()
+        .for_each(|(b, mut block)| {
+            for j in 0..block.ncols() {
+                let k = 16 * b + j;
+                for (r, &d) in dofs.iter().enumerate().filter(|(_, &d)| d != FIXED) {
+                    let mut sum = 0.0;
+                    for q in pattern.col_ptr[d]..pattern.col_ptr[d + 1] {
+                        sum += values[q] * x[(pattern.row_idx[q], k)];
+                    }
+                    block[(r, j)] = sum;
+                }
             }
-        }
-    }
+        });
     out
 }
+
+/// The imbalances `r` (one column per field) each scaled by its field's trace size (2-norm of
+/// the column of `traces`; a field without a trace is dropped), compressed to their numerical
+/// range: R D = U S V^T, returned as U_k S_k over the singular values above [`COMPRESS`] of the
+/// largest. The slab's response is linear, so the corrections T = A R D (A: solve, trace,
+/// remove the shapes' span) equal (A U_k S_k) V_k^T up to the dropped part, and V_k has
+/// orthonormal rows: T's left singular vectors and values are those of A U_k S_k. The slab
+/// then answers rank-many right-hand sides, not one per field (the default engine in 3
+/// components: 552 of 990, the rest below 1e-12 of the largest).
+fn compressed(part: &str, r: &Mat<f64>, traces: &Mat<f64>) -> Result<Mat<f64>, ReduceError> {
+    let scaled = Mat::from_fn(r.nrows(), r.ncols(), |i, k| {
+        let size = traces.col(k).norm_l2();
+        if size > 0.0 {
+            r[(i, k)] / size
+        } else {
+            0.0
+        }
+    });
+    let svd = scaled.thin_svd().map_err(|e| ReduceError::Other {
+        part: part.into(),
+        msg: format!("substructuring: the cut imbalances' SVD failed: {e:?}"),
+    })?;
+    let s = svd.S().column_vector();
+    let smax = (0..s.nrows()).map(|i| s[i]).fold(0.0f64, f64::max);
+    let kept: Vec<usize> = (0..s.nrows()).filter(|&i| s[i] > COMPRESS * smax).collect();
+    let u = svd.U();
+    Ok(Mat::from_fn(r.nrows(), kept.len(), |i, c| {
+        u[(i, kept[c])] * s[kept[c]]
+    }))
+}
+
+/// Singular values of the scaled imbalances below this fraction of the largest are roundoff
+/// (the measured spectrum falls from above 1e-8 to below 1e-12 with nothing between).
+const COMPRESS: f64 = 1e-12;
 
 /// The assembled model's low-frequency fields V = [[I, 0], [X, Phi_k]] (columns) and their
 /// eigenvalues (0 for the static columns).
@@ -267,9 +327,10 @@ fn low_fields(a: &super::Assembled, inner: &Interior) -> (Mat<f64>, Vec<f64>) {
 }
 
 /// Cut `j`'s shapes with up to `count` added: the slab's near-static response to the
-/// imbalances `r` (one column per field), traced on the cut, the present shapes' span
-/// removed, each scaled by its field's trace `traces` (2-norm), then the leading left singular
-/// vectors (above [`SINGULAR_CUT`] of the largest), each scaled to a largest entry of 1.
+/// imbalances `r` (one column per field) each scaled by its field's trace `traces` (2-norm;
+/// solved for their compressed range, [`compressed`]), traced on the cut, the present shapes'
+/// span removed, then the leading left singular vectors (above [`SINGULAR_CUT`] of the
+/// largest), each scaled to a largest entry of 1.
 fn added_shapes(
     p: &Part<'_>,
     prep: &Prepared,
@@ -300,14 +361,15 @@ fn added_shapes(
             part: p.name.into(),
             source: e.into(),
         })?;
-    let mut f = Mat::<f64>::zeros(model.n_free(), r.ncols());
+    let loads = compressed(p.name, r, traces)?;
+    let mut f = Mat::<f64>::zeros(model.n_free(), loads.ncols());
     for (row, &d) in dofs.iter().enumerate().filter(|(_, &d)| d != FIXED) {
-        for k in 0..r.ncols() {
-            f[(d, k)] = r[(row, k)];
+        for k in 0..loads.ncols() {
+            f[(d, k)] = loads[(row, k)];
         }
     }
     crate::eigen::subspace::solve_block(&llt, &mut f);
-    let mut t = Mat::from_fn(dofs.len(), r.ncols(), |row, k| {
+    let mut t = Mat::from_fn(dofs.len(), loads.ncols(), |row, k| {
         if dofs[row] == FIXED {
             0.0
         } else {
@@ -316,11 +378,6 @@ fn added_shapes(
     });
     let q = psi.qr().compute_thin_Q();
     t -= super::ab(q.as_ref(), super::atb(q.as_ref(), t.as_ref()).as_ref());
-    for k in 0..t.ncols() {
-        let size = traces.col(k).norm_l2();
-        let s = if size > 0.0 { 1.0 / size } else { 0.0 };
-        t.col_mut(k).iter_mut().for_each(|x| *x *= s);
-    }
     let added = super::directions(p.name, "enriched cut shapes", &t, (SINGULAR_CUT, count))?;
     let mut out = Mat::<f64>::zeros(psi.nrows(), psi.ncols() + added.ncols());
     out.as_mut().subcols_mut(0, psi.ncols()).copy_from(psi);

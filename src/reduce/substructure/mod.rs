@@ -34,7 +34,7 @@ use super::craig_bampton::{
     gram_cut, symmetrise, CbSettings, CbStats, InterfaceBlock, Load, Output, Part, PartReduction,
     ReduceError,
 };
-use super::part_cache::{reduce_cached, PartCacheError, Source};
+use super::part_cache::{reduce_cached_with, ModeStore, PartCacheError, Source};
 use crate::fem::dofs::{DofMap, FIXED};
 use crate::fem::model::FeModel;
 use crate::mesh::{ElementBlock, Mesh};
@@ -550,19 +550,37 @@ fn prepare(
 }
 
 /// Component `c`'s reduction through the component cache `dir`, its modes up to
-/// `factor` times the part's cut-off.
+/// `factor` times the part's cut-off (those of a first pass when `modes` holds them).
 fn reduce_component(
     p: &Part<'_>,
     prep: &Prepared,
     (c, factor): (usize, f64),
-    settings: &CbSettings,
-    dir: Option<&Path>,
+    (settings, dir): (&CbSettings, Option<&Path>),
+    modes: Option<&ModeStore>,
 ) -> Result<(PartReduction, Source), PartCacheError> {
     let cb = CbSettings {
         cutoff_hz: settings.cutoff_hz * factor,
         keep_basis: false,
     };
-    reduce_cached(&component(p, prep, c), &cb, dir)
+    reduce_cached_with(&component(p, prep, c), &cb, dir, modes)
+}
+
+/// The cut shapes of a split part prepared for the components `wanted` (by index) and,
+/// when the split asks for it, enriched; returns them with the store that holds the first
+/// pass's modes (a store only when the cuts are enriched).
+fn prepare_enriched(
+    p: &Part<'_>,
+    split: &Split,
+    (settings, dir): (&CbSettings, Option<&Path>),
+    wanted: &dyn Fn(usize) -> bool,
+) -> Result<(Prepared, Option<ModeStore>), PartCacheError> {
+    let mut prep = prepare(p, split, dir, wanted)?;
+    if split.enrichment == 0 {
+        return Ok((prep, None));
+    }
+    let store = ModeStore::new(dir)?;
+    enrich::enrich(p, &mut prep, split, (settings, dir), &store)?;
+    Ok((prep, Some(store)))
 }
 
 /// Component `c` of a prepared split of part `p` as a part of its own.
@@ -590,11 +608,9 @@ pub fn reduce_one(
     dir: Option<&Path>,
     c: usize,
 ) -> Result<(PartReduction, Source), PartCacheError> {
-    let mut prep = prepare(p, split, dir, &|j| j + 1 == c || j == c)?;
-    if split.enrichment > 0 {
-        enrich::enrich(p, &mut prep, split, settings, dir)?;
-    }
-    reduce_component(p, &prep, (c, split.component_cutoff_factor), settings, dir)
+    let (prep, modes) = prepare_enriched(p, split, (settings, dir), &|j| j + 1 == c || j == c)?;
+    let factor = split.component_cutoff_factor;
+    reduce_component(p, &prep, (c, factor), (settings, dir), modes.as_ref())
 }
 
 /// Reduces a part by substructuring (module doc): cut shapes, each component's Craig-Bampton
@@ -609,15 +625,12 @@ pub fn reduce_split(
 ) -> Result<(PartReduction, Source), PartCacheError> {
     let t0 = Instant::now();
     let part = p.name;
-    let mut prep = prepare(p, split, dir, &|_| true)?;
-    if split.enrichment > 0 {
-        enrich::enrich(p, &mut prep, split, settings, dir)?;
-    }
+    let (prep, modes) = prepare_enriched(p, split, (settings, dir), &|_| true)?;
     let mut reductions = Vec::with_capacity(prep.comps.len());
     let mut all_cached = true;
     for c in 0..prep.comps.len() {
-        let (r, source) =
-            reduce_component(p, &prep, (c, split.component_cutoff_factor), settings, dir)?;
+        let factor = split.component_cutoff_factor;
+        let (r, source) = reduce_component(p, &prep, (c, factor), (settings, dir), modes.as_ref())?;
         all_cached &= source == Source::Cached;
         reductions.push(r);
     }
@@ -921,6 +934,7 @@ fn second_level(
         outputs: ab(a.outputs.as_ref(), t.as_ref()),
         loads: atb(t.as_ref(), a.loads.as_ref()),
         basis: None,
+        fixed_modes: None,
         dofs,
         stats,
     })
