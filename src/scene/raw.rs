@@ -276,13 +276,14 @@ pub struct RawRom {
     /// Shapes added to each cut between crankcase components from a first assembly: the cut's
     /// force imbalance under the part's static shapes and modes, answered by the slab around
     /// the cut, its leading directions (0: none, the default; at most 10000). The components
-    /// are reduced twice, and each cut's slab solves one right-hand side per static shape and
-    /// mode of the crankcase (more than twice the build time: at 2.7M DOFs in 6 components not
-    /// yet affordable; the enriched shapes are cached with the crankcase, so a liner-only
-    /// what-if does not repeat them). On the default engine in 3
-    /// components with 200 slab shapes, 100 added shapes take the system frequencies below
-    /// half the cut-off from 5.1e-3 (worst) and 3.3e-4 (median) of the one-piece build to
-    /// 2.1e-5 and 3.7e-6, MAC >= 0.9999 for every mode (docs/physics.md).
+    /// are reduced twice (the second time with the first pass's modes), and each cut's slab
+    /// solves the compressed imbalances of the crankcase's static shapes and modes (about 4
+    /// times the build time at 2.7M DOFs in 6 components: 43 min; the enriched shapes are
+    /// cached with the crankcase, so a liner-only what-if does not repeat them). On the default
+    /// engine in 3 components, 100 slab shapes with 200 added and
+    /// `component_cutoff_factor = 1.5` keep the system frequencies below half the cut-off
+    /// within 3.4e-6 of the one-piece build (200 slab shapes alone: 5.1e-3), MAC >= 0.99999
+    /// for every mode (docs/physics.md).
     #[serde(default)]
     pub cut_enrichment: usize,
     /// Cylinders whose liners are modelled (1-based, each once); empty = all.
