@@ -14,7 +14,6 @@
 //! K_ca = 0 and K_nn = diag(lambda). Rows of Phi at output DOFs (node, direction) are kept so
 //! the engine ROM can report responses without the full basis.
 
-use super::interface;
 use crate::eigen::{solve_modes, EigenSettings};
 use crate::fem::dofs::{DofMap, FIXED};
 use crate::fem::model::{FeModel, ModelError};
@@ -140,6 +139,16 @@ pub struct FixedModes {
     pub vectors: Mat<f64>,
 }
 
+impl FixedModes {
+    /// A copy of `lambdas` and `vectors`.
+    fn of(lambdas: &[f64], vectors: &Mat<f64>) -> Self {
+        Self {
+            lambdas: lambdas.to_vec(),
+            vectors: vectors.clone(),
+        }
+    }
+}
+
 /// Settings of one reduction.
 pub struct CbSettings {
     pub cutoff_hz: f64,
@@ -216,27 +225,7 @@ pub fn reduce_with(
         .analysis
         .llt(&inner.km.pattern, &inner.km.k)
         .map_err(|e| err_model(e.into()))?;
-    let known = known.filter(|m| {
-        let fits = m.vectors.nrows() == nb && m.vectors.ncols() == m.lambdas.len();
-        if !fits {
-            log::warn!("[{part}] the earlier fixed-interface modes do not fit the interior model ({} rows, {nb} interior DOFs): solving for them", m.vectors.nrows());
-        }
-        fits
-    });
-    let (lambdas, modes_b) = match known {
-        Some(m) => {
-            tick(&format!(
-                "factorised; {} fixed-interface modes reused",
-                m.lambdas.len()
-            ));
-            (m.lambdas, m.vectors)
-        }
-        None => {
-            let solved = fixed_interface_modes(p, &inner, &llt, settings.cutoff_hz, &tick)?;
-            tick("modes");
-            solved
-        }
-    };
+    let (lambdas, modes_b) = interior_modes(p, (&inner, &llt), settings.cutoff_hz, known, &tick)?;
     let b_to_a = interior_to_full(&full, &inner);
     let mass = full.km.pattern.compress(&full.km.m);
     let boundary = boundary_dofs(na, &b_to_a);
@@ -276,10 +265,6 @@ pub fn reduce_with(
     log_conditioning(part, &k, &m);
     let loads_r = phi.transpose() * &f_a;
     let out = output_rows(&full, p.outputs, &phi);
-    let fixed_modes = settings.keep_basis.then(|| FixedModes {
-        lambdas: lambdas.clone(),
-        vectors: modes_b.clone(),
-    });
     let freqs: Vec<f64> = lambdas
         .iter()
         .map(|l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI))
@@ -293,7 +278,6 @@ pub fn reduce_with(
         highest_mode_hz: freqs.last().copied().unwrap_or(0.0),
         seconds: t0.elapsed().as_secs_f64(),
     };
-    let _ = interface::count; // shapes come from the caller
     Ok(PartReduction {
         k,
         m,
@@ -304,10 +288,46 @@ pub fn reduce_with(
         outputs: out,
         loads: loads_r,
         basis: settings.keep_basis.then_some(phi),
-        fixed_modes,
+        fixed_modes: settings
+            .keep_basis
+            .then(|| FixedModes::of(&lambdas, &modes_b)),
         dofs: full.dofs.clone(),
         stats,
     })
+}
+
+/// The fixed-interface modes of the interior model `inner` (factor `llt`): `known` when they
+/// fit it (one row per interior DOF, one column per eigenvalue), else solved for
+/// ([`fixed_interface_modes`]).
+fn interior_modes(
+    p: &Part<'_>,
+    (inner, llt): (&FeModel, &crate::linalg::factor::Llt<'_>),
+    cutoff_hz: f64,
+    known: Option<FixedModes>,
+    tick: &dyn Fn(&str),
+) -> Result<(Vec<f64>, Mat<f64>), ReduceError> {
+    let nb = inner.n_free();
+    let known = known.filter(|m| {
+        let fits = m.vectors.nrows() == nb && m.vectors.ncols() == m.lambdas.len();
+        if !fits {
+            log::warn!(
+                "[{}] the earlier fixed-interface modes do not fit the interior model ({} rows, {nb} interior DOFs): solving for them",
+                p.name,
+                m.vectors.nrows()
+            );
+        }
+        fits
+    });
+    if let Some(m) = known {
+        tick(&format!(
+            "factorised; {} fixed-interface modes reused",
+            m.lambdas.len()
+        ));
+        return Ok((m.lambdas, m.vectors));
+    }
+    let solved = fixed_interface_modes(p, inner, llt, cutoff_hz, tick)?;
+    tick("modes");
+    Ok(solved)
 }
 
 /// The sets fixed in the interior model: the part's own fixed sets and every interface's,
