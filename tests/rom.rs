@@ -329,7 +329,8 @@ fn scaled_difference(got: &faer::Mat<f64>, want: &faer::Mat<f64>) -> f64 {
 /// other shapes (every second column of each block), give the reduction that solves for them.
 /// The interior model does not depend on the shapes, so both hold the same modes; tolerance
 /// 1e-10 of the scaled entries (the solved modes are the same to the last bits in a process,
-/// `REDUCING`; the margin covers a different Lanczos start only if that ever changes). Modes
+/// `REDUCING`; the margin covers a different Lanczos start only if that ever changes). The
+/// given modes are the ones used (doubled eigenvalues show on K_r's modal diagonal); modes
 /// that do not fit the interior model (one row short) are not used: the result is the same.
 #[test]
 fn verification_reused_fixed_interface_modes_give_the_solved_reduction() {
@@ -378,6 +379,20 @@ fn verification_reused_fixed_interface_modes_give_the_solved_reduction() {
             .subrows(1, known.vectors.nrows() - 1)
             .to_owned(),
     };
+    // the given modes are the ones used: K_r's modal block is diag(lambda) of the given
+    // eigenvalues (here doubled, which a solve would not give)
+    let doubled = linercav::reduce::craig_bampton::FixedModes {
+        lambdas: known.lambdas.iter().map(|l| 2.0 * l).collect(),
+        vectors: known.vectors.clone(),
+    };
+    let r = reduce_with(&part(&other), &settings, Some(doubled.clone())).unwrap();
+    for (j, lam) in doubled.lambdas.iter().enumerate() {
+        let c = r.modes.start + j;
+        assert!(
+            (r.k[(c, c)] - lam).abs() <= 1e-12 * lam.abs().max(1.0),
+            "mode {j}"
+        );
+    }
     for (label, modes) in [("reused", known), ("one row short", short)] {
         let r = reduce_with(&part(&other), &settings, Some(modes)).unwrap();
         assert_eq!(r.size(), solved.size(), "{label}");

@@ -282,14 +282,17 @@ fn rows_times(
 /// then answers rank-many right-hand sides, not one per field (the default engine in 3
 /// components: 552 of 990, the rest below 1e-12 of the largest).
 fn compressed(part: &str, r: &Mat<f64>, traces: &Mat<f64>) -> Result<Mat<f64>, ReduceError> {
-    let scaled = Mat::from_fn(r.nrows(), r.ncols(), |i, k| {
-        let size = traces.col(k).norm_l2();
-        if size > 0.0 {
-            r[(i, k)] / size
-        } else {
-            0.0
-        }
-    });
+    let scale: Vec<f64> = (0..r.ncols())
+        .map(|k| {
+            let size = traces.col(k).norm_l2();
+            if size > 0.0 {
+                1.0 / size
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let scaled = Mat::from_fn(r.nrows(), r.ncols(), |i, k| r[(i, k)] * scale[k]);
     let svd = scaled.thin_svd().map_err(|e| ReduceError::Other {
         part: part.into(),
         msg: format!("substructuring: the cut imbalances' SVD failed: {e:?}"),
